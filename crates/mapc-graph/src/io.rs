@@ -1,0 +1,80 @@
+//! Reading and writing graph files: JSON with a format name and version checked on load, written atomically.
+
+use crate::model::{FORMAT_NAME, FORMAT_VERSION, LaneGraph};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum GraphFileError {
+    #[error("{path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}: line {line}, column {column}: {message}")]
+    Parse { path: PathBuf, line: usize, column: usize, message: String },
+    #[error("{path}: not a mapc graph file (format is `{found}`, expected `{FORMAT_NAME}`)")]
+    NotAGraph { path: PathBuf, found: String },
+    #[error(
+        "{path}: graph file version {found}, but this mapc reads version {FORMAT_VERSION}; re-run `mapc import` on the original map"
+    )]
+    Version { path: PathBuf, found: u32 },
+}
+
+/// Write `bytes` to `path` so that a reader never sees half a file: a temporary file beside it, then a rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir)?;
+    let file_name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = dir.join(format!(".{file_name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+impl LaneGraph {
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a lane graph always serialises")
+    }
+
+    pub fn save(&self, path: &Path) -> Result<(), GraphFileError> {
+        write_atomically(path, self.to_json().as_bytes())
+            .map_err(|source| GraphFileError::Io { path: path.to_path_buf(), source })
+    }
+
+    pub fn load(path: &Path) -> Result<LaneGraph, GraphFileError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| GraphFileError::Io { path: path.to_path_buf(), source })?;
+        Self::from_json(&text, path)
+    }
+
+    /// Parse graph JSON; `path` only names the source in errors. The header is checked before the body so that a
+    /// file of another version says so instead of failing on some field.
+    pub fn from_json(text: &str, path: &Path) -> Result<LaneGraph, GraphFileError> {
+        #[derive(serde::Deserialize)]
+        struct Header {
+            format: Option<String>,
+            version: Option<u32>,
+        }
+        let parse_err = |e: serde_json::Error| GraphFileError::Parse {
+            path: path.to_path_buf(),
+            line: e.line(),
+            column: e.column(),
+            message: e.to_string(),
+        };
+        let header: Header = serde_json::from_str(text).map_err(parse_err)?;
+        let format = header.format.unwrap_or_default();
+        if format != FORMAT_NAME {
+            return Err(GraphFileError::NotAGraph { path: path.to_path_buf(), found: format });
+        }
+        let version = header.version.unwrap_or(0);
+        if version != FORMAT_VERSION {
+            return Err(GraphFileError::Version { path: path.to_path_buf(), found: version });
+        }
+        serde_json::from_str(text).map_err(parse_err)
+    }
+}

@@ -1,0 +1,234 @@
+//! # mapc-import: OSM XML, OSM PBF and SUMO net.xml into a lane graph
+//!
+//! Glossary:
+//! - **kept way**: an OSM way whose `highway` class is one of [`ImportOptions::highways`]; everything else is
+//!   dropped while streaming.
+//! - **piece**: the stretch of a kept way between two junction nodes; a way is split at every node another kept way
+//!   (or the same way again) passes through. Each piece becomes one road per direction of travel.
+//! - **clipped way**: a way naming nodes the file lacks (an extract cut at a bounding box); it is cut there and the
+//!   `way_clipped_at_missing_node` warning counted.
+//! - **class defaults**: lanes, speed limit and priority assumed for a class when tags are missing
+//!   ([`osm::class_defaults`]); every use is a counted warning.
+//! - **internal lane**: SUMO's lane inside a junction; folded into the connection that uses it
+//!   (`Connection::via_length_m`, `via_speed_mps`), never a road.
+//! - **major / minor**: right of way. OSM: the higher class, then more lanes, then the straighter road in is major.
+//!   SUMO: the connection's state (`M`/`m`) or, without one, the junction's request table. [`MajorRoad`] overrides.
+//!
+//! Entry points: [`import_path`] (chosen by file name, then by content), [`import_bytes`] (in memory) and
+//! [`load_any`] (a saved `*.graph.json` or any map). Ids are deterministic: junctions by OSM node id or SUMO file
+//! order, roads by (way id, piece, forward first) or SUMO file order.
+
+mod error;
+pub mod osm;
+mod osm_pbf;
+mod osm_xml;
+mod sumo;
+mod xml;
+
+pub use error::ImportError;
+
+use mapc_graph::{LaneGraph, RightOfWay, Source, SourceFormat};
+use std::io::BufReader;
+use std::path::Path;
+
+use error::{Located, ParseError};
+
+/// What to import and how.
+#[derive(Clone, Debug)]
+pub struct ImportOptions {
+    /// OSM `highway` classes kept.
+    pub highways: Vec<String>,
+    /// Right-of-way overrides applied after import, whatever the format.
+    pub major_roads: Vec<MajorRoad>,
+}
+
+impl Default for ImportOptions {
+    fn default() -> Self {
+        ImportOptions { highways: DEFAULT_HIGHWAYS.map(String::from).to_vec(), major_roads: Vec::new() }
+    }
+}
+
+/// The OSM classes kept unless `--highways` says otherwise.
+pub const DEFAULT_HIGHWAYS: [&str; 5] = ["motorway", "motorway_link", "trunk", "trunk_link", "primary"];
+
+/// "At junction `junction`, the roads named by `road` are major and every other road in yields". Both are
+/// lookups as `mapc_graph` understands them: `osm:61862553`, `J4`, a SUMO id; `osm-way:124433709`, `R7`, an edge id.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MajorRoad {
+    pub junction: String,
+    pub road: String,
+}
+
+impl std::str::FromStr for MajorRoad {
+    type Err = String;
+    /// `JUNCTION=ROAD`, e.g. `osm:61862553=osm-way:124433709`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (j, r) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected JUNCTION=ROAD, e.g. osm:61862553=osm-way:124433709"))?;
+        if j.trim().is_empty() || r.trim().is_empty() {
+            return Err(format!("`{s}`: expected JUNCTION=ROAD"));
+        }
+        Ok(MajorRoad { junction: j.trim().to_string(), road: r.trim().to_string() })
+    }
+}
+
+/// The kinds of map file mapc reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapFormat {
+    OsmXml,
+    OsmPbf,
+    SumoNet,
+}
+
+impl MapFormat {
+    /// By file name: `.osm.pbf`/`.pbf`, `.net.xml`, `.osm`/`.osm.xml`. `None` when the name does not tell.
+    pub fn from_name(path: &Path) -> Option<MapFormat> {
+        let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
+        if name.ends_with(".pbf") {
+            Some(MapFormat::OsmPbf)
+        } else if name.ends_with(".net.xml") {
+            Some(MapFormat::SumoNet)
+        } else if name.ends_with(".osm") || name.ends_with(".osm.xml") {
+            Some(MapFormat::OsmXml)
+        } else {
+            None
+        }
+    }
+
+    /// By the first bytes: a PBF starts with a length and `OSMHeader`; XML roots `<osm` and `<net`.
+    pub fn sniff(head: &[u8]) -> Option<MapFormat> {
+        if head.len() >= 13 && &head[4..7] == b"\x0a\x09O" && head[6..].starts_with(b"OSMHeader") {
+            return Some(MapFormat::OsmPbf);
+        }
+        let text = String::from_utf8_lossy(head);
+        if text.contains("<osm") {
+            Some(MapFormat::OsmXml)
+        } else if text.contains("<net") {
+            Some(MapFormat::SumoNet)
+        } else {
+            None
+        }
+    }
+
+    fn source_format(self) -> SourceFormat {
+        match self {
+            MapFormat::OsmXml => SourceFormat::OsmXml,
+            MapFormat::OsmPbf => SourceFormat::OsmPbf,
+            MapFormat::SumoNet => SourceFormat::SumoNet,
+        }
+    }
+}
+
+/// The format of a map file: by its name, else by its first bytes.
+pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
+    let meta = std::fs::metadata(path).map_err(|e| ImportError::io(path, e))?;
+    if meta.is_dir() {
+        return Err(ImportError::unsupported(path, "is a directory, not a map file"));
+    }
+    if meta.len() == 0 {
+        return Err(ImportError::Empty { path: path.to_path_buf() });
+    }
+    if let Some(f) = MapFormat::from_name(path) {
+        return Ok(f);
+    }
+    use std::io::Read;
+    let mut head = vec![0u8; 4096];
+    let mut file = std::fs::File::open(path).map_err(|e| ImportError::io(path, e))?;
+    let n = file.read(&mut head).map_err(|e| ImportError::io(path, e))?;
+    MapFormat::sniff(&head[..n]).ok_or_else(|| {
+        ImportError::unsupported(path, "not a map mapc reads (expected OSM XML .osm, OSM PBF .osm.pbf or SUMO .net.xml)")
+    })
+}
+
+/// Read any supported map, chosen by its file name (`.osm`, `.osm.pbf`, `.net.xml`) or, failing that, its content.
+pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
+    let format = detect_format(path)?;
+    let source = Source { file: path.display().to_string(), format: format.source_format() };
+    let located = Located::File(path);
+    let open = || -> Result<BufReader<std::fs::File>, ParseError> {
+        std::fs::File::open(path)
+            .map(|f| BufReader::with_capacity(1 << 16, f))
+            .map_err(|e| ParseError::new(0, None, format!("cannot open: {e}")))
+    };
+    let graph = match format {
+        MapFormat::OsmXml => {
+            let (ways, nodes) = osm_xml::read(open, &options.highways).map_err(|e| located.error(e))?;
+            osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
+        }
+        MapFormat::OsmPbf => {
+            let (ways, nodes) = osm_pbf::read_file(path, &options.highways)?;
+            osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
+        }
+        MapFormat::SumoNet => {
+            let input = open().map_err(|e| located.error(e))?;
+            sumo::read(input, source).map_err(|e| located.error(e))?
+        }
+    };
+    finish(graph, path, options)
+}
+
+/// Import a map held in memory; `name` stands for the file in messages and in the graph's source.
+pub fn import_bytes(bytes: &[u8], format: MapFormat, name: &str, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
+    let path = Path::new(name);
+    if bytes.is_empty() {
+        return Err(ImportError::Empty { path: path.to_path_buf() });
+    }
+    let source = Source { file: name.to_string(), format: format.source_format() };
+    let located = Located::Bytes(path, bytes);
+    let graph = match format {
+        MapFormat::OsmXml => {
+            let (ways, nodes) = osm_xml::read(|| Ok(bytes), &options.highways).map_err(|e| located.error(e))?;
+            osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
+        }
+        MapFormat::OsmPbf => {
+            let (ways, nodes) = osm_pbf::read(|| Ok(std::io::Cursor::new(bytes)), path, &options.highways)?;
+            osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
+        }
+        MapFormat::SumoNet => sumo::read(bytes, source).map_err(|e| located.error(e))?,
+    };
+    finish(graph, path, options)
+}
+
+/// Overrides, then a last invariant check (a failure here is a bug in the importer, reported rather than panicking).
+fn finish(mut graph: LaneGraph, path: &Path, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
+    for m in &options.major_roads {
+        apply_major_road(&mut graph, m).map_err(|msg| ImportError::unsupported(path, msg))?;
+    }
+    let problems = graph.invariant_violations();
+    if !problems.is_empty() {
+        return Err(ImportError::unsupported(path, format!("the imported graph is inconsistent: {}", problems.join("; "))));
+    }
+    Ok(graph)
+}
+
+/// Make the roads `m.road` names major at junction `m.junction`, and every other road in there minor.
+pub fn apply_major_road(graph: &mut LaneGraph, m: &MajorRoad) -> Result<(), String> {
+    let j = graph.find_junction(&m.junction).map_err(|e| format!("--major {}={}: {e}", m.junction, m.road))?;
+    let roads = graph.find_roads(&m.road).map_err(|e| format!("--major {}={}: {e}", m.junction, m.road))?;
+    let incoming = &graph.junction(j).expect("found above").incoming;
+    let major: Vec<_> = roads.into_iter().filter(|r| incoming.contains(r)).collect();
+    if major.is_empty() {
+        return Err(format!("--major {}={}: no road named `{}` enters junction {j}", m.junction, m.road, m.road));
+    }
+    for c in graph.connections.iter_mut().filter(|c| c.junction == j) {
+        let row = if major.contains(&c.from_road) { RightOfWay::Major } else { RightOfWay::Minor };
+        if c.right_of_way != row {
+            c.right_of_way = row;
+            c.right_of_way_overridden = true;
+        }
+    }
+    Ok(())
+}
+
+/// A saved graph (`*.graph.json`, or any JSON file) or any map file, imported with default options.
+pub fn load_any(path: &Path) -> Result<LaneGraph, ImportError> {
+    load_any_with(path, &ImportOptions::default())
+}
+
+/// [`load_any`] with import options for maps (ignored for graph files).
+pub fn load_any_with(path: &Path, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
+    let name = path.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    if name.ends_with(".json") {
+        return Ok(LaneGraph::load(path)?);
+    }
+    import_path(path, options)
+}

@@ -1,0 +1,88 @@
+//! Checkpoints: the trainer state plus what the policy needs to be used on a scenario (observation layout and
+//! normalisation constants, N_AV, reward). JSON written atomically (temporary file, then rename).
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::RlError;
+use crate::ppo::TrainerState;
+
+/// Current checkpoint format.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// How observations and actions of the policy are laid out and normalised.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PolicySpec {
+    /// Scenario the policy was trained on.
+    pub scenario: String,
+    /// Reward it was trained with (`outflow`, `flow`, `speed`).
+    pub reward: String,
+    /// Controlled AVs (the observation holds 5 values per AV).
+    pub n_av: usize,
+    pub obs_dim: usize,
+    pub act_dim: usize,
+    /// Speed normalisation V (m/s).
+    pub max_speed: f64,
+    /// Distance normalisation L (m).
+    pub norm_length: f64,
+    /// Acceleration bounds (m/s^2).
+    pub accel_min: f64,
+    pub accel_max: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    pub format_version: u32,
+    pub spec: PolicySpec,
+    pub state: TrainerState,
+}
+
+impl Checkpoint {
+    pub fn save(&self, path: &Path) -> Result<(), RlError> {
+        let text = serde_json::to_string(self).map_err(|e| RlError::Format { path: path.into(), msg: e.to_string() })?;
+        write_atomic(path, text.as_bytes())
+    }
+
+    pub fn load(path: &Path) -> Result<Self, RlError> {
+        let text = std::fs::read_to_string(path).map_err(|e| RlError::Io { path: path.into(), source: e })?;
+        let ck: Checkpoint = serde_json::from_str(&text).map_err(|e| RlError::Format {
+            path: path.into(),
+            msg: format!("line {} column {}: {e}", e.line(), e.column()),
+        })?;
+        if ck.format_version != FORMAT_VERSION {
+            return Err(RlError::Format {
+                path: path.into(),
+                msg: format!("checkpoint format {} (this build reads {FORMAT_VERSION})", ck.format_version),
+            });
+        }
+        let arch = &ck.state.model.arch;
+        if ck.state.model.params.len() != arch.param_len()
+            || arch.obs_dim != ck.spec.obs_dim
+            || arch.act_dim != ck.spec.act_dim
+            || ck.state.adam.m.len() != ck.state.model.params.len()
+            || ck.state.adam.v.len() != ck.state.model.params.len()
+        {
+            return Err(RlError::Format {
+                path: path.into(),
+                msg: "parameter count does not match the network sizes".into(),
+            });
+        }
+        Ok(ck)
+    }
+}
+
+/// The checkpoint file inside a run directory.
+pub fn checkpoint_path(dir: &Path) -> PathBuf {
+    dir.join("checkpoint.json")
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RlError> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(|e| RlError::Io { path: dir.into(), source: e })?;
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(|e| RlError::Io { path: tmp.clone(), source: e })?;
+    std::fs::rename(&tmp, path).map_err(|e| RlError::Io { path: path.into(), source: e })
+}

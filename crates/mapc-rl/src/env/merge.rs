@@ -1,0 +1,200 @@
+//! The merge-control environment on `mapc-sim`: the centralized observation of the first `N_AV` AVs in the
+//! control region, their accelerations as the action, and one of three rewards.
+
+use std::str::FromStr;
+
+use mapc_sim::{SimSpec, Simulation, VehicleId};
+use serde::{Deserialize, Serialize};
+
+use super::obs::{AvView, ControlQueue, ObsNorm, PER_AV, centralized_obs, flow_reward, speed_reward};
+use crate::error::RlError;
+use crate::rollout::{Env, EpisodeMetrics, Transition};
+
+/// Training reward.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RewardKind {
+    /// Vehicles that left the network this step.
+    Outflow,
+    /// Flow's desired-velocity reward with the AV time-gap penalty.
+    Flow,
+    /// Mean speed of all vehicles / V.
+    Speed,
+}
+
+impl RewardKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            RewardKind::Outflow => "outflow",
+            RewardKind::Flow => "flow",
+            RewardKind::Speed => "speed",
+        }
+    }
+}
+
+impl FromStr for RewardKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "outflow" => Ok(RewardKind::Outflow),
+            "flow" => Ok(RewardKind::Flow),
+            "speed" | "average_speed" | "avg_speed" => Ok(RewardKind::Speed),
+            _ => Err(format!("unknown reward `{s}` (outflow, flow, speed)")),
+        }
+    }
+}
+
+/// The paper's normalisation: V = 30 m/s, L = 947.68 m (Simple Merge's total lane length). A transferred policy
+/// keeps the constants it was trained with.
+pub const SIMPLE_MERGE_NORM: ObsNorm = ObsNorm { max_speed: 30.0, length: 947.68 };
+/// Action bounds (m/s^2): the human driver's comfortable deceleration and maximum acceleration.
+pub const ACCEL_MIN: f64 = -4.5;
+pub const ACCEL_MAX: f64 = 2.6;
+/// Flow's desired velocity v*.
+pub const DESIRED_SPEED: f64 = 30.0;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct MergeEnvConfig {
+    pub reward: RewardKind,
+    pub n_av: usize,
+    pub norm: ObsNorm,
+    pub accel_min: f64,
+    pub accel_max: f64,
+}
+
+impl MergeEnvConfig {
+    pub fn obs_dim(&self) -> usize {
+        PER_AV * self.n_av
+    }
+}
+
+pub struct MergeEnv {
+    spec: SimSpec,
+    cfg: MergeEnvConfig,
+    sim: Option<Simulation>,
+    queue: ControlQueue,
+    controlled: Vec<VehicleId>,
+    obs_buf: Vec<f32>,
+}
+
+impl MergeEnv {
+    /// An environment over `spec` (the control region, if any, is the spec's).
+    pub fn new(spec: SimSpec, cfg: MergeEnvConfig) -> Result<Self, RlError> {
+        spec.validate().map_err(|e| RlError::Scenario { scenario: spec.graph.source.file.clone(), msg: e.to_string() })?;
+        if cfg.n_av == 0 {
+            return Err(RlError::Config("N_AV must be at least 1".into()));
+        }
+        Ok(Self { spec, cfg, sim: None, queue: ControlQueue::default(), controlled: vec![], obs_buf: vec![] })
+    }
+
+    pub fn config(&self) -> &MergeEnvConfig {
+        &self.cfg
+    }
+
+    /// Horizon of the scenario (steps).
+    pub fn horizon(&self) -> usize {
+        self.spec.horizon_steps as usize
+    }
+
+    fn sim(&self) -> &Simulation {
+        self.sim.as_ref().expect("reset before step")
+    }
+
+    /// Picks the controlled AVs and builds the observation.
+    fn observe(&mut self) -> Vec<f32> {
+        let sim = self.sim.as_ref().expect("reset before observe");
+        let mut present: Vec<(u64, VehicleId)> = sim
+            .active_ids()
+            .filter_map(|id| {
+                let v = sim.vehicle(id)?;
+                (v.controlled && sim.in_control_region(id)).then_some((v.entry_order, id))
+            })
+            .collect();
+        present.sort_unstable();
+        let ids: Vec<u64> = present.iter().map(|&(_, id)| id as u64).collect();
+        self.controlled = self.queue.update(&ids, self.cfg.n_av).into_iter().map(|id| id as VehicleId).collect();
+        let len = self.cfg.norm.length;
+        let views: Vec<AvView> = self
+            .controlled
+            .iter()
+            .map(|&id| AvView {
+                speed: sim.vehicle(id).map_or(0.0, |v| v.speed),
+                leader: sim.leader(id, len).map(|n| (n.speed, n.gap_m)),
+                follower: sim.follower(id, len).map(|n| (n.speed, n.gap_m)),
+            })
+            .collect();
+        centralized_obs(&views, self.cfg.n_av, self.cfg.norm, &mut self.obs_buf);
+        self.obs_buf.clone()
+    }
+
+    fn reward(&self) -> f64 {
+        let sim = self.sim();
+        match self.cfg.reward {
+            RewardKind::Outflow => sim.arrived_last_step().len() as f64,
+            RewardKind::Speed | RewardKind::Flow => {
+                let speeds: Vec<f64> = sim.active_ids().filter_map(|id| sim.vehicle(id).map(|v| v.speed)).collect();
+                if self.cfg.reward == RewardKind::Speed {
+                    speed_reward(&speeds, self.cfg.norm.max_speed)
+                } else {
+                    let headways: Vec<(f64, f64)> = self
+                        .controlled
+                        .iter()
+                        .filter_map(|&id| {
+                            let v = sim.vehicle(id)?;
+                            sim.leader(id, f64::INFINITY).map(|l| (l.gap_m, v.speed))
+                        })
+                        .collect();
+                    flow_reward(&speeds, DESIRED_SPEED, &headways)
+                }
+            }
+        }
+    }
+
+    /// Steps with the given accelerations; errors of the simulator are passed on.
+    pub fn try_step(&mut self, action: &[f32]) -> Result<Transition, RlError> {
+        let (lo, hi) = (self.cfg.accel_min, self.cfg.accel_max);
+        let sim = self.sim.as_mut().expect("reset before step");
+        for (k, &id) in self.controlled.iter().enumerate() {
+            if let Some(&a) = action.get(k) {
+                let a = if a.is_finite() { (a as f64).clamp(lo, hi) } else { 0.0 };
+                sim.set_acceleration(id, a).map_err(|e| RlError::Scenario { scenario: "simulation".into(), msg: e.to_string() })?;
+            }
+        }
+        if !sim.is_done() {
+            sim.step().map_err(|e| RlError::Scenario { scenario: "simulation".into(), msg: e.to_string() })?;
+        }
+        // The reward sees the controlled set that acted in this step.
+        let reward = self.reward() as f32;
+        let obs = self.observe();
+        Ok(Transition { obs, reward, terminal: false })
+    }
+
+    /// The controlled AVs of the current observation, in slot order.
+    pub fn controlled(&self) -> &[VehicleId] {
+        &self.controlled
+    }
+}
+
+impl Env for MergeEnv {
+    fn obs_dim(&self) -> usize {
+        self.cfg.obs_dim()
+    }
+    fn act_dim(&self) -> usize {
+        self.cfg.n_av
+    }
+    fn reset(&mut self, seed: u64) -> Result<Vec<f32>, RlError> {
+        let mut sim = Simulation::from_spec(self.spec.clone(), seed)
+            .map_err(|e| RlError::Scenario { scenario: self.spec.graph.source.file.clone(), msg: e.to_string() })?;
+        sim.set_invariant_checks(false);
+        self.sim = Some(sim);
+        self.queue.clear();
+        Ok(self.observe())
+    }
+    fn step(&mut self, action: &[f32]) -> Result<Transition, RlError> {
+        self.try_step(action)
+    }
+    fn metrics(&self) -> EpisodeMetrics {
+        let m = self.sim().metrics();
+        EpisodeMetrics { outflow: m.outflow_veh_h, inflow: m.inflow_veh_h, speed: m.avg_speed_mps }
+    }
+}

@@ -1,0 +1,2 @@
+pub mod obs;
+pub mod merge;

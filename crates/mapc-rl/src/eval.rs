@@ -1,0 +1,146 @@
+//! Evaluation of a policy on a scenario over fixed seeds, against the all-human baseline on the same seeds.
+
+use std::path::Path;
+
+use mapc_sim::{MeanCi, RunMetrics, SimSpec, Summary};
+use serde::{Deserialize, Serialize};
+
+use crate::checkpoint::Checkpoint;
+use crate::env::merge::{MergeEnv, MergeEnvConfig};
+use crate::env::obs::{ObsNorm, PER_AV};
+use crate::error::RlError;
+use crate::rng::mix_seed;
+use crate::rollout::{ActionMode, Env, EpisodeMetrics, collect};
+use crate::stats::{WelchTest, welch_t_test};
+
+/// Mean and 95% CI of one metric.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Figure {
+    pub mean: f64,
+    pub ci95: f64,
+}
+
+impl From<MeanCi> for Figure {
+    fn from(m: MeanCi) -> Self {
+        Figure { mean: m.mean, ci95: m.ci95 }
+    }
+}
+
+/// `mapc sim`'s summary shape: outflow, inflow and speed over `seeds` runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FigureSet {
+    pub outflow: Figure,
+    pub inflow: Figure,
+    pub speed: Figure,
+    pub seeds: usize,
+}
+
+impl FigureSet {
+    pub fn of(runs: &[EpisodeMetrics]) -> Self {
+        let col = |f: fn(&EpisodeMetrics) -> f64| Figure::from(MeanCi::of(&runs.iter().map(f).collect::<Vec<_>>()));
+        FigureSet { outflow: col(|m| m.outflow), inflow: col(|m| m.inflow), speed: col(|m| m.speed), seeds: runs.len() }
+    }
+    /// Whether the 95% intervals of the outflow do not overlap.
+    pub fn outflow_ci_disjoint(&self, other: &FigureSet) -> bool {
+        let (a, b) = (self.outflow, other.outflow);
+        a.mean - a.ci95 > b.mean + b.ci95 || b.mean - b.ci95 > a.mean + a.ci95
+    }
+}
+
+/// Welch tests of policy minus baseline.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Comparison {
+    pub outflow: Option<WelchTest>,
+    pub inflow: Option<WelchTest>,
+    pub speed: Option<WelchTest>,
+    /// Policy outflow relative to the baseline's, in percent.
+    pub outflow_change_pct: f64,
+    pub outflow_ci_disjoint: bool,
+}
+
+/// What `mapc eval --json` prints: the policy's figures at the top level (as `mapc sim`), then the baseline.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvalReport {
+    pub outflow: Figure,
+    pub inflow: Figure,
+    pub speed: Figure,
+    pub seeds: usize,
+    pub policy: String,
+    pub scenario: String,
+    pub actions: String,
+    pub baseline: Option<FigureSet>,
+    pub comparison: Option<Comparison>,
+    pub wall_s: f64,
+}
+
+/// The all-human version of a spec: every AV type drives like the humans (its `controlled` flag off).
+pub fn human_spec(spec: &SimSpec) -> SimSpec {
+    let mut s = spec.clone();
+    for t in &mut s.vehicle_types {
+        t.controlled = false;
+    }
+    s
+}
+
+fn to_episode_metrics(r: &RunMetrics) -> EpisodeMetrics {
+    EpisodeMetrics { outflow: r.outflow_veh_h, inflow: r.inflow_veh_h, speed: r.avg_speed_mps }
+}
+
+/// The environment config for running a trained policy on a scenario with `scenario_n_av` controlled AVs
+/// (`None`: the policy's). The observation normalisation is always the policy's own (zero-shot transfer keeps
+/// the constants of training).
+pub fn env_config_for(ck: &Checkpoint, policy: &Path, scenario: &str, scenario_n_av: Option<usize>) -> Result<MergeEnvConfig, RlError> {
+    let n_av = scenario_n_av.unwrap_or(ck.spec.n_av);
+    if PER_AV * n_av != ck.spec.obs_dim {
+        return Err(RlError::ObsMismatch {
+            policy: policy.into(),
+            expected: ck.spec.obs_dim,
+            policy_n_av: ck.spec.n_av,
+            scenario: scenario.into(),
+            got: PER_AV * n_av,
+            scenario_n_av: n_av,
+        });
+    }
+    Ok(MergeEnvConfig {
+        reward: ck.spec.reward.parse().unwrap_or(crate::env::merge::RewardKind::Outflow),
+        n_av,
+        norm: ObsNorm { max_speed: ck.spec.max_speed, length: ck.spec.norm_length },
+        accel_min: ck.spec.accel_min,
+        accel_max: ck.spec.accel_max,
+    })
+}
+
+/// Runs the policy on `spec` for each seed (in parallel, results in seed order).
+pub fn run_policy(ck: &Checkpoint, spec: &SimSpec, cfg: &MergeEnvConfig, seeds: &[u64], mode: ActionMode) -> Result<Vec<EpisodeMetrics>, RlError> {
+    let probe = MergeEnv::new(spec.clone(), cfg.clone())?;
+    let horizon = probe.horizon();
+    let factory = || -> Box<dyn Env> { Box::new(MergeEnv::new(spec.clone(), cfg.clone()).expect("validated above")) };
+    let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, mix_seed(&[s, 0xE7A1]))).collect();
+    let eps = collect(&factory, &ck.state.model, &pairs, horizon, mode, false)?;
+    Ok(eps.into_iter().map(|e| e.metrics).collect())
+}
+
+/// The human baseline on the same seeds.
+pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<EpisodeMetrics>, RlError> {
+    let runs = mapc_sim::run_baseline(&human_spec(spec), seeds)
+        .map_err(|e| RlError::Scenario { scenario: spec.graph.source.file.clone(), msg: e.to_string() })?;
+    Ok(runs.iter().map(to_episode_metrics).collect())
+}
+
+/// Welch tests and the outflow change of `policy` against `baseline`.
+pub fn compare(policy: &[EpisodeMetrics], baseline: &[EpisodeMetrics]) -> Comparison {
+    let col = |r: &[EpisodeMetrics], f: fn(&EpisodeMetrics) -> f64| r.iter().map(f).collect::<Vec<_>>();
+    let (p, b) = (FigureSet::of(policy), FigureSet::of(baseline));
+    Comparison {
+        outflow: welch_t_test(&col(policy, |m| m.outflow), &col(baseline, |m| m.outflow)),
+        inflow: welch_t_test(&col(policy, |m| m.inflow), &col(baseline, |m| m.inflow)),
+        speed: welch_t_test(&col(policy, |m| m.speed), &col(baseline, |m| m.speed)),
+        outflow_change_pct: 100.0 * (p.outflow.mean / b.outflow.mean - 1.0),
+        outflow_ci_disjoint: p.outflow_ci_disjoint(&b),
+    }
+}
+
+/// Summary of simulator runs in the evaluation's shape (for `Summary` users).
+pub fn figures_of_summary(s: &Summary) -> FigureSet {
+    FigureSet { outflow: s.outflow.into(), inflow: s.inflow.into(), speed: s.speed.into(), seeds: s.seeds }
+}

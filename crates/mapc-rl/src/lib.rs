@@ -1,0 +1,1 @@
+//! # mapc-rl (being written)

@@ -1,0 +1,482 @@
+//! All tensor code of the trainer: the two MLPs (policy and value), their plain-`f32` forward pass used at
+//! rollout time, the PPO loss and its gradient on burn (flex CPU backend, autodiff), and Adam.
+//!
+//! Parameters live in one flat `Vec<f32>` (policy layers then value layers; per layer the weight matrix row-major
+//! `[inputs][outputs]`, then the bias). Burn builds leaf tensors from that vector for each minibatch and returns the
+//! gradient as a vector of the same layout, so checkpoints are plain numbers and Adam is a loop over slices.
+
+use burn::tensor::{Device, Tensor, TensorData};
+use serde::{Deserialize, Serialize};
+
+use crate::rng::Rng;
+
+/// The tanh written as `1 - 2 / (exp(2x) + 1)`: the same function, measured 1.6x faster than flex's tanh.
+#[inline]
+pub fn fast_tanh(x: f32) -> f32 {
+    1.0 - 2.0 / ((2.0 * x).exp() + 1.0)
+}
+
+const LN_2PI: f32 = 1.837_877_1;
+
+/// Sizes of the two networks. The policy net ends in `2 * act_dim` outputs (means then log-stds: the log-std is
+/// state-dependent), the value net in one output.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Architecture {
+    pub obs_dim: usize,
+    pub act_dim: usize,
+    pub hidden: Vec<usize>,
+}
+
+impl Architecture {
+    fn policy_sizes(&self) -> Vec<usize> {
+        let mut s = vec![self.obs_dim];
+        s.extend(&self.hidden);
+        s.push(2 * self.act_dim);
+        s
+    }
+    fn value_sizes(&self) -> Vec<usize> {
+        let mut s = vec![self.obs_dim];
+        s.extend(&self.hidden);
+        s.push(1);
+        s
+    }
+    fn count(sizes: &[usize]) -> usize {
+        sizes.windows(2).map(|w| w[0] * w[1] + w[1]).sum()
+    }
+    pub fn policy_len(&self) -> usize {
+        Self::count(&self.policy_sizes())
+    }
+    pub fn param_len(&self) -> usize {
+        self.policy_len() + Self::count(&self.value_sizes())
+    }
+}
+
+/// Policy and value networks with their parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Model {
+    pub arch: Architecture,
+    pub params: Vec<f32>,
+}
+
+/// Fills one MLP's weights with RLlib's "normc" scheme: each output unit's incoming weights are Gaussian, scaled to
+/// L2 norm `std` (1.0 for hidden layers, 0.01 for the output layer so initial actions are near zero). Biases 0.
+fn normc_init(sizes: &[usize], rng: &mut Rng, out: &mut Vec<f32>) {
+    let layers = sizes.len() - 1;
+    for (l, w) in sizes.windows(2).enumerate() {
+        let (n_in, n_out) = (w[0], w[1]);
+        let std = if l + 1 == layers { 0.01 } else { 1.0 };
+        let mut m: Vec<f32> = (0..n_in * n_out).map(|_| rng.normal() as f32).collect();
+        for j in 0..n_out {
+            let norm = (0..n_in).map(|i| m[i * n_out + j].powi(2)).sum::<f32>().sqrt().max(1e-12);
+            for i in 0..n_in {
+                m[i * n_out + j] *= std / norm;
+            }
+        }
+        out.extend(m);
+        out.extend(std::iter::repeat_n(0.0, n_out));
+    }
+}
+
+/// Plain forward of one MLP on one input (tanh hidden layers, linear output).
+fn mlp_forward(params: &[f32], sizes: &[usize], x: &[f32], buf: &mut Vec<f32>, out: &mut Vec<f32>) {
+    out.clear();
+    out.extend_from_slice(x);
+    let mut off = 0;
+    let layers = sizes.len() - 1;
+    for (l, w) in sizes.windows(2).enumerate() {
+        let (n_in, n_out) = (w[0], w[1]);
+        let weights = &params[off..off + n_in * n_out];
+        let bias = &params[off + n_in * n_out..off + n_in * n_out + n_out];
+        off += n_in * n_out + n_out;
+        buf.clear();
+        buf.extend_from_slice(bias);
+        for (i, &xi) in out.iter().enumerate() {
+            if xi == 0.0 {
+                continue;
+            }
+            let row = &weights[i * n_out..(i + 1) * n_out];
+            for (b, &wij) in buf.iter_mut().zip(row) {
+                *b += xi * wij;
+            }
+        }
+        if l + 1 < layers {
+            for b in buf.iter_mut() {
+                *b = fast_tanh(*b);
+            }
+        }
+        std::mem::swap(out, buf);
+    }
+}
+
+/// What the policy says about one observation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PolicyOutput {
+    pub mean: Vec<f32>,
+    pub log_std: Vec<f32>,
+    pub value: f32,
+}
+
+/// Reusable buffers for rollout-time inference (one per worker).
+#[derive(Default)]
+pub struct Scratch {
+    a: Vec<f32>,
+    b: Vec<f32>,
+}
+
+impl Model {
+    /// A freshly initialised model (deterministic in `seed`).
+    pub fn new(arch: Architecture, seed: u64) -> Self {
+        let mut rng = Rng::new(seed);
+        let mut params = Vec::with_capacity(arch.param_len());
+        normc_init(&arch.policy_sizes(), &mut rng, &mut params);
+        normc_init(&arch.value_sizes(), &mut rng, &mut params);
+        Self { arch, params }
+    }
+
+    /// Policy mean, log-std and value for one observation, in plain `f32` (no burn: ~50x cheaper per sample).
+    pub fn infer(&self, obs: &[f32], scratch: &mut Scratch) -> PolicyOutput {
+        let a = self.arch.act_dim;
+        let (pp, vp) = self.params.split_at(self.arch.policy_len());
+        let mut out = Vec::new();
+        mlp_forward(pp, &self.arch.policy_sizes(), obs, &mut scratch.a, &mut out);
+        let mean = out[..a].to_vec();
+        let log_std = out[a..2 * a].to_vec();
+        mlp_forward(vp, &self.arch.value_sizes(), obs, &mut scratch.a, &mut scratch.b);
+        PolicyOutput { mean, log_std, value: scratch.b[0] }
+    }
+
+    /// Value estimate alone.
+    pub fn value(&self, obs: &[f32], scratch: &mut Scratch) -> f32 {
+        let vp = &self.params[self.arch.policy_len()..];
+        let mut out = Vec::new();
+        mlp_forward(vp, &self.arch.value_sizes(), obs, &mut scratch.a, &mut out);
+        out[0]
+    }
+}
+
+/// Log-density of `action` under the diagonal Gaussian (summed over action dimensions).
+pub fn gaussian_log_prob(action: &[f32], mean: &[f32], log_std: &[f32]) -> f32 {
+    action
+        .iter()
+        .zip(mean)
+        .zip(log_std)
+        .map(|((&x, &m), &ls)| {
+            let z = (x - m) / ls.exp();
+            -0.5 * z * z - ls - 0.5 * LN_2PI
+        })
+        .sum()
+}
+
+/// One minibatch, row-major: `obs` is `n * obs_dim`, `actions`, `old_mean`, `old_log_std` are `n * act_dim`.
+pub struct Minibatch<'a> {
+    pub n: usize,
+    pub obs: &'a [f32],
+    pub actions: &'a [f32],
+    pub old_log_prob: &'a [f32],
+    pub old_mean: &'a [f32],
+    pub old_log_std: &'a [f32],
+    pub old_value: &'a [f32],
+    pub advantages: &'a [f32],
+    pub value_targets: &'a [f32],
+}
+
+/// Coefficients of the PPO loss.
+#[derive(Clone, Copy, Debug)]
+pub struct LossCoeffs {
+    pub clip: f32,
+    pub kl_coeff: f32,
+    pub vf_coeff: f32,
+    pub vf_clip: f32,
+    pub entropy_coeff: f32,
+}
+
+/// Minibatch means of the loss terms.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LossStats {
+    pub total: f32,
+    pub policy_loss: f32,
+    pub value_loss: f32,
+    pub kl: f32,
+    pub entropy: f32,
+}
+
+fn leaf(values: Vec<f32>, shape: [usize; 2], device: &Device) -> Tensor<2> {
+    Tensor::<2>::from_data(TensorData::new(values, shape), device)
+}
+
+fn burn_tanh(x: Tensor<2>) -> Tensor<2> {
+    x.mul_scalar(2.0).exp().add_scalar(1.0).recip().mul_scalar(-2.0).add_scalar(1.0)
+}
+
+fn burn_mlp(x: Tensor<2>, layers: &[(Tensor<2>, Tensor<2>)]) -> Tensor<2> {
+    let mut h = x;
+    for (l, (w, b)) in layers.iter().enumerate() {
+        h = h.matmul(w.clone()) + b.clone();
+        if l + 1 < layers.len() {
+            h = burn_tanh(h);
+        }
+    }
+    h
+}
+
+/// The autodiff CPU device used for updates.
+pub fn update_device() -> Device {
+    Device::flex().autodiff()
+}
+
+/// PPO loss (RLlib's formulation) on one minibatch and its gradient with respect to every parameter:
+/// `mean(-min(A r, A clip(r, 1-c, 1+c)) + kl_coeff KL(old||new) + vf_coeff max((V-R)^2, (V_clipped-R)^2)
+/// - entropy_coeff H)`, `r = exp(logp - old_logp)`, `V_clipped = V_old + clip(V - V_old, -vf_clip, vf_clip)`.
+pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs, device: &Device) -> (LossStats, Vec<f32>) {
+    let n = mb.n;
+    let arch = &model.arch;
+    let a = arch.act_dim;
+    // Leaf tensors for every layer of both nets.
+    let mut leaves: Vec<(Tensor<2>, Tensor<2>)> = Vec::new();
+    let mut off = 0;
+    for sizes in [arch.policy_sizes(), arch.value_sizes()] {
+        for w in sizes.windows(2) {
+            let (n_in, n_out) = (w[0], w[1]);
+            let wt = leaf(model.params[off..off + n_in * n_out].to_vec(), [n_in, n_out], device).require_grad();
+            off += n_in * n_out;
+            let bt = leaf(model.params[off..off + n_out].to_vec(), [1, n_out], device).require_grad();
+            off += n_out;
+            leaves.push((wt, bt));
+        }
+    }
+    let n_policy_layers = arch.policy_sizes().len() - 1;
+    let obs = leaf(mb.obs.to_vec(), [n, arch.obs_dim], device);
+    let out = burn_mlp(obs.clone(), &leaves[..n_policy_layers]);
+    let mean = out.clone().narrow(1, 0, a);
+    let log_std = out.narrow(1, a, a);
+    let actions = leaf(mb.actions.to_vec(), [n, a], device);
+    let old_mean = leaf(mb.old_mean.to_vec(), [n, a], device);
+    let old_log_std = leaf(mb.old_log_std.to_vec(), [n, a], device);
+    let col = |v: &[f32]| leaf(v.to_vec(), [n, 1], device);
+    let old_logp = col(mb.old_log_prob);
+    let adv = col(mb.advantages);
+    let targets = col(mb.value_targets);
+    let old_value = col(mb.old_value);
+
+    let inv_std = log_std.clone().neg().exp();
+    let z = (actions - mean.clone()) * inv_std.clone();
+    let logp = (z.square().mul_scalar(-0.5) - log_std.clone()).sum_dim(1).sub_scalar(0.5 * LN_2PI * a as f32);
+    let ratio = (logp - old_logp).exp();
+    let surr = (adv.clone() * ratio.clone()).min_pair(adv * ratio.clamp(1.0 - c.clip, 1.0 + c.clip));
+    // KL(old || new) of diagonal Gaussians.
+    let old_var = old_log_std.clone().mul_scalar(2.0).exp();
+    let kl = (log_std.clone() - old_log_std
+        + (old_var + (old_mean - mean).square()) * inv_std.square().mul_scalar(0.5))
+    .sub_scalar(0.5)
+    .sum_dim(1);
+    let entropy = log_std.sum_dim(1).add_scalar(0.5 * (LN_2PI + 1.0) * a as f32);
+    let value = burn_mlp(obs, &leaves[n_policy_layers..]);
+    let vf1 = (value.clone() - targets.clone()).square();
+    let vf_clipped = old_value.clone() + (value - old_value).clamp(-c.vf_clip, c.vf_clip);
+    let vf2 = (vf_clipped - targets).square();
+    let vf_loss = vf1.max_pair(vf2);
+
+    let policy_loss = surr.neg().mean();
+    let kl_mean = kl.mean();
+    let vf_mean = vf_loss.mean();
+    let ent_mean = entropy.mean();
+    let total = policy_loss.clone()
+        + kl_mean.clone().mul_scalar(c.kl_coeff)
+        + vf_mean.clone().mul_scalar(c.vf_coeff)
+        - ent_mean.clone().mul_scalar(c.entropy_coeff);
+    let stats = LossStats {
+        total: total.clone().into_scalar::<f32>(),
+        policy_loss: policy_loss.into_scalar::<f32>(),
+        value_loss: vf_mean.into_scalar::<f32>(),
+        kl: kl_mean.into_scalar::<f32>(),
+        entropy: ent_mean.into_scalar::<f32>(),
+    };
+    let grads = total.backward();
+    let mut flat = Vec::with_capacity(model.params.len());
+    for (w, b) in &leaves {
+        for t in [w, b] {
+            match t.grad(&grads) {
+                Some(g) => flat.extend_from_slice(g.into_data().as_slice::<f32>().expect("f32 gradient")),
+                None => flat.extend(std::iter::repeat_n(0.0, t.shape().num_elements())),
+            }
+        }
+    }
+    (stats, flat)
+}
+
+/// Adam on the flat parameter vector (its state is checkpointed with the model, so a resumed run is exact).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Adam {
+    pub m: Vec<f32>,
+    pub v: Vec<f32>,
+    pub t: u64,
+    pub beta1: f32,
+    pub beta2: f32,
+    pub eps: f32,
+}
+
+impl Adam {
+    pub fn new(n: usize) -> Self {
+        Self { m: vec![0.0; n], v: vec![0.0; n], t: 0, beta1: 0.9, beta2: 0.999, eps: 1e-8 }
+    }
+
+    pub fn step(&mut self, params: &mut [f32], grad: &[f32], lr: f32) {
+        self.t += 1;
+        let bc1 = 1.0 - self.beta1.powi(self.t as i32);
+        let bc2 = 1.0 - self.beta2.powi(self.t as i32);
+        for i in 0..params.len() {
+            self.m[i] = self.beta1 * self.m[i] + (1.0 - self.beta1) * grad[i];
+            self.v[i] = self.beta2 * self.v[i] + (1.0 - self.beta2) * grad[i] * grad[i];
+            let mh = self.m[i] / bc1;
+            let vh = self.v[i] / bc2;
+            params[i] -= lr * mh / (vh.sqrt() + self.eps);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn arch() -> Architecture {
+        Architecture { obs_dim: 3, act_dim: 2, hidden: vec![4, 3] }
+    }
+
+    /// A model whose hidden weights are zero outputs its last biases: mean and log-std are then known by hand.
+    fn constant_model(mean: [f32; 2], log_std: [f32; 2], value: f32) -> Model {
+        let arch = arch();
+        let mut m = Model::new(arch.clone(), 1);
+        m.params.iter_mut().for_each(|p| *p = 0.0);
+        // Policy output bias sits at the end of the policy block; value output bias at the very end.
+        let pl = arch.policy_len();
+        m.params[pl - 4..pl].copy_from_slice(&[mean[0], mean[1], log_std[0], log_std[1]]);
+        let n = m.params.len();
+        m.params[n - 1] = value;
+        m
+    }
+
+    #[test]
+    fn plain_inference_matches_hand_values() {
+        let m = constant_model([0.5, -1.0], [0.0, -0.5], 2.0);
+        let out = m.infer(&[0.3, -0.2, 0.9], &mut Scratch::default());
+        assert_eq!(out.mean, vec![0.5, -1.0]);
+        assert_eq!(out.log_std, vec![0.0, -0.5]);
+        assert_eq!(out.value, 2.0);
+        // log N(1; 0.5, 1) + log N(-1; -1, e^-0.5) = (-0.125 - 0.9189385) + (0.5 - 0.9189385)
+        let lp = gaussian_log_prob(&[1.0, -1.0], &out.mean, &out.log_std);
+        assert!((lp - (-1.462_877)).abs() < 1e-5, "{lp}");
+    }
+
+    #[test]
+    fn ppo_loss_matches_hand_computation() {
+        // New policy: mean (0.5, -1), log-std (0, -0.5); value 2.
+        let m = constant_model([0.5, -1.0], [0.0, -0.5], 2.0);
+        let action = [1.0, -1.0];
+        let new_lp = -1.462_877_f32;
+        // Old log-prob chosen so the ratio is e^0.5 = 1.6487 (clipped to 1.3 with clip 0.3).
+        let old_lp = new_lp - 0.5;
+        let c = LossCoeffs { clip: 0.3, kl_coeff: 0.2, vf_coeff: 1.0, vf_clip: 10.0, entropy_coeff: 0.01 };
+        let mb = Minibatch {
+            n: 1,
+            obs: &[0.3, -0.2, 0.9],
+            actions: &action,
+            old_log_prob: &[old_lp],
+            old_mean: &[0.0, -1.0],
+            old_log_std: &[0.0, 0.0],
+            old_value: &[1.0],
+            advantages: &[2.0],
+            value_targets: &[3.5],
+        };
+        let (s, g) = loss_and_grad(&m, &mb, &c, &update_device());
+        // Surrogate: min(2 * 1.6487, 2 * 1.3) = 2.6 -> policy loss -2.6.
+        assert!((s.policy_loss + 2.6).abs() < 1e-5, "{:?}", s);
+        // KL: dim 1: 0 - 0 + (1 + 0.25)/2 - 0.5 = 0.125; dim 2: -0.5 - 0 + (1 + 0) / (2 e^-1) - 0.5 = e/2 - 1.
+        let kl = 0.125 + std::f32::consts::E / 2.0 - 1.0;
+        assert!((s.kl - kl).abs() < 1e-5, "{:?} vs {kl}", s);
+        // Value: V = 2, target 3.5: (1.5)^2 = 2.25 (the clipped branch is the same: |2 - 1| < 10).
+        assert!((s.value_loss - 2.25).abs() < 1e-5);
+        // Entropy: sum(log_std) + (ln 2pi + 1) = -0.5 + 2.837877.
+        assert!((s.entropy - 2.337_877).abs() < 1e-5);
+        let total = -2.6 + 0.2 * kl + 2.25 - 0.01 * 2.337_877;
+        assert!((s.total - total).abs() < 1e-5);
+        // The clipped surrogate passes no gradient; the value bias gets d/dV (V - 3.5)^2 = -3.
+        let n = g.len();
+        assert!((g[n - 1] + 3.0).abs() < 1e-5, "{}", g[n - 1]);
+        assert_eq!(g.len(), m.params.len());
+    }
+
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let arch = arch();
+        let m = Model::new(arch, 5);
+        let obs = [0.3, -0.2, 0.9, -0.7, 0.1, 0.4];
+        let actions = [0.1, -0.3, 0.05, 0.2];
+        let mut sc = Scratch::default();
+        let o1 = m.infer(&obs[..3], &mut sc);
+        let o2 = m.infer(&obs[3..], &mut sc);
+        let old_lp = [
+            gaussian_log_prob(&actions[..2], &o1.mean, &o1.log_std) - 0.05,
+            gaussian_log_prob(&actions[2..], &o2.mean, &o2.log_std) + 0.05,
+        ];
+        let old_mean = [o1.mean[0] + 0.01, o1.mean[1], o2.mean[0], o2.mean[1] - 0.02];
+        let old_ls = [o1.log_std[0], o1.log_std[1] + 0.03, o2.log_std[0], o2.log_std[1]];
+        let mb = Minibatch {
+            n: 2,
+            obs: &obs,
+            actions: &actions,
+            old_log_prob: &old_lp,
+            old_mean: &old_mean,
+            old_log_std: &old_ls,
+            old_value: &[o1.value, o2.value],
+            advantages: &[1.0, -0.5],
+            value_targets: &[0.7, -0.4],
+        };
+        let c = LossCoeffs { clip: 0.3, kl_coeff: 0.2, vf_coeff: 1.0, vf_clip: 10.0, entropy_coeff: 0.01 };
+        let dev = update_device();
+        let (_, g) = loss_and_grad(&m, &mb, &c, &dev);
+        for &i in &[0usize, 7, 20, m.arch.policy_len() - 1, m.arch.policy_len() + 3, m.params.len() - 1] {
+            let h = 1e-2;
+            let mut p = m.clone();
+            p.params[i] += h;
+            let (sp, _) = loss_and_grad(&p, &mb, &c, &dev);
+            p.params[i] -= 2.0 * h;
+            let (sm, _) = loss_and_grad(&p, &mb, &c, &dev);
+            let fd = (sp.total - sm.total) / (2.0 * h);
+            assert!((fd - g[i]).abs() < 2e-3 + 0.02 * g[i].abs(), "param {i}: fd {fd} vs {}", g[i]);
+        }
+    }
+
+    #[test]
+    fn burn_forward_matches_plain_inference() {
+        let m = Model::new(Architecture { obs_dim: 4, act_dim: 2, hidden: vec![100, 50, 25] }, 9);
+        let obs = [0.5, -0.25, 0.75, 0.1];
+        let plain = m.infer(&obs, &mut Scratch::default());
+        // Loss with zero coefficients except entropy exposes the log-std mean; check the policy via the KL term
+        // against itself: identical old and new distributions give KL = 0 and ratio 1.
+        let lp = gaussian_log_prob(&[0.0, 0.0], &plain.mean, &plain.log_std);
+        let mb = Minibatch {
+            n: 1,
+            obs: &obs,
+            actions: &[0.0, 0.0],
+            old_log_prob: &[lp],
+            old_mean: &plain.mean,
+            old_log_std: &plain.log_std,
+            old_value: &[plain.value],
+            advantages: &[1.0],
+            value_targets: &[plain.value],
+        };
+        let c = LossCoeffs { clip: 0.3, kl_coeff: 0.2, vf_coeff: 1.0, vf_clip: 10.0, entropy_coeff: 0.0 };
+        let (s, _) = loss_and_grad(&m, &mb, &c, &update_device());
+        assert!(s.kl.abs() < 1e-6, "{:?}", s);
+        assert!((s.policy_loss + 1.0).abs() < 1e-5, "{:?}", s);
+        assert!(s.value_loss < 1e-10, "{:?}", s);
+    }
+
+    #[test]
+    fn adam_first_step_moves_by_lr() {
+        let mut p = vec![1.0, -2.0];
+        let mut a = Adam::new(2);
+        a.step(&mut p, &[0.5, -3.0], 0.1);
+        assert!((p[0] - 0.9).abs() < 1e-6 && (p[1] + 1.9).abs() < 1e-6, "{p:?}");
+    }
+}

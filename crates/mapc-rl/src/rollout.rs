@@ -1,0 +1,150 @@
+//! Rollout collection: the `Env` trait, one episode per seed, episodes run in parallel on the rayon pool and
+//! returned in seed order (so the batch is the same bit for bit whatever the thread count).
+
+use rayon::prelude::*;
+
+use crate::error::RlError;
+use crate::ppo::gae::EpisodeEnd;
+use crate::ppo::tensor::{Model, Scratch, gaussian_log_prob};
+use crate::rng::Rng;
+
+/// The result of one environment step.
+#[derive(Clone, Debug)]
+pub struct Transition {
+    pub obs: Vec<f32>,
+    pub reward: f32,
+    /// The episode reached a terminal state (not a time limit).
+    pub terminal: bool,
+}
+
+/// Episode-level traffic figures reported by an environment.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EpisodeMetrics {
+    /// veh/h.
+    pub outflow: f64,
+    /// veh/h.
+    pub inflow: f64,
+    /// m/s.
+    pub speed: f64,
+}
+
+/// A reinforcement-learning environment with a fixed observation and action size.
+pub trait Env {
+    fn obs_dim(&self) -> usize;
+    fn act_dim(&self) -> usize;
+    /// Starts a new episode; the seed fixes everything random inside the environment.
+    fn reset(&mut self, seed: u64) -> Result<Vec<f32>, RlError>;
+    /// Applies an (unclipped) action: the environment clips it to its bounds.
+    fn step(&mut self, action: &[f32]) -> Result<Transition, RlError>;
+    /// Figures of the episode so far.
+    fn metrics(&self) -> EpisodeMetrics;
+}
+
+/// Builds one environment per worker.
+pub type EnvFactory<'a> = dyn Fn() -> Box<dyn Env> + Sync + 'a;
+
+/// One episode, flattened row-major.
+#[derive(Clone, Debug, Default)]
+pub struct Episode {
+    pub obs: Vec<f32>,
+    pub actions: Vec<f32>,
+    pub rewards: Vec<f32>,
+    pub values: Vec<f32>,
+    pub log_probs: Vec<f32>,
+    pub means: Vec<f32>,
+    pub log_stds: Vec<f32>,
+    pub end: Option<EpisodeEnd>,
+    pub metrics: EpisodeMetrics,
+}
+
+impl Episode {
+    pub fn len(&self) -> usize {
+        self.rewards.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.rewards.is_empty()
+    }
+    pub fn total_reward(&self) -> f64 {
+        self.rewards.iter().map(|&r| r as f64).sum()
+    }
+}
+
+/// How actions are chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ActionMode {
+    /// Sample from the Gaussian (training, `--sample`).
+    Sample,
+    /// The Gaussian's mean (evaluation).
+    Mean,
+}
+
+/// Runs one episode of at most `horizon` steps. `record` keeps the per-step data needed for training.
+pub fn run_episode(
+    env: &mut dyn Env,
+    model: &Model,
+    scratch: &mut Scratch,
+    env_seed: u64,
+    noise_seed: u64,
+    horizon: usize,
+    mode: ActionMode,
+    record: bool,
+) -> Result<Episode, RlError> {
+    let mut rng = Rng::new(noise_seed);
+    let mut ep = Episode::default();
+    let mut obs = env.reset(env_seed)?;
+    let mut terminal = false;
+    for _ in 0..horizon {
+        let out = model.infer(&obs, scratch);
+        let action: Vec<f32> = match mode {
+            ActionMode::Mean => out.mean.clone(),
+            ActionMode::Sample => out
+                .mean
+                .iter()
+                .zip(&out.log_std)
+                .map(|(&m, &ls)| m + ls.exp() * rng.normal() as f32)
+                .collect(),
+        };
+        let tr = env.step(&action)?;
+        if record {
+            ep.log_probs.push(gaussian_log_prob(&action, &out.mean, &out.log_std));
+            ep.obs.extend_from_slice(&obs);
+            ep.actions.extend_from_slice(&action);
+            ep.means.extend_from_slice(&out.mean);
+            ep.log_stds.extend_from_slice(&out.log_std);
+            ep.values.push(out.value);
+        }
+        ep.rewards.push(tr.reward);
+        obs = tr.obs;
+        if tr.terminal {
+            terminal = true;
+            break;
+        }
+    }
+    ep.end = Some(if terminal {
+        EpisodeEnd::Terminal
+    } else {
+        EpisodeEnd::Truncated { bootstrap_value: if record { model.value(&obs, scratch) } else { 0.0 } }
+    });
+    ep.metrics = env.metrics();
+    Ok(ep)
+}
+
+/// Runs one episode per `(env_seed, noise_seed)` pair in parallel, returned in input order.
+pub fn collect(
+    factory: &EnvFactory,
+    model: &Model,
+    seeds: &[(u64, u64)],
+    horizon: usize,
+    mode: ActionMode,
+    record: bool,
+) -> Result<Vec<Episode>, RlError> {
+    seeds
+        .par_iter()
+        .map_init(
+            || (factory(), Scratch::default()),
+            |(env, scratch), &(env_seed, noise_seed)| {
+                run_episode(env.as_mut(), model, scratch, env_seed, noise_seed, horizon, mode, record)
+            },
+        )
+        .collect()
+}

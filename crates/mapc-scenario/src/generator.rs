@@ -1,0 +1,189 @@
+//! Built-in networks. The Simple Merge is laid out as the original code's MergeNetwork: the main road runs east
+//! along y = 0 with the merge at x = pre_merge_m; the ramp comes in from below at `angle_deg`.
+
+use crate::model::{MajorRoad, SimpleMergeParams};
+use mapc_graph::{
+    Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance, RightOfWay, Road, RoadId,
+    Source, SourceFormat,
+};
+
+pub const SIMPLE_MERGE: &str = "simple_merge";
+/// Road names of the Simple Merge, as in the original code (and its SUMO net), so SUMO-style ids find them.
+pub const MAIN_ENTRY: &str = "inflow_highway";
+pub const MAIN_PRE_MERGE: &str = "left";
+pub const RAMP_ENTRY: &str = "inflow_merge";
+pub const RAMP_PRE_MERGE: &str = "bottom";
+pub const POST_MERGE: &str = "center";
+const LANE_WIDTH_M: f64 = 3.2;
+
+pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
+    for (name, v) in [
+        ("inflow_edge_m", p.inflow_edge_m),
+        ("pre_merge_m", p.pre_merge_m),
+        ("merge_m", p.merge_m),
+        ("post_merge_m", p.post_merge_m),
+        ("speed_limit_mps", p.speed_limit_mps),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(format!("network.simple_merge.{name} must be a positive number, not {v}"));
+        }
+    }
+    for (name, v) in [
+        ("main_internal_m", p.main_internal_m),
+        ("ramp_internal_m", p.ramp_internal_m),
+        ("through_internal_m", p.through_internal_m),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!("network.simple_merge.{name} must be zero or positive, not {v}"));
+        }
+    }
+    if !(p.angle_deg > 0.0 && p.angle_deg < 90.0) {
+        return Err(format!("network.simple_merge.angle_deg must be between 0 and 90, not {}", p.angle_deg));
+    }
+    if p.lanes == 0 {
+        return Err("network.simple_merge.lanes must be at least 1".to_string());
+    }
+    let (sin, cos) = p.angle_deg.to_radians().sin_cos();
+    let made_by = || Provenance::made_by(crate::generator::SIMPLE_MERGE);
+    let with_sumo = |id: &str| Provenance { sumo_ids: vec![id.to_string()], ..made_by() };
+    let l = p.inflow_edge_m;
+    let x_merge = p.pre_merge_m;
+    let ramp_total = p.merge_m + l;
+    // Junctions, in the original's names.
+    let nodes: [(&str, [f64; 2]); 6] = [
+        ("inflow_highway", [-l, 0.0]),
+        ("left", [0.0, 0.0]),
+        ("center", [x_merge, 0.0]),
+        ("right", [x_merge + p.post_merge_m, 0.0]),
+        ("inflow_merge", [x_merge - ramp_total * cos, -ramp_total * sin]),
+        ("bottom", [x_merge - p.merge_m * cos, -p.merge_m * sin]),
+    ];
+    let mut g = LaneGraph::new(
+        Source { file: SIMPLE_MERGE.to_string(), format: SourceFormat::Generator },
+        Projection::Plane { offset: [0.0, 0.0] },
+    );
+    g.junctions = nodes
+        .iter()
+        .enumerate()
+        .map(|(i, (name, pos))| Junction {
+            id: JunctionId(i as u32),
+            pos: *pos,
+            kind: JunctionKind::Through,
+            incoming: vec![],
+            outgoing: vec![],
+            provenance: with_sumo(name),
+        })
+        .collect();
+    let jid = |name: &str| JunctionId(nodes.iter().position(|(n, _)| *n == name).unwrap() as u32);
+    let (main_priority, ramp_priority) = match p.major {
+        MajorRoad::Ramp => (-1, 1),
+        MajorRoad::Main => (1, -1),
+    };
+    let edges: [(&str, &str, &str, f64, &str, i32); 5] = [
+        (MAIN_ENTRY, "inflow_highway", "left", l, "highway", main_priority),
+        (MAIN_PRE_MERGE, "left", "center", p.pre_merge_m, "highway", main_priority),
+        (RAMP_ENTRY, "inflow_merge", "bottom", l, "merge", ramp_priority),
+        (RAMP_PRE_MERGE, "bottom", "center", p.merge_m, "merge", ramp_priority),
+        (POST_MERGE, "center", "right", p.post_merge_m, "highway", main_priority),
+    ];
+    g.roads = edges
+        .iter()
+        .enumerate()
+        .map(|(i, &(name, from, to, length_m, class, priority))| Road {
+            id: RoadId(i as u32),
+            from: jid(from),
+            to: jid(to),
+            class: class.to_string(),
+            name: Some(name.to_string()),
+            ref_: None,
+            priority,
+            lanes: (0..p.lanes)
+                .map(|index| Lane { index, speed_mps: p.speed_limit_mps, width_m: LANE_WIDTH_M, length_m })
+                .collect(),
+            geometry: vec![nodes[jid(from).0 as usize].1, nodes[jid(to).0 as usize].1],
+            length_m,
+            provenance: with_sumo(name),
+        })
+        .collect();
+    let rid = |name: &str| RoadId(edges.iter().position(|e| e.0 == name).unwrap() as u32);
+    let (main_row, ramp_row) = match p.major {
+        MajorRoad::Ramp => (RightOfWay::Minor, RightOfWay::Major),
+        MajorRoad::Main => (RightOfWay::Major, RightOfWay::Minor),
+    };
+    for lane in 0..p.lanes {
+        g.connections.push(Connection {
+            junction: jid("center"),
+            from_road: rid(MAIN_PRE_MERGE),
+            from_lane: lane,
+            to_road: rid(POST_MERGE),
+            to_lane: lane,
+            via_length_m: p.main_internal_m,
+            via_speed_mps: Some(p.speed_limit_mps),
+            right_of_way: main_row,
+            right_of_way_overridden: false,
+            provenance: made_by(),
+        });
+        g.connections.push(Connection {
+            junction: jid("center"),
+            from_road: rid(RAMP_PRE_MERGE),
+            from_lane: lane,
+            to_road: rid(POST_MERGE),
+            to_lane: lane,
+            via_length_m: p.ramp_internal_m,
+            via_speed_mps: Some(p.ramp_internal_speed_mps),
+            right_of_way: ramp_row,
+            right_of_way_overridden: false,
+            provenance: made_by(),
+        });
+        for (from, to) in [(MAIN_ENTRY, MAIN_PRE_MERGE), (RAMP_ENTRY, RAMP_PRE_MERGE)] {
+            g.connections.push(Connection {
+                junction: g.road(rid(from)).unwrap().to,
+                from_road: rid(from),
+                from_lane: lane,
+                to_road: rid(to),
+                to_lane: lane,
+                via_length_m: p.through_internal_m,
+                via_speed_mps: Some(p.speed_limit_mps),
+                right_of_way: RightOfWay::Major,
+                right_of_way_overridden: false,
+                provenance: made_by(),
+            });
+        }
+    }
+    g.connections.sort_by_key(|c| (c.junction, c.from_road, c.from_lane, c.to_road, c.to_lane));
+    g.rebuild_junction_links();
+    Ok(g)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn simple_merge_has_the_papers_lengths_and_right_of_way() {
+        let g = simple_merge(&SimpleMergeParams::default()).unwrap();
+        assert!(g.invariant_violations().is_empty(), "{:?}", g.invariant_violations());
+        let center = g.find_junction("center").unwrap();
+        assert_eq!(g.junction(center).unwrap().kind, JunctionKind::Merge);
+        let main_before: f64 = [MAIN_ENTRY, MAIN_PRE_MERGE].iter().map(|n| g.road(g.find_roads(n).unwrap()[0]).unwrap().length_m).sum();
+        let ramp: f64 = [RAMP_ENTRY, RAMP_PRE_MERGE].iter().map(|n| g.road(g.find_roads(n).unwrap()[0]).unwrap().length_m).sum();
+        assert_eq!((main_before, ramp), (600.0, 200.0));
+        // REFERENCE.md sec. 1: the total lane length the original code normalises by.
+        assert!((g.total_lane_length_m() - 947.68).abs() < 1e-9, "{}", g.total_lane_length_m());
+        let ramp_conn = g.connections_from(g.find_roads(RAMP_PRE_MERGE).unwrap()[0]).next().unwrap();
+        assert_eq!(ramp_conn.right_of_way, RightOfWay::Major);
+        let main_conn = g.connections_from(g.find_roads(MAIN_PRE_MERGE).unwrap()[0]).next().unwrap();
+        assert_eq!(main_conn.right_of_way, RightOfWay::Minor);
+        // The ramp's start lies (merge_m + inflow) away from the merge at 45 degrees.
+        let start = g.junction(g.find_junction("inflow_merge").unwrap()).unwrap().pos;
+        assert!(((start[0] - 500.0).hypot(start[1]) - 200.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn bad_parameters_are_named() {
+        let p = SimpleMergeParams { pre_merge_m: -3.0, ..Default::default() };
+        assert!(simple_merge(&p).unwrap_err().contains("pre_merge_m"));
+        let p = SimpleMergeParams { angle_deg: 95.0, ..Default::default() };
+        assert!(simple_merge(&p).unwrap_err().contains("angle_deg"));
+    }
+}

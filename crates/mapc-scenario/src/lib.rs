@@ -1,0 +1,278 @@
+//! # mapc-scenario: what to simulate, and how a real map becomes it
+//!
+//! Glossary:
+//! - **scenario**: a network plus vehicle types, flows (demand), initial vehicles, step, horizon and the controlled
+//!   region; written as TOML (`scenarios/*.toml`).
+//! - **flow**: periodic departures from an entry road at `vehs_per_hour` (SUMO's semantics), of one vehicle type.
+//! - **vehicle type**: IDM driver parameters; `controlled = true` marks an AV a policy may drive.
+//! - **controlled region**: the roads where AVs are driven by a policy (a transfer window), and `n_av`, how many.
+//! - **corridor**: a single-lane main road with the roads merging into it (what `simplify` makes of a highway).
+//! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's.
+//! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
+
+pub mod generator;
+pub mod model;
+pub mod simplify;
+pub mod transform;
+pub mod window;
+
+pub use model::*;
+
+use mapc_graph::{LaneGraph, RoadId};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    #[error("{path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}: {message}")]
+    Toml { path: PathBuf, message: String },
+    #[error("{path}: {key}: {message}")]
+    Invalid { path: PathBuf, key: String, message: String },
+    #[error("{path}: network: {source}")]
+    Graph { path: PathBuf, source: mapc_graph::GraphFileError },
+    #[error("{path}: network: {message}")]
+    Network { path: PathBuf, message: String },
+    #[error("no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge)")]
+    Unknown(String),
+}
+
+/// A scenario with its network in hand, its road references checked.
+#[derive(Clone, Debug)]
+pub struct ResolvedScenario {
+    pub scenario: Scenario,
+    pub graph: LaneGraph,
+    /// Where the scenario came from: a file path, or `builtin:NAME`.
+    pub origin: String,
+    /// Each flow's entry road and optional last road.
+    pub flow_roads: Vec<(RoadId, Option<RoadId>)>,
+    /// The control region's roads (empty: the whole network).
+    pub region_roads: Vec<RoadId>,
+}
+
+impl Scenario {
+    /// The paper's Simple Merge exactly (REFERENCE.md sec. 1).
+    pub fn simple_merge() -> Scenario {
+        let human = VehicleType::default();
+        let av = VehicleType { controlled: true, ..VehicleType::default() };
+        let flow = |id: &str, from: &str, vph: f64, vtype: &str, speed: f64| Flow {
+            id: id.to_string(),
+            from: from.to_string(),
+            to: None,
+            vehs_per_hour: vph,
+            vehicle_type: vtype.to_string(),
+            depart_speed_mps: speed,
+            begin_s: 1.0,
+            end_s: None,
+        };
+        Scenario {
+            version: SCENARIO_VERSION,
+            name: generator::SIMPLE_MERGE.to_string(),
+            description: "The Simple Merge of Cui et al. (AAMAS 2021): 600 m main road, 200 m ramp (the major road), \
+                          100 m after the merge; 2000 veh/h on the main road (10% AVs), 200 veh/h on the ramp."
+                .to_string(),
+            step_s: 0.5,
+            horizon_steps: 2000,
+            warmup_steps: 0,
+            network: NetworkSpec::SimpleMerge(SimpleMergeParams::default()),
+            vehicle_types: [("human".to_string(), human), ("av".to_string(), av)].into_iter().collect(),
+            flows: vec![
+                flow("main_human", generator::MAIN_ENTRY, 1800.0, "human", 10.0),
+                flow("main_av", generator::MAIN_ENTRY, 200.0, "av", 10.0),
+                flow("ramp_human", generator::RAMP_ENTRY, 200.0, "human", 7.5),
+            ],
+            initial_vehicles: Some(InitialVehicles { count: 5, vehicle_type: "human".to_string(), speed_mps: 0.0 }),
+            control: Some(Control { n_av: 5, region: vec![], window: None }),
+        }
+    }
+
+    pub fn builtin(name: &str) -> Option<Scenario> {
+        match name {
+            generator::SIMPLE_MERGE => Some(Scenario::simple_merge()),
+            _ => None,
+        }
+    }
+
+    pub fn from_toml(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
+        let s: Scenario =
+            toml::from_str(text).map_err(|e| ScenarioError::Toml { path: path.to_path_buf(), message: e.to_string() })?;
+        if s.version != SCENARIO_VERSION {
+            return Err(ScenarioError::Invalid {
+                path: path.to_path_buf(),
+                key: "version".into(),
+                message: format!("scenario version {}, but this mapc reads version {SCENARIO_VERSION}", s.version),
+            });
+        }
+        Ok(s)
+    }
+
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).expect("a scenario always serialises to TOML")
+    }
+
+    pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| ScenarioError::Io { path: path.to_path_buf(), source })?;
+        Scenario::from_toml(&text, path)
+    }
+
+    pub fn save(&self, path: &Path) -> Result<(), ScenarioError> {
+        mapc_graph::write_atomically(path, self.to_toml().as_bytes())
+            .map_err(|source| ScenarioError::Io { path: path.to_path_buf(), source })
+    }
+}
+
+impl ResolvedScenario {
+    /// A scenario file, or the name of a built-in scenario (`simple_merge`).
+    pub fn load(file_or_name: &str) -> Result<ResolvedScenario, ScenarioError> {
+        let path = Path::new(file_or_name);
+        if path.exists() {
+            let scenario = Scenario::load(path)?;
+            let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+            return ResolvedScenario::resolve(scenario, &base, file_or_name);
+        }
+        match Scenario::builtin(file_or_name) {
+            Some(s) => ResolvedScenario::resolve(s, Path::new("."), &format!("builtin:{file_or_name}")),
+            None => Err(ScenarioError::Unknown(file_or_name.to_string())),
+        }
+    }
+
+    /// Build or load the network (paths relative to `base_dir`) and check every reference. `origin` names the
+    /// scenario in errors.
+    pub fn resolve(scenario: Scenario, base_dir: &Path, origin: &str) -> Result<ResolvedScenario, ScenarioError> {
+        let path = PathBuf::from(origin);
+        let invalid = |key: String, message: String| ScenarioError::Invalid { path: path.clone(), key, message };
+        let graph = match &scenario.network {
+            NetworkSpec::SimpleMerge(p) => generator::simple_merge(p)
+                .map_err(|message| ScenarioError::Network { path: path.clone(), message })?,
+            NetworkSpec::Graph(g) => LaneGraph::load(&base_dir.join(g))
+                .map_err(|source| ScenarioError::Graph { path: path.clone(), source })?,
+            NetworkSpec::Map(m) => mapc_import::import_path(&base_dir.join(m), &mapc_import::ImportOptions::default())
+                .map_err(|e| ScenarioError::Network { path: path.clone(), message: e.to_string() })?,
+        };
+        if !(scenario.step_s.is_finite() && scenario.step_s > 0.0) {
+            return Err(invalid("step_s".into(), format!("must be a positive number of seconds, not {}", scenario.step_s)));
+        }
+        if scenario.horizon_steps == 0 {
+            return Err(invalid("horizon_steps".into(), "must be at least 1".into()));
+        }
+        for (name, t) in &scenario.vehicle_types {
+            for (field, v, positive) in [
+                ("accel", t.accel, true),
+                ("decel", t.decel, true),
+                ("tau", t.tau, false),
+                ("min_gap", t.min_gap, false),
+                ("max_speed", t.max_speed, true),
+                ("delta", t.delta, true),
+                ("speed_factor", t.speed_factor, true),
+                ("speed_dev", t.speed_dev, false),
+                ("length", t.length, true),
+                ("idm_stepping_s", t.idm_stepping_s, true),
+            ] {
+                if !v.is_finite() || v < 0.0 || (positive && v == 0.0) {
+                    return Err(invalid(format!("vehicle_types.{name}.{field}"), format!("bad value {v}")));
+                }
+            }
+            if !(0.0..=1.0).contains(&t.impatience) {
+                return Err(invalid(format!("vehicle_types.{name}.impatience"), "must be between 0 and 1".into()));
+            }
+        }
+        let find_road = |key: String, r: &str| -> Result<RoadId, ScenarioError> {
+            let found = graph.find_roads(r).map_err(|e| invalid(key.clone(), e.to_string()))?;
+            Ok(found[0])
+        };
+        let mut flow_roads = Vec::new();
+        for (i, f) in scenario.flows.iter().enumerate() {
+            if !scenario.vehicle_types.contains_key(&f.vehicle_type) {
+                return Err(invalid(format!("flows[{i}].vehicle_type"), format!("no vehicle type `{}`", f.vehicle_type)));
+            }
+            if !(f.vehs_per_hour.is_finite() && f.vehs_per_hour >= 0.0) {
+                return Err(invalid(format!("flows[{i}].vehs_per_hour"), format!("bad value {}", f.vehs_per_hour)));
+            }
+            if !(f.depart_speed_mps.is_finite() && f.depart_speed_mps >= 0.0) {
+                return Err(invalid(format!("flows[{i}].depart_speed_mps"), format!("bad value {}", f.depart_speed_mps)));
+            }
+            let from = find_road(format!("flows[{i}].from"), &f.from)?;
+            let to = match &f.to {
+                Some(t) => {
+                    // The last piece of a way the route ends on.
+                    let found = graph.find_roads(t).map_err(|e| invalid(format!("flows[{i}].to"), e.to_string()))?;
+                    Some(*found.last().unwrap())
+                }
+                None => None,
+            };
+            flow_roads.push((from, to));
+        }
+        if let Some(iv) = &scenario.initial_vehicles {
+            if !scenario.vehicle_types.contains_key(&iv.vehicle_type) {
+                return Err(invalid(
+                    "initial_vehicles.vehicle_type".into(),
+                    format!("no vehicle type `{}`", iv.vehicle_type),
+                ));
+            }
+        }
+        let mut region_roads = Vec::new();
+        if let Some(c) = &scenario.control {
+            for (i, r) in c.region.iter().enumerate() {
+                let found = graph.find_roads(r).map_err(|e| invalid(format!("control.region[{i}]"), e.to_string()))?;
+                region_roads.extend(found);
+            }
+            region_roads.sort();
+            region_roads.dedup();
+        }
+        Ok(ResolvedScenario { scenario, graph, origin: origin.to_string(), flow_roads, region_roads })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtin_simple_merge_resolves() {
+        let r = ResolvedScenario::load("simple_merge").unwrap();
+        assert_eq!(r.flow_roads.len(), 3);
+        assert_eq!(r.origin, "builtin:simple_merge");
+    }
+
+    /// `scenarios/simple_merge.toml` is what the generator makes; MAPC_BLESS=1 rewrites it.
+    #[test]
+    fn shipped_simple_merge_file_is_the_builtin() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/simple_merge.toml");
+        let expected = format!(
+            "# The paper's Simple Merge, as mapc's generator builds it (regenerate: MAPC_BLESS=1 cargo test -p mapc-scenario).\n{}",
+            Scenario::simple_merge().to_toml()
+        );
+        if std::env::var_os("MAPC_BLESS").is_some() {
+            assert!(std::env::var_os("CI").is_none(), "MAPC_BLESS is set in CI: golden files would be rewritten, not checked");
+            std::fs::write(&path, &expected).unwrap();
+        }
+        let shipped = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(shipped, expected, "scenarios/simple_merge.toml differs from the generator's; rerun with MAPC_BLESS=1");
+        assert_eq!(Scenario::load(&path).unwrap(), Scenario::simple_merge());
+    }
+
+    #[test]
+    fn toml_round_trip_is_exact() {
+        let s = Scenario::simple_merge();
+        let back = Scenario::from_toml(&s.to_toml(), Path::new("x.toml")).unwrap();
+        assert_eq!(back, s);
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_references_are_named() {
+        let text = Scenario::simple_merge().to_toml().replace("horizon_steps", "horizon_stepz");
+        let err = Scenario::from_toml(&text, Path::new("bad.toml")).unwrap_err().to_string();
+        assert!(err.contains("bad.toml") && err.contains("horizon_stepz"), "{err}");
+
+        let mut s = Scenario::simple_merge();
+        s.flows[1].vehicle_type = "robot".into();
+        let err = ResolvedScenario::resolve(s, Path::new("."), "s.toml").unwrap_err().to_string();
+        assert_eq!(err, "s.toml: flows[1].vehicle_type: no vehicle type `robot`");
+
+        let mut s = Scenario::simple_merge();
+        s.flows[0].from = "nowhere".into();
+        let err = ResolvedScenario::resolve(s, Path::new("."), "s.toml").unwrap_err().to_string();
+        assert!(err.starts_with("s.toml: flows[0].from: no road `nowhere`"), "{err}");
+    }
+}

@@ -1,0 +1,213 @@
+//! The scenario: network, vehicle types, demand, horizon and the controlled region, as written in TOML.
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// Bumped on any change that an older reader would misread.
+pub const SCENARIO_VERSION: u32 = 1;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    #[serde(default = "current_version")]
+    pub version: u32,
+    pub name: String,
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub description: String,
+    /// Simulation step in seconds.
+    #[serde(default = "default_step_s")]
+    pub step_s: f64,
+    /// Episode length in steps.
+    pub horizon_steps: u32,
+    /// Steps simulated before metrics and control start.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub warmup_steps: u32,
+    pub network: NetworkSpec,
+    pub vehicle_types: BTreeMap<String, VehicleType>,
+    pub flows: Vec<Flow>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_vehicles: Option<InitialVehicles>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub control: Option<Control>,
+}
+
+fn current_version() -> u32 {
+    SCENARIO_VERSION
+}
+fn default_step_s() -> f64 {
+    0.5
+}
+fn is_zero(x: &u32) -> bool {
+    *x == 0
+}
+
+/// Where the road network comes from. Relative paths are relative to the scenario file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum NetworkSpec {
+    /// mapc's Simple Merge generator (`[network.simple_merge]`).
+    SimpleMerge(SimpleMergeParams),
+    /// A saved lane graph (`network.graph = "x.graph.json"`).
+    Graph(PathBuf),
+    /// A map imported on the fly (`network.map = "maps/x.net.xml"`).
+    Map(PathBuf),
+}
+
+/// The paper's Simple Merge: a main road and a ramp joining it at `angle_deg`, one lane each. The defaults are the
+/// original code's (MergeNetwork with INFLOW_EDGE_LEN = 100).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SimpleMergeParams {
+    /// Length of the entry road on the main road and on the ramp.
+    pub inflow_edge_m: f64,
+    /// Main road between its entry road and the merge.
+    pub pre_merge_m: f64,
+    /// Ramp between its entry road and the merge.
+    pub merge_m: f64,
+    /// Main road after the merge.
+    pub post_merge_m: f64,
+    pub angle_deg: f64,
+    pub speed_limit_mps: f64,
+    pub lanes: u8,
+    /// Length driven inside the junction from the main road, as SUMO's netconvert builds it (radius 10 m).
+    pub main_internal_m: f64,
+    /// Length driven inside the junction from the ramp (its curve).
+    pub ramp_internal_m: f64,
+    /// netconvert's curve speed limit on the ramp's way through the junction.
+    pub ramp_internal_speed_mps: f64,
+    /// Length of netconvert's internal lane at the two junctions where an entry road meets the next road.
+    pub through_internal_m: f64,
+    /// Which road has the right of way at the merge.
+    pub major: MajorRoad,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MajorRoad {
+    Main,
+    Ramp,
+}
+
+impl Default for SimpleMergeParams {
+    fn default() -> Self {
+        SimpleMergeParams {
+            inflow_edge_m: 100.0,
+            pre_merge_m: 500.0,
+            merge_m: 100.0,
+            post_merge_m: 100.0,
+            angle_deg: 45.0,
+            speed_limit_mps: 30.0,
+            lanes: 1,
+            main_internal_m: 24.53,
+            ramp_internal_m: 22.95,
+            ramp_internal_speed_mps: 15.67,
+            through_internal_m: 0.10,
+            // The original code gives the merge edges priority 1 and the highway -1: the ramp is major.
+            major: MajorRoad::Ramp,
+        }
+    }
+}
+
+/// A driver and vehicle: SUMO's IDM as configured by the original code (Flow's SumoCarFollowingParams defaults).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct VehicleType {
+    /// Maximum acceleration, m/s².
+    pub accel: f64,
+    /// Comfortable deceleration, m/s².
+    pub decel: f64,
+    /// Desired time headway, s.
+    pub tau: f64,
+    /// Standstill gap to the leader, m.
+    pub min_gap: f64,
+    pub max_speed: f64,
+    /// IDM acceleration exponent.
+    pub delta: f64,
+    /// Mean of the driver's speed factor (desired speed = factor × speed limit).
+    pub speed_factor: f64,
+    /// Standard deviation of the speed factor.
+    pub speed_dev: f64,
+    /// 0: a minor-road driver never forces a gap; 1: after waiting long, takes any gap that is physically safe.
+    pub impatience: f64,
+    pub length: f64,
+    /// IDM integration sub-step, s (SUMO's `stepping`).
+    pub idm_stepping_s: f64,
+    /// An automated vehicle that a policy may control.
+    pub controlled: bool,
+}
+
+impl Default for VehicleType {
+    fn default() -> Self {
+        VehicleType {
+            accel: 2.6,
+            decel: 4.5,
+            tau: 1.0,
+            min_gap: 2.5,
+            max_speed: 30.0,
+            delta: 4.0,
+            speed_factor: 1.0,
+            speed_dev: 0.1,
+            impatience: 0.5,
+            length: 5.0,
+            idm_stepping_s: 0.25,
+            controlled: false,
+        }
+    }
+}
+
+/// Periodic departures (SUMO's `vehsPerHour`): one vehicle every 3600 / vehs_per_hour seconds from `begin_s`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Flow {
+    pub id: String,
+    /// Entry road: `R3`, `osm-way:N` or a SUMO edge id.
+    pub from: String,
+    /// Last road of the route; by default the vehicle drives downstream to the end of the corridor.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub to: Option<String>,
+    pub vehs_per_hour: f64,
+    pub vehicle_type: String,
+    pub depart_speed_mps: f64,
+    #[serde(default)]
+    pub begin_s: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_s: Option<f64>,
+}
+
+/// Vehicles on the network at t = 0, evenly spaced along the network's roads.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialVehicles {
+    pub count: u32,
+    pub vehicle_type: String,
+    #[serde(default)]
+    pub speed_mps: f64,
+}
+
+/// Which AVs a policy drives.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Control {
+    /// At most this many AVs are controlled at once, the earliest to enter first.
+    pub n_av: u32,
+    /// Roads where AVs are controlled; empty means the whole network. An AV that leaves the region is never
+    /// controlled again.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub region: Vec<String>,
+    /// How a window region was cut, for display.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window: Option<WindowInfo>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindowInfo {
+    /// The merge junction the window is centred on.
+    pub junction: String,
+    /// The scenario whose lengths the window matches (`simple_merge` or a file).
+    pub matched_to: String,
+    pub upstream_m: f64,
+    pub merge_m: f64,
+    pub downstream_m: f64,
+}

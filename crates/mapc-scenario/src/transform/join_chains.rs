@@ -1,0 +1,83 @@
+//! `join_chains`: a junction with one road in and one out is only a joint; the two roads become one (the first
+//! keeps its id). The joined road's length is the driving length, the connection's internal length included, so
+//! no length is lost; its speed is the one that keeps the free-flow travel time; class, name and ref are the
+//! longer piece's, the priority the downstream piece's (it meets the next junction).
+
+use super::{Corridor, SimplifyOptions, TransformError, mark};
+use mapc_graph::{JunctionId, JunctionKind, RoadId};
+
+pub const NAME: &str = "join_chains";
+
+/// Join the two roads at through junction `j`; returns the surviving and the removed road.
+pub fn join_at(c: &mut Corridor, j: JunctionId) -> Option<(RoadId, RoadId)> {
+    let g = &c.graph;
+    let junction = g.junction(j)?;
+    if junction.kind != JunctionKind::Through {
+        return None;
+    }
+    let (a_id, b_id) = (junction.incoming[0], junction.outgoing[0]);
+    let (a, b) = (g.road(a_id)?, g.road(b_id)?);
+    if a_id == b_id || a.from == b.to {
+        return None;
+    }
+    let via = g.connections.iter().find(|k| k.from_road == a_id && k.to_road == b_id);
+    let via_m = via.map_or(0.0, |k| k.via_length_m);
+    let via_speed = via.and_then(|k| k.via_speed_mps).unwrap_or(b.speed_mps());
+    let length = a.length_m + via_m + b.length_m;
+    let travel_s = a.length_m / a.speed_mps() + via_m / via_speed + b.length_m / b.speed_mps();
+    let speed = if travel_s.is_finite() && travel_s > 0.0 { length / travel_s } else { a.speed_mps() };
+    let longer = if b.length_m > a.length_m { b } else { a };
+    let (class, name, ref_) = (longer.class.clone(), longer.name.clone(), longer.ref_.clone());
+    let priority = b.priority;
+    let mut geometry = a.geometry.clone();
+    let skip = usize::from(b.geometry.first() == a.geometry.last());
+    geometry.extend_from_slice(&b.geometry[skip..]);
+    let mut provenance = a.provenance.merged(&junction.provenance).merged(&b.provenance);
+    mark(&mut provenance, NAME);
+    let to = b.to;
+
+    let a = c.graph.road_mut(a_id).unwrap();
+    a.length_m = length;
+    a.lanes.truncate(1);
+    a.lanes[0].length_m = length;
+    a.lanes[0].speed_mps = speed;
+    a.geometry = geometry;
+    a.class = class;
+    a.name = name;
+    a.ref_ = ref_;
+    a.priority = priority;
+    a.provenance = provenance;
+    a.to = to;
+    c.graph.roads.retain(|r| r.id != b_id);
+    c.graph.junctions.retain(|x| x.id != j);
+    c.graph.connections.retain(|k| k.junction != j);
+    for k in &mut c.graph.connections {
+        if k.from_road == b_id {
+            k.from_road = a_id;
+        }
+    }
+    for chain in std::iter::once(&mut c.main).chain(&mut c.feeders).chain(&mut c.exits) {
+        chain.retain(|r| *r != b_id);
+    }
+    Some((a_id, b_id))
+}
+
+pub fn apply(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, TransformError> {
+    let roads_before = c.graph.roads.len();
+    let mut joints = 0;
+    let candidates: Vec<JunctionId> =
+        c.graph.junctions.iter().filter(|j| j.kind == JunctionKind::Through).map(|j| j.id).collect();
+    for j in candidates {
+        if join_at(c, j).is_some() {
+            joints += 1;
+            c.graph.rebuild_junction_links();
+        }
+    }
+    c.graph.rebuild_junction_links();
+    Ok(format!(
+        "{joints} joints removed: {roads_before} roads joined into {} (main road {} roads, merging roads {})",
+        c.graph.roads.len(),
+        c.main.len(),
+        c.feeders.iter().map(|f| f.len().to_string()).collect::<Vec<_>>().join("/")
+    ))
+}

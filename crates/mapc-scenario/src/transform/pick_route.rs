@@ -1,0 +1,230 @@
+//! `pick_route`: choose the corridor's main road. Through the `--via` points in order (shortest connections
+//! between them over any road), then extended at both ends by the longest route over the allowed classes; with no
+//! `--via`, the longest through route of the map over those classes. Where the road graph has cycles (loop ramps),
+//! the search ignores the edge that closes a cycle, so the result is a simple route and the same on every run.
+
+use super::{Corridor, SimplifyOptions, TransformError, chains_of, mark};
+use mapc_graph::{JunctionId, LaneGraph, Road, RoadId};
+use std::collections::{HashMap, HashSet};
+
+pub const NAME: &str = "pick_route";
+
+/// A point the route must pass.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Waypoint {
+    /// A road or the pieces of one OSM way, in driving order.
+    Roads(Vec<RoadId>),
+    Junction(JunctionId),
+}
+
+/// Read a `--via` value: roads first (`R3`, `osm-way:N`, SUMO edge ids), then junctions (`J3`, `osm:N`, SUMO ids).
+pub fn resolve_via(g: &LaneGraph, query: &str) -> Result<Waypoint, TransformError> {
+    let is_junction_syntax = query.starts_with("osm:") || query.parse::<JunctionId>().is_ok();
+    if !is_junction_syntax {
+        if let Ok(roads) = g.find_roads(query) {
+            let chains = chains_of(g, &roads);
+            if chains.len() != 1 {
+                return Err(TransformError::NoRoute(format!(
+                    "--via `{query}` names {} separate stretches of road ({}); name one with a mapc id",
+                    chains.len(),
+                    chains.iter().map(|c| c[0].to_string()).collect::<Vec<_>>().join(", ")
+                )));
+            }
+            return Ok(Waypoint::Roads(chains.into_iter().next().unwrap()));
+        }
+    }
+    match g.find_junction(query) {
+        Ok(j) => Ok(Waypoint::Junction(j)),
+        Err(source) => {
+            if is_junction_syntax {
+                Err(TransformError::Via { query: query.to_string(), source })
+            } else {
+                Err(TransformError::NoRoute(format!("--via `{query}`: no road or junction of that id in this graph")))
+            }
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Direction {
+    Downstream,
+    Upstream,
+}
+
+/// The longest route from (downstream) or to (upstream) `start` over roads that `allowed` accepts, never
+/// touching a junction in `avoid`. Roads come in driving order.
+fn longest_route(
+    g: &LaneGraph,
+    start: JunctionId,
+    dir: Direction,
+    allowed: &dyn Fn(&Road) -> bool,
+    avoid: &HashSet<JunctionId>,
+    memo: &mut HashMap<JunctionId, (f64, Option<RoadId>)>,
+) -> (f64, Vec<RoadId>) {
+    let mut in_progress = HashSet::new();
+    longest_from(g, start, dir, allowed, avoid, memo, &mut in_progress);
+    let mut roads = Vec::new();
+    let mut cur = start;
+    let mut seen = HashSet::from([start]);
+    while let Some(&(_, Some(r))) = memo.get(&cur) {
+        let road = g.road(r).unwrap();
+        cur = if dir == Direction::Downstream { road.to } else { road.from };
+        if !seen.insert(cur) {
+            break;
+        }
+        roads.push(r);
+    }
+    let total = roads.iter().map(|r| g.road(*r).unwrap().length_m).sum();
+    if dir == Direction::Upstream {
+        roads.reverse();
+    }
+    (total, roads)
+}
+
+fn longest_from(
+    g: &LaneGraph,
+    j: JunctionId,
+    dir: Direction,
+    allowed: &dyn Fn(&Road) -> bool,
+    avoid: &HashSet<JunctionId>,
+    memo: &mut HashMap<JunctionId, (f64, Option<RoadId>)>,
+    in_progress: &mut HashSet<JunctionId>,
+) -> f64 {
+    if let Some(&(d, _)) = memo.get(&j) {
+        return d;
+    }
+    in_progress.insert(j);
+    let Some(junction) = g.junction(j) else { return 0.0 };
+    let candidates = if dir == Direction::Downstream { &junction.outgoing } else { &junction.incoming };
+    let mut best: (f64, Option<RoadId>) = (0.0, None);
+    for &rid in candidates {
+        let road = g.road(rid).unwrap();
+        let next = if dir == Direction::Downstream { road.to } else { road.from };
+        if !allowed(road) || avoid.contains(&next) || in_progress.contains(&next) || next == j {
+            continue;
+        }
+        let d = road.length_m + longest_from(g, next, dir, allowed, avoid, memo, in_progress);
+        if d > best.0 {
+            best = (d, Some(rid));
+        }
+    }
+    in_progress.remove(&j);
+    memo.insert(j, best);
+    best.0
+}
+
+/// The route through `waypoints`, extended at both ends by the longest allowed routes.
+pub fn route_through(
+    g: &LaneGraph,
+    waypoints: &[Waypoint],
+    allowed: &dyn Fn(&Road) -> bool,
+) -> Result<Vec<RoadId>, TransformError> {
+    let mut route: Vec<RoadId> = Vec::new();
+    let mut end: Option<JunctionId> = None;
+    let mut start: Option<JunctionId> = None;
+    let name = |j: JunctionId| describe_junction(g, j);
+    for wp in waypoints {
+        let target = match wp {
+            Waypoint::Roads(chain) => g.road(chain[0]).unwrap().from,
+            Waypoint::Junction(j) => *j,
+        };
+        if let Some(e) = end {
+            if e != target {
+                let path = g.shortest_route(e, target).ok_or_else(|| {
+                    TransformError::NoRoute(format!("no route from {} to {} (in the --via order)", name(e), name(target)))
+                })?;
+                route.extend(path);
+            }
+        } else {
+            start = Some(target);
+        }
+        end = Some(match wp {
+            Waypoint::Roads(chain) => {
+                route.extend(chain);
+                g.road(*chain.last().unwrap()).unwrap().to
+            }
+            Waypoint::Junction(j) => *j,
+        });
+    }
+    let (start, end) = match (start, end) {
+        (Some(s), Some(e)) => (s, e),
+        _ => return Err(TransformError::NoRoute("no --via points".into())),
+    };
+    let mut on_route: HashSet<JunctionId> = HashSet::from([start]);
+    for r in &route {
+        if !on_route.insert(g.road(*r).unwrap().to) {
+            return Err(TransformError::NoRoute(format!(
+                "the route through the --via points passes {} twice",
+                name(g.road(*r).unwrap().to)
+            )));
+        }
+    }
+    let (_, upstream) = longest_route(g, start, Direction::Upstream, allowed, &on_route, &mut HashMap::new());
+    on_route.extend(upstream.iter().map(|r| g.road(*r).unwrap().from));
+    let (_, downstream) = longest_route(g, end, Direction::Downstream, allowed, &on_route, &mut HashMap::new());
+    let mut full = upstream;
+    full.extend(route);
+    full.extend(downstream);
+    if full.is_empty() {
+        return Err(TransformError::NoRoute(format!("no road of the allowed classes passes {}", name(start))));
+    }
+    Ok(full)
+}
+
+/// The longest through route of the whole map over allowed roads.
+pub fn longest_through_route(g: &LaneGraph, allowed: &dyn Fn(&Road) -> bool) -> Result<Vec<RoadId>, TransformError> {
+    let mut memo = HashMap::new();
+    let avoid = HashSet::new();
+    let mut best: (f64, Option<JunctionId>) = (0.0, None);
+    for j in &g.junctions {
+        let (d, _) = longest_route(g, j.id, Direction::Downstream, allowed, &avoid, &mut memo);
+        if d > best.0 {
+            best = (d, Some(j.id));
+        }
+    }
+    let Some(start) = best.1 else {
+        return Err(TransformError::NoRoute("no road of the allowed classes in this map".into()));
+    };
+    Ok(longest_route(g, start, Direction::Downstream, allowed, &avoid, &mut memo).1)
+}
+
+/// `J12 (osm:61862553)` or `J12 (gneJ18)`.
+pub fn describe_junction(g: &LaneGraph, j: JunctionId) -> String {
+    match g.junction(j) {
+        Some(junction) => match (junction.provenance.osm_nodes.first(), junction.provenance.sumo_ids.first()) {
+            (Some(n), _) => format!("{j} (osm:{n})"),
+            (None, Some(s)) => format!("{j} ({s})"),
+            (None, None) => j.to_string(),
+        },
+        None => j.to_string(),
+    }
+}
+
+pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, TransformError> {
+    let allowed = |r: &Road| opts.class_allowed(&r.class);
+    let route = if opts.via.is_empty() {
+        longest_through_route(&c.graph, &allowed)?
+    } else {
+        let waypoints = opts.via.iter().map(|v| resolve_via(&c.graph, v)).collect::<Result<Vec<_>, _>>()?;
+        route_through(&c.graph, &waypoints, &allowed)?
+    };
+    for r in &route {
+        mark(&mut c.graph.road_mut(*r).unwrap().provenance, NAME);
+    }
+    c.main = route;
+    let g = &c.graph;
+    let first = g.road(c.main[0]).unwrap().from;
+    let last = g.road(*c.main.last().unwrap()).unwrap().to;
+    let how = if opts.via.is_empty() {
+        format!("the longest through route over {}", opts.classes.join("/"))
+    } else {
+        format!("through --via {}", opts.via.join(", "))
+    };
+    Ok(format!(
+        "main road {how}: {} roads, {:.1} m, from {} to {}",
+        c.main.len(),
+        Corridor::chain_length_m(g, &c.main),
+        describe_junction(g, first),
+        describe_junction(g, last)
+    ))
+}

@@ -1,0 +1,273 @@
+//! The Intelligent Driver Model as SUMO's car-following model `IDM` computes it (Euler update, internal
+//! sub-stepping), plus the kinematic helpers SUMO's junction and insertion logic use (brake gap, maximum safe stop
+//! speed, arrival times). All functions are pure; speeds in m/s, distances in m, times in s.
+
+/// Below this a quantity counts as zero (SUMO's `NUMERICAL_EPS`).
+pub const NUMERICAL_EPS: f64 = 0.001;
+
+/// Car-following parameters of one driver type.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IdmParams {
+    /// Maximum acceleration a (m/s^2).
+    pub accel: f64,
+    /// Comfortable deceleration b (m/s^2), also the deceleration the junction logic plans with.
+    pub decel: f64,
+    /// Deceleration a driver is physically able to apply when the safe speed demands it (m/s^2).
+    pub emergency_decel: f64,
+    /// Desired time headway T (s).
+    pub tau: f64,
+    /// Standstill gap s0 (m), front bumper to the leader's back bumper.
+    pub min_gap: f64,
+    /// Free-road exponent delta.
+    pub delta: f64,
+    /// Number of IDM sub-steps per simulation step (SUMO: round(step / 0.25), at least 1).
+    pub iterations: u32,
+    /// Step length (s).
+    pub dt: f64,
+}
+
+impl IdmParams {
+    /// Parameters with SUMO's sub-stepping rule for the step `dt` (IDM stepping 0.25 s).
+    pub fn new(accel: f64, decel: f64, emergency_decel: f64, tau: f64, min_gap: f64, delta: f64, dt: f64) -> Self {
+        let iterations = ((dt / 0.25 + 0.5) as u32).max(1);
+        IdmParams { accel, decel, emergency_decel, tau, min_gap, delta, iterations, dt }
+    }
+
+    fn two_sqrt_ab(&self) -> f64 {
+        2.0 * (self.accel * self.decel).sqrt()
+    }
+
+    fn speed_ratio_pow(&self, x: f64) -> f64 {
+        // delta = 4 is the common case; powi keeps it cheap and exact.
+        if self.delta == 4.0 {
+            let x2 = x * x;
+            x2 * x2
+        } else {
+            x.powf(self.delta)
+        }
+    }
+
+    /// SUMO's `MSCFModel_IDM::_v`: the speed after one step behind a leader at bumper gap `gap` driving at
+    /// `leader_speed`, integrating IDM's acceleration in `iterations` sub-steps (the gap shrinks between sub-steps;
+    /// the leader is assumed to keep its speed). `respect_min_gap` adds s0 to both the gap and the desired gap.
+    pub fn next_speed(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64, respect_min_gap: bool) -> f64 {
+        let n = self.iterations as f64;
+        let two_sqrt_ab = self.two_sqrt_ab();
+        let des = desired_speed.max(NUMERICAL_EPS);
+        let mut v = speed;
+        let mut g = if respect_min_gap { gap + self.min_gap } else { gap };
+        for _ in 0..self.iterations {
+            let dv = v - leader_speed;
+            let mut s = (v * self.tau + v * dv / two_sqrt_ab).max(0.0);
+            if respect_min_gap {
+                s += self.min_gap;
+            }
+            g = g.max(NUMERICAL_EPS);
+            let acc = self.accel * (1.0 - self.speed_ratio_pow(v / des) - (s * s) / (g * g));
+            v = (v + acc * self.dt / n).max(0.0);
+            g -= ((v - leader_speed) * self.dt / n).max(0.0);
+        }
+        v.max(0.0)
+    }
+
+    /// Speed behind a moving leader (`gap` already excludes the min gap).
+    pub fn follow_speed(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64) -> f64 {
+        self.next_speed(gap, speed, leader_speed, desired_speed, true)
+    }
+
+    /// Speed that lets the vehicle stop within `gap` (a stop line, the end of the road).
+    pub fn stop_speed(&self, gap: f64, speed: f64, desired_speed: f64) -> f64 {
+        if gap < 0.01 {
+            return 0.0;
+        }
+        let v = self.next_speed(gap, speed, 0.0, desired_speed, false);
+        if speed < NUMERICAL_EPS && v < NUMERICAL_EPS {
+            // IDM alone never starts towards a close stop point; fall back to the kinematic bound.
+            return self.maximum_safe_stop_speed(gap, speed);
+        }
+        v
+    }
+
+    /// Speed on free road towards `max_speed`, which applies `seen` metres ahead (SUMO's IDM `freeSpeed`).
+    pub fn free_speed(&self, speed: f64, seen: f64, max_speed: f64, desired_speed: f64) -> f64 {
+        let sec_gap = self.secure_gap(max_speed, 0.0);
+        let mut v = if speed <= max_speed {
+            self.next_speed(1e6, speed, max_speed, desired_speed, false)
+        } else {
+            self.next_speed(seen.max(sec_gap), speed, 0.0, desired_speed, false)
+        };
+        if seen < sec_gap {
+            v = v.min(max_speed);
+        }
+        v
+    }
+
+    /// IDM's desired dynamic gap without s0 (SUMO's `getSecureGap` for IDM).
+    pub fn secure_gap(&self, speed: f64, leader_speed: f64) -> f64 {
+        (speed * self.tau + speed * (speed - leader_speed) / self.two_sqrt_ab()).max(0.0)
+    }
+
+    /// The highest speed a vehicle may be inserted with at `gap` behind a leader, starting from `speed`
+    /// (SUMO's `insertionFollowSpeed`).
+    pub fn insertion_follow_speed(&self, speed: f64, gap: f64, leader_speed: f64, desired_speed: f64) -> f64 {
+        let mut v = speed;
+        for _ in 0..64 {
+            if gap >= self.secure_gap(v, leader_speed) {
+                return v;
+            }
+            let v2 = self.follow_speed(gap, v, leader_speed, desired_speed);
+            let v3 = self.follow_speed(gap, v2, leader_speed, desired_speed);
+            if v2 - v3 < 1.0 {
+                return v2;
+            }
+            v = v2;
+        }
+        v
+    }
+
+    /// Distance needed to stop from `speed` braking `decel` each step, plus `headway` seconds at `speed`
+    /// (SUMO's Euler `brakeGap`).
+    pub fn brake_gap(&self, speed: f64, decel: f64, headway: f64) -> f64 {
+        let reduction = decel * self.dt;
+        if reduction <= 0.0 {
+            return f64::INFINITY;
+        }
+        let steps = (speed / reduction).floor();
+        self.dt * (steps * speed - reduction * steps * (steps + 1.0) / 2.0) + speed * headway
+    }
+
+    /// The largest speed from which the vehicle can still stop within `gap` braking at `decel` per step
+    /// (SUMO's Euler `maximumSafeStopSpeed`).
+    pub fn maximum_safe_stop_speed(&self, gap: f64, _speed: f64) -> f64 {
+        let g = gap - NUMERICAL_EPS;
+        if g <= 0.0 {
+            return 0.0;
+        }
+        let b = self.decel * self.dt;
+        let s = self.dt;
+        let t = 0.0;
+        let n = (0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s).floor();
+        let h = 0.5 * n * (n - 1.0) * b * s + n * b * t;
+        let r = (g - h) / (n * s + t);
+        // n steps of driving: the last at speed r, each earlier one b faster
+        (n - 1.0) * b + r
+    }
+
+    /// Time to cover `dist` starting at `speed` and reaching `arrival_speed`, accelerating or braking at the
+    /// type's limits and then cruising (SUMO's `getMinimalArrivalTime`).
+    pub fn minimal_arrival_time(&self, dist: f64, speed: f64, arrival_speed: f64) -> f64 {
+        if dist <= 0.0 {
+            return 0.0;
+        }
+        if arrival_speed <= NUMERICAL_EPS && speed <= NUMERICAL_EPS {
+            return 1e6;
+        }
+        let accel = if arrival_speed >= speed { self.accel } else { -self.decel };
+        let accel_time = (arrival_speed - speed) / accel;
+        let accel_way = accel_time * (arrival_speed + speed) * 0.5;
+        if dist >= accel_way {
+            // drive as fast as possible: brake as late as possible, or accelerate first and then hold the speed
+            let cruise = speed.max(arrival_speed).max(0.1);
+            return accel_time + (dist - accel_way) / cruise;
+        }
+        // the target speed is not reached: solve dist = v t + a t^2 / 2
+        let disc = speed * speed + 2.0 * accel * dist;
+        if disc <= 0.0 {
+            return 1e6;
+        }
+        (disc.sqrt() - speed) / accel
+    }
+
+    /// Speed after `dist` metres accelerating at `accel` from `speed` (SUMO's `estimateSpeedAfterDistance`).
+    pub fn speed_after_distance(dist: f64, speed: f64, accel: f64) -> f64 {
+        (2.0 * dist * accel + speed * speed).max(0.0).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paper() -> IdmParams {
+        IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, 0.5)
+    }
+
+    #[test]
+    fn sub_steps_follow_sumo_rule() {
+        assert_eq!(paper().iterations, 2);
+        assert_eq!(IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, 0.1).iterations, 1);
+        assert_eq!(IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, 1.0).iterations, 4);
+    }
+
+    #[test]
+    fn free_acceleration_from_standstill_is_accel_times_dt() {
+        // v = 0: no interaction term, (v/v0)^4 = 0, so each sub-step adds a * dt / 2.
+        let p = paper();
+        let v = p.next_speed(1e6, 0.0, 30.0, 30.0, false);
+        // second sub-step: v = 0.65, (0.65/30)^4 ~ 2.2e-7 -> acc ~ 2.6
+        let expected = 0.65 + 0.25 * 2.6 * (1.0 - (0.65f64 / 30.0).powi(4));
+        assert!((v - expected).abs() < 1e-12, "{v} vs {expected}");
+    }
+
+    #[test]
+    fn following_matches_hand_computation() {
+        // v = 10, leader 10, gap 20 (bumper gap minus s0): s* = 2.5 + 10 = 12.5, gap' = 22.5.
+        let p = paper();
+        let s1: f64 = 12.5;
+        let g1: f64 = 22.5;
+        let acc1 = 2.6 * (1.0 - (10.0f64 / 30.0).powi(4) - (s1 * s1) / (g1 * g1));
+        let v1 = 10.0 + acc1 * 0.25;
+        let g2 = g1 - ((v1 - 10.0) * 0.25f64).max(0.0);
+        let s2 = 2.5 + (v1 * 1.0 + v1 * (v1 - 10.0) / (2.0 * (2.6f64 * 4.5).sqrt())).max(0.0);
+        let acc2 = 2.6 * (1.0 - (v1 / 30.0).powi(4) - (s2 * s2) / (g2 * g2));
+        let v2 = v1 + acc2 * 0.25;
+        let got = p.follow_speed(20.0, 10.0, 10.0, 30.0);
+        assert!((got - v2).abs() < 1e-12, "{got} vs {v2}");
+    }
+
+    #[test]
+    fn stop_speed_brakes_for_a_near_stop_line_and_is_zero_at_it() {
+        let p = paper();
+        assert_eq!(p.stop_speed(0.005, 5.0, 30.0), 0.0);
+        let v = p.stop_speed(10.0, 10.0, 30.0);
+        assert!(v < 10.0 - 2.0, "must brake hard: {v}");
+        // from standstill close to the line IDM alone would not move; the kinematic bound lets it creep.
+        assert!(p.stop_speed(3.0, 0.0, 30.0) > 0.0);
+    }
+
+    #[test]
+    fn brake_gap_and_safe_stop_speed_are_consistent() {
+        let p = paper();
+        // from 9 m/s braking 2.25 m/s per step: 6.75, 4.5, 2.25, 0 -> distance 0.5 * (6.75+4.5+2.25) = 6.75
+        assert!((p.brake_gap(9.0, 4.5, 0.0) - 6.75).abs() < 1e-9);
+        for gap in [1.0, 5.0, 6.75, 20.0, 100.0] {
+            let v = p.maximum_safe_stop_speed(gap, 0.0);
+            assert!(p.brake_gap(v, 4.5, 0.0) <= gap + 1e-6, "gap {gap}: v {v}");
+            // driving at v now and braking by b per step covers exactly the gap
+            let b = 4.5 * 0.5;
+            let (mut x, mut d) = (v, 0.0);
+            while x > 1e-9 {
+                d += x * 0.5;
+                x -= b;
+            }
+            assert!((d - (gap - NUMERICAL_EPS)).abs() < 1e-6, "gap {gap}: v {v} covers {d}");
+        }
+    }
+
+    #[test]
+    fn arrival_time_accelerating_and_cruising() {
+        let p = paper();
+        // at 10 m/s cruising 100 m: 10 s
+        assert!((p.minimal_arrival_time(100.0, 10.0, 10.0) - 10.0).abs() < 1e-9);
+        // 0 -> 2.6 m/s takes 1 s and 1.3 m, then 8.7 m at 2.6 m/s
+        let t = p.minimal_arrival_time(10.0, 0.0, 2.6);
+        assert!((t - (1.0 + 8.7 / 2.6)).abs() < 1e-9, "{t}");
+    }
+
+    #[test]
+    fn insertion_speed_kept_when_gap_suffices() {
+        let p = paper();
+        assert_eq!(p.insertion_follow_speed(10.0, 50.0, 10.0, 30.0), 10.0);
+        assert!(p.insertion_follow_speed(10.0, 5.0, 0.0, 30.0) < 10.0);
+    }
+}

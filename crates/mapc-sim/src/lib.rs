@@ -1,0 +1,75 @@
+//! # mapc-sim: a microscopic single-lane traffic simulator calibrated to SUMO 1.8
+//!
+//! Glossary:
+//! - **lane**: every road is driven as one lane (lane 0); every connection across a junction is an *internal
+//!   lane* (its length counts as distance driven).
+//! - **link**: a road-to-road connection at a junction; **major** links drive on, **minor** links yield.
+//! - **merge foe**: a link from another road into the same road; vehicles on merging links follow each other by
+//!   their distance to the *merge point* (the end of the links).
+//! - **IDM**: the Intelligent Driver Model as SUMO computes it (two sub-steps per 0.5 s step).
+//! - **safe speed**: the highest speed with which the vehicle can follow its leaders and stop where it must; it is
+//!   never exceeded, and no vehicle ever moves into its leader (checked after every step in debug builds).
+//! - **impatience**: base impatience + waiting time / 300 s; it shifts the foe arrival time a minor driver
+//!   assumes towards the foe's arrival when braking, so waiting drivers take smaller gaps.
+//! - **flow**: periodic departures (SUMO's vehsPerHour); a vehicle that cannot be inserted safely waits at its
+//!   entry road and only counts once inserted.
+//! - **vehicle-step**: one vehicle simulated for one step (the unit of the speed figures).
+//!
+//! ## Using it (for the environment and evaluation code)
+//! ```ignore
+//! let mut sim = Simulation::new(&resolved, seed)?;       // or Simulation::from_spec(spec, seed)
+//! while !sim.is_done() {
+//!     for id in sim.active_ids().collect::<Vec<_>>() {
+//!         let v = sim.vehicle(id).unwrap();               // VehicleView: type, controlled, road, pos, speed, ...
+//!         if v.controlled && sim.in_control_region(id) {
+//!             let lead = sim.leader(id, 1000.0);          // Neighbor { id, gap_m, speed } across junctions
+//!             let follow = sim.follower(id, 1000.0);      // may be on the merging road
+//!             let junction = sim.distance_to_next_junction(id);
+//!             let foe = sim.nearest_merge_foe(id, 200.0); // MergeFoe { id, dist_to_merge_m, speed }
+//!             sim.set_acceleration(id, 0.5)?;             // applies in the next step only
+//!         }
+//!     }
+//!     sim.step()?;
+//!     let left = sim.arrived_last_step();                 // ids of vehicles that left in that step
+//! }
+//! let m: RunMetrics = sim.metrics();
+//! let runs = run_baseline(&resolved, &(0..100).collect::<Vec<u64>>())?; // rayon, seed order
+//! let s = Summary::of(&runs);                             // mean and Student-t 95% CI per metric
+//! ```
+//! Time: `time_s()` is SUMO's clock (step 0 starts at the spec's `start_time_s`), `step_index()` counts steps.
+//! Accelerations are clamped to [-decel, accel] and the resulting speed is capped by the safe speed, including
+//! waiting at a minor link when a major vehicle has the right of way (SUMO's speed mode 9).
+
+pub mod idm;
+pub mod metrics;
+pub mod network;
+pub mod scenario;
+pub mod sim;
+pub mod spec;
+
+pub use idm::IdmParams;
+pub use metrics::{MeanCi, RunMetrics, Summary, run_baseline_spec, t_quantile_975};
+pub use network::Network;
+pub use scenario::{run_baseline, spec_from_scenario};
+pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleView};
+pub use spec::{FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
+
+/// Header of trace CSV files.
+pub const TRACE_HEADER: &str = "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled";
+
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    #[error("network: {0}")]
+    Network(String),
+    #[error("scenario: {0}")]
+    Spec(String),
+    #[error("no vehicle {0}")]
+    UnknownVehicle(VehicleId),
+    #[error("vehicle {0} is not a controlled vehicle")]
+    NotControlled(VehicleId),
+    #[error("collision at t = {time_s} s: vehicle {follower} is {gap_m:.3} m into vehicle {leader} ({place})")]
+    Collision { time_s: f64, leader: VehicleId, follower: VehicleId, gap_m: f64, place: String },
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,98 @@
+//! Per-run metrics, their summary over seeds (mean and Student-t 95% confidence interval), and the parallel
+//! all-human baseline.
+
+use crate::SimError;
+use crate::sim::Simulation;
+use crate::spec::SimSpec;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// What one run measured (definitions as the paper computed them).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunMetrics {
+    /// 3600 x vehicles that left the network during the horizon / horizon seconds.
+    pub outflow_veh_h: f64,
+    /// The same with vehicles that entered (initial vehicles and vehicles still waiting do not count).
+    pub inflow_veh_h: f64,
+    /// Mean over steps of the mean speed of the vehicles in the network (steps with none, or all stopped, skipped).
+    pub avg_speed_mps: f64,
+    /// Mean time from entering to leaving, over the vehicles that left.
+    pub mean_travel_time_s: f64,
+    /// Mean of travel time minus the time at each driver's desired speed, over the vehicles that left.
+    pub mean_delay_s: f64,
+    pub arrived: u64,
+    pub departed: u64,
+    pub steps: u64,
+    /// Sum over steps of the vehicles in the network (work done, for speed figures).
+    pub vehicle_steps: u64,
+}
+
+/// Mean and half-width of the 95% confidence interval (Student t with n - 1 degrees of freedom).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeanCi {
+    pub mean: f64,
+    pub ci95: f64,
+    pub std: f64,
+    pub n: usize,
+}
+
+impl MeanCi {
+    /// Summary of `xs`; one value gives a zero interval, none gives NaN.
+    pub fn of(xs: &[f64]) -> MeanCi {
+        let n = xs.len();
+        if n == 0 {
+            return MeanCi { mean: f64::NAN, ci95: f64::NAN, std: f64::NAN, n };
+        }
+        // sequential sums in the given order: the same numbers for any thread count
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        if n == 1 {
+            return MeanCi { mean, ci95: 0.0, std: 0.0, n };
+        }
+        let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1) as f64;
+        let std = var.sqrt();
+        let t = t_quantile_975(n - 1);
+        MeanCi { mean, ci95: t * std / (n as f64).sqrt(), std, n }
+    }
+}
+
+/// The 97.5% quantile of Student's t with `dof` degrees of freedom.
+pub fn t_quantile_975(dof: usize) -> f64 {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    StudentsT::new(0.0, 1.0, dof as f64).map(|t| t.inverse_cdf(0.975)).unwrap_or(1.959964)
+}
+
+/// Metrics over seeds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    pub outflow: MeanCi,
+    pub inflow: MeanCi,
+    pub speed: MeanCi,
+    pub travel_time: MeanCi,
+    pub delay: MeanCi,
+    pub seeds: usize,
+}
+
+impl Summary {
+    pub fn of(runs: &[RunMetrics]) -> Summary {
+        let col = |f: fn(&RunMetrics) -> f64| MeanCi::of(&runs.iter().map(f).collect::<Vec<_>>());
+        Summary {
+            outflow: col(|r| r.outflow_veh_h),
+            inflow: col(|r| r.inflow_veh_h),
+            speed: col(|r| r.avg_speed_mps),
+            travel_time: col(|r| r.mean_travel_time_s),
+            delay: col(|r| r.mean_delay_s),
+            seeds: runs.len(),
+        }
+    }
+}
+
+/// Run every seed to the horizon in parallel (rayon's current pool); results in seed order.
+pub fn run_baseline_spec(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, SimError> {
+    seeds
+        .par_iter()
+        .map(|&seed| {
+            let mut sim = Simulation::from_spec(spec.clone(), seed)?;
+            sim.run()
+        })
+        .collect()
+}

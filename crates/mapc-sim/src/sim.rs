@@ -1,0 +1,1331 @@
+//! The stepping simulator: plan every vehicle's safe speed from the state at the start of the step (leaders
+//! across lanes and junctions, speed limits ahead, minor-link requests), register junction approaches, decide
+//! links (right of way with impatience), then move every vehicle, front to back, never into its leader.
+
+use crate::idm::{IdmParams, NUMERICAL_EPS};
+use crate::metrics::RunMetrics;
+use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network};
+use crate::spec::SimSpec;
+use crate::SimError;
+use mapc_graph::RoadId;
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+use rand_distr::{Distribution, Normal};
+use std::collections::VecDeque;
+
+/// Index of a vehicle, stable for the whole run (vehicles are numbered in creation order).
+pub type VehicleId = u32;
+
+/// Below this speed a vehicle counts as halting (its waiting time grows).
+const HALTING_SPEED: f64 = 0.1;
+/// Waiting time after which impatience has grown by 1 (SUMO's default time to impatience).
+const TIME_TO_IMPATIENCE_S: f64 = 300.0;
+/// How far the stop point lies before a minor link's stop line (SUMO's POSITION_EPS).
+const POSITION_EPS: f64 = 0.1;
+/// A foe must arrive this much later than ego leaves for ego to go first (SUMO's link lookahead).
+const LINK_LOOKAHEAD_S: f64 = 1.0;
+/// The arrival time of a foe that could stop is this much later than its normal arrival.
+const BRAKING_ARRIVAL_DELAY_S: f64 = 30.0;
+/// Links planned ahead per vehicle.
+const MAX_LINK_ITEMS: usize = 4;
+
+/// Where a vehicle is in its life.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VehicleStatus {
+    /// Scheduled or waiting at its entry: not yet in the network.
+    Pending,
+    Active,
+    Arrived,
+}
+
+#[derive(Clone, Debug)]
+struct Veh {
+    vtype: u16,
+    controlled: bool,
+    status: VehicleStatus,
+    lane: LaneIdx,
+    pos: f64,
+    speed: f64,
+    length: f64,
+    speed_factor: f64,
+    route: u32,
+    route_pos: u32,
+    waiting_s: f64,
+    scheduled_depart_s: f64,
+    depart_s: f64,
+    arrive_s: f64,
+    /// Order of entering the network (0-based); `u64::MAX` while pending.
+    entry_order: u64,
+    /// Acceleration for the next step (controlled vehicles), NaN when none was set.
+    accel_cmd: f64,
+    depart_speed: f64,
+    distance_m: f64,
+    free_flow_s: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct LinkItem {
+    link: LinkIdx,
+    dist: f64,
+    v_link_pass: f64,
+    v_link_wait: f64,
+    arrival_time: f64,
+    arrival_speed: f64,
+    leave_time: f64,
+    leave_speed: f64,
+    arrival_time_braking: f64,
+    arrival_speed_braking: f64,
+    will_pass: bool,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct Plan {
+    v_safe: f64,
+    n_items: u8,
+    items: [LinkItem; MAX_LINK_ITEMS],
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Approach {
+    veh: VehicleId,
+    arrival_time: f64,
+    leave_time: f64,
+    arrival_speed: f64,
+    leave_speed: f64,
+    arrival_time_braking: f64,
+    arrival_speed_braking: f64,
+    will_pass: bool,
+    decel: f64,
+}
+
+#[derive(Clone, Debug)]
+struct Route {
+    lanes: Vec<LaneIdx>,
+    /// Distance from the route's start to the start of each lane.
+    start_m: Vec<f64>,
+}
+
+/// A vehicle that is ahead of or behind another, with the bumper-to-bumper gap in metres (without min gap).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Neighbor {
+    pub id: VehicleId,
+    pub gap_m: f64,
+    pub speed: f64,
+}
+
+/// A vehicle on another road approaching the same merge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergeFoe {
+    pub id: VehicleId,
+    /// Its front's distance to the merge point (end of its junction connection).
+    pub dist_to_merge_m: f64,
+    pub speed: f64,
+}
+
+/// Read-only view of one vehicle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VehicleView<'a> {
+    pub id: VehicleId,
+    pub vehicle_type: &'a str,
+    pub controlled: bool,
+    pub status: VehicleStatus,
+    /// The road the vehicle is on; for a vehicle inside a junction, the road it came from.
+    pub road: RoadId,
+    /// True while inside a junction (on the connection from `road` to the next road).
+    pub in_junction: bool,
+    pub pos_m: f64,
+    pub speed: f64,
+    pub length: f64,
+    pub entry_order: u64,
+    pub depart_s: f64,
+}
+
+/// A running simulation of one seed.
+pub struct Simulation {
+    net: Network,
+    spec: SimSpec,
+    types: Vec<IdmParams>,
+    routes: Vec<Route>,
+    veh: Vec<Veh>,
+    lane_veh: Vec<VecDeque<VehicleId>>,
+    lane_order: Vec<LaneIdx>,
+    plans: Vec<Plan>,
+    approaches: Vec<Vec<Approach>>,
+    link_has_minor_foe: Vec<bool>,
+    /// Per entry lane, the vehicles waiting to be inserted, in departure order.
+    pending: Vec<VecDeque<VehicleId>>,
+    entry_lanes: Vec<LaneIdx>,
+    flow_next: Vec<u64>,
+    flow_route: Vec<u32>,
+    in_region: Vec<bool>,
+    rng: StdRng,
+    step: u64,
+    time_s: f64,
+    next_entry: u64,
+    arrived_last: Vec<VehicleId>,
+    departed_last: Vec<VehicleId>,
+    main_line: Vec<(LaneIdx, f64)>,
+    metrics: MetricsAcc,
+    check_invariants: bool,
+}
+
+#[derive(Clone, Debug, Default)]
+struct MetricsAcc {
+    arrived: u64,
+    departed: u64,
+    speed_sum: f64,
+    speed_steps: u64,
+    steps: u64,
+    veh_steps: u64,
+    travel_time_sum: f64,
+    delay_sum: f64,
+}
+
+impl Simulation {
+    /// A simulation of `spec` with every random draw from `seed`.
+    pub fn from_spec(spec: SimSpec, seed: u64) -> Result<Simulation, SimError> {
+        spec.validate()?;
+        let net = Network::from_graph(&spec.graph)?;
+        let dt = spec.step_s;
+        let types: Vec<IdmParams> = spec
+            .vehicle_types
+            .iter()
+            .map(|t| IdmParams::new(t.accel, t.decel, t.emergency_decel, t.tau, t.min_gap, t.delta, dt))
+            .collect();
+        let mut sim = Simulation {
+            lane_veh: vec![VecDeque::new(); net.lanes.len()],
+            approaches: vec![Vec::new(); net.links.len()],
+            link_has_minor_foe: net.links.iter().map(|l| l.foes.iter().any(|&f| !net.links[f as usize].major)).collect(),
+            pending: Vec::new(),
+            entry_lanes: Vec::new(),
+            lane_order: Vec::new(),
+            flow_next: vec![0; spec.flows.len()],
+            flow_route: Vec::new(),
+            in_region: vec![true; net.lanes.len()],
+            routes: Vec::new(),
+            veh: Vec::new(),
+            plans: Vec::new(),
+            rng: StdRng::seed_from_u64(seed),
+            step: 0,
+            time_s: spec.start_time_s,
+            next_entry: 0,
+            arrived_last: Vec::new(),
+            departed_last: Vec::new(),
+            main_line: Vec::new(),
+            metrics: MetricsAcc::default(),
+            check_invariants: cfg!(debug_assertions),
+            types,
+            net,
+            spec,
+        };
+        // Downstream lanes first, so a leader has moved before its follower.
+        let mut order: Vec<LaneIdx> = (0..sim.net.lanes.len() as LaneIdx).collect();
+        order.sort_by(|&a, &b| {
+            sim.net.lanes[a as usize].downstream_m.total_cmp(&sim.net.lanes[b as usize].downstream_m).then(a.cmp(&b))
+        });
+        sim.lane_order = order;
+        if let Some(region) = &sim.spec.control_region {
+            for (i, lane) in sim.net.lanes.iter().enumerate() {
+                sim.in_region[i] = match lane.kind {
+                    LaneKind::Road(r) => region.contains(&sim.net.road_ids[r]),
+                    LaneKind::Via(k) => {
+                        let l = &sim.net.links[k as usize];
+                        let from = sim.net.road_ids[sim.net.road_of(l.from_lane).unwrap()];
+                        let to = sim.net.road_ids[sim.net.road_of(l.to_lane).unwrap()];
+                        region.contains(&from) && region.contains(&to)
+                    }
+                };
+            }
+        }
+        for f in 0..sim.spec.flows.len() {
+            let flow = sim.spec.flows[f].clone();
+            let r = sim.add_route(flow.from, flow.to)?;
+            sim.flow_route.push(r);
+            let entry = sim.routes[r as usize].lanes[0];
+            if !sim.entry_lanes.contains(&entry) {
+                sim.entry_lanes.push(entry);
+                sim.pending.push(VecDeque::new());
+            }
+        }
+        sim.main_line = sim.derive_main_line()?;
+        // Initial vehicles: standing where the spec puts them, before the first step.
+        for i in 0..sim.spec.initial.len() {
+            let iv = sim.spec.initial[i].clone();
+            let r = sim.add_route(iv.road, None)?;
+            let lane = sim.routes[r as usize].lanes[0];
+            let len = sim.net.lanes[lane as usize].length;
+            if !(iv.pos_m >= 0.0 && iv.pos_m <= len) {
+                return Err(SimError::Spec(format!(
+                    "initial vehicle {i}: position {} m is off road {} (length {len} m)",
+                    iv.pos_m, iv.road
+                )));
+            }
+            let id = sim.create_vehicle(iv.vehicle_type, r, sim.time_s, iv.speed);
+            sim.place(id, lane, iv.pos_m, iv.speed, false)?;
+        }
+        Ok(sim)
+    }
+
+    fn add_route(&mut self, from: RoadId, to: Option<RoadId>) -> Result<u32, SimError> {
+        let lanes = self.net.route(&self.spec.graph, from, to)?;
+        if let Some(i) = self.routes.iter().position(|r| r.lanes == lanes) {
+            return Ok(i as u32);
+        }
+        let mut start_m = Vec::with_capacity(lanes.len());
+        let mut acc = 0.0;
+        for &l in &lanes {
+            start_m.push(acc);
+            acc += self.net.lanes[l as usize].length;
+        }
+        self.routes.push(Route { lanes, start_m });
+        Ok(self.routes.len() as u32 - 1)
+    }
+
+    fn derive_main_line(&mut self) -> Result<Vec<(LaneIdx, f64)>, SimError> {
+        let roads: Vec<RoadId> = if !self.spec.main_line.is_empty() {
+            self.spec.main_line.clone()
+        } else if let Some(f) = self
+            .spec
+            .flows
+            .iter()
+            .max_by(|a, b| a.vehs_per_hour.total_cmp(&b.vehs_per_hour).then(b.from.cmp(&a.from)))
+        {
+            let lanes = self.net.route(&self.spec.graph, f.from, None)?;
+            lanes.iter().filter_map(|&l| self.net.road_of(l)).map(|r| self.net.road_ids[r]).collect()
+        } else {
+            return Ok(Vec::new());
+        };
+        let lanes = self.net.route(&self.spec.graph, roads[0], roads.last().copied())?;
+        let mut acc = 0.0;
+        let mut out = Vec::with_capacity(lanes.len());
+        for l in lanes {
+            out.push((l, acc));
+            acc += self.net.lanes[l as usize].length;
+        }
+        Ok(out)
+    }
+
+    fn create_vehicle(&mut self, vtype: usize, route: u32, depart_s: f64, depart_speed: f64) -> VehicleId {
+        let t = &self.spec.vehicle_types[vtype];
+        let factor = if t.speed_dev > 0.0 {
+            // SUMO redraws until the factor lies in [0.2, 2] (at most 10 tries, then the mean).
+            let normal = Normal::new(t.speed_factor, t.speed_dev).expect("validated deviation");
+            let mut f = t.speed_factor;
+            for _ in 0..10 {
+                let x: f64 = normal.sample(&mut self.rng);
+                if (0.2..=2.0).contains(&x) {
+                    f = x;
+                    break;
+                }
+            }
+            f
+        } else {
+            t.speed_factor
+        };
+        let route_lanes = &self.routes[route as usize].lanes;
+        let free_flow_s: f64 = route_lanes
+            .iter()
+            .map(|&l| {
+                let lane = &self.net.lanes[l as usize];
+                lane.length / (lane.speed_limit * factor).min(t.max_speed)
+            })
+            .sum();
+        let id = self.veh.len() as VehicleId;
+        self.veh.push(Veh {
+            vtype: vtype as u16,
+            controlled: t.controlled,
+            status: VehicleStatus::Pending,
+            lane: route_lanes[0],
+            pos: 0.0,
+            speed: 0.0,
+            length: t.length,
+            speed_factor: factor,
+            route,
+            route_pos: 0,
+            waiting_s: 0.0,
+            scheduled_depart_s: depart_s,
+            depart_s: f64::NAN,
+            arrive_s: f64::NAN,
+            entry_order: u64::MAX,
+            accel_cmd: f64::NAN,
+            depart_speed,
+            distance_m: 0.0,
+            free_flow_s,
+        });
+        self.plans.push(Plan::default());
+        id
+    }
+
+    /// Put a vehicle into the network at the back of `lane`.
+    fn place(&mut self, id: VehicleId, lane: LaneIdx, pos: f64, speed: f64, counted: bool) -> Result<(), SimError> {
+        let q = &mut self.lane_veh[lane as usize];
+        // keep the lane sorted front-first
+        let at = q.iter().position(|&o| self.veh[o as usize].pos < pos).unwrap_or(q.len());
+        q.insert(at, id);
+        let v = &mut self.veh[id as usize];
+        v.status = VehicleStatus::Active;
+        v.lane = lane;
+        v.pos = pos;
+        v.speed = speed;
+        v.depart_s = self.time_s;
+        v.entry_order = self.next_entry;
+        self.next_entry += 1;
+        if counted {
+            self.metrics.departed += 1;
+            self.departed_last.push(id);
+        }
+        Ok(())
+    }
+
+    // ----------------------------------------------------------------------------------------------------------
+    // Queries
+    // ----------------------------------------------------------------------------------------------------------
+
+    pub fn step_s(&self) -> f64 {
+        self.spec.step_s
+    }
+    /// Simulation time in seconds (SUMO's clock: step 0 starts at `start_time_s`).
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+    /// Steps done so far.
+    pub fn step_index(&self) -> u64 {
+        self.step
+    }
+    pub fn horizon_steps(&self) -> u64 {
+        self.spec.horizon_steps
+    }
+    /// True once the horizon has been simulated.
+    pub fn is_done(&self) -> bool {
+        self.step >= self.spec.horizon_steps
+    }
+    pub fn network(&self) -> &Network {
+        &self.net
+    }
+    pub fn spec(&self) -> &SimSpec {
+        &self.spec
+    }
+    /// Vehicles in the network now, in lane order (downstream lanes first, front first).
+    pub fn active_ids(&self) -> impl Iterator<Item = VehicleId> + '_ {
+        self.lane_order.iter().flat_map(move |&l| self.lane_veh[l as usize].iter().copied())
+    }
+    /// Number of vehicles in the network.
+    pub fn active_count(&self) -> usize {
+        self.lane_veh.iter().map(|q| q.len()).sum()
+    }
+    /// Every vehicle created so far (pending, active, arrived).
+    pub fn vehicle_count(&self) -> usize {
+        self.veh.len()
+    }
+    /// Ids of vehicles that left the network in the last step.
+    pub fn arrived_last_step(&self) -> &[VehicleId] {
+        &self.arrived_last
+    }
+    /// Ids of vehicles that entered the network in the last step.
+    pub fn departed_last_step(&self) -> &[VehicleId] {
+        &self.departed_last
+    }
+
+    pub fn vehicle(&self, id: VehicleId) -> Option<VehicleView<'_>> {
+        let v = self.veh.get(id as usize)?;
+        let (road, in_junction) = self.road_of_lane(v.lane);
+        Some(VehicleView {
+            id,
+            vehicle_type: &self.spec.vehicle_types[v.vtype as usize].name,
+            controlled: v.controlled,
+            status: v.status,
+            road,
+            in_junction,
+            pos_m: v.pos,
+            speed: v.speed,
+            length: v.length,
+            entry_order: v.entry_order,
+            depart_s: v.depart_s,
+        })
+    }
+
+    fn road_of_lane(&self, lane: LaneIdx) -> (RoadId, bool) {
+        match self.net.lanes[lane as usize].kind {
+            LaneKind::Road(r) => (self.net.road_ids[r], false),
+            LaneKind::Via(k) => {
+                let from = self.net.links[k as usize].from_lane;
+                (self.net.road_ids[self.net.road_of(from).unwrap()], true)
+            }
+        }
+    }
+
+    #[doc(hidden)]
+    pub fn veh_lane(&self, id: VehicleId) -> LaneIdx {
+        self.veh[id as usize].lane
+    }
+
+    /// Whether the vehicle is in the scenario's control region (everywhere when the scenario has none).
+    pub fn in_control_region(&self, id: VehicleId) -> bool {
+        self.veh
+            .get(id as usize)
+            .is_some_and(|v| v.status == VehicleStatus::Active && self.in_region[v.lane as usize])
+    }
+
+    /// Distance travelled along the route so far and the route's total length.
+    pub fn route_progress(&self, id: VehicleId) -> Option<(f64, f64)> {
+        let v = self.veh.get(id as usize)?;
+        let r = &self.routes[v.route as usize];
+        let total = r.start_m.last().copied().unwrap_or(0.0) + r.lanes.last().map_or(0.0, |&l| self.net.lanes[l as usize].length);
+        let done = match v.status {
+            VehicleStatus::Pending => 0.0,
+            VehicleStatus::Arrived => total,
+            VehicleStatus::Active => r.start_m[v.route_pos as usize] + v.pos,
+        };
+        Some((done, total))
+    }
+
+    /// Distance from the vehicle's front to the next junction where roads merge or split (a link with foes or a
+    /// road with several exits), and that junction; `None` if no such junction lies ahead on its route.
+    pub fn distance_to_next_junction(&self, id: VehicleId) -> Option<(f64, mapc_graph::JunctionId)> {
+        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
+        let r = &self.routes[v.route as usize];
+        let mut seen = self.net.lanes[v.lane as usize].length - v.pos;
+        for k in (v.route_pos as usize + 1)..r.lanes.len() {
+            let lane = &self.net.lanes[r.lanes[k] as usize];
+            if let LaneKind::Via(link) = lane.kind {
+                let l = &self.net.links[link as usize];
+                let branches = self.net.lanes[l.from_lane as usize].out_links.len() > 1;
+                if (!l.foes.is_empty() || branches) && k > v.route_pos as usize {
+                    return Some((seen, l.junction));
+                }
+            }
+            seen += lane.length;
+        }
+        None
+    }
+
+    /// Distance from the vehicle's front to the network's end along its route position's main line
+    /// (`corridor_x_m` of traces): `Some` only on main-line roads and their connections.
+    pub fn corridor_x(&self, id: VehicleId) -> Option<f64> {
+        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
+        self.main_line.iter().find(|(l, _)| *l == v.lane).map(|(_, start)| start + v.pos)
+    }
+
+    /// The nearest vehicle ahead on the route (across lanes and junctions, including vehicles on a merging
+    /// connection that are closer to the merge point), within `max_dist` metres.
+    pub fn leader(&self, id: VehicleId, max_dist: f64) -> Option<Neighbor> {
+        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
+        let mut best: Option<Neighbor> = None;
+        self.for_each_leader(id, max_dist, false, |l, gap| {
+            if best.is_none_or(|b| gap < b.gap_m) {
+                best = Some(Neighbor { id: l, gap_m: gap, speed: self.veh[l as usize].speed });
+            }
+        });
+        let _ = v;
+        best
+    }
+
+    /// The nearest vehicle behind (on this road, the connections into it, and the roads before them, the merging
+    /// road included), within `max_dist` metres.
+    pub fn follower(&self, id: VehicleId, max_dist: f64) -> Option<Neighbor> {
+        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
+        let q = &self.lane_veh[v.lane as usize];
+        let idx = q.iter().position(|&o| o == id)?;
+        if idx + 1 < q.len() {
+            let f = q[idx + 1];
+            let fv = &self.veh[f as usize];
+            let gap = v.pos - v.length - fv.pos;
+            return (gap <= max_dist).then_some(Neighbor { id: f, gap_m: gap, speed: fv.speed });
+        }
+        // Search upstream: distance from the start of a lane to ego's back.
+        let mut best: Option<Neighbor> = None;
+        let mut stack: Vec<(LaneIdx, f64)> = vec![(v.lane, v.pos - v.length)];
+        let mut visited = 0;
+        while let Some((lane, back_from_start)) = stack.pop() {
+            visited += 1;
+            if visited > 64 {
+                break;
+            }
+            for (up, len) in self.upstream_lanes(lane) {
+                if let Some(&f) = self.lane_veh[up as usize].front() {
+                    let fv = &self.veh[f as usize];
+                    let gap = back_from_start + (len - fv.pos);
+                    if f != id && gap <= max_dist && best.is_none_or(|b| gap < b.gap_m) {
+                        best = Some(Neighbor { id: f, gap_m: gap, speed: fv.speed });
+                    }
+                } else if back_from_start + len <= max_dist {
+                    stack.push((up, back_from_start + len));
+                }
+            }
+        }
+        best
+    }
+
+    fn upstream_lanes(&self, lane: LaneIdx) -> Vec<(LaneIdx, f64)> {
+        match self.net.lanes[lane as usize].kind {
+            LaneKind::Via(k) => {
+                let from = self.net.links[k as usize].from_lane;
+                vec![(from, self.net.lanes[from as usize].length)]
+            }
+            LaneKind::Road(_) => self
+                .net
+                .links
+                .iter()
+                .filter(|l| l.to_lane == lane)
+                .map(|l| (l.via_lane, self.net.lanes[l.via_lane as usize].length))
+                .collect(),
+        }
+    }
+
+    /// The vehicle on another road nearest to the merge point that this vehicle's route reaches next, among those
+    /// approaching it (on the merging road within `max_dist` of the merge, or inside the junction).
+    pub fn nearest_merge_foe(&self, id: VehicleId, max_dist: f64) -> Option<MergeFoe> {
+        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
+        let r = &self.routes[v.route as usize];
+        // find the next via lane on the route with foes
+        let mut k = v.route_pos as usize;
+        if !matches!(self.net.lanes[v.lane as usize].kind, LaneKind::Via(_)) {
+            k += 1;
+        }
+        while k < r.lanes.len() {
+            if let LaneKind::Via(link) = self.net.lanes[r.lanes[k] as usize].kind {
+                let foes = &self.net.links[link as usize].foes;
+                if !foes.is_empty() {
+                    let mut best: Option<MergeFoe> = None;
+                    for &f in foes {
+                        let fl = &self.net.links[f as usize];
+                        let via_len = self.net.lanes[fl.via_lane as usize].length;
+                        let mut consider = |o: VehicleId, d: f64| {
+                            if o != id && d <= max_dist && best.is_none_or(|b| d < b.dist_to_merge_m) {
+                                best = Some(MergeFoe { id: o, dist_to_merge_m: d, speed: self.veh[o as usize].speed });
+                            }
+                        };
+                        for &o in &self.lane_veh[fl.via_lane as usize] {
+                            consider(o, via_len - self.veh[o as usize].pos);
+                        }
+                        let from_len = self.net.lanes[fl.from_lane as usize].length;
+                        for &o in &self.lane_veh[fl.from_lane as usize] {
+                            consider(o, via_len + from_len - self.veh[o as usize].pos);
+                        }
+                    }
+                    return best;
+                }
+            }
+            k += 1;
+        }
+        None
+    }
+
+    /// Set the acceleration a controlled vehicle applies in the next step (clamped to [-decel, accel], then
+    /// capped by the safe speed). Ignored for vehicles that are not controlled or not in the network.
+    pub fn set_acceleration(&mut self, id: VehicleId, accel: f64) -> Result<(), SimError> {
+        let v = self.veh.get_mut(id as usize).ok_or(SimError::UnknownVehicle(id))?;
+        if !v.controlled {
+            return Err(SimError::NotControlled(id));
+        }
+        if accel.is_finite() {
+            v.accel_cmd = accel;
+        }
+        Ok(())
+    }
+
+    pub fn metrics(&self) -> RunMetrics {
+        let m = &self.metrics;
+        let secs = (m.steps as f64 * self.spec.step_s).max(f64::MIN_POSITIVE);
+        RunMetrics {
+            outflow_veh_h: 3600.0 * m.arrived as f64 / secs,
+            inflow_veh_h: 3600.0 * m.departed as f64 / secs,
+            avg_speed_mps: if m.speed_steps > 0 { m.speed_sum / m.speed_steps as f64 } else { 0.0 },
+            mean_travel_time_s: if m.arrived > 0 { m.travel_time_sum / m.arrived as f64 } else { f64::NAN },
+            mean_delay_s: if m.arrived > 0 { m.delay_sum / m.arrived as f64 } else { f64::NAN },
+            arrived: m.arrived,
+            departed: m.departed,
+            steps: m.steps,
+            vehicle_steps: m.veh_steps,
+        }
+    }
+
+    /// Turn the per-step collision check on or off (on by default in debug builds).
+    pub fn set_invariant_checks(&mut self, on: bool) {
+        self.check_invariants = on;
+    }
+
+    // ----------------------------------------------------------------------------------------------------------
+    // Stepping
+    // ----------------------------------------------------------------------------------------------------------
+
+    /// Run to the horizon.
+    pub fn run(&mut self) -> Result<RunMetrics, SimError> {
+        while !self.is_done() {
+            self.step()?;
+        }
+        Ok(self.metrics())
+    }
+
+    /// Advance one step.
+    pub fn step(&mut self) -> Result<(), SimError> {
+        self.arrived_last.clear();
+        self.departed_last.clear();
+        // Metrics see the network as it is before the step (as the original rollouts did).
+        let mut n = 0u64;
+        let mut sum = 0.0;
+        for q in &self.lane_veh {
+            for &id in q {
+                n += 1;
+                sum += self.veh[id as usize].speed;
+            }
+        }
+        if n > 0 && sum / n as f64 > 0.0 {
+            self.metrics.speed_sum += sum / n as f64;
+            self.metrics.speed_steps += 1;
+        }
+        self.metrics.veh_steps += n;
+
+        for a in &mut self.approaches {
+            a.clear();
+        }
+        for li in 0..self.lane_order.len() {
+            let lane = self.lane_order[li];
+            for qi in 0..self.lane_veh[lane as usize].len() {
+                let id = self.lane_veh[lane as usize][qi];
+                self.plan(id, qi);
+            }
+        }
+        self.execute_moves();
+        self.time_s += self.spec.step_s;
+        self.step += 1;
+        self.metrics.steps += 1;
+        self.insert_departures();
+        if self.check_invariants {
+            self.check_no_overlap()?;
+        }
+        Ok(())
+    }
+
+    fn desired_speed(&self, v: &Veh, lane: LaneIdx) -> f64 {
+        (self.net.lanes[lane as usize].speed_limit * v.speed_factor).min(self.spec.vehicle_types[v.vtype as usize].max_speed)
+    }
+
+    /// Calls `f(leader, gap)` for every vehicle the ego must follow within `max_dist` (gap: bumper to bumper).
+    fn for_each_leader(&self, id: VehicleId, max_dist: f64, guard: bool, mut f: impl FnMut(VehicleId, f64)) {
+        let v = &self.veh[id as usize];
+        let q = &self.lane_veh[v.lane as usize];
+        let idx = q.iter().position(|&o| o == id).unwrap_or(0);
+        if idx > 0 {
+            let l = q[idx - 1];
+            let lv = &self.veh[l as usize];
+            f(l, lv.pos - lv.length - v.pos);
+            return;
+        }
+        self.leaders_beyond(id, max_dist, guard, &mut f);
+    }
+
+    /// Leaders beyond the ego's own lane: on the lanes ahead on its route, tails of vehicles that just entered a
+    /// connection, and vehicles on merging connections that are closer to the merge point.
+    fn leaders_beyond(&self, id: VehicleId, max_dist: f64, guard: bool, f: &mut impl FnMut(VehicleId, f64)) {
+        let v = &self.veh[id as usize];
+        let r = &self.routes[v.route as usize];
+        let cur = &self.net.lanes[v.lane as usize];
+        let mut seen = cur.length - v.pos;
+        let on_via = matches!(cur.kind, LaneKind::Via(_));
+        if on_via {
+            self.junction_foe_leaders(id, v.lane, seen, guard, f);
+        } else {
+            // tails of vehicles on any connection out of this road still reach back onto it
+            for &k in &cur.out_links {
+                let via = self.net.links[k as usize].via_lane;
+                if let Some(&o) = self.lane_veh[via as usize].back() {
+                    let ov = &self.veh[o as usize];
+                    if ov.pos < ov.length && r.lanes.get(v.route_pos as usize + 1) != Some(&via) {
+                        f(o, seen + ov.pos - ov.length);
+                    }
+                }
+            }
+        }
+        let mut k = v.route_pos as usize + 1;
+        while k < r.lanes.len() && seen <= max_dist {
+            let lane = r.lanes[k];
+            let l = &self.net.lanes[lane as usize];
+            if let LaneKind::Via(link) = l.kind {
+                if !self.net.links[link as usize].foes.is_empty() {
+                    self.junction_foe_leaders(id, lane, seen + l.length, guard, f);
+                }
+            }
+            if let Some(&o) = self.lane_veh[lane as usize].back() {
+                let ov = &self.veh[o as usize];
+                f(o, seen + ov.pos - ov.length);
+                return;
+            }
+            seen += l.length;
+            k += 1;
+        }
+    }
+
+    /// Vehicles on connections merging with `via` (or about to enter them) whose front is closer to the merge
+    /// point than ego's front at `dist_to_merge`.
+    fn junction_foe_leaders(
+        &self,
+        id: VehicleId,
+        via: LaneIdx,
+        dist_to_merge: f64,
+        guard: bool,
+        f: &mut impl FnMut(VehicleId, f64),
+    ) {
+        let LaneKind::Via(link) = self.net.lanes[via as usize].kind else { return };
+        let ego_in_junction = self.veh[id as usize].lane == via;
+        for &foe in &self.net.links[link as usize].foes {
+            let fl = &self.net.links[foe as usize];
+            let flen = self.net.lanes[fl.via_lane as usize].length;
+            for &o in self.lane_veh[fl.via_lane as usize].iter() {
+                let ov = &self.veh[o as usize];
+                let d = flen - ov.pos;
+                if d < dist_to_merge {
+                    f(o, dist_to_merge - d - ov.length);
+                }
+            }
+            if let Some(&o) = self.lane_veh[fl.from_lane as usize].front() {
+                let ov = &self.veh[o as usize];
+                let from_len = self.net.lanes[fl.from_lane as usize].length;
+                let d = flen + from_len - ov.pos;
+                // planning: a foe at its stop line may enter this very step ahead of ego (already inside);
+                // moving: a foe that entered in this step (moved past its road's end) leads ego
+                let relevant = if guard { ov.pos > from_len } else { ego_in_junction && d - flen < ov.speed * self.spec.step_s + 1.0 };
+                if d < dist_to_merge && relevant {
+                    f(o, dist_to_merge - d - ov.length);
+                }
+            }
+        }
+    }
+
+    fn plan(&mut self, id: VehicleId, qi: usize) {
+        let dt = self.spec.step_s;
+        let v = &self.veh[id as usize];
+        let p = self.types[v.vtype as usize];
+        let t = &self.spec.vehicle_types[v.vtype as usize];
+        let speed = v.speed;
+        let des_cur = self.desired_speed(v, v.lane);
+        let max_next = (speed + p.accel * dt).min(t.max_speed);
+        let mut vv = max_next.min(des_cur);
+        let lookahead = max_next * dt + p.brake_gap(max_next, p.decel, p.tau) + v.length;
+        let r = &self.routes[v.route as usize];
+        let cur = &self.net.lanes[v.lane as usize];
+
+        // Leader on the own lane.
+        if qi > 0 {
+            let l = self.lane_veh[v.lane as usize][qi - 1];
+            let lv = &self.veh[l as usize];
+            let gap = lv.pos - lv.length - v.pos - p.min_gap;
+            vv = vv.min(p.follow_speed(gap, speed, lv.speed, des_cur));
+        } else if let LaneKind::Via(_) = cur.kind {
+            let mut m = vv;
+            self.junction_foe_leaders(id, v.lane, cur.length - v.pos, false, &mut |o, gap| {
+                m = m.min(p.follow_speed(gap - p.min_gap, speed, self.veh[o as usize].speed, des_cur));
+            });
+            vv = m;
+        }
+        if qi == 0 && !matches!(cur.kind, LaneKind::Via(_)) {
+            for &k in &cur.out_links {
+                let via = self.net.links[k as usize].via_lane;
+                if r.lanes.get(v.route_pos as usize + 1) == Some(&via) {
+                    continue;
+                }
+                if let Some(&o) = self.lane_veh[via as usize].back() {
+                    let ov = &self.veh[o as usize];
+                    if ov.pos < ov.length {
+                        let gap = cur.length - v.pos + ov.pos - ov.length - p.min_gap;
+                        vv = vv.min(p.follow_speed(gap, speed, ov.speed, des_cur));
+                    }
+                }
+            }
+        }
+
+        let mut plan = Plan { v_safe: 0.0, n_items: 0, items: [LinkItem::default(); MAX_LINK_ITEMS] };
+        let mut seen = cur.length - v.pos;
+        let mut k = v.route_pos as usize;
+        let mut leader_found = qi > 0;
+        let mut v_link_pass_est = vv;
+        let mut slowed_for_minor = false;
+        loop {
+            if k + 1 >= r.lanes.len() {
+                // final lane: drive out at the lane's speed (SUMO's arrival handling)
+                let lane_max = self.desired_speed(v, r.lanes[k]);
+                let va = p.free_speed(speed, seen - lane_max * dt, lane_max, des_cur);
+                vv = vv.min(va);
+                break;
+            }
+            let via = r.lanes[k + 1];
+            let LaneKind::Via(link) = self.net.lanes[via as usize].kind else { break };
+            let lk = &self.net.links[link as usize];
+            let via_lane = &self.net.lanes[via as usize];
+            // vehicles already inside the junction on merging connections lead us
+            if !lk.foes.is_empty() && k == v.route_pos as usize && !matches!(cur.kind, LaneKind::Via(_)) {
+                let mut m = vv;
+                self.junction_foe_leaders(id, via, seen + via_lane.length, false, &mut |o, gap| {
+                    m = m.min(p.follow_speed(gap - p.min_gap, speed, self.veh[o as usize].speed, des_cur));
+                });
+                vv = m;
+            }
+            let items_full = (plan.n_items as usize) >= MAX_LINK_ITEMS;
+            if !items_full {
+                let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).max(0.0);
+                let v_link_wait = vv.min(p.stop_speed(stop_dist, speed, des_cur));
+                let mut arrival_speed = v_link_pass_est.min(vv);
+                if !lk.major && seen >= FOE_VISIBILITY_M && p.brake_gap(speed, p.decel, 0.0) < seen {
+                    let max_at_vis = p.maximum_safe_stop_speed(FOE_VISIBILITY_M, speed);
+                    let max_arrival = IdmParams::speed_after_distance(FOE_VISIBILITY_M, max_at_vis, p.accel);
+                    arrival_speed = arrival_speed.min(max_arrival);
+                    slowed_for_minor = true;
+                }
+                let arrival_time = self.time_s + p.minimal_arrival_time(seen, vv, arrival_speed);
+                let mut arrival_speed_braking = 0.0;
+                let mut arrival_time_braking = arrival_time + BRAKING_ARRIVAL_DELAY_S;
+                if seen < p.brake_gap(vv, p.decel, p.tau) {
+                    arrival_speed_braking = if seen < vv * dt {
+                        arrival_speed
+                    } else {
+                        IdmParams::speed_after_distance(seen, vv, -p.decel).min(arrival_speed)
+                    };
+                    arrival_time_braking =
+                        arrival_time.max(self.time_s + seen / ((vv + arrival_speed_braking) * 0.5).max(NUMERICAL_EPS));
+                }
+                let via_max = self.desired_speed(v, via);
+                let leave_speed = via_max.min(IdmParams::speed_after_distance(via_lane.length, arrival_speed, p.accel));
+                let leave_time = arrival_time
+                    + (via_lane.length + v.length) / (0.5 * (arrival_speed + leave_speed)).max(NUMERICAL_EPS);
+                plan.items[plan.n_items as usize] = LinkItem {
+                    link,
+                    dist: seen,
+                    v_link_pass: vv,
+                    v_link_wait,
+                    arrival_time,
+                    arrival_speed,
+                    leave_time,
+                    leave_speed,
+                    arrival_time_braking,
+                    arrival_speed_braking,
+                    will_pass: vv > 0.0,
+                };
+                plan.n_items += 1;
+            }
+            if seen > lookahead || items_full {
+                break;
+            }
+            // enter the connection: its speed limit and the vehicles on it
+            let via_max = self.desired_speed(v, via);
+            vv = vv.min(via_max.max(p.free_speed(speed, seen, via_max, des_cur)));
+            if !leader_found {
+                if let Some(&o) = self.lane_veh[via as usize].back() {
+                    let ov = &self.veh[o as usize];
+                    let gap = seen + ov.pos - ov.length - p.min_gap;
+                    vv = vv.min(p.follow_speed(gap, speed, ov.speed, des_cur));
+                    leader_found = true;
+                }
+            }
+            seen += via_lane.length;
+            k += 1;
+            if k + 1 >= r.lanes.len() {
+                break;
+            }
+            // the road after the connection
+            let next = r.lanes[k + 1];
+            let next_lane = &self.net.lanes[next as usize];
+            let next_max = self.desired_speed(v, next);
+            vv = vv.min(next_max.max(p.free_speed(speed, seen, next_max, des_cur)));
+            if !leader_found {
+                if let Some(&o) = self.lane_veh[next as usize].back() {
+                    let ov = &self.veh[o as usize];
+                    let gap = seen + ov.pos - ov.length - p.min_gap;
+                    vv = vv.min(p.follow_speed(gap, speed, ov.speed, des_cur));
+                    leader_found = true;
+                }
+            }
+            v_link_pass_est = IdmParams::speed_after_distance(next_lane.length, vv, p.accel).min(next_max);
+            seen += next_lane.length;
+            k += 1;
+            if seen > lookahead + next_lane.length {
+                break;
+            }
+        }
+        let _ = slowed_for_minor;
+        plan.v_safe = vv;
+        // register approaches on links that minor foes check
+        for it in &plan.items[..plan.n_items as usize] {
+            if self.link_has_minor_foe[it.link as usize] {
+                self.approaches[it.link as usize].push(Approach {
+                    veh: id,
+                    arrival_time: it.arrival_time,
+                    leave_time: it.leave_time,
+                    arrival_speed: it.arrival_speed,
+                    leave_speed: it.leave_speed,
+                    arrival_time_braking: it.arrival_time_braking,
+                    arrival_speed_braking: it.arrival_speed_braking,
+                    will_pass: it.will_pass,
+                    decel: p.decel,
+                });
+            }
+        }
+        self.plans[id as usize] = plan;
+    }
+
+    /// SUMO's `MSLink::opened` for a minor link at a merge: blocked by any foe approach that conflicts in time.
+    fn link_opened(&self, id: VehicleId, it: &LinkItem, can_brake: bool) -> bool {
+        let lk = &self.net.links[it.link as usize];
+        if lk.major {
+            return true;
+        }
+        let v = &self.veh[id as usize];
+        let t = &self.spec.vehicle_types[v.vtype as usize];
+        // a driver who can no longer stop takes any gap
+        let impatience =
+            if can_brake { (t.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0) } else { 1.0 };
+        let decel = t.decel;
+        for &foe in &lk.foes {
+            for a in &self.approaches[foe as usize] {
+                if a.veh == id || !a.will_pass {
+                    continue;
+                }
+                let foe_arrival = (1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking;
+                if a.leave_time < it.arrival_time {
+                    // ego would follow the foe
+                    if it.arrival_time - a.leave_time < LINK_LOOKAHEAD_S
+                        || unsafe_merge_speeds(a.leave_speed, it.arrival_speed, a.decel, decel)
+                    {
+                        return false;
+                    }
+                } else if foe_arrival > it.leave_time + LINK_LOOKAHEAD_S {
+                    // ego would lead the foe
+                    if unsafe_merge_speeds(it.leave_speed, a.arrival_speed_braking, decel, a.decel) {
+                        return false;
+                    }
+                } else {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    fn execute_moves(&mut self) {
+        let dt = self.spec.step_s;
+        // 1. decide each vehicle's next speed from its plan and the links
+        for li in 0..self.lane_order.len() {
+            let lane = self.lane_order[li];
+            for qi in 0..self.lane_veh[lane as usize].len() {
+                let id = self.lane_veh[lane as usize][qi];
+                let plan = self.plans[id as usize];
+                let v = &self.veh[id as usize];
+                let p = self.types[v.vtype as usize];
+                let mut v_safe = plan.v_safe;
+                for it in &plan.items[..plan.n_items as usize] {
+                    let lk = &self.net.links[it.link as usize];
+                    if lk.major {
+                        continue;
+                    }
+                    let can_brake = it.dist > p.brake_gap(v.speed, p.decel, 0.0) || v.speed < p.decel * dt;
+                    let opened = it.will_pass && self.link_opened(id, it, can_brake);
+                    if !opened && (can_brake || !it.will_pass) {
+                        v_safe = v_safe.min(it.v_link_wait);
+                        break;
+                    }
+                }
+                if std::env::var("MAPC_SIM_DEBUG").is_ok_and(|s| s.split(',').any(|x| x == id.to_string())) {
+                    let items: Vec<String> = plan.items[..plan.n_items as usize]
+                        .iter()
+                        .map(|it| format!("link{} d={:.2} wait={:.2} pass={:.2} at={:.2} lt={:.2} atb={:.2} open={}", it.link, it.dist, it.v_link_wait, it.v_link_pass, it.arrival_time, it.leave_time, it.arrival_time_braking, self.link_opened(id, it, true)))
+                        .collect();
+                    eprintln!("t={:.1} id={id} lane={} pos={:.2} v={:.2} wait={:.1} vsafe_plan={:.2} vsafe={:.2} items={items:?}", self.time_s, self.net.lane_names[v.lane as usize], v.pos, v.speed, v.waiting_s, plan.v_safe, v_safe);
+                }
+                // finalise: acceleration and deceleration bounds (emergency braking allowed when unsafe)
+                let v_max = v_safe.min(v.speed + p.accel * dt);
+                let v_min = (v.speed - p.decel * dt).min(v_safe.max(v.speed - p.emergency_decel * dt)).max(0.0);
+                let mut next = v_max.max(v_min);
+                if v.controlled && v.accel_cmd.is_finite() && self.in_region[v.lane as usize] {
+                    let a = v.accel_cmd.clamp(-p.decel, p.accel);
+                    next = (v.speed + a * dt).max(0.0).min(v_safe);
+                }
+                self.plans[id as usize].v_safe = next.max(0.0);
+            }
+        }
+        // 2. move, downstream lanes first and front to back, never past the (already moved) leader
+        for li in 0..self.lane_order.len() {
+            let lane = self.lane_order[li];
+            let mut qi = 0;
+            while qi < self.lane_veh[lane as usize].len() {
+                let id = self.lane_veh[lane as usize][qi];
+                let mut next = self.plans[id as usize].v_safe;
+                let mut cap = f64::INFINITY;
+                self.for_each_leader(id, next * dt + 1.0, true, |l, gap| {
+                    // the leader's movement this step, if it already moved
+                    let _ = l;
+                    cap = cap.min(gap);
+                });
+                // `for_each_leader` measured gaps from positions partly updated this step: leaders that moved
+                // report their new position, the rest their old one; both are safe bounds.
+                if cap.is_finite() {
+                    next = next.min((cap / dt).max(0.0));
+                }
+                let v = &mut self.veh[id as usize];
+                v.accel_cmd = f64::NAN;
+                v.speed = next;
+                v.pos += next * dt;
+                v.distance_m += next * dt;
+                v.waiting_s = if next < HALTING_SPEED { v.waiting_s + dt } else { 0.0 };
+                qi += 1;
+            }
+        }
+        // 3. lane changes along routes and arrivals; vehicles moved into a lane are appended behind its others
+        for li in 0..self.lane_order.len() {
+            let lane = self.lane_order[li];
+            loop {
+                let Some(&id) = self.lane_veh[lane as usize].front() else { break };
+                let len = self.net.lanes[lane as usize].length;
+                let v = &self.veh[id as usize];
+                let r = &self.routes[v.route as usize];
+                let last = v.route_pos as usize + 1 >= r.lanes.len();
+                if last {
+                    if v.pos > len - POSITION_EPS {
+                        self.lane_veh[lane as usize].pop_front();
+                        self.arrive(id);
+                        continue;
+                    }
+                    break;
+                }
+                if v.pos <= len {
+                    break;
+                }
+                self.lane_veh[lane as usize].pop_front();
+                let mut v_pos = v.pos;
+                let mut rp = v.route_pos as usize;
+                // a fast vehicle may cross a short connection in one step
+                let mut arrived = false;
+                while v_pos > self.net.lanes[r.lanes[rp] as usize].length {
+                    v_pos -= self.net.lanes[r.lanes[rp] as usize].length;
+                    rp += 1;
+                    if rp + 1 >= r.lanes.len() && v_pos > self.net.lanes[r.lanes[rp] as usize].length - POSITION_EPS {
+                        arrived = true;
+                        break;
+                    }
+                }
+                if arrived {
+                    self.arrive(id);
+                    continue;
+                }
+                let new_lane = r.lanes[rp];
+                let v = &mut self.veh[id as usize];
+                v.pos = v_pos;
+                v.route_pos = rp as u32;
+                v.lane = new_lane;
+                // behind every vehicle already on the new lane
+                let q = &mut self.lane_veh[new_lane as usize];
+                let at = q.iter().rposition(|&o| self.veh[o as usize].pos >= v_pos).map_or(0, |i| i + 1);
+                q.insert(at, id);
+            }
+        }
+    }
+
+    fn arrive(&mut self, id: VehicleId) {
+        let v = &mut self.veh[id as usize];
+        v.status = VehicleStatus::Arrived;
+        v.arrive_s = self.time_s + self.spec.step_s;
+        self.metrics.arrived += 1;
+        let tt = v.arrive_s - v.depart_s;
+        self.metrics.travel_time_sum += tt;
+        self.metrics.delay_sum += (tt - v.free_flow_s).max(0.0);
+        self.arrived_last.push(id);
+    }
+
+    /// Create the flows' vehicles due by now and insert waiting vehicles where it is safe (SUMO's insertion: at
+    /// most one per entry lane and step; a refused vehicle blocks the ones behind it).
+    fn insert_departures(&mut self) {
+        let now = self.time_s - self.spec.step_s; // insertion happens within the step just executed
+        for f in 0..self.spec.flows.len() {
+            let flow = self.spec.flows[f].clone();
+            if flow.vehs_per_hour <= 0.0 {
+                continue;
+            }
+            let period = 3600.0 / flow.vehs_per_hour;
+            loop {
+                let depart = flow.begin_s + self.flow_next[f] as f64 * period;
+                if depart > now + 1e-9 || depart >= flow.end_s {
+                    break;
+                }
+                let (vt, route, speed) = (flow.vehicle_type, self.flow_route[f], flow.depart_speed);
+                let id = self.create_vehicle(vt, route, depart, speed);
+                self.flow_next[f] += 1;
+                let entry = self.routes[route as usize].lanes[0];
+                let ei = self.entry_lanes.iter().position(|&l| l == entry).unwrap();
+                self.pending[ei].push_back(id);
+            }
+        }
+        for ei in 0..self.entry_lanes.len() {
+            while let Some(&id) = self.pending[ei].front() {
+                if self.try_insert(id) {
+                    self.pending[ei].pop_front();
+                } else {
+                    break;
+                }
+            }
+        }
+    }
+
+    /// SUMO's insertion check at the start of the entry road: front at length + POSITION_EPS, the depart speed
+    /// safe behind the leader and able to stop before a minor link within reach.
+    fn try_insert(&mut self, id: VehicleId) -> bool {
+        let v = &self.veh[id as usize];
+        let p = self.types[v.vtype as usize];
+        let route = &self.routes[v.route as usize];
+        let lane = route.lanes[0];
+        let lane_len = self.net.lanes[lane as usize].length;
+        let pos = (v.length + POSITION_EPS).min(lane_len);
+        let speed = v.depart_speed;
+        let des = self.desired_speed(v, lane);
+        // leader: last vehicle on the lane, or further along the route
+        let mut seen = 0.0 - pos;
+        let mut k = 0;
+        let reach = speed * self.spec.step_s + p.brake_gap(speed, p.decel, p.tau) + 200.0;
+        while k < route.lanes.len() && seen < reach {
+            let l = route.lanes[k];
+            if let Some(&o) = self.lane_veh[l as usize].back() {
+                let ov = &self.veh[o as usize];
+                let gap = seen + ov.pos - ov.length - p.min_gap;
+                if gap < 0.0 {
+                    return false;
+                }
+                if p.insertion_follow_speed(speed, gap, ov.speed, des) < speed {
+                    return false;
+                }
+                break;
+            }
+            // tails of vehicles that just left this road onto a connection
+            if k == 0 {
+                for &lk in &self.net.lanes[l as usize].out_links {
+                    let via = self.net.links[lk as usize].via_lane;
+                    if let Some(&o) = self.lane_veh[via as usize].back() {
+                        let ov = &self.veh[o as usize];
+                        let gap = seen + lane_len + ov.pos - ov.length - p.min_gap;
+                        if gap < 0.0 || p.insertion_follow_speed(speed, gap, ov.speed, des) < speed {
+                            return false;
+                        }
+                    }
+                }
+            }
+            seen += self.net.lanes[l as usize].length;
+            if let LaneKind::Via(link) = self.net.lanes[l as usize].kind {
+                let _ = link;
+            }
+            // a minor link ahead must be reachable with a stop
+            if k + 1 < route.lanes.len() {
+                if let LaneKind::Via(link) = self.net.lanes[route.lanes[k + 1] as usize].kind {
+                    if !self.net.links[link as usize].major && seen < p.brake_gap(speed, p.decel, 0.0) + speed * self.spec.step_s {
+                        let vs = p.stop_speed((seen - POSITION_EPS).max(0.0), speed, des);
+                        if vs < speed {
+                            return false;
+                        }
+                    }
+                }
+            }
+            k += 1;
+        }
+        let _ = self.place(id, lane, pos, speed, true);
+        true
+    }
+
+    /// Every pair of consecutive vehicles keeps a non-negative gap, on lanes, from connections into roads, and
+    /// between vehicles on merging connections ordered by their distance to the merge point.
+    pub fn check_no_overlap(&self) -> Result<(), SimError> {
+        const EPS: f64 = 1e-6;
+        let err = |a: VehicleId, b: VehicleId, gap: f64| SimError::Collision {
+            time_s: self.time_s,
+            leader: a,
+            follower: b,
+            gap_m: gap,
+            place: format!(
+                "leader on {} at {:.2} m, {:.2} m/s; follower on {} at {:.2} m, {:.2} m/s",
+                self.net.lane_names[self.veh[a as usize].lane as usize],
+                self.veh[a as usize].pos,
+                self.veh[a as usize].speed,
+                self.net.lane_names[self.veh[b as usize].lane as usize],
+                self.veh[b as usize].pos,
+                self.veh[b as usize].speed
+            ),
+        };
+        for (li, q) in self.lane_veh.iter().enumerate() {
+            for w in q.iter().collect::<Vec<_>>().windows(2) {
+                let (a, b) = (&self.veh[*w[0] as usize], &self.veh[*w[1] as usize]);
+                let gap = a.pos - a.length - b.pos;
+                if gap < -EPS {
+                    return Err(err(*w[0], *w[1], gap));
+                }
+            }
+            // a road's last vehicle versus the front vehicle of each connection into it
+            if let LaneKind::Road(_) = self.net.lanes[li].kind {
+                if let Some(&last) = q.back() {
+                    let lv = &self.veh[last as usize];
+                    for l in self.net.links.iter().filter(|l| l.to_lane as usize == li) {
+                        if let Some(&f) = self.lane_veh[l.via_lane as usize].front() {
+                            let fv = &self.veh[f as usize];
+                            let gap = lv.pos - lv.length + (self.net.lanes[l.via_lane as usize].length - fv.pos);
+                            if gap < -EPS {
+                                return Err(err(last, f, gap));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // merging connections: order by distance to the merge point
+        for (i, lk) in self.net.links.iter().enumerate() {
+            for &foe in &lk.foes {
+                if (foe as usize) < i {
+                    continue;
+                }
+                let a_len = self.net.lanes[lk.via_lane as usize].length;
+                let b_len = self.net.lanes[self.net.links[foe as usize].via_lane as usize].length;
+                for &a in &self.lane_veh[lk.via_lane as usize] {
+                    for &b in &self.lane_veh[self.net.links[foe as usize].via_lane as usize] {
+                        let (av, bv) = (&self.veh[a as usize], &self.veh[b as usize]);
+                        let (da, db) = (a_len - av.pos, b_len - bv.pos);
+                        let (lead, fol, gap) =
+                            if da <= db { (a, b, db - da - av.length) } else { (b, a, da - db - bv.length) };
+                        if gap < -EPS {
+                            return Err(err(lead, fol, gap));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Append this step's rows to a trace (`time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,
+    /// speed_mps,controlled`).
+    pub fn write_trace_rows(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
+        for id in self.active_ids() {
+            let v = &self.veh[id as usize];
+            let x = self.corridor_x(id).map(|x| format!("{x:.3}")).unwrap_or_default();
+            writeln!(
+                out,
+                "{:.2},{},{},{},{:.3},{},{:.3},{}",
+                self.time_s,
+                id,
+                self.spec.vehicle_types[v.vtype as usize].name,
+                self.net.lane_names[v.lane as usize],
+                v.pos,
+                x,
+                v.speed,
+                v.controlled
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Draw a uniform number from the run's generator (for callers that need run-bound randomness).
+    pub fn random_unit(&mut self) -> f64 {
+        self.rng.random::<f64>()
+    }
+
+    /// Vehicles waiting at their entry roads.
+    pub fn waiting_to_enter(&self) -> usize {
+        self.pending.iter().map(|q| q.len()).sum()
+    }
+}
+
+/// A follower can brake behind a leader at the merge when the leader's braking distance is the longer one.
+fn unsafe_merge_speeds(leader_speed: f64, follower_speed: f64, leader_decel: f64, follower_decel: f64) -> bool {
+    leader_speed * leader_speed / leader_decel <= follower_speed * follower_speed / follower_decel
+}

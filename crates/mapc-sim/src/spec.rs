@@ -1,0 +1,140 @@
+//! What a simulation run is made of, in the simulator's own plain terms: the lane graph plus driver types, flows,
+//! initial vehicles, step and horizon. [`SimSpec::from_scenario`] fills it from a resolved scenario.
+
+use crate::SimError;
+use mapc_graph::{LaneGraph, RoadId};
+
+/// One driver/vehicle type.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VehicleTypeSpec {
+    pub name: String,
+    pub accel: f64,
+    pub decel: f64,
+    /// Hardest braking when the safe speed demands it (SUMO's passenger default: 9).
+    pub emergency_decel: f64,
+    pub tau: f64,
+    pub min_gap: f64,
+    pub delta: f64,
+    pub max_speed: f64,
+    pub length: f64,
+    /// Mean of the per-driver speed factor (desired speed = factor x speed limit, capped by `max_speed`).
+    pub speed_factor: f64,
+    /// Standard deviation of the speed factor; the draw is repeated until it lies in [0.2, 2] (SUMO's bounds).
+    pub speed_dev: f64,
+    /// Base impatience in [0, 1]; it grows by waiting time / 300 s.
+    pub impatience: f64,
+    /// Vehicles of this type take accelerations from the caller (AVs).
+    pub controlled: bool,
+}
+
+impl VehicleTypeSpec {
+    /// The paper's human driver (SUMO IDM as Flow configured it).
+    pub fn paper_human(name: &str) -> Self {
+        VehicleTypeSpec {
+            name: name.to_string(),
+            accel: 2.6,
+            decel: 4.5,
+            emergency_decel: 9.0,
+            tau: 1.0,
+            min_gap: 2.5,
+            delta: 4.0,
+            max_speed: 30.0,
+            length: 5.0,
+            speed_factor: 1.0,
+            speed_dev: 0.1,
+            impatience: 0.5,
+            controlled: false,
+        }
+    }
+}
+
+/// Periodic departures with SUMO's vehsPerHour semantics: departure i at `begin_s + i * 3600 / vehs_per_hour`
+/// while before `end_s`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlowSpec {
+    pub from: RoadId,
+    pub to: Option<RoadId>,
+    pub vehs_per_hour: f64,
+    /// Index into [`SimSpec::vehicle_types`].
+    pub vehicle_type: usize,
+    pub depart_speed: f64,
+    pub begin_s: f64,
+    pub end_s: f64,
+}
+
+/// A vehicle present at time 0, standing on `road` with its front at `pos_m`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InitialVehicleSpec {
+    pub road: RoadId,
+    pub pos_m: f64,
+    pub speed: f64,
+    pub vehicle_type: usize,
+}
+
+#[derive(Clone, Debug)]
+pub struct SimSpec {
+    pub graph: LaneGraph,
+    pub vehicle_types: Vec<VehicleTypeSpec>,
+    pub flows: Vec<FlowSpec>,
+    pub initial: Vec<InitialVehicleSpec>,
+    pub step_s: f64,
+    pub horizon_steps: u64,
+    /// Simulation time at step 0 (the original runs two set-up steps before the horizon starts).
+    pub start_time_s: f64,
+    /// Roads where controlled vehicles take commands; `None`: everywhere.
+    pub control_region: Option<Vec<RoadId>>,
+    /// The corridor's main line, upstream first (for corridor positions in traces); empty: derived.
+    pub main_line: Vec<RoadId>,
+}
+
+impl SimSpec {
+    /// Check the numbers a run relies on; errors name the item.
+    pub fn validate(&self) -> Result<(), SimError> {
+        if !(self.step_s > 0.0 && self.step_s <= 10.0) {
+            return Err(SimError::Spec(format!("step_s must be in (0, 10], got {}", self.step_s)));
+        }
+        for (i, t) in self.vehicle_types.iter().enumerate() {
+            let bad = |what: &str, v: f64| SimError::Spec(format!("vehicle type {i} `{}`: {what} = {v}", t.name));
+            for (what, v) in [
+                ("accel", t.accel),
+                ("decel", t.decel),
+                ("max_speed", t.max_speed),
+                ("length", t.length),
+                ("speed_factor", t.speed_factor),
+                ("delta", t.delta),
+            ] {
+                if !(v > 0.0 && v.is_finite()) {
+                    return Err(bad(what, v));
+                }
+            }
+            for (what, v) in [("tau", t.tau), ("min_gap", t.min_gap), ("speed_dev", t.speed_dev)] {
+                if !(v >= 0.0 && v.is_finite()) {
+                    return Err(bad(what, v));
+                }
+            }
+            if !(0.0..=1.0).contains(&t.impatience) {
+                return Err(bad("impatience", t.impatience));
+            }
+            if !(t.emergency_decel >= t.decel) {
+                return Err(bad("emergency_decel (must be >= decel)", t.emergency_decel));
+            }
+        }
+        for (i, f) in self.flows.iter().enumerate() {
+            if f.vehicle_type >= self.vehicle_types.len() {
+                return Err(SimError::Spec(format!("flow {i}: unknown vehicle type index {}", f.vehicle_type)));
+            }
+            if !(f.vehs_per_hour >= 0.0 && f.vehs_per_hour.is_finite()) {
+                return Err(SimError::Spec(format!("flow {i}: vehs_per_hour = {}", f.vehs_per_hour)));
+            }
+            if !(f.depart_speed >= 0.0) {
+                return Err(SimError::Spec(format!("flow {i}: depart_speed = {}", f.depart_speed)));
+            }
+        }
+        for (i, v) in self.initial.iter().enumerate() {
+            if v.vehicle_type >= self.vehicle_types.len() {
+                return Err(SimError::Spec(format!("initial vehicle {i}: unknown vehicle type index {}", v.vehicle_type)));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,8 @@
+//! `mapc bench` (being written).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`mapc bench` is not built yet")
+}

@@ -1,0 +1,105 @@
+//! `mapc eval`: a trained policy on a scenario over fixed seeds, against the human baseline.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args as ClapArgs;
+use mapc_rl::Checkpoint;
+use mapc_rl::checkpoint::checkpoint_path;
+use mapc_rl::eval::{EvalReport, FigureSet, compare, env_config_for, run_human, run_policy};
+use mapc_rl::rollout::ActionMode;
+
+/// Evaluate a policy: mean and 95% CI of outflow, inflow and speed, and a Welch t-test against the humans.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// Policy: a checkpoint file (policies/*.json) or a run directory of `mapc train`.
+    #[arg(long)]
+    pub policy: PathBuf,
+    /// Scenario: `simple_merge` or a scenario file (a window from `mapc window` for zero-shot transfer).
+    #[arg(long, default_value = "simple_merge")]
+    pub scenario: String,
+    /// Number of seeds (0, 1, ..., N-1 from --first-seed).
+    #[arg(long, default_value_t = 100)]
+    pub seeds: u64,
+    #[arg(long, default_value_t = 0)]
+    pub first_seed: u64,
+    /// Sample actions from the Gaussian instead of taking its mean.
+    #[arg(long)]
+    pub sample: bool,
+    /// Skip the human baseline.
+    #[arg(long)]
+    pub no_baseline: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn policy_file(p: &Path) -> PathBuf {
+    if p.is_dir() { checkpoint_path(p) } else { p.to_path_buf() }
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(t) = args.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(t).build_global().ok();
+    }
+    if args.seeds == 0 {
+        anyhow::bail!("--seeds must be at least 1");
+    }
+    let start = Instant::now();
+    let file = policy_file(&args.policy);
+    let ck = Checkpoint::load(&file)?;
+    let sc = super::train::load_scenario(&args.scenario)?;
+    let cfg = env_config_for(&ck, &file, &args.scenario, Some(sc.n_av.unwrap_or(5)))?;
+    let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
+    let mode = if args.sample { ActionMode::Sample } else { ActionMode::Mean };
+    let runs = run_policy(&ck, &sc.spec, &cfg, &seeds, mode).with_context(|| format!("evaluating {}", file.display()))?;
+    let figs = FigureSet::of(&runs);
+    let (baseline, comparison) = if args.no_baseline {
+        (None, None)
+    } else {
+        let human = run_human(&sc.spec, &seeds)?;
+        (Some(FigureSet::of(&human)), Some(compare(&runs, &human)))
+    };
+    let report = EvalReport {
+        outflow: figs.outflow,
+        inflow: figs.inflow,
+        speed: figs.speed,
+        seeds: figs.seeds,
+        policy: file.display().to_string(),
+        scenario: args.scenario.clone(),
+        actions: if args.sample { "sample" } else { "mean" }.into(),
+        baseline,
+        comparison,
+        wall_s: start.elapsed().as_secs_f64(),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    println!("policy {} on {} ({} seeds, {} actions)", report.policy, report.scenario, report.seeds, report.actions);
+    let row = |name: &str, f: &FigureSet| {
+        println!(
+            "  {name:<8} outflow {:8.2} ± {:5.2} veh/h   inflow {:8.2} ± {:5.2} veh/h   speed {:6.2} ± {:4.2} m/s",
+            f.outflow.mean, f.outflow.ci95, f.inflow.mean, f.inflow.ci95, f.speed.mean, f.speed.ci95
+        )
+    };
+    row("policy", &figs);
+    if let (Some(b), Some(c)) = (&report.baseline, &report.comparison) {
+        row("human", b);
+        let p = |t: &Option<mapc_rl::stats::WelchTest>| t.map_or("n/a".to_string(), |t| format!("t = {:.2}, p = {:.2e}", t.t, t.p_value));
+        println!(
+            "  outflow {:+.1}% vs human ({}; 95% CIs {}); Welch outflow {}, speed {}",
+            c.outflow_change_pct,
+            if c.outflow_change_pct >= 0.0 { "higher" } else { "lower" },
+            if c.outflow_ci_disjoint { "disjoint" } else { "overlap" },
+            p(&c.outflow),
+            p(&c.speed)
+        );
+    }
+    println!("  {:.1} s wall", report.wall_s);
+    Ok(())
+}

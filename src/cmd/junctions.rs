@@ -1,0 +1,8 @@
+//! `mapc junctions` (being written).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`mapc junctions` is not built yet")
+}

@@ -1,0 +1,8 @@
+//! `mapc render` (being written).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`mapc render` is not built yet")
+}

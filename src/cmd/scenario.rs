@@ -1,0 +1,75 @@
+//! `mapc scenario show`: print a scenario resolved (network built, references checked).
+
+use mapc_scenario::ResolvedScenario;
+
+#[derive(clap::Subcommand)]
+pub enum Command {
+    /// Print a scenario with its network summarised and every reference checked.
+    Show(ShowArgs),
+}
+
+#[derive(clap::Args)]
+pub struct ShowArgs {
+    /// A scenario file or a built-in name (simple_merge).
+    #[arg(default_value = "simple_merge")]
+    pub scenario: String,
+    /// Print JSON instead of TOML and a summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(c: Command) -> anyhow::Result<()> {
+    match c {
+        Command::Show(a) => show(a),
+    }
+}
+
+fn show(a: ShowArgs) -> anyhow::Result<()> {
+    let r = ResolvedScenario::load(&a.scenario)?;
+    let g = &r.graph;
+    let road_text = |id: mapc_graph::RoadId| {
+        let road = g.road(id).expect("resolved roads exist");
+        format!("{id} ({}, {:.1} m)", road.label(), road.length_m)
+    };
+    if a.json {
+        let flows: Vec<_> = r
+            .scenario
+            .flows
+            .iter()
+            .zip(&r.flow_roads)
+            .map(|(f, (from, to))| {
+                serde_json::json!({"id": f.id, "from_road": from.to_string(), "to_road": to.map(|t| t.to_string())})
+            })
+            .collect();
+        let out = serde_json::json!({
+            "origin": r.origin,
+            "scenario": r.scenario,
+            "network": {
+                "junctions": g.junctions.len(),
+                "roads": g.roads.len(),
+                "total_lane_length_m": g.total_lane_length_m(),
+            },
+            "flows": flows,
+            "region_roads": r.region_roads.iter().map(|x| x.to_string()).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    println!("# {} (from {})", r.scenario.name, r.origin);
+    println!(
+        "# network: {} junctions, {} roads, {:.2} m of lanes",
+        g.junctions.len(),
+        g.roads.len(),
+        g.total_lane_length_m()
+    );
+    for (f, (from, to)) in r.scenario.flows.iter().zip(&r.flow_roads) {
+        let to = to.map(road_text).unwrap_or_else(|| "end of corridor".into());
+        println!("# flow {}: {} veh/h of {} from {} to {}", f.id, f.vehs_per_hour, f.vehicle_type, road_text(*from), to);
+    }
+    if !r.region_roads.is_empty() {
+        let roads: Vec<String> = r.region_roads.iter().map(|x| road_text(*x)).collect();
+        println!("# controlled region: {}", roads.join(", "));
+    }
+    print!("{}", r.scenario.to_toml());
+    Ok(())
+}

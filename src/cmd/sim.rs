@@ -1,0 +1,8 @@
+//! `mapc sim` (being written).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`mapc sim` is not built yet")
+}

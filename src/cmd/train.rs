@@ -1,0 +1,236 @@
+//! `mapc train`: PPO on a scenario, with a progress bar, a CSV log and atomic checkpoints.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::Args as ClapArgs;
+use indicatif::{ProgressBar, ProgressStyle};
+use mapc_rl::checkpoint::PolicySpec;
+use mapc_rl::env::merge::{ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM};
+use mapc_rl::env::obs::PER_AV;
+use mapc_rl::run::{TrainRun, log_path};
+use mapc_rl::rollout::Env;
+use mapc_rl::{IterationStats, PpoConfig};
+
+/// Train a centralized PPO policy (defaults: the paper's hyperparameters; `--preset fast` for minutes on CPU).
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// Scenario: `simple_merge` or a scenario file.
+    #[arg(long, default_value = "simple_merge")]
+    pub scenario: String,
+    /// Reward: outflow, flow (Flow's desired-velocity reward) or speed (average speed).
+    #[arg(long, default_value = "outflow")]
+    pub reward: String,
+    /// Training iterations (overrides the preset / config).
+    #[arg(long)]
+    pub iters: Option<u64>,
+    /// Run directory (checkpoint.json, progress.csv).
+    #[arg(short = 'o', long)]
+    pub out: Option<PathBuf>,
+    /// Continue the run in this directory (its own scenario, reward and hyperparameters; --iters may extend it).
+    #[arg(long, conflicts_with_all = ["out", "config", "preset"])]
+    pub resume: Option<PathBuf>,
+    /// Hyperparameter preset: paper (defaults) or fast.
+    #[arg(long, default_value = "paper")]
+    pub preset: String,
+    /// TOML file of hyperparameters (keys of PpoConfig: lr, gamma, lambda, hidden, clip, vf_clip, vf_coeff,
+    /// entropy_coeff, kl_coeff, kl_target, train_batch_size, minibatch, epochs, iterations, horizon, seed,
+    /// grad_slices); applied over the preset, under the flags.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    #[arg(long)]
+    pub seed: Option<u64>,
+    #[arg(long)]
+    pub lr: Option<f32>,
+    /// Environment steps per iteration.
+    #[arg(long)]
+    pub batch: Option<usize>,
+    #[arg(long)]
+    pub minibatch: Option<usize>,
+    #[arg(long)]
+    pub epochs: Option<usize>,
+    #[arg(long)]
+    pub gamma: Option<f32>,
+    #[arg(long)]
+    pub lambda: Option<f32>,
+    #[arg(long)]
+    pub clip: Option<f32>,
+    #[arg(long)]
+    pub kl_coeff: Option<f32>,
+    #[arg(long)]
+    pub kl_target: Option<f32>,
+    /// Episode length in steps (default: the scenario's horizon).
+    #[arg(long)]
+    pub horizon: Option<usize>,
+    /// Controlled AVs (default: the scenario's N_AV, 5 on Simple Merge).
+    #[arg(long)]
+    pub n_av: Option<usize>,
+    /// Write a checkpoint every K iterations (and at the end).
+    #[arg(long, default_value_t = 5)]
+    pub checkpoint_every: u64,
+    /// Worker threads for rollouts (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print the final iteration's figures as JSON (no progress bar).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// A scenario resolved for the simulator: its spec, display name and N_AV (if the scenario sets one).
+pub struct LoadedScenario {
+    pub spec: mapc_sim::SimSpec,
+    pub name: String,
+    pub n_av: Option<usize>,
+}
+
+/// Resolves `simple_merge` or a scenario file into a simulator spec.
+pub fn load_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
+    let resolved = mapc_scenario::ResolvedScenario::load(arg)?;
+    let spec = mapc_sim::spec_from_scenario(&resolved).with_context(|| format!("scenario {arg}"))?;
+    let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
+    Ok(LoadedScenario { spec, name: resolved.scenario.name.clone(), n_av })
+}
+
+fn apply_flags(c: &mut PpoConfig, a: &Args) {
+    macro_rules! set {
+        ($field:ident, $flag:expr) => {
+            if let Some(v) = $flag {
+                c.$field = v;
+            }
+        };
+    }
+    set!(iterations, a.iters);
+    set!(seed, a.seed);
+    set!(lr, a.lr);
+    set!(train_batch_size, a.batch);
+    set!(minibatch, a.minibatch);
+    set!(epochs, a.epochs);
+    set!(gamma, a.gamma);
+    set!(lambda, a.lambda);
+    set!(clip, a.clip);
+    set!(kl_coeff, a.kl_coeff);
+    set!(kl_target, a.kl_target);
+    set!(horizon, a.horizon);
+}
+
+fn read_config(path: &Path, base: PpoConfig) -> anyhow::Result<PpoConfig> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    // Keys absent from the file keep the preset's values.
+    let mut table: toml::Table = toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
+    let base_value = toml::Table::try_from(&base)?;
+    for (k, v) in base_value {
+        table.entry(k).or_insert(v);
+    }
+    let c: PpoConfig = table.try_into().with_context(|| format!("{}: invalid hyperparameters", path.display()))?;
+    Ok(c)
+}
+
+fn validate(c: &PpoConfig) -> anyhow::Result<()> {
+    if c.hidden.is_empty() || c.hidden.contains(&0) {
+        bail!("hidden layer sizes must be positive, got {:?}", c.hidden);
+    }
+    for (name, v) in [("lr", c.lr), ("gamma", c.gamma), ("lambda", c.lambda), ("clip", c.clip)] {
+        if !(v > 0.0 && v.is_finite()) {
+            bail!("{name} must be a positive number, got {v}");
+        }
+    }
+    if c.minibatch == 0 || c.epochs == 0 || c.train_batch_size == 0 || c.horizon == 0 || c.grad_slices == 0 {
+        bail!("minibatch, epochs, batch, horizon and grad_slices must be at least 1");
+    }
+    Ok(())
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(t) = args.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(t).build_global().ok();
+    }
+    let mut run = if let Some(dir) = &args.resume {
+        let mut r = TrainRun::resume(dir, args.checkpoint_every)?;
+        if let Some(n) = args.iters {
+            r.state.config.iterations = n;
+        }
+        r
+    } else {
+        let reward: RewardKind = args.reward.parse().map_err(anyhow::Error::msg)?;
+        let mut config = PpoConfig::preset(&args.preset)
+            .with_context(|| format!("unknown preset `{}` (paper, fast)", args.preset))?;
+        if let Some(p) = &args.config {
+            config = read_config(p, config)?;
+        }
+        apply_flags(&mut config, &args);
+        let sc = load_scenario(&args.scenario)?;
+        if args.horizon.is_none() {
+            config.horizon = sc.spec.horizon_steps as usize;
+        }
+        validate(&config)?;
+        let n_av = args.n_av.or(sc.n_av).unwrap_or(5);
+        let spec = PolicySpec {
+            scenario: args.scenario.clone(),
+            reward: reward.name().into(),
+            n_av,
+            obs_dim: PER_AV * n_av,
+            act_dim: n_av,
+            max_speed: SIMPLE_MERGE_NORM.max_speed,
+            norm_length: SIMPLE_MERGE_NORM.length,
+            accel_min: ACCEL_MIN,
+            accel_max: ACCEL_MAX,
+        };
+        let out = args.out.clone().unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, reward.name())));
+        TrainRun::create(&out, spec, config, args.checkpoint_every)?
+    };
+    let sc = load_scenario(&run.spec.scenario)?;
+    let mut spec = sc.spec.clone();
+    spec.horizon_steps = run.state.config.horizon as u64;
+    let env_cfg = MergeEnvConfig {
+        reward: run.spec.reward.parse().map_err(anyhow::Error::msg)?,
+        n_av: run.spec.n_av,
+        norm: mapc_rl::env::obs::ObsNorm { max_speed: run.spec.max_speed, length: run.spec.norm_length },
+        accel_min: run.spec.accel_min,
+        accel_max: run.spec.accel_max,
+    };
+    let probe = MergeEnv::new(spec.clone(), env_cfg.clone())?;
+    if probe.obs_dim() != run.spec.obs_dim {
+        bail!("run expects {} observation values, scenario gives {}", run.spec.obs_dim, probe.obs_dim());
+    }
+    let factory = move || -> Box<dyn Env> { Box::new(MergeEnv::new(spec.clone(), env_cfg.clone()).expect("validated")) };
+
+    let total = run.state.config.iterations;
+    let bar = if args.json { ProgressBar::hidden() } else { ProgressBar::new(total) };
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_position(run.state.iteration);
+    let mut last: Option<IterationStats> = run.log.rows.last().cloned();
+    while !run.done() {
+        let s = run.step(&factory)?;
+        bar.set_position(s.iteration);
+        bar.set_message(format!(
+            "return {:.2}  outflow {:.0} veh/h  speed {:.2} m/s  kl {:.4}",
+            s.mean_return, s.mean_outflow, s.mean_speed, s.kl
+        ));
+        last = Some(s);
+    }
+    run.save()?;
+    bar.finish();
+    let ck = mapc_rl::checkpoint::checkpoint_path(&run.dir);
+    if args.json {
+        let v = serde_json::json!({
+            "run_dir": run.dir,
+            "checkpoint": ck,
+            "log": log_path(&run.dir),
+            "last": last,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        if let Some(s) = &last {
+            println!(
+                "iteration {}: mean return {:.3}, outflow {:.1} veh/h, speed {:.2} m/s, {:.0} s wall in total",
+                s.iteration, s.mean_return, s.mean_outflow, s.mean_speed, s.wall_s
+            );
+        }
+        println!("checkpoint: {}\nlog: {}", ck.display(), log_path(&run.dir).display());
+    }
+    Ok(())
+}

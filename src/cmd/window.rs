@@ -1,0 +1,8 @@
+//! `mapc window` (being written).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`mapc window` is not built yet")
+}

@@ -1,0 +1,69 @@
+//! `mapc`: turn real road maps into traffic scenarios and train AV policies that reduce congestion.
+
+mod cmd;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "mapc", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Read an OSM (.osm, .osm.pbf) or SUMO (.net.xml) map into a lane graph file.
+    Import(cmd::import::Args),
+    /// List a map's junctions (merges, diverges) with their roads.
+    Junctions(cmd::junctions::Args),
+    /// Export a map as GeoJSON.
+    Export(cmd::export::Args),
+    /// Draw a map as PNG or SVG.
+    Render(cmd::render::Args),
+    /// Reduce a highway to a single-lane corridor with its merging roads.
+    Simplify(cmd::simplify::Args),
+    /// Cut a window around a merge, matched to a source scenario's lengths.
+    Window(cmd::window::Args),
+    /// Inspect scenario files.
+    #[command(subcommand)]
+    Scenario(cmd::scenario::Command),
+    /// Run the all-human baseline of a scenario over many seeds.
+    Sim(cmd::sim::Args),
+    /// Measure the simulator's speed.
+    Bench(cmd::bench::Args),
+    /// Train an AV policy with PPO.
+    Train(cmd::train::Args),
+    /// Evaluate a policy against the human baseline.
+    Eval(cmd::eval::Args),
+    /// Draw time-space diagrams and training curves.
+    #[command(subcommand)]
+    Plot(cmd::plot::Command),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Import(a) => cmd::import::run(a),
+        Command::Junctions(a) => cmd::junctions::run(a),
+        Command::Export(a) => cmd::export::run(a),
+        Command::Render(a) => cmd::render::run(a),
+        Command::Simplify(a) => cmd::simplify::run(a),
+        Command::Window(a) => cmd::window::run(a),
+        Command::Scenario(c) => cmd::scenario::run(c),
+        Command::Sim(a) => cmd::sim::run(a),
+        Command::Bench(a) => cmd::bench::run(a),
+        Command::Train(a) => cmd::train::run(a),
+        Command::Eval(a) => cmd::eval::run(a),
+        Command::Plot(c) => cmd::plot::run(c),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // Bad input is the usual cause; every message names the file and the place.
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
