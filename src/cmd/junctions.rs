@@ -1,8 +1,146 @@
-//! `mapc junctions` (being written).
+//! `mapc junctions`: list a map's junctions with the roads in and out of each.
+
+use mapc_graph::{Junction, JunctionKind, LaneGraph, RoadId};
+use mapc_import::ImportOptions;
+use serde::Serialize;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum KindArg {
+    Merge,
+    Diverge,
+    Through,
+    Source,
+    Sink,
+    Complex,
+}
+
+impl From<KindArg> for JunctionKind {
+    fn from(k: KindArg) -> JunctionKind {
+        match k {
+            KindArg::Merge => JunctionKind::Merge,
+            KindArg::Diverge => JunctionKind::Diverge,
+            KindArg::Through => JunctionKind::Through,
+            KindArg::Source => JunctionKind::Source,
+            KindArg::Sink => JunctionKind::Sink,
+            KindArg::Complex => JunctionKind::Complex,
+        }
+    }
+}
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// A saved graph (*.graph.json) or a map (.osm, .osm.pbf, .net.xml), imported on the fly.
+    pub map: PathBuf,
+    /// Only junctions of this kind.
+    #[arg(long, value_enum)]
+    pub kind: Option<KindArg>,
+    /// OSM highway classes to keep when MAP is an OSM file, comma-separated.
+    #[arg(long, value_delimiter = ',')]
+    pub highways: Option<Vec<String>>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`mapc junctions` is not built yet")
+#[derive(Serialize)]
+struct RoadRow {
+    id: String,
+    label: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    name: Option<String>,
+    #[serde(rename = "ref", skip_serializing_if = "Option::is_none")]
+    ref_: Option<String>,
+    class: String,
+    lanes: usize,
+    length_m: f64,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    osm_ways: Vec<i64>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    sumo_ids: Vec<String>,
+}
+
+#[derive(Serialize)]
+struct JunctionRow {
+    id: String,
+    kind: JunctionKind,
+    /// `osm:NODE` or the SUMO junction id.
+    provenance: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lat: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lon: Option<f64>,
+    incoming: Vec<RoadRow>,
+    outgoing: Vec<RoadRow>,
+}
+
+fn provenance_text(j: &Junction) -> String {
+    let p = &j.provenance;
+    let mut parts: Vec<String> = p.osm_nodes.iter().map(|n| format!("osm:{n}")).collect();
+    if p.osm_nodes.is_empty() {
+        parts.extend(p.sumo_ids.iter().cloned());
+    }
+    if parts.is_empty() {
+        parts.extend(p.made_by.iter().cloned());
+    }
+    parts.join(" ")
+}
+
+fn road_row(g: &LaneGraph, id: RoadId) -> RoadRow {
+    let r = g.road(id).expect("junctions list existing roads");
+    RoadRow {
+        id: id.to_string(),
+        label: r.label(),
+        name: r.name.clone(),
+        ref_: r.ref_.clone(),
+        class: r.class.clone(),
+        lanes: r.lanes.len(),
+        length_m: (r.length_m * 100.0).round() / 100.0,
+        osm_ways: r.provenance.osm_ways.clone(),
+        sumo_ids: r.provenance.sumo_ids.clone(),
+    }
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let mut options = ImportOptions::default();
+    if let Some(h) = args.highways {
+        options.highways = h;
+    }
+    let graph = mapc_import::load_any_with(&args.map, &options)?;
+    let want: Option<JunctionKind> = args.kind.map(Into::into);
+    let rows: Vec<JunctionRow> = graph
+        .junctions
+        .iter()
+        .filter(|j| want.is_none_or(|k| j.kind == k))
+        .map(|j| {
+            let lonlat = graph.junction_lonlat(j.id);
+            JunctionRow {
+                id: j.id.to_string(),
+                kind: j.kind,
+                provenance: provenance_text(j),
+                lat: lonlat.map(|p| (p[1] * 1e7).round() / 1e7),
+                lon: lonlat.map(|p| (p[0] * 1e7).round() / 1e7),
+                incoming: j.incoming.iter().map(|&r| road_row(&graph, r)).collect(),
+                outgoing: j.outgoing.iter().map(|&r| road_row(&graph, r)).collect(),
+            }
+        })
+        .collect();
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+        return Ok(());
+    }
+    println!("{} junctions in {}", rows.len(), args.map.display());
+    for j in &rows {
+        let at = match (j.lat, j.lon) {
+            (Some(lat), Some(lon)) => format!(" at {lat:.7}, {lon:.7}"),
+            _ => String::new(),
+        };
+        println!("{} {:?} ({}){at}", j.id, j.kind, j.provenance);
+        for (dir, roads) in [("in ", &j.incoming), ("out", &j.outgoing)] {
+            for r in roads {
+                println!("    {dir} {:<5} {:<40} {:<14} {} lanes {:>9.1} m", r.id, r.label, r.class, r.lanes, r.length_m);
+            }
+        }
+    }
+    Ok(())
 }

@@ -1,13 +1,141 @@
-//! `mapc plot` (being written).
+//! `mapc plot`: time-space diagrams of simulator traces and training curves of PPO runs.
+
+use mapc_viz::timespace::{RoadFilter, TimeSpaceOptions};
+use mapc_viz::training::{TrainingPlotOptions, XAxis};
+use std::path::PathBuf;
 
 #[derive(clap::Subcommand)]
 pub enum Command {
-    /// Time-space diagram of a trace.
-    Timespace,
-    /// Training curves of a run.
-    Training,
+    /// Time-space diagram of a trace (`mapc sim --trace`): time across, corridor position up, colour = speed.
+    Timespace(TimespaceArgs),
+    /// Training curves of one or more runs (RUN_DIR/log.csv), overlaid.
+    Training(TrainingArgs),
 }
 
-pub fn run(_c: Command) -> anyhow::Result<()> {
-    anyhow::bail!("`mapc plot` is not built yet")
+#[derive(clap::Args)]
+pub struct TimespaceArgs {
+    /// Trace CSV (header `time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled`).
+    pub trace: PathBuf,
+    /// Output picture: .png or .svg.
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: PathBuf,
+    /// `main`: the corridor's main line (rows with corridor_x_m); or road names from the trace's `road` column,
+    /// comma separated (position on the road is drawn up).
+    #[arg(long, default_value = "main", value_name = "FILTER")]
+    pub road_filter: RoadFilter,
+    /// Top of the speed colour scale, m/s (default: the fastest sample, rounded up to 5).
+    #[arg(long, value_name = "MPS")]
+    pub speed_max: Option<f64>,
+    /// Leave out samples before this time, s (a warm-up).
+    #[arg(long, value_name = "S")]
+    pub start: Option<f64>,
+    #[arg(long, default_value_t = 1400, value_name = "PX")]
+    pub width: u32,
+    #[arg(long, default_value_t = 800, value_name = "PX")]
+    pub height: u32,
+    /// Title (default: the trace's file name and what is shown).
+    #[arg(long)]
+    pub title: Option<String>,
+    /// Print what was drawn as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(clap::Args)]
+pub struct TrainingArgs {
+    /// Run directories (each with a log.csv) or log files; several are overlaid.
+    #[arg(required = true, value_name = "RUN_DIR")]
+    pub runs: Vec<PathBuf>,
+    /// Output picture: .png or .svg.
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: PathBuf,
+    /// Draw the all-human baseline's outflow, veh/h, as a dashed line on the outflow panel.
+    #[arg(long, value_name = "VEH_PER_H")]
+    pub baseline_outflow: Option<f64>,
+    /// What goes across: iteration, env_steps or wall_s.
+    #[arg(long, default_value = "iteration")]
+    pub x: XAxis,
+    #[arg(long, default_value_t = 1800, value_name = "PX")]
+    pub width: u32,
+    #[arg(long, default_value_t = 900, value_name = "PX")]
+    pub height: u32,
+    #[arg(long)]
+    pub title: Option<String>,
+    /// Print what was drawn as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(c: Command) -> anyhow::Result<()> {
+    match c {
+        Command::Timespace(a) => timespace(a),
+        Command::Training(a) => training(a),
+    }
+}
+
+fn timespace(a: TimespaceArgs) -> anyhow::Result<()> {
+    if let Some(v) = a.speed_max {
+        anyhow::ensure!(
+            v.is_finite() && v > 0.0,
+            "--speed-max must be a positive number of m/s, not {v}"
+        );
+    }
+    let options = TimeSpaceOptions {
+        filter: a.road_filter,
+        width_px: a.width,
+        height_px: a.height,
+        speed_max_mps: a.speed_max,
+        start_s: a.start,
+        title: a.title,
+    };
+    let s = mapc_viz::timespace::plot_timespace(&a.trace, &a.output, &options)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&s)?);
+    } else {
+        println!(
+            "wrote {}: {} samples of {} vehicles ({} controlled), {:.0}-{:.0} s, {:.0}-{:.0} m",
+            s.path.display(),
+            s.samples_drawn,
+            s.vehicles,
+            s.controlled_vehicles,
+            s.time_range_s[0],
+            s.time_range_s[1],
+            s.position_range_m[0],
+            s.position_range_m[1]
+        );
+    }
+    Ok(())
+}
+
+fn training(a: TrainingArgs) -> anyhow::Result<()> {
+    if let Some(b) = a.baseline_outflow {
+        anyhow::ensure!(
+            b.is_finite() && b >= 0.0,
+            "--baseline-outflow must be a number of veh/h, not {b}"
+        );
+    }
+    let options = TrainingPlotOptions {
+        baseline_outflow: a.baseline_outflow,
+        x: a.x,
+        width_px: a.width,
+        height_px: a.height,
+        title: a.title,
+    };
+    let s = mapc_viz::training::plot_training(&a.runs, &a.output, &options)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&s)?);
+    } else {
+        let rows: Vec<String> = s
+            .runs
+            .iter()
+            .map(|r| format!("{} ({} iterations)", r.label, r.rows))
+            .collect();
+        println!("wrote {}: {}", s.path.display(), rows.join(", "));
+        for r in &s.runs {
+            if !r.missing_columns.is_empty() {
+                println!("  {}: no column {}", r.log.display(), r.missing_columns.join(", "));
+            }
+        }
+    }
+    Ok(())
 }

@@ -23,9 +23,11 @@ pub mod osm;
 mod osm_pbf;
 mod osm_xml;
 mod sumo;
+mod summary;
 mod xml;
 
 pub use error::ImportError;
+pub use summary::Summary;
 
 use mapc_graph::{LaneGraph, RightOfWay, Source, SourceFormat};
 use std::io::BufReader;

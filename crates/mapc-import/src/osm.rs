@@ -555,7 +555,7 @@ mod tests {
         let major: Vec<_> = g.connections.iter().filter(|c| c.right_of_way == RightOfWay::Major && c.junction == merge).collect();
         assert!(major.iter().all(|c| g.road(c.from_road).unwrap().class == "motorway"));
         let r0 = g.road(RoadId(0)).unwrap();
-        assert!((r0.length_m - 823.0).abs() < 5.0, "{}", r0.length_m);
+        assert!((r0.length_m - 828.5).abs() < 1.0, "{}", r0.length_m);
         assert_eq!(r0.provenance.osm_nodes, vec![10, 20]);
     }
 }

@@ -36,6 +36,7 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
     loop {
         match xml.next()? {
             Item::Eof => break,
+            Item::Skip => {}
             Item::End => {
                 if current.is_some() && xml.depth() < current_depth {
                     let (id, nodes, tags) = current.take().unwrap();
@@ -44,9 +45,7 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                     }
                 }
             }
-            Item::Start { element, empty } => {
-                let at = xml.start;
-                let depth = xml.depth();
+            Item::Start { element, empty, at, depth } => {
                 if !root_checked {
                     root_checked = true;
                     let name = element.name().as_ref().to_string();
@@ -109,9 +108,9 @@ pub(crate) fn read_nodes<R: BufRead>(input: R, needed: &HashSet<i64>, nodes_firs
     loop {
         match xml.next()? {
             Item::Eof => break,
+            Item::Skip => {}
             Item::End => {}
-            Item::Start { element, .. } => {
-                let at = xml.start;
+            Item::Start { element, at, .. } => {
                 match element.name().as_ref() {
                     "node" => {
                         let (mut id, mut lat, mut lon) = (None, None, None);

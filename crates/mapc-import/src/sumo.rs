@@ -1,6 +1,481 @@
-//! SUMO net.xml (being written).
+//! SUMO net.xml, streamed once: edges with their lanes, junctions with their request tables, connections and the
+//! location. Internal edges (inside junctions) are not roads: their lanes' lengths and speeds are folded into the
+//! connections that drive through them.
+
 use crate::error::ParseError;
-use mapc_graph::{LaneGraph, Source};
-pub(crate) fn read<R: std::io::BufRead>(_input: R, _source: Source) -> Result<LaneGraph, ParseError> {
-    Err(ParseError::new(0, None, "SUMO not yet"))
+use crate::xml::{Item, XmlStream, attrs, describe};
+use mapc_graph::{
+    Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance, RightOfWay, Road, RoadId,
+    Source, Warnings,
+};
+use std::collections::HashMap;
+use std::io::BufRead;
+
+/// Width SUMO gives a lane that states none.
+const SUMO_DEFAULT_LANE_WIDTH_M: f64 = 3.2;
+
+struct SumoLane {
+    id: String,
+    index: u8,
+    speed: f64,
+    length: f64,
+    width: f64,
+    shape: Vec<[f64; 2]>,
+}
+
+struct SumoEdge {
+    id: String,
+    at: u64,
+    internal: bool,
+    from: String,
+    to: String,
+    type_: Option<String>,
+    priority: i32,
+    name: Option<String>,
+    shape: Option<Vec<[f64; 2]>>,
+    lanes: Vec<SumoLane>,
+}
+
+struct SumoJunction {
+    id: String,
+    pos: [f64; 2],
+    internal: bool,
+    inc_lanes: Vec<String>,
+    /// (request index, response bits).
+    requests: Vec<(usize, String)>,
+}
+
+struct SumoConnection {
+    at: u64,
+    from: String,
+    to: String,
+    from_lane: u8,
+    to_lane: u8,
+    via: Option<String>,
+    state: Option<String>,
+}
+
+type Attrs<'a> = Vec<(&'a str, std::borrow::Cow<'a, str>)>;
+
+struct Element<'a> {
+    kv: Attrs<'a>,
+    at: u64,
+    described: String,
+}
+
+impl Element<'_> {
+    fn err(&self, message: impl Into<String>) -> ParseError {
+        ParseError::new(self.at, Some(self.described.clone()), message)
+    }
+    fn get(&self, key: &str) -> Option<&str> {
+        self.kv.iter().find(|(k, _)| *k == key).map(|(_, v)| v.as_ref())
+    }
+    fn req(&self, key: &str) -> Result<&str, ParseError> {
+        self.get(key).ok_or_else(|| self.err(format!("missing `{key}`")))
+    }
+    fn num(&self, key: &str) -> Result<Option<f64>, ParseError> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(v) => v
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .map(Some)
+                .ok_or_else(|| self.err(format!("`{key}` is `{v}`, not a number"))),
+        }
+    }
+    fn req_num(&self, key: &str) -> Result<f64, ParseError> {
+        self.num(key)?.ok_or_else(|| self.err(format!("missing `{key}`")))
+    }
+    fn int<T: std::str::FromStr>(&self, key: &str) -> Result<Option<T>, ParseError> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(v) => v.trim().parse::<T>().map(Some).map_err(|_| self.err(format!("`{key}` is `{v}`, not a valid integer"))),
+        }
+    }
+    fn shape(&self, key: &str) -> Result<Option<Vec<[f64; 2]>>, ParseError> {
+        let Some(text) = self.get(key) else { return Ok(None) };
+        let mut out = Vec::new();
+        for point in text.split_whitespace() {
+            let mut it = point.split(',');
+            let mut coord = || it.next().and_then(|c| c.parse::<f64>().ok()).filter(|c| c.is_finite());
+            match (coord(), coord()) {
+                (Some(x), Some(y)) => out.push([x, y]),
+                _ => return Err(self.err(format!("`{key}` has the point `{point}`, not x,y numbers"))),
+            }
+        }
+        Ok(Some(out))
+    }
+}
+
+#[derive(Default)]
+struct Net {
+    location: Option<([f64; 2], String)>,
+    edges: Vec<SumoEdge>,
+    junctions: Vec<SumoJunction>,
+    connections: Vec<SumoConnection>,
+}
+
+fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
+    let mut xml = XmlStream::new(input);
+    let mut net = Net::default();
+    let mut root_checked = false;
+    // Index into net.edges / net.junctions of the element whose children are being read.
+    let mut in_edge = false;
+    let mut in_junction = false;
+    loop {
+        match xml.next()? {
+            Item::Eof => break,
+            Item::Skip => {}
+            Item::End => {
+                if xml.depth() < 2 {
+                    in_edge = false;
+                    in_junction = false;
+                }
+            }
+            Item::Start { element, empty, at, depth } => {
+                let name = element.name().as_ref().to_string();
+                if !root_checked {
+                    root_checked = true;
+                    if name != "net" {
+                        return Err(ParseError::new(
+                            at,
+                            Some(format!("<{name}>")),
+                            format!("this is XML but not a SUMO network (root element <{name}>, expected <net>)"),
+                        ));
+                    }
+                    continue;
+                }
+                let kv = attrs(&element).map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
+                let el = Element { kv, at, described: describe(&element) };
+                match (depth, name.as_str()) {
+                    (2, "location") => {
+                        let offset = el.get("netOffset").unwrap_or("0,0");
+                        let mut parts = offset.split(',').map(|p| p.trim().parse::<f64>().ok().filter(|v| v.is_finite()));
+                        let (Some(Some(x)), Some(Some(y))) = (parts.next(), parts.next()) else {
+                            return Err(el.err(format!("netOffset `{offset}` is not two numbers")));
+                        };
+                        net.location = Some(([x, y], el.get("projParameter").unwrap_or("!").to_string()));
+                    }
+                    (2, "edge") => {
+                        let function = el.get("function").unwrap_or("normal");
+                        let internal = function != "normal";
+                        let edge = SumoEdge {
+                            id: el.req("id")?.to_string(),
+                            at,
+                            internal,
+                            from: if internal { String::new() } else { el.req("from")?.to_string() },
+                            to: if internal { String::new() } else { el.req("to")?.to_string() },
+                            type_: el.get("type").filter(|t| !t.is_empty()).map(str::to_string),
+                            priority: el.int("priority")?.unwrap_or(-1),
+                            name: el.get("name").filter(|t| !t.is_empty()).map(str::to_string),
+                            shape: el.shape("shape")?,
+                            lanes: Vec::new(),
+                        };
+                        net.edges.push(edge);
+                        in_edge = !empty;
+                    }
+                    (3, "lane") if in_edge => {
+                        let index: u8 = el.int("index")?.ok_or_else(|| el.err("missing `index`"))?;
+                        let lane = SumoLane {
+                            id: el.req("id")?.to_string(),
+                            index,
+                            speed: el.req_num("speed")?,
+                            length: el.req_num("length")?,
+                            width: el.num("width")?.unwrap_or(SUMO_DEFAULT_LANE_WIDTH_M),
+                            shape: el.shape("shape")?.ok_or_else(|| el.err("missing `shape`"))?,
+                        };
+                        if lane.length < 0.0 || lane.speed < 0.0 {
+                            return Err(el.err("negative length or speed"));
+                        }
+                        net.edges.last_mut().expect("in an edge").lanes.push(lane);
+                    }
+                    (2, "junction") => {
+                        let j = SumoJunction {
+                            id: el.req("id")?.to_string(),
+                            pos: [el.req_num("x")?, el.req_num("y")?],
+                            internal: el.get("type") == Some("internal"),
+                            inc_lanes: el.get("incLanes").unwrap_or("").split_whitespace().map(str::to_string).collect(),
+                            requests: Vec::new(),
+                        };
+                        net.junctions.push(j);
+                        in_junction = !empty;
+                    }
+                    (3, "request") if in_junction => {
+                        let index: usize = el.int("index")?.ok_or_else(|| el.err("missing `index`"))?;
+                        let response = el.req("response")?.to_string();
+                        net.junctions.last_mut().expect("in a junction").requests.push((index, response));
+                    }
+                    (2, "connection") => {
+                        net.connections.push(SumoConnection {
+                            at,
+                            from: el.req("from")?.to_string(),
+                            to: el.req("to")?.to_string(),
+                            from_lane: el.int("fromLane")?.ok_or_else(|| el.err("missing `fromLane`"))?,
+                            to_lane: el.int("toLane")?.ok_or_else(|| el.err("missing `toLane`"))?,
+                            via: el.get("via").map(str::to_string),
+                            state: el.get("state").map(str::to_string),
+                        });
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+    Ok(net)
+}
+
+fn row_from_state(state: &str) -> Option<RightOfWay> {
+    match state {
+        "M" | "O" | "G" => Some(RightOfWay::Major),
+        "m" | "=" | "s" | "w" | "Z" | "o" | "g" | "y" | "Y" | "r" | "u" => Some(RightOfWay::Minor),
+        _ => None,
+    }
+}
+
+/// An OSM id carried in a SUMO id made by netconvert from OSM (`123`, `-123#4`), for provenance.
+fn osm_id_in(sumo_id: &str) -> Option<i64> {
+    let base = sumo_id.split('#').next()?;
+    let n: i64 = base.parse().ok()?;
+    Some(n.abs())
+}
+
+/// Read a net.xml into a lane graph.
+pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, ParseError> {
+    let net = parse(input)?;
+    let mut warnings = Warnings::default();
+    let projection = match &net.location {
+        None => {
+            warnings.add("no_location", "the net has no <location>; coordinates kept as they are");
+            Projection::Plane { offset: [0.0, 0.0] }
+        }
+        Some((offset, proj)) => Projection::from_sumo_location(*offset, proj).unwrap_or_else(|m| {
+            warnings.add("projection_unsupported", m);
+            Projection::Plane { offset: *offset }
+        }),
+    };
+    let geographic = projection.is_geographic();
+
+    // Lanes of internal edges, by lane id: (length, speed).
+    let mut internal_lanes: HashMap<&str, (f64, f64)> = HashMap::new();
+    let mut edge_index: HashMap<&str, &SumoEdge> = HashMap::new();
+    for e in &net.edges {
+        if edge_index.insert(e.id.as_str(), e).is_some() {
+            return Err(ParseError::new(e.at, Some(format!("<edge id=\"{}\">", e.id)), "a second edge with this id"));
+        }
+        if e.lanes.is_empty() {
+            return Err(ParseError::new(e.at, Some(format!("<edge id=\"{}\">", e.id)), "edge without lanes"));
+        }
+        if e.internal {
+            for l in &e.lanes {
+                internal_lanes.insert(l.id.as_str(), (l.length, l.speed));
+            }
+        }
+    }
+
+    // Junctions that normal edges use, in file order.
+    let normal: Vec<&SumoEdge> = net.edges.iter().filter(|e| !e.internal).collect();
+    let mut used: HashMap<&str, bool> = HashMap::new();
+    for e in &normal {
+        used.insert(e.from.as_str(), true);
+        used.insert(e.to.as_str(), true);
+    }
+    let mut junction_of: HashMap<&str, JunctionId> = HashMap::new();
+    let mut junctions = Vec::new();
+    for sj in &net.junctions {
+        if sj.internal || sj.id.starts_with(':') {
+            continue;
+        }
+        if !used.contains_key(sj.id.as_str()) {
+            warnings.add("isolated_junction", format!("junction {} has no road", sj.id));
+            continue;
+        }
+        let id = JunctionId(junctions.len() as u32);
+        junction_of.insert(sj.id.as_str(), id);
+        let mut provenance = Provenance::sumo(sj.id.clone());
+        if geographic {
+            if let Ok(n) = sj.id.parse::<i64>() {
+                provenance.osm_nodes.push(n);
+            }
+        }
+        junctions.push(Junction { id, pos: sj.pos, kind: JunctionKind::Through, incoming: vec![], outgoing: vec![], provenance });
+    }
+
+    let mut road_of: HashMap<&str, RoadId> = HashMap::new();
+    let mut roads = Vec::new();
+    for e in &normal {
+        let place = || Some(format!("<edge id=\"{}\">", e.id));
+        let from = *junction_of
+            .get(e.from.as_str())
+            .ok_or_else(|| ParseError::new(e.at, place(), format!("`from` names junction `{}`, which the net lacks", e.from)))?;
+        let to = *junction_of
+            .get(e.to.as_str())
+            .ok_or_else(|| ParseError::new(e.at, place(), format!("`to` names junction `{}`, which the net lacks", e.to)))?;
+        let mut lanes: Vec<&SumoLane> = e.lanes.iter().collect();
+        lanes.sort_by_key(|l| l.index);
+        if lanes.iter().enumerate().any(|(i, l)| l.index as usize != i) {
+            return Err(ParseError::new(e.at, place(), "lane indices are not 0, 1, 2, ..."));
+        }
+        let geometry = match &e.shape {
+            Some(s) if s.len() >= 2 => s.clone(),
+            _ => centre_line(&lanes),
+        };
+        if geometry.len() < 2 {
+            return Err(ParseError::new(e.at, place(), "shape has fewer than two points"));
+        }
+        let mut length = lanes.iter().map(|l| l.length).sum::<f64>() / lanes.len() as f64;
+        if !(length > 0.0) {
+            warnings.add("zero_length_road", format!("edge {}", e.id));
+            length = 0.01;
+        }
+        let id = RoadId(roads.len() as u32);
+        road_of.insert(e.id.as_str(), id);
+        let mut provenance = Provenance::sumo(e.id.clone());
+        if geographic {
+            if let Some(w) = osm_id_in(&e.id) {
+                provenance.osm_ways.push(w);
+            }
+        }
+        roads.push(Road {
+            id,
+            from,
+            to,
+            class: e.type_.clone().unwrap_or_else(|| "unknown".to_string()),
+            name: e.name.clone(),
+            ref_: None,
+            priority: e.priority,
+            lanes: lanes
+                .iter()
+                .map(|l| Lane { index: l.index, speed_mps: l.speed, width_m: l.width, length_m: l.length.max(0.01) })
+                .collect(),
+            geometry,
+            length_m: length,
+            provenance,
+        });
+    }
+
+    // Request tables by SUMO junction id, for connections without a state.
+    let requests: HashMap<&str, &SumoJunction> = net.junctions.iter().map(|j| (j.id.as_str(), j)).collect();
+    // Connections leaving internal lanes, by (internal edge, lane).
+    let internal_next: HashMap<(&str, u8), &SumoConnection> =
+        net.connections.iter().map(|k| ((k.from.as_str(), k.from_lane), k)).collect();
+    // SUMO numbers a junction's links in the order of its incoming lanes (`incLanes`), then as listed.
+    let mut link_index: HashMap<usize, usize> = HashMap::new();
+    {
+        let mut keyed: Vec<(&str, usize, usize)> = Vec::new();
+        for (ci, c) in net.connections.iter().enumerate() {
+            let Some(e) = edge_index.get(c.from.as_str()).filter(|e| !e.internal) else { continue };
+            let lane = format!("{}_{}", c.from, c.from_lane);
+            let pos = requests.get(e.to.as_str()).and_then(|j| j.inc_lanes.iter().position(|l| *l == lane)).unwrap_or(usize::MAX);
+            keyed.push((e.to.as_str(), pos, ci));
+        }
+        keyed.sort();
+        let mut last: Option<&str> = None;
+        let mut n = 0;
+        for (j, _, ci) in keyed {
+            if last != Some(j) {
+                last = Some(j);
+                n = 0;
+            }
+            link_index.insert(ci, n);
+            n += 1;
+        }
+    }
+    let mut connections = Vec::new();
+    for (ci, c) in net.connections.iter().enumerate() {
+        let el = || Some(format!("<connection from=\"{}\" to=\"{}\">", c.from, c.to));
+        let from_edge = edge_index
+            .get(c.from.as_str())
+            .ok_or_else(|| ParseError::new(c.at, el(), format!("`from` names edge `{}`, which the net lacks", c.from)))?;
+        let to_edge = edge_index
+            .get(c.to.as_str())
+            .ok_or_else(|| ParseError::new(c.at, el(), format!("`to` names edge `{}`, which the net lacks", c.to)))?;
+        if from_edge.internal || to_edge.internal {
+            continue;
+        }
+        if c.from_lane as usize >= from_edge.lanes.len() || c.to_lane as usize >= to_edge.lanes.len() {
+            return Err(ParseError::new(c.at, el(), format!("lane {} -> {} does not exist", c.from_lane, c.to_lane)));
+        }
+        if from_edge.to != to_edge.from {
+            return Err(ParseError::new(c.at, el(), format!("edge `{}` ends at `{}` but `{}` starts at `{}`", c.from, from_edge.to, c.to, to_edge.from)));
+        }
+        let junction = junction_of[from_edge.to.as_str()];
+        // Follow the internal lanes from `via` to the next normal edge.
+        let (mut via_length, mut via_speed) = (0.0, None::<f64>);
+        let mut next = c.via.clone();
+        let mut steps = 0;
+        while let Some(lane) = next.take() {
+            let &(len, speed) = internal_lanes
+                .get(lane.as_str())
+                .ok_or_else(|| ParseError::new(c.at, el(), format!("`via` names lane `{lane}`, which the net lacks")))?;
+            via_length += len;
+            via_speed = Some(via_speed.map_or(speed, |s: f64| s.min(speed)));
+            steps += 1;
+            if steps > 16 {
+                return Err(ParseError::new(c.at, el(), "the internal lanes after `via` loop"));
+            }
+            // An internal lane that leads into another internal lane (an internal junction) continues the path.
+            let (edge_id, lane_index) = lane.rsplit_once('_').unwrap_or((lane.as_str(), "0"));
+            next = lane_index.parse::<u8>().ok().and_then(|li| internal_next.get(&(edge_id, li))).and_then(|k| {
+                k.via.clone().or_else(|| {
+                    edge_index
+                        .get(k.to.as_str())
+                        .filter(|e| e.internal)
+                        .map(|e| e.lanes[(k.to_lane as usize).min(e.lanes.len() - 1)].id.clone())
+                })
+            });
+        }
+        let link = link_index[&ci];
+        let right_of_way = match c.state.as_deref().and_then(row_from_state) {
+            Some(r) => r,
+            None => {
+                // The junction's request table: any `1` in the response means this link yields to another.
+                let yields = requests
+                    .get(from_edge.to.as_str())
+                    .and_then(|j| j.requests.iter().find(|(i, _)| *i == link))
+                    .is_some_and(|(_, response)| response.contains('1'));
+                if yields { RightOfWay::Minor } else { RightOfWay::Major }
+            }
+        };
+        let mut provenance = Provenance::default();
+        if let Some(v) = &c.via {
+            provenance.sumo_ids.push(v.clone());
+        }
+        connections.push(Connection {
+            junction,
+            from_road: road_of[c.from.as_str()],
+            from_lane: c.from_lane,
+            to_road: road_of[c.to.as_str()],
+            to_lane: c.to_lane,
+            via_length_m: via_length,
+            via_speed_mps: via_speed,
+            right_of_way,
+            right_of_way_overridden: false,
+            provenance,
+        });
+    }
+
+    let mut graph = LaneGraph::new(source, projection);
+    graph.junctions = junctions;
+    graph.roads = roads;
+    graph.connections = connections;
+    graph.warnings = warnings;
+    graph.rebuild_junction_links();
+    Ok(graph)
+}
+
+/// The middle of an edge's lanes, point by point when they have the same number of points, else the middle lane.
+fn centre_line(lanes: &[&SumoLane]) -> Vec<[f64; 2]> {
+    let n = lanes[0].shape.len();
+    if lanes.iter().all(|l| l.shape.len() == n) {
+        (0..n)
+            .map(|i| {
+                let k = lanes.len() as f64;
+                [lanes.iter().map(|l| l.shape[i][0]).sum::<f64>() / k, lanes.iter().map(|l| l.shape[i][1]).sum::<f64>() / k]
+            })
+            .collect()
+    } else {
+        lanes[lanes.len() / 2].shape.clone()
+    }
 }

@@ -19,8 +19,11 @@ pub(crate) struct XmlStream<R: BufRead> {
 
 /// One element start (`<a ..>` or `<a ../>`), an element end, or the end of the input.
 pub(crate) enum Item<'b> {
-    Start { element: BytesStart<'b>, empty: bool },
+    /// `at`: byte offset of the `<`; `depth`: 1 for the root.
+    Start { element: BytesStart<'b>, empty: bool, at: u64, depth: usize },
     End,
+    /// Text, a comment, a declaration: nothing a reader needs.
+    Skip,
     Eof,
 }
 
@@ -38,9 +41,9 @@ impl<R: BufRead> XmlStream<R> {
         self.open.len()
     }
 
-    /// Next element start or end; text, comments and declarations are skipped.
+    /// Next event; text, comments and declarations come back as [`Item::Skip`].
     pub fn next(&mut self) -> Result<Item<'_>, ParseError> {
-        loop {
+        {
             self.buf.clear();
             self.start = self.reader.buffer_position();
             let event = match self.reader.read_event_into(&mut self.buf) {
@@ -64,8 +67,8 @@ impl<R: BufRead> XmlStream<R> {
                     if !empty {
                         self.open.push(name);
                     }
-                    // Re-borrow from the buffer: the event above borrows it, so rebuild with the same lifetime.
-                    return Ok(Item::Start { element, empty });
+                    let (at, depth) = (self.start, self.open.len() + usize::from(empty));
+                    return Ok(Item::Start { element, empty, at, depth });
                 }
                 Event::End(_) => {
                     self.open.pop();
@@ -85,12 +88,13 @@ impl<R: BufRead> XmlStream<R> {
                     return Ok(Item::Eof);
                 }
                 Event::Text(t) => {
-                    if self.open.is_empty() && t.iter().any(|b| !b.is_ascii_whitespace()) {
+                    if self.open.is_empty() && !t.into_inner().trim().is_empty() {
                         return Err(ParseError::new(self.start, None, "text outside the root element: not an XML file"));
                     }
                 }
                 _ => {}
             }
+            Ok(Item::Skip)
         }
     }
 }

@@ -1,1 +1,36 @@
-//! # mapc-rl (being written)
+//! mapc-rl: reinforcement learning for merge control — the environment layer on the simulator, PPO on burn
+//! (pure-Rust flex CPU backend) and policy evaluation.
+//!
+//! Glossary
+//! - **AV**: autonomous vehicle; **controlled AV**: one of the first `N_AV` AVs (by entry time, FIFO) inside the
+//!   control region, whose acceleration the policy sets.
+//! - **Observation**: five values per controlled AV (own speed, leader speed difference and gap, follower speed
+//!   difference and gap), normalised by `V` (max speed) and `L` (network lane length), zero-padded to `5 N_AV`.
+//! - **Episode**: one simulation of `horizon` steps (2000 x 0.5 s); cutting it there is a *truncation*, and the
+//!   value of the last state is bootstrapped from the value network.
+//! - **Return**: sum of rewards of an episode. **Advantage**: GAE estimate of how much better an action was than
+//!   the value network expected.
+//! - **Iteration**: one batch of episodes collected with the current policy, then `epochs` passes of minibatch SGD.
+//! - **Checkpoint**: weights, optimiser state, KL coefficient, RNG state and the observation spec (`PolicySpec`),
+//!   enough to resume a run exactly or to evaluate the policy on another scenario.
+//! - **Outflow / inflow**: vehicles leaving / entering the network per hour over the episode.
+//!
+//! Layout: `ppo::tensor` holds all tensor code (burn for the loss gradient, plain `f32` for rollout inference),
+//! `ppo::gae` the advantage estimation, `rollout` the `Env` trait and parallel collection, `env` the merge
+//! environment on `mapc-sim`, `run` a training run on disk, `eval` evaluation against the human baseline.
+
+pub mod checkpoint;
+pub mod env;
+pub mod error;
+pub mod eval;
+pub mod log;
+pub mod ppo;
+pub mod rng;
+pub mod rollout;
+pub mod run;
+pub mod stats;
+
+pub use checkpoint::{Checkpoint, PolicySpec};
+pub use error::RlError;
+pub use ppo::{IterationStats, PpoConfig, TrainerState};
+pub use rollout::{Env, EpisodeMetrics};

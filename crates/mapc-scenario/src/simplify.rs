@@ -88,3 +88,85 @@ pub fn corridor_merges(g: &LaneGraph, roles: &CorridorRoles) -> Vec<MergeSummary
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transform::test_maps::highway;
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() < 1e-6
+    }
+
+    #[test]
+    fn default_route_is_the_longest_motorway_with_its_merge() {
+        let raw = highway();
+        let s = simplify(&raw, &SimplifyOptions::default()).unwrap();
+        let names: Vec<&str> = s.steps.iter().map(|r| r.step.as_str()).collect();
+        assert_eq!(names, ["pick_route", "keep_feeders", "drop_diverges", "prune", "collapse_lanes", "join_chains"]);
+        assert!(s.graph.invariant_violations().is_empty());
+        assert!(s.graph.roads.iter().all(|r| r.lanes.len() == 1));
+        // Main road R0+R1 (joint J1 gone) and R4+R8+R7: the bent collector R8 is longer than R6, so the longest
+        // route takes it and R6 (leaving and rejoining the route) goes with the exit. The ramp R2+R3 is one road.
+        assert_eq!(s.roles.main, vec![RoadId(0), RoadId(4)]);
+        assert_eq!(s.roles.feeders, vec![vec![RoadId(2)]]);
+        assert_eq!(s.graph.roads.len(), 3);
+        let merges = corridor_merges(&s.graph, &s.roles);
+        assert_eq!(merges.len(), 1);
+        let m = &merges[0];
+        assert_eq!((m.junction.as_str(), m.osm_node), ("J2", Some(1002)));
+        let len = |i| raw.road(RoadId(i)).unwrap().length_m;
+        let after = len(4) + len(8) + len(7);
+        assert!(close(m.main_before_m, 1500.0) && close(m.merge_m, len(2) + len(3)) && close(m.main_after_m, after), "{m:?}");
+        assert!(s.graph.road(RoadId(6)).is_none());
+        // Joined roads keep every piece's provenance and say which steps made them.
+        let main0 = s.graph.road(RoadId(0)).unwrap();
+        assert_eq!(main0.provenance.osm_ways, vec![500, 501]);
+        assert!(main0.provenance.made_by.contains(&"join_chains".to_string()));
+        // The roles read back from the graph alone.
+        assert_eq!(CorridorRoles::of(&s.graph).unwrap(), s.roles);
+    }
+
+    #[test]
+    fn via_pins_the_route_and_exits_can_be_kept() {
+        let raw = highway();
+        let opts = SimplifyOptions { via: vec!["osm-way:506".into()], keep_exits: true, ..Default::default() };
+        let s = simplify(&raw, &opts).unwrap();
+        // Pinned through the shorter R6: the collector R8 leaves and rejoins the route (dropped); R5 is kept as an
+        // exit, so J5 stays a diverge and the main road is R0+R1, R4, R6+R7.
+        assert!(s.graph.road(RoadId(8)).is_none());
+        assert_eq!(s.roles.main, vec![RoadId(0), RoadId(4), RoadId(6)]);
+        assert_eq!(s.roles.exits, vec![vec![RoadId(5)]]);
+        assert_eq!(s.steps[2].step, "keep_exits");
+        let err = simplify(&raw, &SimplifyOptions { via: vec!["osm-way:42".into()], ..Default::default() });
+        assert!(err.unwrap_err().to_string().contains("osm-way:42"));
+        let err = simplify(&raw, &SimplifyOptions { via: vec!["osm:42".into()], ..Default::default() });
+        assert!(err.unwrap_err().to_string().contains("osm:42"));
+    }
+
+    #[test]
+    fn feeder_length_trims_the_merging_road() {
+        let opts = SimplifyOptions { feeder_length_m: Some(120.0), ..Default::default() };
+        let s = simplify(&highway(), &opts).unwrap();
+        assert_eq!(s.steps.last().unwrap().step, "trim_feeders");
+        let m = &corridor_merges(&s.graph, &s.roles)[0];
+        assert!(close(m.merge_m, 120.0), "{m:?}");
+        assert!(s.graph.invariant_violations().is_empty());
+    }
+
+    #[test]
+    fn a_broken_step_is_caught_by_the_invariants() {
+        let mut c = Corridor::new(highway());
+        let opts = SimplifyOptions::default();
+        let steps = crate::transform::simplify_steps(&opts);
+        crate::transform::run_steps(&mut c, &steps, &opts).unwrap();
+        let before = (Corridor::chain_length_m(&c.graph, &c.main), vec![Corridor::chain_length_m(&c.graph, &c.feeders[0])]);
+        c.graph.roads[0].length_m += 5.0;
+        let err = crate::transform::check(&c, "broken", Some(&before)).unwrap_err().to_string();
+        assert!(err.contains("broken") && err.contains("main road's length"), "{err}");
+        let lane = c.graph.roads[1].lanes[0].clone();
+        c.graph.roads[1].lanes.push(lane);
+        let err = crate::transform::check(&c, "broken", None).unwrap_err().to_string();
+        assert!(err.contains("2 lanes"), "{err}");
+    }
+}

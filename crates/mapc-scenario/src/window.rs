@@ -254,7 +254,7 @@ pub fn cut_window(corridor: &LaneGraph, junction: &str, shape: &SourceShape) -> 
         acc += len;
         downstream_roads.push(*r);
     }
-    let pieces = Topology_count(&g);
+    let pieces = mapc_graph::Topology::new(&g).component_count();
     if pieces != 1 {
         return Err(TransformError::Invariant {
             step: transform::CUT_AT.into(),
@@ -275,11 +275,6 @@ pub fn cut_window(corridor: &LaneGraph, junction: &str, shape: &SourceShape) -> 
         graph: g,
         notes,
     })
-}
-
-#[allow(non_snake_case)]
-fn Topology_count(g: &LaneGraph) -> usize {
-    mapc_graph::Topology::new(g).component_count()
 }
 
 /// How the window scenario's demand differs from the source's.
@@ -370,4 +365,117 @@ pub fn window_scenario(
             }),
         }),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simplify::simplify;
+    use crate::transform::SimplifyOptions;
+    use crate::transform::test_maps::{build, highway};
+    use proptest::prelude::*;
+
+    fn corridor() -> LaneGraph {
+        simplify(&highway(), &SimplifyOptions::default()).unwrap().graph
+    }
+
+    #[test]
+    fn simple_merge_shape_is_600_200_100() {
+        let source = ResolvedScenario::load("simple_merge").unwrap();
+        let shape = SourceShape::of(&source).unwrap();
+        assert_eq!((shape.upstream_m, shape.merge_m, shape.downstream_m), (600.0, 200.0, 100.0));
+        let names = |rs: &[RoadId]| -> Vec<String> {
+            rs.iter().map(|r| source.graph.road(*r).unwrap().name.clone().unwrap()).collect()
+        };
+        assert_eq!(names(&shape.main_roads), ["inflow_highway", "left"]);
+        assert_eq!(names(&shape.merge_roads), ["inflow_merge", "bottom"]);
+    }
+
+    #[test]
+    fn window_cuts_exactly_and_keeps_the_corridor() {
+        let g = corridor();
+        let source = ResolvedScenario::load("simple_merge").unwrap();
+        let shape = SourceShape::of(&source).unwrap();
+        let cut = cut_window(&g, "osm:1002", &shape).unwrap();
+        assert!((cut.upstream_m - 600.0).abs() < 1e-9 && (cut.merge_m - 200.0).abs() < 1e-9);
+        assert!((cut.downstream_m - 100.0).abs() < 1e-9);
+        assert_eq!(cut.notes.len(), 3);
+        assert!(cut.graph.invariant_violations().is_empty());
+        assert!((cut.graph.total_lane_length_m() - g.total_lane_length_m()).abs() < 1e-6);
+        // Three cuts: three new roads above the largest id, three new through junctions.
+        assert_eq!(cut.graph.roads.len(), g.roads.len() + 3);
+        assert_eq!(cut.main_entry, RoadId(0));
+        let scenario = window_scenario(&cut, &source, &shape, "w", "w.graph.json", &DemandOverride::default()).unwrap();
+        let flows: Vec<(&str, f64)> = scenario.flows.iter().map(|f| (f.from.as_str(), f.vehs_per_hour)).collect();
+        assert_eq!(flows, [("R0", 1800.0), ("R0", 200.0), (cut.merge_entry.to_string().as_str(), 200.0)]);
+        let control = scenario.control.as_ref().unwrap();
+        assert_eq!(control.n_av, 5);
+        assert_eq!(control.region.len(), cut.region().len());
+        // The scenario comes back from TOML exactly, and resolves against its graph.
+        let back = Scenario::from_toml(&scenario.to_toml(), std::path::Path::new("w.toml")).unwrap();
+        assert_eq!(back, scenario);
+        let dir = std::env::temp_dir().join(format!("mapc-window-test-{}", std::process::id()));
+        cut.graph.save(&dir.join("w.graph.json")).unwrap();
+        let resolved = ResolvedScenario::resolve(scenario, &dir, "w.toml").unwrap();
+        assert_eq!(resolved.region_roads, cut.region());
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn shortfalls_and_non_merges_are_named() {
+        let g = corridor();
+        let source = ResolvedScenario::load("simple_merge").unwrap();
+        let mut shape = SourceShape::of(&source).unwrap();
+        shape.upstream_m = 1600.0;
+        let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+        assert!(err.contains("main road before J2") && err.contains("100.0 m short"), "{err}");
+        shape.upstream_m = 600.0;
+        shape.merge_m = 2000.0;
+        let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+        assert!(err.contains("merging road into J2"), "{err}");
+        let err = cut_window(&g, "J0", &shape).unwrap_err().to_string();
+        assert!(err.contains("not inside the corridor's main road") && err.contains("J2 (osm:1002)"), "{err}");
+        let err = cut_window(&g, "osm:77", &shape).unwrap_err().to_string();
+        assert!(err.contains("osm:77"), "{err}");
+    }
+
+    #[test]
+    fn a_boundary_near_a_junction_snaps_to_it() {
+        let g = corridor();
+        let source = ResolvedScenario::load("simple_merge").unwrap();
+        let mut shape = SourceShape::of(&source).unwrap();
+        shape.upstream_m = 1499.8; // the corridor's start is 1500 m before the merge
+        let cut = cut_window(&g, "J2", &shape).unwrap();
+        assert_eq!(cut.upstream_m, 1500.0);
+        assert!(cut.notes[0].contains("boundary at junction J0"), "{:?}", cut.notes);
+    }
+
+    proptest! {
+        #[test]
+        fn a_cut_keeps_total_length_and_connectivity(
+            bends in proptest::collection::vec((0.0f64..500.0, -50.0f64..50.0), 0..6),
+            at in 0.001f64..0.999,
+        ) {
+            let mut pts: Vec<[f64; 2]> = bends.iter().map(|&(x, y)| [x, y]).collect();
+            pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            let g = build(&[[-100.0, 0.0], [600.0, 0.0], [700.0, 0.0]], &[
+                (0, 1, "motorway", 2, &pts),
+                (1, 2, "motorway", 1, &[]),
+            ]);
+            let mut cut = g.clone();
+            let length = g.roads[0].length_m;
+            let (a, b, j) = crate::transform::cut_road(&mut cut, RoadId(0), at * length).unwrap();
+            prop_assert!(cut.invariant_violations().is_empty(), "{:?}", cut.invariant_violations());
+            prop_assert_eq!(mapc_graph::Topology::new(&cut).component_count(), 1);
+            let (ra, rb) = (cut.road(a).unwrap(), cut.road(b).unwrap());
+            prop_assert!((ra.length_m + rb.length_m - length).abs() < 1e-9);
+            prop_assert!((cut.total_lane_length_m() - g.total_lane_length_m()).abs() < 1e-6);
+            prop_assert_eq!(ra.to, j);
+            prop_assert_eq!(rb.from, j);
+            prop_assert_eq!(cut.junction(j).unwrap().kind, JunctionKind::Through);
+            prop_assert_eq!(ra.geometry.last(), rb.geometry.first());
+            // The rest of the road still leads on to R1.
+            prop_assert_eq!(cut.shortest_route(JunctionId(0), JunctionId(2)).unwrap(), vec![a, b, RoadId(1)]);
+        }
+    }
 }

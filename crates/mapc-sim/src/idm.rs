@@ -29,7 +29,22 @@ pub struct IdmParams {
 impl IdmParams {
     /// Parameters with SUMO's sub-stepping rule for the step `dt` (IDM stepping 0.25 s).
     pub fn new(accel: f64, decel: f64, emergency_decel: f64, tau: f64, min_gap: f64, delta: f64, dt: f64) -> Self {
-        let iterations = ((dt / 0.25 + 0.5) as u32).max(1);
+        Self::with_stepping(accel, decel, emergency_decel, tau, min_gap, delta, dt, 0.25)
+    }
+
+    /// Parameters with `round(dt / stepping)` sub-steps (at least one).
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_stepping(
+        accel: f64,
+        decel: f64,
+        emergency_decel: f64,
+        tau: f64,
+        min_gap: f64,
+        delta: f64,
+        dt: f64,
+        stepping: f64,
+    ) -> Self {
+        let iterations = ((dt / stepping + 0.5) as u32).max(1);
         IdmParams { accel, decel, emergency_decel, tau, min_gap, delta, iterations, dt }
     }
 

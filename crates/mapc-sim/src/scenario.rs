@@ -2,14 +2,150 @@
 
 use crate::SimError;
 use crate::metrics::{RunMetrics, run_baseline_spec};
-use crate::spec::SimSpec;
+use crate::network::Network;
+use crate::sim::Simulation;
+use crate::spec::{FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
+use mapc_graph::RoadId;
+use mapc_scenario::ResolvedScenario;
 
-/// Placeholder until the scenario model is wired: the spec is taken as is.
-pub fn spec_from_scenario(spec: &SimSpec) -> Result<SimSpec, SimError> {
-    Ok(spec.clone())
+/// SUMO's default emergency deceleration of a passenger car (m/s^2).
+const EMERGENCY_DECEL: f64 = 9.0;
+/// The original rollouts ran two steps (start, and the reset that inserts the initial vehicles) before the
+/// horizon; the clock at step 0 is two steps in.
+const SETUP_STEPS: f64 = 2.0;
+
+/// The simulator's description of a resolved scenario.
+pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
+    let sc = &rs.scenario;
+    let names: Vec<&String> = sc.vehicle_types.keys().collect();
+    let vehicle_types: Vec<VehicleTypeSpec> = sc
+        .vehicle_types
+        .iter()
+        .map(|(name, t)| VehicleTypeSpec {
+            name: name.clone(),
+            accel: t.accel,
+            decel: t.decel,
+            emergency_decel: EMERGENCY_DECEL.max(t.decel),
+            tau: t.tau,
+            min_gap: t.min_gap,
+            delta: t.delta,
+            max_speed: t.max_speed,
+            length: t.length,
+            speed_factor: t.speed_factor,
+            speed_dev: t.speed_dev,
+            impatience: t.impatience,
+            controlled: t.controlled,
+            idm_stepping_s: t.idm_stepping_s,
+        })
+        .collect();
+    let type_index = |name: &str, what: &str| -> Result<usize, SimError> {
+        names
+            .iter()
+            .position(|n| n.as_str() == name)
+            .ok_or_else(|| SimError::Spec(format!("{}: {what}: no vehicle type `{name}`", rs.origin)))
+    };
+    let mut flows = Vec::with_capacity(sc.flows.len());
+    for (i, f) in sc.flows.iter().enumerate() {
+        let (from, to) = *rs
+            .flow_roads
+            .get(i)
+            .ok_or_else(|| SimError::Spec(format!("{}: flows[{i}] has no resolved roads", rs.origin)))?;
+        flows.push(FlowSpec {
+            from,
+            to,
+            vehs_per_hour: f.vehs_per_hour,
+            vehicle_type: type_index(&f.vehicle_type, &format!("flows[{i}].vehicle_type"))?,
+            depart_speed: f.depart_speed_mps,
+            begin_s: f.begin_s,
+            end_s: f.end_s.unwrap_or(f64::INFINITY),
+        });
+    }
+    // Main line: the route of the busiest flow.
+    let net = Network::from_graph(&rs.graph)?;
+    let main_line: Vec<RoadId> = match flows.iter().max_by(|a, b| a.vehs_per_hour.total_cmp(&b.vehs_per_hour)) {
+        Some(f) => net
+            .route(&rs.graph, f.from, f.to)?
+            .into_iter()
+            .filter_map(|l| net.road_of(l))
+            .map(|r| net.road_ids[r])
+            .collect(),
+        None => Vec::new(),
+    };
+    let mut initial = Vec::new();
+    if let Some(iv) = &sc.initial_vehicles {
+        let vt = type_index(&iv.vehicle_type, "initial_vehicles.vehicle_type")?;
+        initial = initial_placement(&rs.graph, &net, &main_line, iv.count as usize, iv.speed_mps, vt)?;
+    }
+    let step_s = sc.step_s;
+    Ok(SimSpec {
+        graph: rs.graph.clone(),
+        vehicle_types,
+        flows,
+        initial,
+        step_s,
+        horizon_steps: sc.horizon_steps as u64,
+        warmup_steps: sc.warmup_steps as u64,
+        start_time_s: SETUP_STEPS * step_s,
+        control_region: if rs.region_roads.is_empty() { None } else { Some(rs.region_roads.clone()) },
+        n_av: sc.control.as_ref().map_or(0, |c| c.n_av as usize),
+        main_line,
+    })
 }
 
-/// All-human baseline over `seeds` (parallel, results in seed order).
-pub fn run_baseline(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, SimError> {
-    run_baseline_spec(spec, seeds)
+/// Initial vehicles as the original placed them: spaced evenly by the total length of all roads divided by
+/// their count, laid out from the start of the main line (internal lanes counted as driven length); a vehicle
+/// that would land inside a junction goes to the start of the next road.
+fn initial_placement(
+    g: &mapc_graph::LaneGraph,
+    net: &Network,
+    main_line: &[RoadId],
+    count: usize,
+    speed: f64,
+    vehicle_type: usize,
+) -> Result<Vec<InitialVehicleSpec>, SimError> {
+    if count == 0 {
+        return Ok(Vec::new());
+    }
+    let Some(&first) = main_line.first() else {
+        return Err(SimError::Spec("initial vehicles need a flow to define the main line".into()));
+    };
+    let lanes = net.route(g, first, main_line.last().copied())?;
+    let total: f64 = g.roads.iter().map(|r| r.length_m).sum();
+    let spacing = total / count as f64;
+    let mut out = Vec::with_capacity(count);
+    for i in 0..count {
+        let mut x = i as f64 * spacing;
+        let mut placed = false;
+        for (k, &l) in lanes.iter().enumerate() {
+            let len = net.lanes[l as usize].length;
+            if x < len || k + 1 == lanes.len() {
+                let (lane, pos) = match net.road_of(l) {
+                    Some(_) => (l, x.min(len)),
+                    // inside a junction: the start of the next road
+                    None => (lanes[k + 1], 0.0),
+                };
+                let road = net.road_ids[net.road_of(lane).unwrap()];
+                out.push(InitialVehicleSpec { road, pos_m: pos, speed, vehicle_type });
+                placed = true;
+                break;
+            }
+            x -= len;
+        }
+        if !placed {
+            return Err(SimError::Spec(format!("initial vehicle {i} does not fit on the main line")));
+        }
+    }
+    Ok(out)
+}
+
+impl Simulation {
+    /// A simulation of a resolved scenario with every random draw from `seed`.
+    pub fn new(rs: &ResolvedScenario, seed: u64) -> Result<Simulation, SimError> {
+        Simulation::from_spec(spec_from_scenario(rs)?, seed)
+    }
+}
+
+/// All-human baseline over `seeds` (controlled vehicles drive as humans; parallel, results in seed order).
+pub fn run_baseline(rs: &ResolvedScenario, seeds: &[u64]) -> Result<Vec<RunMetrics>, SimError> {
+    run_baseline_spec(&spec_from_scenario(rs)?, seeds)
 }

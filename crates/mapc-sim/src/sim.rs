@@ -190,7 +190,9 @@ impl Simulation {
         let types: Vec<IdmParams> = spec
             .vehicle_types
             .iter()
-            .map(|t| IdmParams::new(t.accel, t.decel, t.emergency_decel, t.tau, t.min_gap, t.delta, dt))
+            .map(|t| {
+                IdmParams::with_stepping(t.accel, t.decel, t.emergency_decel, t.tau, t.min_gap, t.delta, dt, t.idm_stepping_s)
+            })
             .collect();
         let mut sim = Simulation {
             lane_veh: vec![VecDeque::new(); net.lanes.len()],
@@ -395,9 +397,13 @@ impl Simulation {
     pub fn horizon_steps(&self) -> u64 {
         self.spec.horizon_steps
     }
-    /// True once the horizon has been simulated.
+    /// True once the warm-up and the horizon have been simulated.
     pub fn is_done(&self) -> bool {
-        self.step >= self.spec.horizon_steps
+        self.step >= self.spec.warmup_steps + self.spec.horizon_steps
+    }
+    /// True while in the warm-up (metrics are not collected).
+    pub fn in_warmup(&self) -> bool {
+        self.step < self.spec.warmup_steps
     }
     pub fn network(&self) -> &Network {
         &self.net
@@ -661,6 +667,9 @@ impl Simulation {
     pub fn step(&mut self) -> Result<(), SimError> {
         self.arrived_last.clear();
         self.departed_last.clear();
+        if self.step == self.spec.warmup_steps {
+            self.metrics = MetricsAcc::default();
+        }
         // Metrics see the network as it is before the step (as the original rollouts did).
         let mut n = 0u64;
         let mut sum = 0.0;

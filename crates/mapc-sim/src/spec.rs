@@ -25,6 +25,8 @@ pub struct VehicleTypeSpec {
     pub impatience: f64,
     /// Vehicles of this type take accelerations from the caller (AVs).
     pub controlled: bool,
+    /// IDM integration sub-step (s); the step is split into round(step / this) sub-steps.
+    pub idm_stepping_s: f64,
 }
 
 impl VehicleTypeSpec {
@@ -44,6 +46,7 @@ impl VehicleTypeSpec {
             speed_dev: 0.1,
             impatience: 0.5,
             controlled: false,
+            idm_stepping_s: 0.25,
         }
     }
 }
@@ -79,10 +82,15 @@ pub struct SimSpec {
     pub initial: Vec<InitialVehicleSpec>,
     pub step_s: f64,
     pub horizon_steps: u64,
+    /// Steps simulated before the horizon; metrics ignore them.
+    pub warmup_steps: u64,
     /// Simulation time at step 0 (the original runs two set-up steps before the horizon starts).
     pub start_time_s: f64,
     /// Roads where controlled vehicles take commands; `None`: everywhere.
     pub control_region: Option<Vec<RoadId>>,
+    /// How many controlled vehicles a policy drives at once (for the environment; the simulator obeys every
+    /// acceleration it is given).
+    pub n_av: usize,
     /// The corridor's main line, upstream first (for corridor positions in traces); empty: derived.
     pub main_line: Vec<RoadId>,
 }
@@ -106,6 +114,9 @@ impl SimSpec {
                 if !(v > 0.0 && v.is_finite()) {
                     return Err(bad(what, v));
                 }
+            }
+            if !(t.idm_stepping_s > 0.0) {
+                return Err(bad("idm_stepping_s", t.idm_stepping_s));
             }
             for (what, v) in [("tau", t.tau), ("min_gap", t.min_gap), ("speed_dev", t.speed_dev)] {
                 if !(v >= 0.0 && v.is_finite()) {

@@ -1,101 +1,19 @@
-//! Crate tests on the paper's Simple Merge (built here exactly as SUMO 1.8's net for it reads).
+//! Crate tests on the paper's Simple Merge.
 
 use crate::spec::*;
 use crate::*;
-use mapc_graph::*;
 
-/// The Simple Merge of `maps/simple_merge.net.xml`: main 100 + 500 m, ramp 100 + 100 m, 100 m after; internal
-/// lanes 24.53 m (main, 30 m/s) and 22.95 m (ramp, 15.67 m/s), 0.1 m at the shape junctions; the ramp is major.
-pub(crate) fn simple_merge_graph() -> LaneGraph {
-    let mut g = LaneGraph::new(
-        Source { file: "simple_merge (test fixture)".into(), format: SourceFormat::Generator },
-        Projection::Plane { offset: [0.0, 0.0] },
-    );
-    let pts = [[0.0, 141.42], [100.0, 141.42], [600.0, 141.42], [700.0, 141.42], [458.58, 0.0], [529.29, 70.71]];
-    g.junctions = pts
-        .iter()
-        .enumerate()
-        .map(|(i, &pos)| Junction {
-            id: JunctionId(i as u32),
-            pos,
-            kind: JunctionKind::Through,
-            incoming: vec![],
-            outgoing: vec![],
-            provenance: Provenance::default(),
-        })
-        .collect();
-    let road = |id: u32, from: u32, to: u32, len: f64, prio: i32| Road {
-        id: RoadId(id),
-        from: JunctionId(from),
-        to: JunctionId(to),
-        class: "highway".into(),
-        name: None,
-        ref_: None,
-        priority: prio,
-        lanes: vec![Lane { index: 0, speed_mps: 30.0, width_m: 3.2, length_m: len }],
-        geometry: vec![pts[from as usize], pts[to as usize]],
-        length_m: len,
-        provenance: Provenance::default(),
-    };
-    g.roads = vec![
-        road(0, 0, 1, 100.0, -1), // inflow_highway
-        road(1, 1, 2, 500.0, -1), // left
-        road(2, 2, 3, 100.0, -1), // center
-        road(3, 4, 5, 100.0, 1),  // inflow_merge
-        road(4, 5, 2, 100.0, 1),  // bottom
-    ];
-    let conn = |j: u32, from: u32, to: u32, len: f64, speed: f64, row| Connection {
-        junction: JunctionId(j),
-        from_road: RoadId(from),
-        from_lane: 0,
-        to_road: RoadId(to),
-        to_lane: 0,
-        via_length_m: len,
-        via_speed_mps: Some(speed),
-        right_of_way: row,
-        right_of_way_overridden: false,
-        provenance: Provenance::default(),
-    };
-    g.connections = vec![
-        conn(1, 0, 1, 0.1, 30.0, RightOfWay::Major),
-        conn(5, 3, 4, 0.1, 30.0, RightOfWay::Major),
-        conn(2, 4, 2, 22.95, 15.67, RightOfWay::Major),
-        conn(2, 1, 2, 24.53, 30.0, RightOfWay::Minor),
-    ];
-    g.rebuild_junction_links();
-    g
-}
-
+/// The paper's Simple Merge, as mapc's scenario generator builds it.
 pub(crate) fn simple_merge_spec() -> SimSpec {
-    let human = VehicleTypeSpec::paper_human("human");
-    let mut av = VehicleTypeSpec::paper_human("av");
-    av.controlled = true;
-    let flow = |from: u32, vph: f64, t: usize, speed: f64| FlowSpec {
-        from: RoadId(from),
-        to: None,
-        vehs_per_hour: vph,
-        vehicle_type: t,
-        depart_speed: speed,
-        begin_s: 1.0,
-        end_s: 86400.0,
-    };
-    let init = |road: u32, pos: f64| InitialVehicleSpec { road: RoadId(road), pos_m: pos, speed: 0.0, vehicle_type: 0 };
-    SimSpec {
-        graph: simple_merge_graph(),
-        vehicle_types: vec![human, av],
-        flows: vec![flow(0, 1800.0, 0, 10.0), flow(0, 200.0, 1, 10.0), flow(3, 200.0, 0, 7.5)],
-        initial: vec![init(0, 0.0), init(1, 79.9), init(1, 259.9), init(1, 439.9), init(2, 97.4)],
-        step_s: 0.5,
-        horizon_steps: 2000,
-        start_time_s: 1.0,
-        control_region: None,
-        main_line: vec![],
-    }
+    let rs = mapc_scenario::ResolvedScenario::load("simple_merge").expect("built-in scenario");
+    spec_from_scenario(&rs).expect("simulator spec")
 }
 
 fn human_spec() -> SimSpec {
     let mut s = simple_merge_spec();
-    s.vehicle_types[1].controlled = false;
+    for t in &mut s.vehicle_types {
+        t.controlled = false;
+    }
     s
 }
 

@@ -27,11 +27,16 @@ pub(crate) enum PictureKind {
 }
 
 pub(crate) fn picture_kind(path: &Path) -> Result<PictureKind, VizError> {
-    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
     match ext.as_str() {
         "png" => Ok(PictureKind::Png),
         "svg" => Ok(PictureKind::Svg),
-        _ => Err(VizError::PictureType { path: path.to_path_buf() }),
+        _ => Err(VizError::PictureType {
+            path: path.to_path_buf(),
+        }),
     }
 }
 
@@ -39,8 +44,14 @@ pub(crate) fn picture_kind(path: &Path) -> Result<PictureKind, VizError> {
 /// complete.
 pub(crate) fn draw_to_file(out: &Path, size: (u32, u32), figure: &impl Figure) -> Result<(), VizError> {
     let kind = picture_kind(out)?;
-    let draw_err = |message: String| VizError::Draw { path: out.to_path_buf(), message };
-    let io_err = |source: std::io::Error| VizError::Io { path: out.to_path_buf(), source };
+    let draw_err = |message: String| VizError::Draw {
+        path: out.to_path_buf(),
+        message,
+    };
+    let io_err = |source: std::io::Error| VizError::Io {
+        path: out.to_path_buf(),
+        source,
+    };
     match kind {
         PictureKind::Svg => {
             let mut svg = String::new();
@@ -72,9 +83,21 @@ pub(crate) fn draw_to_file(out: &Path, size: (u32, u32), figure: &impl Figure) -
 /// A hidden temporary name in `out`'s directory that keeps its extension (the bitmap encoder picks the format from
 /// it), so that the final rename stays on one file system.
 fn temp_beside(out: &Path) -> Result<PathBuf, VizError> {
-    let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).map_err(|source| VizError::Io { path: dir.to_path_buf(), source })?;
-    let name = out.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let ext = out.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    let dir = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(|source| VizError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = out
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
     Ok(dir.join(format!(".{name}.{}.tmp.{ext}", std::process::id())))
 }

@@ -20,11 +20,11 @@ const CLASS_COLORS: [(&str, RGBColor); 10] = [
 /// Colours for classes outside the table, handed out in order of first appearance.
 const SPARE_COLORS: [RGBColor; 6] = [
     RGBColor(0, 128, 128),
-    RGBColor(90, 90, 90),
+    RGBColor(214, 97, 0),
     RGBColor(200, 0, 160),
     RGBColor(110, 80, 20),
     RGBColor(60, 60, 180),
-    RGBColor(170, 170, 0),
+    RGBColor(90, 90, 90),
 ];
 
 /// `highway.motorway` -> `motorway`; other names unchanged.
@@ -35,7 +35,10 @@ pub fn base_class(class: &str) -> &str {
 /// Rank of a class for drawing order and the legend: known classes by importance, then the others.
 pub fn class_rank(class: &str) -> usize {
     let c = base_class(class);
-    CLASS_COLORS.iter().position(|(k, _)| *k == c).unwrap_or(CLASS_COLORS.len())
+    CLASS_COLORS
+        .iter()
+        .position(|(k, _)| *k == c)
+        .unwrap_or(CLASS_COLORS.len())
 }
 
 /// The colour of each class in `classes` (sorted by [`class_rank`], then name); unknown classes get spare colours.
@@ -47,11 +50,15 @@ pub fn class_colors(classes: &[String]) -> Vec<(String, RGBColor)> {
     sorted
         .into_iter()
         .map(|c| {
-            let color = CLASS_COLORS.iter().find(|(k, _)| *k == base_class(c)).map(|(_, col)| *col).unwrap_or_else(|| {
-                let col = SPARE_COLORS[spare % SPARE_COLORS.len()];
-                spare += 1;
-                col
-            });
+            let color = CLASS_COLORS
+                .iter()
+                .find(|(k, _)| *k == base_class(c))
+                .map(|(_, col)| *col)
+                .unwrap_or_else(|| {
+                    let col = SPARE_COLORS[spare % SPARE_COLORS.len()];
+                    spare += 1;
+                    col
+                });
             (c.clone(), color)
         })
         .collect()
@@ -109,8 +116,9 @@ mod tests {
 
     #[test]
     fn classes_get_distinct_colours_in_importance_order() {
-        let classes: Vec<String> =
-            ["primary", "highway.motorway", "weird", "motorway_link", "other"].map(String::from).to_vec();
+        let classes: Vec<String> = ["primary", "highway.motorway", "weird", "motorway_link", "other"]
+            .map(String::from)
+            .to_vec();
         let cc = class_colors(&classes);
         assert_eq!(cc[0].0, "highway.motorway");
         assert_eq!(cc[1].0, "motorway_link");

@@ -32,15 +32,24 @@ pub fn to_geojson(graph: &LaneGraph) -> (Value, [f64; 4]) {
     let geographic = graph.projection.is_geographic();
     let point = |p: [f64; 2]| -> [f64; 2] {
         match graph.projection.to_lonlat(p) {
-            Some([lon, lat]) if geographic => {
-                [(lon * DEGREE_DECIMALS).round() / DEGREE_DECIMALS, (lat * DEGREE_DECIMALS).round() / DEGREE_DECIMALS]
-            }
-            _ => [(p[0] * METRE_DECIMALS).round() / METRE_DECIMALS, (p[1] * METRE_DECIMALS).round() / METRE_DECIMALS],
+            Some([lon, lat]) if geographic => [
+                (lon * DEGREE_DECIMALS).round() / DEGREE_DECIMALS,
+                (lat * DEGREE_DECIMALS).round() / DEGREE_DECIMALS,
+            ],
+            _ => [
+                (p[0] * METRE_DECIMALS).round() / METRE_DECIMALS,
+                (p[1] * METRE_DECIMALS).round() / METRE_DECIMALS,
+            ],
         }
     };
     let mut bbox = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
     let mut grow = |c: [f64; 2]| {
-        bbox = [bbox[0].min(c[0]), bbox[1].min(c[1]), bbox[2].max(c[0]), bbox[3].max(c[1])];
+        bbox = [
+            bbox[0].min(c[0]),
+            bbox[1].min(c[1]),
+            bbox[2].max(c[0]),
+            bbox[3].max(c[1]),
+        ];
     };
     let mut features = Vec::with_capacity(graph.roads.len() + graph.junctions.len());
     for r in &graph.roads {
@@ -99,8 +108,10 @@ pub fn to_geojson(graph: &LaneGraph) -> (Value, [f64; 4]) {
     match graph.projection {
         Projection::Utm { zone, north, .. } => {
             collection["mapc_coordinates"] = json!("wgs84");
-            collection["mapc_note"] =
-                json!(format!("WGS84 longitude/latitude, from the graph's UTM zone {zone}{} frame", if north { "N" } else { "S" }));
+            collection["mapc_note"] = json!(format!(
+                "WGS84 longitude/latitude, from the graph's UTM zone {zone}{} frame",
+                if north { "N" } else { "S" }
+            ));
         }
         Projection::Plane { .. } => {
             collection["mapc_coordinates"] = json!("local_metres");
@@ -115,13 +126,23 @@ pub fn to_geojson(graph: &LaneGraph) -> (Value, [f64; 4]) {
 /// Write the graph's GeoJSON to `out`, atomically.
 pub fn write_geojson(graph: &LaneGraph, out: &Path) -> Result<GeoJsonSummary, VizError> {
     let (value, bbox) = to_geojson(graph);
-    let text = serde_json::to_string(&value).map_err(|e| VizError::Input { path: out.to_path_buf(), message: e.to_string() })?;
-    mapc_graph::write_atomically(out, text.as_bytes()).map_err(|source| VizError::Io { path: out.to_path_buf(), source })?;
+    let text = serde_json::to_string(&value).map_err(|e| VizError::Input {
+        path: out.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    mapc_graph::write_atomically(out, text.as_bytes()).map_err(|source| VizError::Io {
+        path: out.to_path_buf(),
+        source,
+    })?;
     Ok(GeoJsonSummary {
         path: out.to_path_buf(),
         roads: graph.roads.len(),
         junctions: graph.junctions.len(),
-        coordinates: if graph.projection.is_geographic() { "wgs84" } else { "local_metres" },
+        coordinates: if graph.projection.is_geographic() {
+            "wgs84"
+        } else {
+            "local_metres"
+        },
         bbox,
     })
 }

@@ -20,6 +20,7 @@ pub mod colors;
 pub mod csvin;
 pub mod geojson;
 pub mod map;
+pub mod pngstats;
 pub mod timespace;
 pub mod training;
 
@@ -34,7 +35,12 @@ pub enum VizError {
     #[error("{path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
     #[error("{path}: line {line}, column `{column}`: {message}")]
-    Field { path: PathBuf, line: u64, column: String, message: String },
+    Field {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        message: String,
+    },
     #[error("{path}: {message}")]
     Input { path: PathBuf, message: String },
     #[error("{path}: unsupported picture type (the name must end in .png or .svg)")]
@@ -42,3 +48,6 @@ pub enum VizError {
     #[error("{path}: drawing failed: {message}")]
     Draw { path: PathBuf, message: String },
 }
+
+#[cfg(test)]
+mod tests;

@@ -113,11 +113,17 @@ pub fn render_map_with(
 ) -> Result<MapRenderSummary, VizError> {
     crate::canvas::picture_kind(out)?;
     if graph.roads.is_empty() {
-        return Err(VizError::Input { path: out.to_path_buf(), message: "the map has no roads to draw".into() });
+        return Err(VizError::Input {
+            path: out.to_path_buf(),
+            message: "the map has no roads to draw".into(),
+        });
     }
     for r in &highlight.roads {
         if graph.road(*r).is_none() {
-            return Err(VizError::Input { path: out.to_path_buf(), message: format!("highlighted road {r} is not in the map") });
+            return Err(VizError::Input {
+                path: out.to_path_buf(),
+                message: format!("highlighted road {r} is not in the map"),
+            });
         }
     }
     for j in &highlight.junctions {
@@ -255,7 +261,12 @@ impl Layout {
 fn clip_segment(a: [f64; 2], b: [f64; 2], bx: [f64; 4]) -> Option<([f64; 2], [f64; 2])> {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [(-dx, a[0] - bx[0]), (dx, bx[2] - a[0]), (-dy, a[1] - bx[1]), (dy, bx[3] - a[1])] {
+    for (p, q) in [
+        (-dx, a[0] - bx[0]),
+        (dx, bx[2] - a[0]),
+        (-dy, a[1] - bx[1]),
+        (dy, bx[3] - a[1]),
+    ] {
         if p == 0.0 {
             if q < 0.0 {
                 return None;
@@ -278,11 +289,19 @@ pub(crate) fn nice_length(x: f64) -> f64 {
         return 1.0;
     }
     let p = 10f64.powf(x.log10().floor());
-    [5.0, 2.0, 1.0].into_iter().map(|m| m * p).find(|v| *v <= x).unwrap_or(p)
+    [5.0, 2.0, 1.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|v| *v <= x)
+        .unwrap_or(p)
 }
 
 fn format_metres(m: f64) -> String {
-    if m >= 1000.0 { format!("{} km", m / 1000.0) } else { format!("{m} m") }
+    if m >= 1000.0 {
+        format!("{} km", m / 1000.0)
+    } else {
+        format!("{m} m")
+    }
 }
 
 struct MapFigure<'a> {
@@ -301,11 +320,21 @@ impl<'a> MapFigure<'a> {
         let legend_rows = classes.len() + 6 + usize::from(!highlight.is_empty());
         let min_plot_h = (legend_rows as u32 * 24 + 60).max(360);
         let layout = Layout::new(bounds(graph, highlight), width, min_plot_h);
-        MapFigure { graph, highlight, layout, classes, placed: std::cell::RefCell::new((0, 0)) }
+        MapFigure {
+            graph,
+            highlight,
+            layout,
+            classes,
+            placed: std::cell::RefCell::new((0, 0)),
+        }
     }
 
     fn class_color(&self, class: &str) -> RGBColor {
-        self.classes.iter().find(|(c, _)| c == class).map(|(_, col)| *col).unwrap_or(RGBColor(128, 128, 128))
+        self.classes
+            .iter()
+            .find(|(c, _)| c == class)
+            .map(|(_, col)| *col)
+            .unwrap_or(RGBColor(128, 128, 128))
     }
 
     fn frame_note(&self) -> String {
@@ -375,7 +404,12 @@ impl Figure for MapFigure<'_> {
                 self.graph.count_kind(JunctionKind::Diverge)
             )
         });
-        root.draw(&Text::new(title, (MARGIN as i32, 10), ("sans-serif", 22).into_font().color(&BLACK))).d()?;
+        root.draw(&Text::new(
+            title,
+            (MARGIN as i32, 10),
+            ("sans-serif", 22).into_font().color(&BLACK),
+        ))
+        .d()?;
         let sub = format!(
             "{}; shown {:.2} km x {:.2} km, equal aspect, {:.1} m per pixel",
             self.frame_note(),
@@ -383,12 +417,20 @@ impl Figure for MapFigure<'_> {
             (l.y1 - l.y0) / 1000.0,
             1.0 / l.scale
         );
-        root.draw(&Text::new(sub, (MARGIN as i32, 38), ("sans-serif", 14).into_font().color(&RGBColor(80, 80, 80))))
-            .d()?;
+        root.draw(&Text::new(
+            sub,
+            (MARGIN as i32, 38),
+            ("sans-serif", 14).into_font().color(&RGBColor(80, 80, 80)),
+        ))
+        .d()?;
 
         // Plot box.
         let (bx0, by0, bx1, by1) = (l.left, l.top, l.left + l.plot_w, l.top + l.plot_h);
-        root.draw(&Rectangle::new([(bx0, by0), (bx1, by1)], RGBColor(250, 250, 247).filled())).d()?;
+        root.draw(&Rectangle::new(
+            [(bx0, by0), (bx1, by1)],
+            RGBColor(250, 250, 247).filled(),
+        ))
+        .d()?;
 
         // Halos under the roads.
         let halo = HALO.mix(0.35).stroke_width(12);
@@ -467,49 +509,91 @@ impl Figure for MapFigure<'_> {
                 continue;
             }
             let text = id.to_string();
-            let font = ("sans-serif", if asked { LABEL_FONT + 3.0 } else { LABEL_FONT }).into_font();
+            let color = if asked { RGBColor(0, 90, 160) } else { dark };
+            let font = ("sans-serif", if asked { LABEL_FONT + 3.0 } else { LABEL_FONT })
+                .into_font()
+                .color(&color);
             let (tw, th) = root.estimate_text_size(&text, &font).d()?;
             let (tw, th) = (tw as i32 + 4, th as i32 + 2);
             let (x, y) = l.px(j.pos);
-            let candidates = [(x + 6, y - 6 - th), (x + 6, y + 6), (x - 6 - tw, y - 6 - th), (x - 6 - tw, y + 6)];
-            let spot = candidates.into_iter().map(|(cx, cy)| [cx, cy, cx + tw, cy + th]).find(|bx| {
-                bx[0] >= bx0 && bx[1] >= by0 && bx[2] <= bx1 && bx[3] <= by1 && !taken.iter().any(|t| overlaps(t, bx, 1))
-            });
+            let candidates = [
+                (x + 6, y - 6 - th),
+                (x + 6, y + 6),
+                (x - 6 - tw, y - 6 - th),
+                (x - 6 - tw, y + 6),
+            ];
+            let spot = candidates
+                .into_iter()
+                .map(|(cx, cy)| [cx, cy, cx + tw, cy + th])
+                .find(|bx| {
+                    bx[0] >= bx0
+                        && bx[1] >= by0
+                        && bx[2] <= bx1
+                        && bx[3] <= by1
+                        && !taken.iter().any(|t| overlaps(t, bx, 1))
+                });
             let Some(bx) = spot else {
                 skipped += 1;
                 continue;
             };
             taken.push(bx);
             drawn += 1;
-            root.draw(&Rectangle::new([(bx[0], bx[1]), (bx[2], bx[3])], WHITE.mix(0.8).filled())).d()?;
-            let color = if asked { RGBColor(0, 90, 160) } else { dark };
-            root.draw(&Text::new(text, (bx[0] + 2, bx[1] + 1), font.color(&color))).d()?;
+            root.draw(&Rectangle::new(
+                [(bx[0], bx[1]), (bx[2], bx[3])],
+                WHITE.mix(0.8).filled(),
+            ))
+            .d()?;
+            root.draw(&Text::new(text, (bx[0] + 2, bx[1] + 1), font)).d()?;
         }
         *self.placed.borrow_mut() = (drawn, skipped);
 
         // North arrow, top left of the plot.
         let (nx, ny) = (bx0 + 28, by0 + 16);
-        root.draw(&Polygon::new(vec![(nx, ny), (nx - 9, ny + 24), (nx, ny + 18), (nx + 9, ny + 24)], dark.filled()))
-            .d()?;
+        root.draw(&Polygon::new(
+            vec![(nx, ny), (nx - 9, ny + 24), (nx, ny + 18), (nx + 9, ny + 24)],
+            dark.filled(),
+        ))
+        .d()?;
         root.draw(&Text::new(
             "N",
             (nx, ny + 28),
-            ("sans-serif", 16).into_font().color(&dark).pos(Pos::new(HPos::Center, VPos::Top)),
+            ("sans-serif", 16)
+                .into_font()
+                .color(&dark)
+                .pos(Pos::new(HPos::Center, VPos::Top)),
         ))
         .d()?;
 
         // Scale bar, bottom left of the plot: two halves, black and white.
         let bar_px = (l.scale_bar_m * l.scale).round() as i32;
         let (sx, sy) = (bx0 + 20, by1 - 30);
-        root.draw(&Rectangle::new([(sx - 8, sy - 22), (sx + bar_px + 40, sy + 16)], WHITE.mix(0.85).filled())).d()?;
-        root.draw(&Rectangle::new([(sx, sy), (sx + bar_px / 2, sy + 6)], dark.filled())).d()?;
-        root.draw(&Rectangle::new([(sx + bar_px / 2, sy), (sx + bar_px, sy + 6)], WHITE.filled())).d()?;
-        root.draw(&Rectangle::new([(sx, sy), (sx + bar_px, sy + 6)], dark.stroke_width(1))).d()?;
-        let small = ("sans-serif", 13).into_font().color(&dark).pos(Pos::new(HPos::Center, VPos::Bottom));
+        root.draw(&Rectangle::new(
+            [(sx - 8, sy - 22), (sx + bar_px + 40, sy + 16)],
+            WHITE.mix(0.85).filled(),
+        ))
+        .d()?;
+        root.draw(&Rectangle::new([(sx, sy), (sx + bar_px / 2, sy + 6)], dark.filled()))
+            .d()?;
+        root.draw(&Rectangle::new(
+            [(sx + bar_px / 2, sy), (sx + bar_px, sy + 6)],
+            WHITE.filled(),
+        ))
+        .d()?;
+        root.draw(&Rectangle::new([(sx, sy), (sx + bar_px, sy + 6)], dark.stroke_width(1)))
+            .d()?;
+        let small = ("sans-serif", 13)
+            .into_font()
+            .color(&dark)
+            .pos(Pos::new(HPos::Center, VPos::Bottom));
         root.draw(&Text::new("0", (sx, sy - 3), small.clone())).d()?;
-        root.draw(&Text::new(format_metres(l.scale_bar_m), (sx + bar_px, sy - 3), small)).d()?;
+        root.draw(&Text::new(format_metres(l.scale_bar_m), (sx + bar_px, sy - 3), small))
+            .d()?;
 
-        root.draw(&Rectangle::new([(bx0, by0), (bx1, by1)], RGBColor(120, 120, 120).stroke_width(1))).d()?;
+        root.draw(&Rectangle::new(
+            [(bx0, by0), (bx1, by1)],
+            RGBColor(120, 120, 120).stroke_width(1),
+        ))
+        .d()?;
 
         // Legend, right of the plot.
         let lx = bx1 + 18;
@@ -520,13 +604,26 @@ impl Figure for MapFigure<'_> {
         ly += 26;
         for (class, color) in &self.classes {
             let n = self.graph.roads.iter().filter(|r| &r.class == class).count();
-            root.draw(&PathElement::new(vec![(lx, ly + 8), (lx + 30, ly + 8)], color.stroke_width(4))).d()?;
-            root.draw(&Text::new(format!("{class} ({n})"), (lx + 40, ly), item.clone())).d()?;
+            root.draw(&PathElement::new(
+                vec![(lx, ly + 8), (lx + 30, ly + 8)],
+                color.stroke_width(4),
+            ))
+            .d()?;
+            root.draw(&Text::new(format!("{class} ({n})"), (lx + 40, ly), item.clone()))
+                .d()?;
             ly += 22;
         }
         if !self.highlight.is_empty() {
-            root.draw(&PathElement::new(vec![(lx, ly + 8), (lx + 30, ly + 8)], HALO.mix(0.35).stroke_width(12))).d()?;
-            let label = self.highlight.label.clone().unwrap_or_else(|| "highlighted roads".to_string());
+            root.draw(&PathElement::new(
+                vec![(lx, ly + 8), (lx + 30, ly + 8)],
+                HALO.mix(0.35).stroke_width(12),
+            ))
+            .d()?;
+            let label = self
+                .highlight
+                .label
+                .clone()
+                .unwrap_or_else(|| "highlighted roads".to_string());
             root.draw(&Text::new(label, (lx + 40, ly), item.clone())).d()?;
             ly += 22;
         }
@@ -534,22 +631,33 @@ impl Figure for MapFigure<'_> {
         root.draw(&Text::new("Junctions", (lx, ly), head)).d()?;
         ly += 26;
         root.draw(&Circle::new((lx + 15, ly + 8), 3, dark.filled())).d()?;
-        root.draw(&Text::new("merge (labelled Jn)", (lx + 40, ly), item.clone())).d()?;
+        root.draw(&Text::new("merge (labelled Jn)", (lx + 40, ly), item.clone()))
+            .d()?;
         ly += 22;
-        root.draw(&Circle::new((lx + 15, ly + 8), 3, dark.stroke_width(1))).d()?;
+        root.draw(&Circle::new((lx + 15, ly + 8), 3, dark.stroke_width(1)))
+            .d()?;
         root.draw(&Text::new("diverge", (lx + 40, ly), item.clone())).d()?;
         ly += 22;
         if !self.highlight.junctions.is_empty() {
-            root.draw(&Circle::new((lx + 15, ly + 8), 6, HALO.stroke_width(2))).d()?;
-            root.draw(&Text::new("named junction", (lx + 40, ly), item.clone())).d()?;
+            root.draw(&Circle::new((lx + 15, ly + 8), 6, HALO.stroke_width(2)))
+                .d()?;
+            root.draw(&Text::new("named junction", (lx + 40, ly), item.clone()))
+                .d()?;
             ly += 22;
         }
         if skipped > 0 {
             ly += 8;
             let note = ("sans-serif", 12).into_font().color(&RGBColor(90, 90, 90));
-            root.draw(&Text::new(format!("{skipped} merge labels left out"), (lx, ly), note.clone())).d()?;
-            root.draw(&Text::new("where they would overlap;", (lx, ly + 16), note.clone())).d()?;
-            root.draw(&Text::new("`mapc junctions` lists all", (lx, ly + 32), note)).d()?;
+            root.draw(&Text::new(
+                format!("{skipped} merge labels left out"),
+                (lx, ly),
+                note.clone(),
+            ))
+            .d()?;
+            root.draw(&Text::new("where they would overlap;", (lx, ly + 16), note.clone()))
+                .d()?;
+            root.draw(&Text::new("`mapc junctions` lists all", (lx, ly + 32), note))
+                .d()?;
         }
         Ok(())
     }
@@ -576,7 +684,10 @@ mod tests {
     #[test]
     fn clipping_keeps_the_inside_part() {
         let bx = [0.0, 0.0, 10.0, 10.0];
-        assert_eq!(clip_segment([-5.0, 5.0], [5.0, 5.0], bx), Some(([0.0, 5.0], [5.0, 5.0])));
+        assert_eq!(
+            clip_segment([-5.0, 5.0], [5.0, 5.0], bx),
+            Some(([0.0, 5.0], [5.0, 5.0]))
+        );
         assert_eq!(clip_segment([-5.0, 20.0], [5.0, 20.0], bx), None);
         assert_eq!(clip_segment([1.0, 1.0], [2.0, 2.0], bx), Some(([1.0, 1.0], [2.0, 2.0])));
     }

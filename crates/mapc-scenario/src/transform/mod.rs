@@ -333,3 +333,116 @@ pub fn chains_of(g: &LaneGraph, roads: &[RoadId]) -> Vec<Vec<RoadId>> {
     }
     chains
 }
+
+/// Small highways built in code for the unit tests.
+#[cfg(test)]
+pub(crate) mod test_maps {
+    use mapc_graph::*;
+
+    fn polyline_length(g: &[[f64; 2]]) -> f64 {
+        g.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum()
+    }
+
+    /// A map from junction positions and roads `(from, to, class, lanes, bends)`; roads are numbered in order,
+    /// lengths are their drawn lengths, every pair of consecutive roads is connected lane 0 to lane 0.
+    pub fn build(junctions: &[[f64; 2]], roads: &[(u32, u32, &str, u8, &[[f64; 2]])]) -> LaneGraph {
+        let mut g = LaneGraph::new(
+            Source { file: "test".into(), format: SourceFormat::Generator },
+            Projection::Plane { offset: [0.0, 0.0] },
+        );
+        g.junctions = junctions
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Junction {
+                id: JunctionId(i as u32),
+                pos: *p,
+                kind: JunctionKind::Through,
+                incoming: vec![],
+                outgoing: vec![],
+                provenance: Provenance::osm_node(1000 + i as i64),
+            })
+            .collect();
+        g.roads = roads
+            .iter()
+            .enumerate()
+            .map(|(i, &(from, to, class, lanes, bends))| {
+                let mut geometry = vec![junctions[from as usize]];
+                geometry.extend_from_slice(bends);
+                geometry.push(junctions[to as usize]);
+                let length_m = polyline_length(&geometry);
+                Road {
+                    id: RoadId(i as u32),
+                    from: JunctionId(from),
+                    to: JunctionId(to),
+                    class: class.into(),
+                    name: None,
+                    ref_: None,
+                    priority: if class == "motorway" { 13 } else { 12 },
+                    lanes: (0..lanes).map(|index| Lane { index, speed_mps: 30.0, width_m: 3.5, length_m }).collect(),
+                    geometry,
+                    length_m,
+                    provenance: Provenance { osm_ways: vec![500 + i as i64], ..Default::default() },
+                }
+            })
+            .collect();
+        g.rebuild_junction_links();
+        let pairs: Vec<(RoadId, RoadId, JunctionId)> = g
+            .roads
+            .iter()
+            .flat_map(|a| g.roads.iter().filter(move |b| b.from == a.to).map(move |b| (a.id, b.id, a.to)))
+            .collect();
+        for (a, b, j) in pairs {
+            let row = if g.road(a).unwrap().class == "motorway" { RightOfWay::Major } else { RightOfWay::Minor };
+            g.connections.push(Connection {
+                junction: j,
+                from_road: a,
+                from_lane: 0,
+                to_road: b,
+                to_lane: 0,
+                via_length_m: 0.0,
+                via_speed_mps: None,
+                right_of_way: row,
+                right_of_way_overridden: false,
+                provenance: Provenance::default(),
+            });
+        }
+        super::sort_connections(&mut g);
+        g
+    }
+
+    /// A 3 km motorway (J0 -> J7) with a joint at J1, an on-ramp of two pieces merging at J2, an exit at J5, a
+    /// loop ramp that leaves at J5 and rejoins at J6, a short motorway elsewhere and a disconnected side road.
+    pub fn highway() -> LaneGraph {
+        let j = [
+            [0.0, 0.0],       // J0 start
+            [1000.0, 0.0],    // J1 joint
+            [1500.0, 0.0],    // J2 merge
+            [1300.0, -150.0], // J3 ramp joint
+            [900.0, -400.0],  // J4 ramp start
+            [2300.0, 0.0],    // J5 diverge
+            [2600.0, 0.0],    // J6 loop rejoins
+            [3000.0, 0.0],    // J7 end
+            [2500.0, -300.0], // J8 exit end
+            [0.0, 500.0],     // J9 other motorway
+            [100.0, 500.0],   // J10
+            [0.0, 900.0],     // J11 side road
+            [300.0, 900.0],   // J12
+        ];
+        build(
+            &j,
+            &[
+                (0, 1, "motorway", 3, &[]),                     // R0
+                (1, 2, "motorway", 2, &[]),                     // R1
+                (4, 3, "motorway_link", 1, &[[1100.0, -300.0]]), // R2
+                (3, 2, "motorway_link", 1, &[]),                // R3
+                (2, 5, "motorway", 3, &[]),                     // R4
+                (5, 8, "motorway_link", 1, &[]),                // R5 exit
+                (5, 6, "motorway", 2, &[]),                     // R6
+                (6, 7, "motorway", 2, &[]),                     // R7
+                (5, 6, "motorway_link", 1, &[[2450.0, 60.0]]),  // R8 collector, leaves and rejoins
+                (9, 10, "motorway", 2, &[]),                    // R9
+                (11, 12, "primary", 1, &[]),                    // R10
+            ],
+        )
+    }
+}
