@@ -15,8 +15,27 @@ fn tmp(name: &str) -> PathBuf {
 
 fn tiny_train(dir: &PathBuf, iters: u64) -> std::process::Output {
     mapc()
-        .args(["train", "--scenario", "simple_merge", "--reward", "outflow", "--preset", "fast"])
-        .args(["--iters", &iters.to_string(), "--batch", "600", "--horizon", "300", "--minibatch", "200", "--epochs", "2"])
+        .args([
+            "train",
+            "--scenario",
+            "simple_merge",
+            "--reward",
+            "outflow",
+            "--preset",
+            "fast",
+        ])
+        .args([
+            "--iters",
+            &iters.to_string(),
+            "--batch",
+            "600",
+            "--horizon",
+            "300",
+            "--minibatch",
+            "200",
+            "--epochs",
+            "2",
+        ])
         .args(["--checkpoint-every", "1", "--json", "-o"])
         .arg(dir)
         .output()
@@ -39,7 +58,11 @@ fn tiny_training_resume_and_eval() {
 
     // Continue to 3 iterations; the same run done in one go must give the same third row (bit for bit, wall
     // time aside).
-    let out = mapc().args(["train", "--iters", "3", "--json", "--resume"]).arg(&dir).output().unwrap();
+    let out = mapc()
+        .args(["train", "--iters", "3", "--json", "--resume"])
+        .arg(&dir)
+        .output()
+        .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let straight = tmp("straight");
     assert!(tiny_train(&straight, 3).status.success());
@@ -54,7 +77,15 @@ fn tiny_training_resume_and_eval() {
 
     // Evaluate on 3 seeds: the JSON has mapc sim's shape plus the baseline and the test.
     let out = mapc()
-        .args(["eval", "--scenario", "simple_merge", "--seeds", "3", "--json", "--policy"])
+        .args([
+            "eval",
+            "--scenario",
+            "simple_merge",
+            "--seeds",
+            "3",
+            "--json",
+            "--policy",
+        ])
         .arg(&dir)
         .output()
         .unwrap();
@@ -75,16 +106,35 @@ fn tiny_training_resume_and_eval() {
 fn policy_with_another_observation_size_is_a_clear_error() {
     let dir = tmp("nav3");
     let out = mapc()
-        .args(["train", "--n-av", "3", "--iters", "1", "--batch", "100", "--horizon", "100", "--minibatch", "50"])
+        .args([
+            "train",
+            "--n-av",
+            "3",
+            "--iters",
+            "1",
+            "--batch",
+            "100",
+            "--horizon",
+            "100",
+            "--minibatch",
+            "50",
+        ])
         .args(["--epochs", "1", "--json", "-o"])
         .arg(&dir)
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let out = mapc().args(["eval", "--seeds", "2", "--scenario", "simple_merge", "--policy"]).arg(&dir).output().unwrap();
+    let out = mapc()
+        .args(["eval", "--seeds", "2", "--scenario", "simple_merge", "--policy"])
+        .arg(&dir)
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("expects 15 observation values") && err.contains("gives 25"), "{err}");
+    assert!(
+        err.contains("expects 15 observation values") && err.contains("gives 25"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -94,7 +144,11 @@ fn a_corrupt_checkpoint_names_the_file() {
     std::fs::create_dir_all(&dir).unwrap();
     let f = dir.join("policy.json");
     std::fs::write(&f, "{\"format_version\": 1, \"spec\": ").unwrap();
-    let out = mapc().args(["eval", "--seeds", "2", "--policy"]).arg(&f).output().unwrap();
+    let out = mapc()
+        .args(["eval", "--seeds", "2", "--policy"])
+        .arg(&f)
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("policy.json") && err.contains("line 1"), "{err}");

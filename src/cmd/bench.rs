@@ -25,7 +25,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    anyhow::ensure!(args.single_core_seeds >= 1 && args.seeds >= 1, "seed counts must be at least 1");
+    anyhow::ensure!(
+        args.single_core_seeds >= 1 && args.seeds >= 1,
+        "seed counts must be at least 1"
+    );
     let rs = super::sim::load_scenario(&args.scenario)?;
     let spec = spec_from_scenario(&rs)?;
 
@@ -44,7 +47,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let vs_per_s = vehicle_steps as f64 / single_s;
 
     // The parallel baseline, as `mapc sim` runs it.
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(args.threads).build()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads)
+        .build()?;
     let start = Instant::now();
     let runs = pool.install(|| {
         (0..args.seeds)
@@ -77,7 +82,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             steps as f64 / single_s,
             mean_vehicles
         );
-        println!("  baseline: {} seeds on {} threads in {:.3} s", args.seeds, args.threads, baseline_s);
+        println!(
+            "  baseline: {} seeds on {} threads in {:.3} s",
+            args.seeds, args.threads, baseline_s
+        );
     }
     Ok(())
 }

@@ -39,7 +39,11 @@ pub struct Args {
 }
 
 fn policy_file(p: &Path) -> PathBuf {
-    if p.is_dir() { checkpoint_path(p) } else { p.to_path_buf() }
+    if p.is_dir() {
+        checkpoint_path(p)
+    } else {
+        p.to_path_buf()
+    }
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -55,8 +59,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let sc = super::train::load_scenario(&args.scenario)?;
     let cfg = env_config_for(&ck, &file, &args.scenario, Some(sc.n_av.unwrap_or(5)))?;
     let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
-    let mode = if args.sample { ActionMode::Sample } else { ActionMode::Mean };
-    let runs = run_policy(&ck, &sc.spec, &cfg, &seeds, mode).with_context(|| format!("evaluating {}", file.display()))?;
+    let mode = if args.sample {
+        ActionMode::Sample
+    } else {
+        ActionMode::Mean
+    };
+    let runs =
+        run_policy(&ck, &sc.spec, &cfg, &seeds, mode).with_context(|| format!("evaluating {}", file.display()))?;
     let figs = FigureSet::of(&runs);
     let (baseline, comparison) = if args.no_baseline {
         (None, None)
@@ -80,7 +89,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
-    println!("policy {} on {} ({} seeds, {} actions)", report.policy, report.scenario, report.seeds, report.actions);
+    println!(
+        "policy {} on {} ({} seeds, {} actions)",
+        report.policy, report.scenario, report.seeds, report.actions
+    );
     let row = |name: &str, f: &FigureSet| {
         println!(
             "  {name:<8} outflow {:8.2} ± {:5.2} veh/h   inflow {:8.2} ± {:5.2} veh/h   speed {:6.2} ± {:4.2} m/s",
@@ -90,7 +102,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     row("policy", &figs);
     if let (Some(b), Some(c)) = (&report.baseline, &report.comparison) {
         row("human", b);
-        let p = |t: &Option<mapc_rl::stats::WelchTest>| t.map_or("n/a".to_string(), |t| format!("t = {:.2}, p = {:.2e}", t.t, t.p_value));
+        let p = |t: &Option<mapc_rl::stats::WelchTest>| {
+            t.map_or("n/a".to_string(), |t| format!("t = {:.2}, p = {:.2e}", t.t, t.p_value))
+        };
         println!(
             "  outflow {:+.1}% vs human ({}; 95% CIs {}); Welch outflow {}, speed {}",
             c.outflow_change_pct,

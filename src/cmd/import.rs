@@ -25,7 +25,10 @@ pub struct Args {
 
 /// `i696.osm.pbf` -> `i696`: the file name without the map extensions.
 pub fn map_stem(path: &Path) -> String {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "map".into());
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "map".into());
     for ext in [".osm.pbf", ".osm.xml", ".net.xml", ".osm", ".pbf", ".xml"] {
         if name.len() > ext.len() && name.to_ascii_lowercase().ends_with(ext) {
             return name[..name.len() - ext.len()].to_string();
@@ -37,14 +40,26 @@ pub fn map_stem(path: &Path) -> String {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let mut options = ImportOptions::default();
     if let Some(h) = args.highways {
-        let h: Vec<String> = h.into_iter().map(|s| s.trim().to_string()).filter(|s| !s.is_empty()).collect();
-        anyhow::ensure!(!h.is_empty(), "--highways: name at least one class (default: {})", DEFAULT_HIGHWAYS.join(","));
+        let h: Vec<String> = h
+            .into_iter()
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect();
+        anyhow::ensure!(
+            !h.is_empty(),
+            "--highways: name at least one class (default: {})",
+            DEFAULT_HIGHWAYS.join(",")
+        );
         options.highways = h;
     }
     options.major_roads = args.major;
     let graph = mapc_import::import_path(&args.file, &options)?;
-    let output = args.output.unwrap_or_else(|| PathBuf::from(format!("{}.graph.json", map_stem(&args.file))));
-    graph.save(&output).with_context(|| format!("writing the graph to {}", output.display()))?;
+    let output = args
+        .output
+        .unwrap_or_else(|| PathBuf::from(format!("{}.graph.json", map_stem(&args.file))));
+    graph
+        .save(&output)
+        .with_context(|| format!("writing the graph to {}", output.display()))?;
     let summary = Summary::of(&graph);
     if args.json {
         let mut value = serde_json::to_value(&summary)?;
@@ -66,7 +81,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         } else {
             println!("  warnings:");
             for (kind, n) in &summary.warnings {
-                let example = graph.warnings.examples.get(kind).and_then(|e| e.first()).map_or("", String::as_str);
+                let example = graph
+                    .warnings
+                    .examples
+                    .get(kind)
+                    .and_then(|e| e.first())
+                    .map_or("", String::as_str);
                 println!("    {kind}: {n} (e.g. {example})");
             }
         }

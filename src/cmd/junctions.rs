@@ -138,7 +138,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("{} {:?} ({}){at}", j.id, j.kind, j.provenance);
         for (dir, roads) in [("in ", &j.incoming), ("out", &j.outgoing)] {
             for r in roads {
-                println!("    {dir} {:<5} {:<40} {:<14} {} lanes {:>9.1} m", r.id, r.label, r.class, r.lanes, r.length_m);
+                println!(
+                    "    {dir} {:<5} {:<40} {:<14} {} lanes {:>9.1} m",
+                    r.id, r.label, r.class, r.lanes, r.length_m
+                );
             }
         }
     }

@@ -4,7 +4,9 @@
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use mapc_scenario::ResolvedScenario;
-use mapc_sim::{MeanCi, RunMetrics, SimSpec, Simulation, Summary, TRACE_HEADER, spec_from_scenario};
+use mapc_sim::{
+    MeanCi, RunMetrics, SimSpec, Simulation, Summary, TRACE_HEADER, spec_from_scenario,
+};
 use rayon::prelude::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -38,7 +40,11 @@ pub struct Args {
 
 /// Load a scenario by file or built-in name; the default file falls back to the built-in Simple Merge.
 pub fn load_scenario(name: &str) -> anyhow::Result<ResolvedScenario> {
-    let name = if name == DEFAULT_SCENARIO && !Path::new(name).exists() { BUILTIN_FALLBACK } else { name };
+    let name = if name == DEFAULT_SCENARIO && !Path::new(name).exists() {
+        BUILTIN_FALLBACK
+    } else {
+        name
+    };
     ResolvedScenario::load(name).with_context(|| format!("loading scenario `{name}`"))
 }
 
@@ -47,7 +53,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let rs = load_scenario(&args.scenario)?;
     let spec = spec_from_scenario(&rs).with_context(|| format!("scenario `{}`", rs.origin))?;
     let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(args.threads.unwrap_or(0)).build()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()?;
     let progress = progress_bar(seeds.len() as u64, args.json);
     let start = std::time::Instant::now();
     let runs: Vec<RunMetrics> = pool.install(|| {
@@ -81,9 +89,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
-        println!("{} — all-human baseline, {} seeds ({:.2} s)", rs.origin, s.seeds, wall_s);
+        println!(
+            "{} — all-human baseline, {} seeds ({:.2} s)",
+            rs.origin, s.seeds, wall_s
+        );
         let row = |name: &str, m: &MeanCi, unit: &str| {
-            println!("  {name:<12} {:>10.2} ± {:<7.2} {unit}  (sd {:.2})", m.mean, m.ci95, m.std);
+            println!(
+                "  {name:<12} {:>10.2} ± {:<7.2} {unit}  (sd {:.2})",
+                m.mean, m.ci95, m.std
+            );
         };
         row("outflow", &s.outflow, "veh/h");
         row("inflow", &s.inflow, "veh/h");
@@ -102,7 +116,10 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::new(n);
-    pb.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} seeds {elapsed}").expect("valid template"));
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} seeds {elapsed}")
+            .expect("valid template"),
+    );
     pb
 }
 
@@ -111,7 +128,8 @@ pub fn write_trace(spec: &SimSpec, seed: u64, path: &Path) -> anyhow::Result<()>
     let mut sim = Simulation::from_spec(spec.clone(), seed)?;
     let tmp = path.with_extension("csv.tmp");
     {
-        let file = std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+        let file =
+            std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
         let mut w = std::io::BufWriter::new(file);
         writeln!(w, "{TRACE_HEADER}")?;
         sim.write_trace_rows(&mut w)?;
@@ -119,8 +137,10 @@ pub fn write_trace(spec: &SimSpec, seed: u64, path: &Path) -> anyhow::Result<()>
             sim.step()?;
             sim.write_trace_rows(&mut w)?;
         }
-        w.flush().with_context(|| format!("writing {}", tmp.display()))?;
+        w.flush()
+            .with_context(|| format!("writing {}", tmp.display()))?;
     }
-    std::fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
+    std::fs::rename(&tmp, path)
+        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
     Ok(())
 }

@@ -1,8 +1,137 @@
-//! `mapc simplify` (being written).
+//! `mapc simplify`: a highway map becomes a single-lane corridor with its merging roads (a `*.graph.json`).
+
+use anyhow::Context;
+use mapc_scenario::simplify::{MergeSummary, Simplified, corridor_merges, simplify};
+use mapc_scenario::transform::{Corridor, SimplifyOptions, pick_route::describe_junction};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+/// Options shared with `mapc window` when it is given a raw map.
+#[derive(clap::Args, Clone, Debug)]
+pub struct RouteArgs {
+    /// A point the main road must pass, in order (repeat): `osm-way:WAY`, `osm:NODE`, a SUMO edge or junction id,
+    /// `R3` or `J3`. Default: the longest through route over --classes.
+    #[arg(long = "via", value_name = "ID")]
+    pub via: Vec<String>,
+    /// Keep merging roads at most this long (metres) instead of back to where they start in the map.
+    #[arg(long, value_name = "M")]
+    pub feeder_length: Option<f64>,
+    /// Keep diverging roads as exits (up to their next junction) instead of dropping them.
+    #[arg(long)]
+    pub keep_exits: bool,
+    /// Road classes the main road may use where --via does not pin it (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "motorway,motorway_link,trunk,trunk_link")]
+    pub classes: Vec<String>,
+}
+
+impl RouteArgs {
+    pub fn options(&self) -> SimplifyOptions {
+        SimplifyOptions {
+            via: self.via.clone(),
+            classes: self.classes.clone(),
+            feeder_length_m: self.feeder_length,
+            keep_exits: self.keep_exits,
+        }
+    }
+}
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// A map (.osm, .osm.pbf, .net.xml) or a graph file (.graph.json).
+    pub map: PathBuf,
+    #[command(flatten)]
+    pub route: RouteArgs,
+    /// Where to write the corridor graph; default `<map name>.corridor.graph.json` in the current directory.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<PathBuf>,
+    /// Print what each transformation step did.
+    #[arg(long)]
+    pub explain: bool,
+    /// Print the result as JSON (the merges with their lengths, the steps).
+    #[arg(long)]
+    pub json: bool,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`mapc simplify` is not built yet")
+/// `maps/i696.osm` -> `i696`.
+pub fn map_stem(path: &Path) -> String {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "map".into());
+    for ext in [".corridor.graph.json", ".graph.json", ".osm.pbf", ".net.xml", ".osm", ".json", ".xml", ".pbf"] {
+        if let Some(stem) = name.strip_suffix(ext) {
+            return stem.to_string();
+        }
+    }
+    name
+}
+
+/// Load a map or graph file with the importer's defaults.
+pub fn load_map(path: &Path) -> anyhow::Result<mapc_graph::LaneGraph> {
+    mapc_import::load_any(path).with_context(|| format!("cannot read map {}", path.display()))
+}
+
+pub fn run_simplify(map: &Path, route: &RouteArgs) -> anyhow::Result<Simplified> {
+    let raw = load_map(map)?;
+    simplify(&raw, &route.options()).map_err(|e| anyhow::anyhow!("{}: {e}", map.display()))
+}
+
+/// The JSON report of a corridor: its main road, merges and steps.
+pub fn corridor_json(s: &Simplified, map: &Path, output: &Path) -> serde_json::Value {
+    let g = &s.graph;
+    let merges: Vec<MergeSummary> = corridor_merges(g, &s.roles);
+    let first = g.road(s.roles.main[0]).unwrap().from;
+    let last = g.road(*s.roles.main.last().unwrap()).unwrap().to;
+    json!({
+        "map": map.display().to_string(),
+        "output": output.display().to_string(),
+        "main_road": {
+            "roads": s.roles.main.iter().map(|r| r.to_string()).collect::<Vec<_>>(),
+            "length_m": Corridor::chain_length_m(g, &s.roles.main),
+            "from": describe_junction(g, first),
+            "to": describe_junction(g, last),
+        },
+        "merges": merges,
+        "exits": s.roles.exits.len(),
+        "roads": g.roads.len(),
+        "junctions": g.junctions.len(),
+        "steps": s.steps,
+    })
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let s = run_simplify(&args.map, &args.route)?;
+    let output =
+        args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.corridor.graph.json", map_stem(&args.map))));
+    s.graph.save(&output)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&corridor_json(&s, &args.map, &output))?);
+        return Ok(());
+    }
+    if args.explain {
+        for (i, step) in s.steps.iter().enumerate() {
+            println!("{}. {}: {}", i + 1, step.step, step.summary);
+        }
+    }
+    let g = &s.graph;
+    println!(
+        "{}: corridor of {} roads and {} junctions, main road {:.1} m, written to {}",
+        args.map.display(),
+        g.roads.len(),
+        g.junctions.len(),
+        Corridor::chain_length_m(g, &s.roles.main),
+        output.display()
+    );
+    println!("{:<8} {:>12} {:>10} {:>10} {:>10}  merging road", "merge", "osm node", "before m", "merge m", "after m");
+    for m in corridor_merges(g, &s.roles) {
+        println!(
+            "{:<8} {:>12} {:>10.1} {:>10.1} {:>10.1}  {} {}{}",
+            m.junction,
+            m.osm_node.map_or_else(|| m.sumo_id.clone().unwrap_or_default(), |n| n.to_string()),
+            m.main_before_m,
+            m.merge_m,
+            m.main_after_m,
+            m.merging_roads.join("..."),
+            m.merging_label,
+            if m.merging_is_major { " (major)" } else { "" }
+        );
+    }
+    Ok(())
 }

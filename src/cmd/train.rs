@@ -8,8 +8,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use mapc_rl::checkpoint::PolicySpec;
 use mapc_rl::env::merge::{ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM};
 use mapc_rl::env::obs::PER_AV;
-use mapc_rl::run::{TrainRun, log_path};
 use mapc_rl::rollout::Env;
+use mapc_rl::run::{TrainRun, log_path};
 use mapc_rl::{IterationStats, PpoConfig};
 
 /// Train a centralized PPO policy (defaults: the paper's hyperparameters; `--preset fast` for minutes on CPU).
@@ -86,95 +86,13 @@ pub struct LoadedScenario {
 /// Resolves `simple_merge` or a scenario file into a simulator spec.
 pub fn load_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
     let resolved = mapc_scenario::ResolvedScenario::load(arg)?;
-    let spec = sim_spec(&resolved);
+    let spec = mapc_sim::spec_from_scenario(&resolved).with_context(|| format!("scenario {arg}"))?;
     let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
-    Ok(LoadedScenario { spec, name: resolved.scenario.name.clone(), n_av })
-}
-
-/// The simulator's spec of a resolved scenario: vehicle types in name order, flows on their resolved roads,
-/// initial vehicles evenly spaced along the main line (downstream from the first flow's entry road).
-fn sim_spec(r: &mapc_scenario::ResolvedScenario) -> mapc_sim::SimSpec {
-    use mapc_sim::{FlowSpec, InitialVehicleSpec, VehicleTypeSpec};
-    let sc = &r.scenario;
-    let names: Vec<&String> = sc.vehicle_types.keys().collect();
-    let vehicle_types = sc
-        .vehicle_types
-        .iter()
-        .map(|(name, t)| VehicleTypeSpec {
-            name: name.clone(),
-            accel: t.accel,
-            decel: t.decel,
-            emergency_decel: 9.0f64.max(t.decel),
-            tau: t.tau,
-            min_gap: t.min_gap,
-            delta: t.delta,
-            max_speed: t.max_speed,
-            length: t.length,
-            speed_factor: t.speed_factor,
-            speed_dev: t.speed_dev,
-            impatience: t.impatience,
-            controlled: t.controlled,
-        })
-        .collect();
-    let type_index = |n: &str| names.iter().position(|x| x.as_str() == n).unwrap_or(0);
-    let flows = sc
-        .flows
-        .iter()
-        .zip(&r.flow_roads)
-        .map(|(f, &(from, to))| FlowSpec {
-            from,
-            to,
-            vehs_per_hour: f.vehs_per_hour,
-            vehicle_type: type_index(&f.vehicle_type),
-            depart_speed: f.depart_speed_mps,
-            begin_s: f.begin_s,
-            end_s: f.end_s.unwrap_or(f64::INFINITY),
-        })
-        .collect();
-    // Main line: from the first flow's entry road, follow the first connection downstream.
-    let g = &r.graph;
-    let mut line = Vec::new();
-    if let Some(&(mut road, _)) = r.flow_roads.first() {
-        while !line.contains(&road) {
-            line.push(road);
-            match g.connections.iter().find(|c| c.from_road == road) {
-                Some(c) => road = c.to_road,
-                None => break,
-            }
-        }
-    }
-    let mut initial = Vec::new();
-    if let Some(iv) = &sc.initial_vehicles {
-        let lens: Vec<f64> = line.iter().map(|&id| g.road(id).map_or(0.0, |rd| rd.length_m)).collect();
-        let total: f64 = lens.iter().sum();
-        let n = iv.count as usize;
-        for k in 0..n {
-            let mut x = total * k as f64 / n.max(1) as f64;
-            for (i, &len) in lens.iter().enumerate() {
-                if x < len || i + 1 == lens.len() {
-                    initial.push(InitialVehicleSpec {
-                        road: line[i],
-                        pos_m: x.min(len),
-                        speed: iv.speed_mps,
-                        vehicle_type: type_index(&iv.vehicle_type),
-                    });
-                    break;
-                }
-                x -= len;
-            }
-        }
-    }
-    mapc_sim::SimSpec {
-        graph: g.clone(),
-        vehicle_types,
-        flows,
-        initial,
-        step_s: sc.step_s,
-        horizon_steps: sc.horizon_steps as u64,
-        start_time_s: 2.0 * sc.step_s,
-        control_region: if r.region_roads.is_empty() { None } else { Some(r.region_roads.clone()) },
-        main_line: vec![],
-    }
+    Ok(LoadedScenario {
+        spec,
+        name: resolved.scenario.name.clone(),
+        n_av,
+    })
 }
 
 fn apply_flags(c: &mut PpoConfig, a: &Args) {
@@ -207,7 +125,9 @@ fn read_config(path: &Path, base: PpoConfig) -> anyhow::Result<PpoConfig> {
     for (k, v) in base_value {
         table.entry(k).or_insert(v);
     }
-    let c: PpoConfig = table.try_into().with_context(|| format!("{}: invalid hyperparameters", path.display()))?;
+    let c: PpoConfig = table
+        .try_into()
+        .with_context(|| format!("{}: invalid hyperparameters", path.display()))?;
     Ok(c)
 }
 
@@ -261,7 +181,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             accel_min: ACCEL_MIN,
             accel_max: ACCEL_MAX,
         };
-        let out = args.out.clone().unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, reward.name())));
+        let out = args
+            .out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, reward.name())));
         TrainRun::create(&out, spec, config, args.checkpoint_every)?
     };
     let sc = load_scenario(&run.spec.scenario)?;
@@ -270,18 +193,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let env_cfg = MergeEnvConfig {
         reward: run.spec.reward.parse().map_err(anyhow::Error::msg)?,
         n_av: run.spec.n_av,
-        norm: mapc_rl::env::obs::ObsNorm { max_speed: run.spec.max_speed, length: run.spec.norm_length },
+        norm: mapc_rl::env::obs::ObsNorm {
+            max_speed: run.spec.max_speed,
+            length: run.spec.norm_length,
+        },
         accel_min: run.spec.accel_min,
         accel_max: run.spec.accel_max,
     };
     let probe = MergeEnv::new(spec.clone(), env_cfg.clone())?;
     if probe.obs_dim() != run.spec.obs_dim {
-        bail!("run expects {} observation values, scenario gives {}", run.spec.obs_dim, probe.obs_dim());
+        bail!(
+            "run expects {} observation values, scenario gives {}",
+            run.spec.obs_dim,
+            probe.obs_dim()
+        );
     }
-    let factory = move || -> Box<dyn Env> { Box::new(MergeEnv::new(spec.clone(), env_cfg.clone()).expect("validated")) };
+    let factory =
+        move || -> Box<dyn Env> { Box::new(MergeEnv::new(spec.clone(), env_cfg.clone()).expect("validated")) };
 
     let total = run.state.config.iterations;
-    let bar = if args.json { ProgressBar::hidden() } else { ProgressBar::new(total) };
+    let bar = if args.json {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(total)
+    };
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
             .expect("static template")

@@ -10,7 +10,11 @@ pub enum ImportError {
     Empty { path: PathBuf },
     /// A problem at a known place in the input: `line 12, column 5 (byte 345), in <way id="7">`.
     #[error("{path}: {place}: {message}")]
-    At { path: PathBuf, place: String, message: String },
+    At {
+        path: PathBuf,
+        place: String,
+        message: String,
+    },
     /// A problem with the file as a whole (wrong kind of file, nothing to import, a bad option).
     #[error("{path}: {message}")]
     Unsupported { path: PathBuf, message: String },
@@ -20,10 +24,16 @@ pub enum ImportError {
 
 impl ImportError {
     pub(crate) fn io(path: &Path, source: std::io::Error) -> ImportError {
-        ImportError::Io { path: path.to_path_buf(), source }
+        ImportError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
     }
     pub(crate) fn unsupported(path: &Path, message: impl Into<String>) -> ImportError {
-        ImportError::Unsupported { path: path.to_path_buf(), message: message.into() }
+        ImportError::Unsupported {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
     }
 }
 
@@ -38,7 +48,11 @@ pub(crate) struct ParseError {
 
 impl ParseError {
     pub fn new(byte: u64, element: Option<String>, message: impl Into<String>) -> ParseError {
-        ParseError { byte, element, message: message.into() }
+        ParseError {
+            byte,
+            element,
+            message: message.into(),
+        }
     }
 }
 
@@ -73,10 +87,18 @@ impl Located<'_> {
             },
             Located::Bytes(_, text) => line_and_column(text, e.byte),
         };
-        let mut place = if line > 0 { format!("line {line}, column {column} (byte {})", e.byte) } else { format!("byte {}", e.byte) };
+        let mut place = if line > 0 {
+            format!("line {line}, column {column} (byte {})", e.byte)
+        } else {
+            format!("byte {}", e.byte)
+        };
         if let Some(el) = e.element {
             place.push_str(&format!(", in {el}"));
         }
-        ImportError::At { path: self.path().to_path_buf(), place, message: e.message }
+        ImportError::At {
+            path: self.path().to_path_buf(),
+            place,
+            message: e.message,
+        }
     }
 }

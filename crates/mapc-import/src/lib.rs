@@ -22,8 +22,8 @@ mod error;
 pub mod osm;
 mod osm_pbf;
 mod osm_xml;
-mod sumo;
 mod summary;
+mod sumo;
 mod xml;
 
 pub use error::ImportError;
@@ -46,7 +46,10 @@ pub struct ImportOptions {
 
 impl Default for ImportOptions {
     fn default() -> Self {
-        ImportOptions { highways: DEFAULT_HIGHWAYS.map(String::from).to_vec(), major_roads: Vec::new() }
+        ImportOptions {
+            highways: DEFAULT_HIGHWAYS.map(String::from).to_vec(),
+            major_roads: Vec::new(),
+        }
     }
 }
 
@@ -65,11 +68,16 @@ impl std::str::FromStr for MajorRoad {
     type Err = String;
     /// `JUNCTION=ROAD`, e.g. `osm:61862553=osm-way:124433709`.
     fn from_str(s: &str) -> Result<Self, String> {
-        let (j, r) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected JUNCTION=ROAD, e.g. osm:61862553=osm-way:124433709"))?;
+        let (j, r) = s
+            .split_once('=')
+            .ok_or_else(|| format!("`{s}`: expected JUNCTION=ROAD, e.g. osm:61862553=osm-way:124433709"))?;
         if j.trim().is_empty() || r.trim().is_empty() {
             return Err(format!("`{s}`: expected JUNCTION=ROAD"));
         }
-        Ok(MajorRoad { junction: j.trim().to_string(), road: r.trim().to_string() })
+        Ok(MajorRoad {
+            junction: j.trim().to_string(),
+            road: r.trim().to_string(),
+        })
     }
 }
 
@@ -127,7 +135,9 @@ pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
         return Err(ImportError::unsupported(path, "is a directory, not a map file"));
     }
     if meta.len() == 0 {
-        return Err(ImportError::Empty { path: path.to_path_buf() });
+        return Err(ImportError::Empty {
+            path: path.to_path_buf(),
+        });
     }
     if let Some(f) = MapFormat::from_name(path) {
         return Ok(f);
@@ -137,14 +147,20 @@ pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
     let mut file = std::fs::File::open(path).map_err(|e| ImportError::io(path, e))?;
     let n = file.read(&mut head).map_err(|e| ImportError::io(path, e))?;
     MapFormat::sniff(&head[..n]).ok_or_else(|| {
-        ImportError::unsupported(path, "not a map mapc reads (expected OSM XML .osm, OSM PBF .osm.pbf or SUMO .net.xml)")
+        ImportError::unsupported(
+            path,
+            "not a map mapc reads (expected OSM XML .osm, OSM PBF .osm.pbf or SUMO .net.xml)",
+        )
     })
 }
 
 /// Read any supported map, chosen by its file name (`.osm`, `.osm.pbf`, `.net.xml`) or, failing that, its content.
 pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
     let format = detect_format(path)?;
-    let source = Source { file: path.display().to_string(), format: format.source_format() };
+    let source = Source {
+        file: path.display().to_string(),
+        format: format.source_format(),
+    };
     let located = Located::File(path);
     let open = || -> Result<BufReader<std::fs::File>, ParseError> {
         std::fs::File::open(path)
@@ -157,7 +173,8 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, Im
             osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::OsmPbf => {
-            let (ways, nodes) = osm_pbf::read_file(path, &options.highways)?;
+            let bytes = std::fs::read(path).map_err(|e| ImportError::io(path, e))?;
+            let (ways, nodes) = osm_pbf::read(&bytes, &options.highways).map_err(|e| binary_error(path, e))?;
             osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::SumoNet => {
@@ -169,12 +186,22 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, Im
 }
 
 /// Import a map held in memory; `name` stands for the file in messages and in the graph's source.
-pub fn import_bytes(bytes: &[u8], format: MapFormat, name: &str, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
+pub fn import_bytes(
+    bytes: &[u8],
+    format: MapFormat,
+    name: &str,
+    options: &ImportOptions,
+) -> Result<LaneGraph, ImportError> {
     let path = Path::new(name);
     if bytes.is_empty() {
-        return Err(ImportError::Empty { path: path.to_path_buf() });
+        return Err(ImportError::Empty {
+            path: path.to_path_buf(),
+        });
     }
-    let source = Source { file: name.to_string(), format: format.source_format() };
+    let source = Source {
+        file: name.to_string(),
+        format: format.source_format(),
+    };
     let located = Located::Bytes(path, bytes);
     let graph = match format {
         MapFormat::OsmXml => {
@@ -182,12 +209,25 @@ pub fn import_bytes(bytes: &[u8], format: MapFormat, name: &str, options: &Impor
             osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::OsmPbf => {
-            let (ways, nodes) = osm_pbf::read(|| Ok(std::io::Cursor::new(bytes)), path, &options.highways)?;
+            let (ways, nodes) = osm_pbf::read(bytes, &options.highways).map_err(|e| binary_error(path, e))?;
             osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::SumoNet => sumo::read(bytes, source).map_err(|e| located.error(e))?,
     };
     finish(graph, path, options)
+}
+
+/// An error in a binary file: the place is a byte offset and the blob, not a line.
+fn binary_error(path: &Path, e: ParseError) -> ImportError {
+    let mut place = format!("byte {}", e.byte);
+    if let Some(el) = e.element {
+        place.push_str(&format!(" ({el})"));
+    }
+    ImportError::At {
+        path: path.to_path_buf(),
+        place,
+        message: e.message,
+    }
 }
 
 /// Overrides, then a last invariant check (a failure here is a bug in the importer, reported rather than panicking).
@@ -197,22 +237,36 @@ fn finish(mut graph: LaneGraph, path: &Path, options: &ImportOptions) -> Result<
     }
     let problems = graph.invariant_violations();
     if !problems.is_empty() {
-        return Err(ImportError::unsupported(path, format!("the imported graph is inconsistent: {}", problems.join("; "))));
+        return Err(ImportError::unsupported(
+            path,
+            format!("the imported graph is inconsistent: {}", problems.join("; ")),
+        ));
     }
     Ok(graph)
 }
 
 /// Make the roads `m.road` names major at junction `m.junction`, and every other road in there minor.
 pub fn apply_major_road(graph: &mut LaneGraph, m: &MajorRoad) -> Result<(), String> {
-    let j = graph.find_junction(&m.junction).map_err(|e| format!("--major {}={}: {e}", m.junction, m.road))?;
-    let roads = graph.find_roads(&m.road).map_err(|e| format!("--major {}={}: {e}", m.junction, m.road))?;
+    let j = graph
+        .find_junction(&m.junction)
+        .map_err(|e| format!("--major {}={}: {e}", m.junction, m.road))?;
+    let roads = graph
+        .find_roads(&m.road)
+        .map_err(|e| format!("--major {}={}: {e}", m.junction, m.road))?;
     let incoming = &graph.junction(j).expect("found above").incoming;
     let major: Vec<_> = roads.into_iter().filter(|r| incoming.contains(r)).collect();
     if major.is_empty() {
-        return Err(format!("--major {}={}: no road named `{}` enters junction {j}", m.junction, m.road, m.road));
+        return Err(format!(
+            "--major {}={}: no road named `{}` enters junction {j}",
+            m.junction, m.road, m.road
+        ));
     }
     for c in graph.connections.iter_mut().filter(|c| c.junction == j) {
-        let row = if major.contains(&c.from_road) { RightOfWay::Major } else { RightOfWay::Minor };
+        let row = if major.contains(&c.from_road) {
+            RightOfWay::Major
+        } else {
+            RightOfWay::Minor
+        };
         if c.right_of_way != row {
             c.right_of_way = row;
             c.right_of_way_overridden = true;
@@ -228,7 +282,10 @@ pub fn load_any(path: &Path) -> Result<LaneGraph, ImportError> {
 
 /// [`load_any`] with import options for maps (ignored for graph files).
 pub fn load_any_with(path: &Path, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
-    let name = path.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
     if name.ends_with(".json") {
         return Ok(LaneGraph::load(path)?);
     }

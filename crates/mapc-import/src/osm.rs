@@ -142,13 +142,35 @@ fn directions(way: &OsmWay, warnings: &mut Warnings) -> Directions {
     let implied = matches!(way.tags.highway.as_str(), "motorway" | "motorway_link")
         || way.tags.junction.as_deref() == Some("roundabout");
     match way.tags.oneway.as_deref() {
-        Some("yes" | "true" | "1") => Directions { forward: true, backward: false },
-        Some("-1" | "reverse") => Directions { forward: false, backward: true },
-        Some("no" | "false" | "0") => Directions { forward: true, backward: true },
-        None => Directions { forward: true, backward: !implied },
+        Some("yes" | "true" | "1") => Directions {
+            forward: true,
+            backward: false,
+        },
+        Some("-1" | "reverse") => Directions {
+            forward: false,
+            backward: true,
+        },
+        Some("no" | "false" | "0") => Directions {
+            forward: true,
+            backward: true,
+        },
+        None => Directions {
+            forward: true,
+            backward: !implied,
+        },
         Some(other) => {
-            warnings.add("oneway_unknown", format!("way {}: oneway={other}, read as {}", way.id, if implied { "yes" } else { "no" }));
-            Directions { forward: true, backward: !implied }
+            warnings.add(
+                "oneway_unknown",
+                format!(
+                    "way {}: oneway={other}, read as {}",
+                    way.id,
+                    if implied { "yes" } else { "no" }
+                ),
+            );
+            Directions {
+                forward: true,
+                backward: !implied,
+            }
         }
     }
 }
@@ -183,7 +205,13 @@ fn lane_counts(way: &OsmWay, dirs: Directions, warnings: &mut Warnings) -> (u8, 
         bwd.or(total).map(|n| (0, n))
     };
     result.unwrap_or_else(|| {
-        warnings.add("lanes_defaulted", format!("way {} ({}): no lanes tag, {default} per direction", way.id, way.tags.highway));
+        warnings.add(
+            "lanes_defaulted",
+            format!(
+                "way {} ({}): no lanes tag, {default} per direction",
+                way.id, way.tags.highway
+            ),
+        );
         (default, default)
     })
 }
@@ -196,7 +224,10 @@ fn speeds(way: &OsmWay, warnings: &mut Warnings) -> (f64, f64) {
         let text = v.as_deref()?;
         let s = parse_maxspeed(text);
         if s.is_none() {
-            warnings.add("maxspeed_unparsed", format!("way {}: {key}={text}, class default used", way.id));
+            warnings.add(
+                "maxspeed_unparsed",
+                format!("way {}: {key}={text}, class default used", way.id),
+            );
         }
         s
     };
@@ -204,7 +235,10 @@ fn speeds(way: &OsmWay, warnings: &mut Warnings) -> (f64, f64) {
     let fwd = read("maxspeed:forward", &t.maxspeed_forward).or(both);
     let bwd = read("maxspeed:backward", &t.maxspeed_backward).or(both);
     if fwd.is_none() && bwd.is_none() && t.maxspeed.is_none() {
-        warnings.add("maxspeed_defaulted", format!("way {} ({}): no maxspeed tag", way.id, way.tags.highway));
+        warnings.add(
+            "maxspeed_defaulted",
+            format!("way {} ({}): no maxspeed tag", way.id, way.tags.highway),
+        );
     }
     (fwd.unwrap_or(default), bwd.unwrap_or(default))
 }
@@ -265,7 +299,13 @@ pub fn build_graph(
         if !missing.is_empty() {
             warnings.add(
                 "way_clipped_at_missing_node",
-                format!("way {}: {} of its {} nodes are not in the file (first {})", way.id, missing.len(), way.nodes.len(), missing[0]),
+                format!(
+                    "way {}: {} of its {} nodes are not in the file (first {})",
+                    way.id,
+                    missing.len(),
+                    way.nodes.len(),
+                    missing[0]
+                ),
             );
         }
     }
@@ -284,7 +324,11 @@ pub fn build_graph(
         for i in 1..run.len() {
             if i == run.len() - 1 || uses[&run[i]] >= 2 {
                 let counter = piece_counter.entry(*wi).or_default();
-                pieces.push(Piece { way: *wi, index: *counter, nodes: run[start..=i].to_vec() });
+                pieces.push(Piece {
+                    way: *wi,
+                    index: *counter,
+                    nodes: run[start..=i].to_vec(),
+                });
                 *counter += 1;
                 start = i;
             }
@@ -299,7 +343,12 @@ pub fn build_graph(
     for p in &pieces {
         for n in &p.nodes {
             let pos = nodes[n];
-            bbox = [bbox[0].min(pos.lon()), bbox[1].min(pos.lat()), bbox[2].max(pos.lon()), bbox[3].max(pos.lat())];
+            bbox = [
+                bbox[0].min(pos.lon()),
+                bbox[1].min(pos.lat()),
+                bbox[2].max(pos.lon()),
+                bbox[3].max(pos.lat()),
+            ];
         }
     }
     let projection = Projection::utm_around((bbox[0] + bbox[2]) / 2.0, (bbox[1] + bbox[3]) / 2.0);
@@ -309,10 +358,15 @@ pub fn build_graph(
     };
 
     // Junctions sorted by OSM node id.
-    let junction_nodes: BTreeSet<i64> =
-        pieces.iter().flat_map(|p| [p.nodes[0], *p.nodes.last().unwrap()]).collect();
-    let junction_of: HashMap<i64, JunctionId> =
-        junction_nodes.iter().enumerate().map(|(i, &n)| (n, JunctionId(i as u32))).collect();
+    let junction_nodes: BTreeSet<i64> = pieces
+        .iter()
+        .flat_map(|p| [p.nodes[0], *p.nodes.last().unwrap()])
+        .collect();
+    let junction_of: HashMap<i64, JunctionId> = junction_nodes
+        .iter()
+        .enumerate()
+        .map(|(i, &n)| (n, JunctionId(i as u32)))
+        .collect();
     let mut graph = LaneGraph::new(source, projection.clone());
     graph.junctions = junction_nodes
         .iter()
@@ -341,7 +395,15 @@ pub fn build_graph(
             let dirs = directions(way, &mut warnings);
             let lanes = lane_counts(way, dirs, &mut warnings);
             let speeds = speeds(way, &mut warnings);
-            (wi, WayInfo { dirs, lanes, speeds, priority: class_defaults(&way.tags.highway).2 })
+            (
+                wi,
+                WayInfo {
+                    dirs,
+                    lanes,
+                    speeds,
+                    priority: class_defaults(&way.tags.highway).2,
+                },
+            )
         })
         .collect();
 
@@ -371,7 +433,10 @@ pub fn build_graph(
                 length += Geodesic.distance(Point::new(a.lon(), a.lat()), Point::new(b.lon(), b.lat()));
             }
             if !(length > 0.01) {
-                warnings.add("zero_length_road", format!("way {} between nodes {} and {}", way.id, seq[0], seq[seq.len() - 1]));
+                warnings.add(
+                    "zero_length_road",
+                    format!("way {} between nodes {} and {}", way.id, seq[0], seq[seq.len() - 1]),
+                );
                 length = length.max(0.01);
             }
             let id = RoadId(graph.roads.len() as u32);
@@ -384,7 +449,12 @@ pub fn build_graph(
                 ref_: way.tags.ref_.clone(),
                 priority: wi.priority,
                 lanes: (0..lanes.max(1))
-                    .map(|i| Lane { index: i, speed_mps: speed, width_m: OSM_LANE_WIDTH_M, length_m: length })
+                    .map(|i| Lane {
+                        index: i,
+                        speed_mps: speed,
+                        width_m: OSM_LANE_WIDTH_M,
+                        length_m: length,
+                    })
                     .collect(),
                 geometry: seq.iter().map(|&n| local(n)).collect(),
                 length_m: length,
@@ -416,7 +486,11 @@ fn osm_connections(graph: &LaneGraph, road_piece: &[(i64, u32)]) -> Vec<Connecti
     let mut out = Vec::new();
     for j in &graph.junctions {
         let links = |from: RoadId| -> Vec<RoadId> {
-            j.outgoing.iter().copied().filter(|&to| road_piece[from.0 as usize] != road_piece[to.0 as usize]).collect()
+            j.outgoing
+                .iter()
+                .copied()
+                .filter(|&to| road_piece[from.0 as usize] != road_piece[to.0 as usize])
+                .collect()
         };
         // Rank the roads in: best first.
         let mut ranked: Vec<(RoadId, i32, usize, f64)> = j
@@ -431,9 +505,18 @@ fn osm_connections(graph: &LaneGraph, road_piece: &[(i64, u32)]) -> Vec<Connecti
                 (from, r.priority, r.lanes.len(), straightest)
             })
             .collect();
-        ranked.sort_by(|a, b| b.1.cmp(&a.1).then(b.2.cmp(&a.2)).then(a.3.total_cmp(&b.3)).then(a.0.cmp(&b.0)));
+        ranked.sort_by(|a, b| {
+            b.1.cmp(&a.1)
+                .then(b.2.cmp(&a.2))
+                .then(a.3.total_cmp(&b.3))
+                .then(a.0.cmp(&b.0))
+        });
         for (rank, &(from, ..)) in ranked.iter().enumerate() {
-            let right_of_way = if rank == 0 { RightOfWay::Major } else { RightOfWay::Minor };
+            let right_of_way = if rank == 0 {
+                RightOfWay::Major
+            } else {
+                RightOfWay::Minor
+            };
             let fr = road(from);
             for to in links(from) {
                 let tr = road(to);
@@ -494,22 +577,49 @@ mod tests {
         for (k, v) in tags {
             t.set(k, v);
         }
-        OsmWay { id, nodes: nodes.to_vec(), tags: t }
+        OsmWay {
+            id,
+            nodes: nodes.to_vec(),
+            tags: t,
+        }
     }
 
     #[test]
     fn lanes_per_direction() {
         let mut w = Warnings::default();
-        let two = Directions { forward: true, backward: true };
-        let one = Directions { forward: true, backward: false };
-        assert_eq!(lane_counts(&way(1, &[], &[("highway", "primary"), ("lanes", "5")]), two, &mut w), (3, 2));
+        let two = Directions {
+            forward: true,
+            backward: true,
+        };
+        let one = Directions {
+            forward: true,
+            backward: false,
+        };
         assert_eq!(
-            lane_counts(&way(1, &[], &[("highway", "primary"), ("lanes", "5"), ("lanes:forward", "2")]), two, &mut w),
+            lane_counts(&way(1, &[], &[("highway", "primary"), ("lanes", "5")]), two, &mut w),
+            (3, 2)
+        );
+        assert_eq!(
+            lane_counts(
+                &way(
+                    1,
+                    &[],
+                    &[("highway", "primary"), ("lanes", "5"), ("lanes:forward", "2")]
+                ),
+                two,
+                &mut w
+            ),
             (2, 3)
         );
-        assert_eq!(lane_counts(&way(1, &[], &[("highway", "motorway"), ("lanes", "4")]), one, &mut w), (4, 0));
+        assert_eq!(
+            lane_counts(&way(1, &[], &[("highway", "motorway"), ("lanes", "4")]), one, &mut w),
+            (4, 0)
+        );
         assert!(w.is_empty());
-        assert_eq!(lane_counts(&way(1, &[], &[("highway", "motorway")]), one, &mut w), (2, 2));
+        assert_eq!(
+            lane_counts(&way(1, &[], &[("highway", "motorway")]), one, &mut w),
+            (2, 2)
+        );
         assert_eq!(w.counts["lanes_defaulted"], 1);
     }
 
@@ -538,21 +648,41 @@ mod tests {
             (41, (41.998, -82.995)),
         ]
         .into_iter()
-        .map(|(id, (lat, lon))| (id, NodePos { lat_e7: (lat * 1e7_f64).round() as i32, lon_e7: (lon * 1e7_f64).round() as i32 }))
+        .map(|(id, (lat, lon))| {
+            (
+                id,
+                NodePos {
+                    lat_e7: (lat * 1e7_f64).round() as i32,
+                    lon_e7: (lon * 1e7_f64).round() as i32,
+                },
+            )
+        })
         .collect();
         let ways = vec![
             way(1, &[10, 20, 30], &[("highway", "motorway"), ("lanes", "2")]),
             way(2, &[40, 41, 20, 99], &[("highway", "motorway_link")]),
         ];
-        let g = build_graph(ways, &nodes, Source { file: "t".into(), format: mapc_graph::SourceFormat::OsmXml }, &ImportOptions::default())
-            .unwrap();
+        let g = build_graph(
+            ways,
+            &nodes,
+            Source {
+                file: "t".into(),
+                format: mapc_graph::SourceFormat::OsmXml,
+            },
+            &ImportOptions::default(),
+        )
+        .unwrap();
         assert!(g.invariant_violations().is_empty(), "{:?}", g.invariant_violations());
         assert_eq!(g.junctions.len(), 4);
         assert_eq!(g.roads.len(), 3);
         let merge = g.find_junction("osm:20").unwrap();
         assert_eq!(g.junction(merge).unwrap().kind, JunctionKind::Merge);
         assert_eq!(g.warnings.counts["way_clipped_at_missing_node"], 1);
-        let major: Vec<_> = g.connections.iter().filter(|c| c.right_of_way == RightOfWay::Major && c.junction == merge).collect();
+        let major: Vec<_> = g
+            .connections
+            .iter()
+            .filter(|c| c.right_of_way == RightOfWay::Major && c.junction == merge)
+            .collect();
         assert!(major.iter().all(|c| g.road(c.from_road).unwrap().class == "motorway"));
         let r0 = g.road(RoadId(0)).unwrap();
         assert!((r0.length_m - 828.5).abs() < 1.0, "{}", r0.length_m);

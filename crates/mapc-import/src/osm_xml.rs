@@ -20,7 +20,9 @@ fn id_of(element: &quick_xml::events::BytesStart<'_>, at: u64) -> Result<i64, Pa
     let Some(raw) = raw else {
         return Err(ParseError::new(at, Some(describe(element)), "missing `id`"));
     };
-    raw.trim().parse().map_err(|_| ParseError::new(at, Some(describe(element)), format!("id `{raw}` is not an integer")))
+    raw.trim()
+        .parse()
+        .map_err(|_| ParseError::new(at, Some(describe(element)), format!("id `{raw}` is not an integer")))
 }
 
 /// Pass one: the kept ways, in file order.
@@ -45,7 +47,12 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                     }
                 }
             }
-            Item::Start { element, empty, at, depth } => {
+            Item::Start {
+                element,
+                empty,
+                at,
+                depth,
+            } => {
                 if !root_checked {
                     root_checked = true;
                     let name = element.name().as_ref().to_string();
@@ -76,16 +83,23 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                         if let Some((way_id, nodes, _)) = current.as_mut() {
                             let r = crate::xml::attr_value(&element, "ref")
                                 .map_err(|m| ParseError::new(at, Some(format!("<nd> of way {way_id}")), m))?
-                                .ok_or_else(|| ParseError::new(at, Some(format!("<nd> of way {way_id}")), "missing `ref`"))?;
+                                .ok_or_else(|| {
+                                    ParseError::new(at, Some(format!("<nd> of way {way_id}")), "missing `ref`")
+                                })?;
                             let r: i64 = r.trim().parse().map_err(|_| {
-                                ParseError::new(at, Some(format!("<nd> of way {way_id}")), format!("ref `{r}` is not an integer"))
+                                ParseError::new(
+                                    at,
+                                    Some(format!("<nd> of way {way_id}")),
+                                    format!("ref `{r}` is not an integer"),
+                                )
                             })?;
                             nodes.push(r);
                         }
                     }
                     "tag" => {
                         if let Some((way_id, _, tags)) = current.as_mut() {
-                            let kv = attrs(&element).map_err(|m| ParseError::new(at, Some(format!("<tag> of way {way_id}")), m))?;
+                            let kv = attrs(&element)
+                                .map_err(|m| ParseError::new(at, Some(format!("<tag> of way {way_id}")), m))?;
                             let k = kv.iter().find(|(k, _)| *k == "k").map(|(_, v)| v.as_ref());
                             let v = kv.iter().find(|(k, _)| *k == "v").map(|(_, v)| v.as_ref());
                             if let (Some(k), Some(v)) = (k, v) {
@@ -102,7 +116,11 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
 }
 
 /// Pass two: coordinates of the `needed` nodes. Every node's coordinates are checked, used or not.
-pub(crate) fn read_nodes<R: BufRead>(input: R, needed: &HashSet<i64>, nodes_first: bool) -> Result<HashMap<i64, NodePos>, ParseError> {
+pub(crate) fn read_nodes<R: BufRead>(
+    input: R,
+    needed: &HashSet<i64>,
+    nodes_first: bool,
+) -> Result<HashMap<i64, NodePos>, ParseError> {
     let mut xml = XmlStream::new(input);
     let mut out = HashMap::with_capacity(needed.len());
     loop {
@@ -110,36 +128,39 @@ pub(crate) fn read_nodes<R: BufRead>(input: R, needed: &HashSet<i64>, nodes_firs
             Item::Eof => break,
             Item::Skip => {}
             Item::End => {}
-            Item::Start { element, at, .. } => {
-                match element.name().as_ref() {
-                    "node" => {
-                        let (mut id, mut lat, mut lon) = (None, None, None);
-                        let kv = attrs(&element).map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
-                        for (k, v) in kv {
-                            match k {
-                                "id" => id = Some(v),
-                                "lat" => lat = Some(v),
-                                "lon" => lon = Some(v),
-                                _ => {}
-                            }
-                        }
-                        let el = || Some(describe(&element));
-                        let id: i64 = match id {
-                            Some(v) => v.trim().parse().map_err(|_| ParseError::new(at, el(), format!("id `{v}` is not an integer")))?,
-                            None => return Err(ParseError::new(at, el(), "missing `id`")),
-                        };
-                        let lat = lat.ok_or_else(|| ParseError::new(at, el(), "missing `lat`"))?;
-                        let lon = lon.ok_or_else(|| ParseError::new(at, el(), "missing `lon`"))?;
-                        let lat_e7 = parse_degrees(&lat, 90.0).map_err(|m| ParseError::new(at, el(), format!("lat: {m}")))?;
-                        let lon_e7 = parse_degrees(&lon, 180.0).map_err(|m| ParseError::new(at, el(), format!("lon: {m}")))?;
-                        if needed.contains(&id) {
-                            out.insert(id, NodePos { lat_e7, lon_e7 });
+            Item::Start { element, at, .. } => match element.name().as_ref() {
+                "node" => {
+                    let (mut id, mut lat, mut lon) = (None, None, None);
+                    let kv = attrs(&element).map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
+                    for (k, v) in kv {
+                        match k {
+                            "id" => id = Some(v),
+                            "lat" => lat = Some(v),
+                            "lon" => lon = Some(v),
+                            _ => {}
                         }
                     }
-                    "way" | "relation" if nodes_first => break,
-                    _ => {}
+                    let el = || Some(describe(&element));
+                    let id: i64 = match id {
+                        Some(v) => v
+                            .trim()
+                            .parse()
+                            .map_err(|_| ParseError::new(at, el(), format!("id `{v}` is not an integer")))?,
+                        None => return Err(ParseError::new(at, el(), "missing `id`")),
+                    };
+                    let lat = lat.ok_or_else(|| ParseError::new(at, el(), "missing `lat`"))?;
+                    let lon = lon.ok_or_else(|| ParseError::new(at, el(), "missing `lon`"))?;
+                    let lat_e7 =
+                        parse_degrees(&lat, 90.0).map_err(|m| ParseError::new(at, el(), format!("lat: {m}")))?;
+                    let lon_e7 =
+                        parse_degrees(&lon, 180.0).map_err(|m| ParseError::new(at, el(), format!("lon: {m}")))?;
+                    if needed.contains(&id) {
+                        out.insert(id, NodePos { lat_e7, lon_e7 });
+                    }
                 }
-            }
+                "way" | "relation" if nodes_first => break,
+                _ => {}
+            },
         }
     }
     Ok(out)

@@ -35,7 +35,10 @@ impl Summary {
     pub fn of(graph: &LaneGraph) -> Summary {
         let mut junction_kinds = BTreeMap::new();
         for j in &graph.junctions {
-            let name = serde_json::to_value(j.kind).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
+            let name = serde_json::to_value(j.kind)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default();
             *junction_kinds.entry(name).or_insert(0) += 1;
         }
         let source = std::path::Path::new(&graph.source.file)

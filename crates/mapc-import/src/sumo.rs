@@ -91,7 +91,11 @@ impl Element<'_> {
     fn int<T: std::str::FromStr>(&self, key: &str) -> Result<Option<T>, ParseError> {
         match self.get(key) {
             None => Ok(None),
-            Some(v) => v.trim().parse::<T>().map(Some).map_err(|_| self.err(format!("`{key}` is `{v}`, not a valid integer"))),
+            Some(v) => v
+                .trim()
+                .parse::<T>()
+                .map(Some)
+                .map_err(|_| self.err(format!("`{key}` is `{v}`, not a valid integer"))),
         }
     }
     fn shape(&self, key: &str) -> Result<Option<Vec<[f64; 2]>>, ParseError> {
@@ -134,7 +138,12 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                     in_junction = false;
                 }
             }
-            Item::Start { element, empty, at, depth } => {
+            Item::Start {
+                element,
+                empty,
+                at,
+                depth,
+            } => {
                 let name = element.name().as_ref().to_string();
                 if !root_checked {
                     root_checked = true;
@@ -148,11 +157,17 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                     continue;
                 }
                 let kv = attrs(&element).map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
-                let el = Element { kv, at, described: describe(&element) };
+                let el = Element {
+                    kv,
+                    at,
+                    described: describe(&element),
+                };
                 match (depth, name.as_str()) {
                     (2, "location") => {
                         let offset = el.get("netOffset").unwrap_or("0,0");
-                        let mut parts = offset.split(',').map(|p| p.trim().parse::<f64>().ok().filter(|v| v.is_finite()));
+                        let mut parts = offset
+                            .split(',')
+                            .map(|p| p.trim().parse::<f64>().ok().filter(|v| v.is_finite()));
                         let (Some(Some(x)), Some(Some(y))) = (parts.next(), parts.next()) else {
                             return Err(el.err(format!("netOffset `{offset}` is not two numbers")));
                         };
@@ -165,8 +180,16 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                             id: el.req("id")?.to_string(),
                             at,
                             internal,
-                            from: if internal { String::new() } else { el.req("from")?.to_string() },
-                            to: if internal { String::new() } else { el.req("to")?.to_string() },
+                            from: if internal {
+                                String::new()
+                            } else {
+                                el.req("from")?.to_string()
+                            },
+                            to: if internal {
+                                String::new()
+                            } else {
+                                el.req("to")?.to_string()
+                            },
                             type_: el.get("type").filter(|t| !t.is_empty()).map(str::to_string),
                             priority: el.int("priority")?.unwrap_or(-1),
                             name: el.get("name").filter(|t| !t.is_empty()).map(str::to_string),
@@ -196,7 +219,12 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                             id: el.req("id")?.to_string(),
                             pos: [el.req_num("x")?, el.req_num("y")?],
                             internal: el.get("type") == Some("internal"),
-                            inc_lanes: el.get("incLanes").unwrap_or("").split_whitespace().map(str::to_string).collect(),
+                            inc_lanes: el
+                                .get("incLanes")
+                                .unwrap_or("")
+                                .split_whitespace()
+                                .map(str::to_string)
+                                .collect(),
                             requests: Vec::new(),
                         };
                         net.junctions.push(j);
@@ -205,7 +233,11 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                     (3, "request") if in_junction => {
                         let index: usize = el.int("index")?.ok_or_else(|| el.err("missing `index`"))?;
                         let response = el.req("response")?.to_string();
-                        net.junctions.last_mut().expect("in a junction").requests.push((index, response));
+                        net.junctions
+                            .last_mut()
+                            .expect("in a junction")
+                            .requests
+                            .push((index, response));
                     }
                     (2, "connection") => {
                         net.connections.push(SumoConnection {
@@ -262,10 +294,18 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     let mut edge_index: HashMap<&str, &SumoEdge> = HashMap::new();
     for e in &net.edges {
         if edge_index.insert(e.id.as_str(), e).is_some() {
-            return Err(ParseError::new(e.at, Some(format!("<edge id=\"{}\">", e.id)), "a second edge with this id"));
+            return Err(ParseError::new(
+                e.at,
+                Some(format!("<edge id=\"{}\">", e.id)),
+                "a second edge with this id",
+            ));
         }
         if e.lanes.is_empty() {
-            return Err(ParseError::new(e.at, Some(format!("<edge id=\"{}\">", e.id)), "edge without lanes"));
+            return Err(ParseError::new(
+                e.at,
+                Some(format!("<edge id=\"{}\">", e.id)),
+                "edge without lanes",
+            ));
         }
         if e.internal {
             for l in &e.lanes {
@@ -299,19 +339,34 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                 provenance.osm_nodes.push(n);
             }
         }
-        junctions.push(Junction { id, pos: sj.pos, kind: JunctionKind::Through, incoming: vec![], outgoing: vec![], provenance });
+        junctions.push(Junction {
+            id,
+            pos: sj.pos,
+            kind: JunctionKind::Through,
+            incoming: vec![],
+            outgoing: vec![],
+            provenance,
+        });
     }
 
     let mut road_of: HashMap<&str, RoadId> = HashMap::new();
     let mut roads = Vec::new();
     for e in &normal {
         let place = || Some(format!("<edge id=\"{}\">", e.id));
-        let from = *junction_of
-            .get(e.from.as_str())
-            .ok_or_else(|| ParseError::new(e.at, place(), format!("`from` names junction `{}`, which the net lacks", e.from)))?;
-        let to = *junction_of
-            .get(e.to.as_str())
-            .ok_or_else(|| ParseError::new(e.at, place(), format!("`to` names junction `{}`, which the net lacks", e.to)))?;
+        let from = *junction_of.get(e.from.as_str()).ok_or_else(|| {
+            ParseError::new(
+                e.at,
+                place(),
+                format!("`from` names junction `{}`, which the net lacks", e.from),
+            )
+        })?;
+        let to = *junction_of.get(e.to.as_str()).ok_or_else(|| {
+            ParseError::new(
+                e.at,
+                place(),
+                format!("`to` names junction `{}`, which the net lacks", e.to),
+            )
+        })?;
         let mut lanes: Vec<&SumoLane> = e.lanes.iter().collect();
         lanes.sort_by_key(|l| l.index);
         if lanes.iter().enumerate().any(|(i, l)| l.index as usize != i) {
@@ -347,7 +402,12 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             priority: e.priority,
             lanes: lanes
                 .iter()
-                .map(|l| Lane { index: l.index, speed_mps: l.speed, width_m: l.width, length_m: l.length.max(0.01) })
+                .map(|l| Lane {
+                    index: l.index,
+                    speed_mps: l.speed,
+                    width_m: l.width,
+                    length_m: l.length.max(0.01),
+                })
                 .collect(),
             geometry,
             length_m: length,
@@ -358,16 +418,24 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     // Request tables by SUMO junction id, for connections without a state.
     let requests: HashMap<&str, &SumoJunction> = net.junctions.iter().map(|j| (j.id.as_str(), j)).collect();
     // Connections leaving internal lanes, by (internal edge, lane).
-    let internal_next: HashMap<(&str, u8), &SumoConnection> =
-        net.connections.iter().map(|k| ((k.from.as_str(), k.from_lane), k)).collect();
+    let internal_next: HashMap<(&str, u8), &SumoConnection> = net
+        .connections
+        .iter()
+        .map(|k| ((k.from.as_str(), k.from_lane), k))
+        .collect();
     // SUMO numbers a junction's links in the order of its incoming lanes (`incLanes`), then as listed.
     let mut link_index: HashMap<usize, usize> = HashMap::new();
     {
         let mut keyed: Vec<(&str, usize, usize)> = Vec::new();
         for (ci, c) in net.connections.iter().enumerate() {
-            let Some(e) = edge_index.get(c.from.as_str()).filter(|e| !e.internal) else { continue };
+            let Some(e) = edge_index.get(c.from.as_str()).filter(|e| !e.internal) else {
+                continue;
+            };
             let lane = format!("{}_{}", c.from, c.from_lane);
-            let pos = requests.get(e.to.as_str()).and_then(|j| j.inc_lanes.iter().position(|l| *l == lane)).unwrap_or(usize::MAX);
+            let pos = requests
+                .get(e.to.as_str())
+                .and_then(|j| j.inc_lanes.iter().position(|l| *l == lane))
+                .unwrap_or(usize::MAX);
             keyed.push((e.to.as_str(), pos, ci));
         }
         keyed.sort();
@@ -385,9 +453,13 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     let mut connections = Vec::new();
     for (ci, c) in net.connections.iter().enumerate() {
         let el = || Some(format!("<connection from=\"{}\" to=\"{}\">", c.from, c.to));
-        let from_edge = edge_index
-            .get(c.from.as_str())
-            .ok_or_else(|| ParseError::new(c.at, el(), format!("`from` names edge `{}`, which the net lacks", c.from)))?;
+        let from_edge = edge_index.get(c.from.as_str()).ok_or_else(|| {
+            ParseError::new(
+                c.at,
+                el(),
+                format!("`from` names edge `{}`, which the net lacks", c.from),
+            )
+        })?;
         let to_edge = edge_index
             .get(c.to.as_str())
             .ok_or_else(|| ParseError::new(c.at, el(), format!("`to` names edge `{}`, which the net lacks", c.to)))?;
@@ -395,10 +467,21 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             continue;
         }
         if c.from_lane as usize >= from_edge.lanes.len() || c.to_lane as usize >= to_edge.lanes.len() {
-            return Err(ParseError::new(c.at, el(), format!("lane {} -> {} does not exist", c.from_lane, c.to_lane)));
+            return Err(ParseError::new(
+                c.at,
+                el(),
+                format!("lane {} -> {} does not exist", c.from_lane, c.to_lane),
+            ));
         }
         if from_edge.to != to_edge.from {
-            return Err(ParseError::new(c.at, el(), format!("edge `{}` ends at `{}` but `{}` starts at `{}`", c.from, from_edge.to, c.to, to_edge.from)));
+            return Err(ParseError::new(
+                c.at,
+                el(),
+                format!(
+                    "edge `{}` ends at `{}` but `{}` starts at `{}`",
+                    c.from, from_edge.to, c.to, to_edge.from
+                ),
+            ));
         }
         let junction = junction_of[from_edge.to.as_str()];
         // Follow the internal lanes from `via` to the next normal edge.
@@ -406,9 +489,9 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         let mut next = c.via.clone();
         let mut steps = 0;
         while let Some(lane) = next.take() {
-            let &(len, speed) = internal_lanes
-                .get(lane.as_str())
-                .ok_or_else(|| ParseError::new(c.at, el(), format!("`via` names lane `{lane}`, which the net lacks")))?;
+            let &(len, speed) = internal_lanes.get(lane.as_str()).ok_or_else(|| {
+                ParseError::new(c.at, el(), format!("`via` names lane `{lane}`, which the net lacks"))
+            })?;
             via_length += len;
             via_speed = Some(via_speed.map_or(speed, |s: f64| s.min(speed)));
             steps += 1;
@@ -417,14 +500,18 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             }
             // An internal lane that leads into another internal lane (an internal junction) continues the path.
             let (edge_id, lane_index) = lane.rsplit_once('_').unwrap_or((lane.as_str(), "0"));
-            next = lane_index.parse::<u8>().ok().and_then(|li| internal_next.get(&(edge_id, li))).and_then(|k| {
-                k.via.clone().or_else(|| {
-                    edge_index
-                        .get(k.to.as_str())
-                        .filter(|e| e.internal)
-                        .map(|e| e.lanes[(k.to_lane as usize).min(e.lanes.len() - 1)].id.clone())
-                })
-            });
+            next = lane_index
+                .parse::<u8>()
+                .ok()
+                .and_then(|li| internal_next.get(&(edge_id, li)))
+                .and_then(|k| {
+                    k.via.clone().or_else(|| {
+                        edge_index
+                            .get(k.to.as_str())
+                            .filter(|e| e.internal)
+                            .map(|e| e.lanes[(k.to_lane as usize).min(e.lanes.len() - 1)].id.clone())
+                    })
+                });
         }
         let link = link_index[&ci];
         let right_of_way = match c.state.as_deref().and_then(row_from_state) {
@@ -472,7 +559,10 @@ fn centre_line(lanes: &[&SumoLane]) -> Vec<[f64; 2]> {
         (0..n)
             .map(|i| {
                 let k = lanes.len() as f64;
-                [lanes.iter().map(|l| l.shape[i][0]).sum::<f64>() / k, lanes.iter().map(|l| l.shape[i][1]).sum::<f64>() / k]
+                [
+                    lanes.iter().map(|l| l.shape[i][0]).sum::<f64>() / k,
+                    lanes.iter().map(|l| l.shape[i][1]).sum::<f64>() / k,
+                ]
             })
             .collect()
     } else {

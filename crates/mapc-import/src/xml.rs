@@ -20,7 +20,12 @@ pub(crate) struct XmlStream<R: BufRead> {
 /// One element start (`<a ..>` or `<a ../>`), an element end, or the end of the input.
 pub(crate) enum Item<'b> {
     /// `at`: byte offset of the `<`; `depth`: 1 for the root.
-    Start { element: BytesStart<'b>, empty: bool, at: u64, depth: usize },
+    Start {
+        element: BytesStart<'b>,
+        empty: bool,
+        at: u64,
+        depth: usize,
+    },
     End,
     /// Text, a comment, a declaration: nothing a reader needs.
     Skip,
@@ -33,7 +38,13 @@ impl<R: BufRead> XmlStream<R> {
         let config = reader.config_mut();
         config.check_end_names = true;
         config.trim_text_start = false;
-        XmlStream { reader, buf: Vec::with_capacity(4096), open: Vec::new(), start: 0, root: None }
+        XmlStream {
+            reader,
+            buf: Vec::with_capacity(4096),
+            open: Vec::new(),
+            start: 0,
+            root: None,
+        }
     }
 
     /// Depth of the element the last `Start` opened (1 for the root), or of the current parent after an `End`.
@@ -50,13 +61,19 @@ impl<R: BufRead> XmlStream<R> {
                 Ok(e) => e,
                 Err(e) => {
                     let at = self.reader.error_position().max(self.start);
-                    return Err(ParseError::new(at, self.open.last().map(|n| format!("<{n}>")), format!("not well-formed XML: {e}")));
+                    return Err(ParseError::new(
+                        at,
+                        self.open.last().map(|n| format!("<{n}>")),
+                        format!("not well-formed XML: {e}"),
+                    ));
                 }
             };
             match event {
                 Event::Start(_) | Event::Empty(_) => {
                     let empty = matches!(event, Event::Empty(_));
-                    let (Event::Start(element) | Event::Empty(element)) = event else { unreachable!() };
+                    let (Event::Start(element) | Event::Empty(element)) = event else {
+                        unreachable!()
+                    };
                     if self.open.is_empty() && self.root.is_some() {
                         return Err(ParseError::new(self.start, None, "more than one root element"));
                     }
@@ -68,7 +85,12 @@ impl<R: BufRead> XmlStream<R> {
                         self.open.push(name);
                     }
                     let (at, depth) = (self.start, self.open.len() + usize::from(empty));
-                    return Ok(Item::Start { element, empty, at, depth });
+                    return Ok(Item::Start {
+                        element,
+                        empty,
+                        at,
+                        depth,
+                    });
                 }
                 Event::End(_) => {
                     self.open.pop();
@@ -89,7 +111,11 @@ impl<R: BufRead> XmlStream<R> {
                 }
                 Event::Text(t) => {
                     if self.open.is_empty() && !t.into_inner().trim().is_empty() {
-                        return Err(ParseError::new(self.start, None, "text outside the root element: not an XML file"));
+                        return Err(ParseError::new(
+                            self.start,
+                            None,
+                            "text outside the root element: not an XML file",
+                        ));
                     }
                 }
                 _ => {}
@@ -104,7 +130,10 @@ pub(crate) fn attr_value<'a>(element: &'a BytesStart<'_>, key: &str) -> Result<O
     for a in element.attributes() {
         let a = a.map_err(|e| format!("bad attribute: {e}"))?;
         if a.key.as_ref() == key {
-            return a.normalized_value(XmlVersion::Implicit1_0).map(Some).map_err(|e| format!("attribute `{key}`: {e}"));
+            return a
+                .normalized_value(XmlVersion::Implicit1_0)
+                .map(Some)
+                .map_err(|e| format!("attribute `{key}`: {e}"));
         }
     }
     Ok(None)
@@ -117,7 +146,11 @@ pub(crate) fn attrs<'a>(element: &'a BytesStart<'_>) -> Result<Vec<(&'a str, Cow
         let a = a.map_err(|e| format!("bad attribute: {e}"))?;
         let key: &'a str = a.key.0;
         let value = if a.value.contains('&') {
-            Cow::Owned(a.normalized_value(XmlVersion::Implicit1_0).map_err(|e| format!("attribute `{key}`: {e}"))?.into_owned())
+            Cow::Owned(
+                a.normalized_value(XmlVersion::Implicit1_0)
+                    .map_err(|e| format!("attribute `{key}`: {e}"))?
+                    .into_owned(),
+            )
         } else {
             a.value
         };

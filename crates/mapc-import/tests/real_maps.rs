@@ -38,17 +38,39 @@ fn i696_named_merges() {
         let ins: Vec<_> = j.incoming.iter().map(|&r| g.road(r).unwrap()).collect();
         let out = g.road(j.outgoing[0]).unwrap();
         for r in &ins {
-            let row: Vec<_> = g.connections.iter().filter(|c| c.from_road == r.id && c.junction == j.id).map(|c| c.right_of_way).collect();
-            eprintln!("{node}: in {} way {:?} {} lanes {} {:?}", r.id, r.provenance.osm_ways, r.class, r.lanes.len(), row);
+            let row: Vec<_> = g
+                .connections
+                .iter()
+                .filter(|c| c.from_road == r.id && c.junction == j.id)
+                .map(|c| c.right_of_way)
+                .collect();
+            eprintln!(
+                "{node}: in {} way {:?} {} lanes {} {:?}",
+                r.id,
+                r.provenance.osm_ways,
+                r.class,
+                r.lanes.len(),
+                row
+            );
         }
-        eprintln!("{node}: out way {:?} {:?} {:?}", out.provenance.osm_ways, out.ref_, out.name);
-        assert!(ins.iter().any(|r| r.provenance.osm_ways == [joining_way]), "node {node}");
+        eprintln!(
+            "{node}: out way {:?} {:?} {:?}",
+            out.provenance.osm_ways, out.ref_, out.name
+        );
+        assert!(
+            ins.iter().any(|r| r.provenance.osm_ways == [joining_way]),
+            "node {node}"
+        );
     }
 }
 
 fn sumo(name: &str) -> LaneGraph {
     let g = import_path(&map(name), &ImportOptions::default()).unwrap();
-    assert!(g.invariant_violations().is_empty(), "{name}: {:?}", g.invariant_violations());
+    assert!(
+        g.invariant_violations().is_empty(),
+        "{name}: {:?}",
+        g.invariant_violations()
+    );
     g
 }
 
@@ -63,13 +85,21 @@ fn simple_merge_net_lengths_and_right_of_way() {
     assert_eq!(g.junction(center).unwrap().kind, JunctionKind::Merge);
     let conn = |edge: &str| {
         let r = g.find_roads(edge).unwrap()[0];
-        g.connections.iter().find(|c| c.from_road == r && c.junction == center).unwrap().clone()
+        g.connections
+            .iter()
+            .find(|c| c.from_road == r && c.junction == center)
+            .unwrap()
+            .clone()
     };
     let (main, ramp) = (conn("left"), conn("bottom"));
     assert!((main.via_length_m - 24.53).abs() < 1e-9, "{}", main.via_length_m);
     assert!((ramp.via_length_m - 22.95).abs() < 1e-9, "{}", ramp.via_length_m);
     assert_eq!(ramp.via_speed_mps, Some(15.67));
-    assert_eq!(ramp.right_of_way, RightOfWay::Major, "the ramp is the major road in this net");
+    assert_eq!(
+        ramp.right_of_way,
+        RightOfWay::Major,
+        "the ramp is the major road in this net"
+    );
     assert_eq!(main.right_of_way, RightOfWay::Minor);
     assert!(!g.projection.is_geographic());
 }
@@ -89,8 +119,12 @@ fn sumo_proxy_junctions_lie_on_their_osm_nodes() {
     let osm = i696();
     let mut distances = Vec::new();
     for j in &net.junctions {
-        let Some(&node) = j.provenance.osm_nodes.first() else { continue };
-        let Ok(mine) = osm.find_junction(&format!("osm:{node}")) else { continue };
+        let Some(&node) = j.provenance.osm_nodes.first() else {
+            continue;
+        };
+        let Ok(mine) = osm.find_junction(&format!("osm:{node}")) else {
+            continue;
+        };
         let [lon, lat] = net.projection.to_lonlat(j.pos).unwrap();
         let there = osm.projection.to_local(lon, lat).unwrap();
         let here = osm.junction(mine).unwrap().pos;
@@ -102,4 +136,68 @@ fn sumo_proxy_junctions_lie_on_their_osm_nodes() {
     let far: Vec<_> = distances.iter().filter(|(d, _)| *d > 1.0).collect();
     assert!(far.iter().all(|(_, node)| *node == 4815187016), "{far:?}");
     assert!(distances[1].0 < 0.1, "{:?}", distances[1]);
+}
+
+#[test]
+fn osm_and_pbf_give_the_same_graph() {
+    let xml = i696();
+    let mut pbf = import_path(&map("i696.osm.pbf"), &ImportOptions::default()).unwrap();
+    assert_eq!(pbf.source.format, mapc_graph::SourceFormat::OsmPbf);
+    pbf.source = xml.source.clone();
+    assert!(pbf == xml, "the .osm.pbf graph differs from the .osm graph");
+}
+
+#[test]
+fn ids_are_deterministic_and_provenance_is_kept() {
+    let (a, b) = (i696(), i696());
+    assert_eq!(a, b);
+    // Junctions in OSM node order, roads in (way, piece) order.
+    assert!(
+        a.junctions
+            .windows(2)
+            .all(|w| w[0].provenance.osm_nodes[0] < w[1].provenance.osm_nodes[0])
+    );
+    assert!(
+        a.roads
+            .windows(2)
+            .all(|w| w[0].provenance.osm_ways[0] <= w[1].provenance.osm_ways[0])
+    );
+    for r in &a.roads {
+        let ends = [
+            a.junction(r.from).unwrap().provenance.osm_nodes[0],
+            a.junction(r.to).unwrap().provenance.osm_nodes[0],
+        ];
+        assert_eq!(r.provenance.osm_nodes, ends);
+    }
+}
+
+#[test]
+fn highways_option_and_major_override() {
+    let wide = import_path(
+        &map("i696.osm"),
+        &ImportOptions {
+            highways: vec!["motorway".into(), "motorway_link".into(), "secondary".into()],
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(wide.roads.iter().any(|r| r.class == "secondary"));
+    assert!(wide.roads.len() > i696().roads.len());
+    // Make the I-96 side major where I-696 joins it.
+    let options = ImportOptions {
+        major_roads: vec!["osm:61862553=osm-way:8667198".parse().unwrap()],
+        ..Default::default()
+    };
+    let g = import_path(&map("i696.osm"), &options).unwrap();
+    let j = g.find_junction("osm:61862553").unwrap();
+    for c in g.connections.iter().filter(|c| c.junction == j) {
+        let way = g.road(c.from_road).unwrap().provenance.osm_ways[0];
+        let expect = if way == 8667198 {
+            RightOfWay::Major
+        } else {
+            RightOfWay::Minor
+        };
+        assert_eq!(c.right_of_way, expect);
+        assert!(c.right_of_way_overridden);
+    }
 }

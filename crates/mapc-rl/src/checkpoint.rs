@@ -40,12 +40,18 @@ pub struct Checkpoint {
 
 impl Checkpoint {
     pub fn save(&self, path: &Path) -> Result<(), RlError> {
-        let text = serde_json::to_string(self).map_err(|e| RlError::Format { path: path.into(), msg: e.to_string() })?;
+        let text = serde_json::to_string(self).map_err(|e| RlError::Format {
+            path: path.into(),
+            msg: e.to_string(),
+        })?;
         write_atomic(path, text.as_bytes())
     }
 
     pub fn load(path: &Path) -> Result<Self, RlError> {
-        let text = std::fs::read_to_string(path).map_err(|e| RlError::Io { path: path.into(), source: e })?;
+        let text = std::fs::read_to_string(path).map_err(|e| RlError::Io {
+            path: path.into(),
+            source: e,
+        })?;
         let ck: Checkpoint = serde_json::from_str(&text).map_err(|e| RlError::Format {
             path: path.into(),
             msg: format!("line {} column {}: {e}", e.line(), e.column()),
@@ -53,7 +59,10 @@ impl Checkpoint {
         if ck.format_version != FORMAT_VERSION {
             return Err(RlError::Format {
                 path: path.into(),
-                msg: format!("checkpoint format {} (this build reads {FORMAT_VERSION})", ck.format_version),
+                msg: format!(
+                    "checkpoint format {} (this build reads {FORMAT_VERSION})",
+                    ck.format_version
+                ),
             });
         }
         let arch = &ck.state.model.arch;
@@ -79,10 +88,25 @@ pub fn checkpoint_path(dir: &Path) -> PathBuf {
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RlError> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).map_err(|e| RlError::Io { path: dir.into(), source: e })?;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(|e| RlError::Io {
+        path: dir.into(),
+        source: e,
+    })?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes).map_err(|e| RlError::Io { path: tmp.clone(), source: e })?;
-    std::fs::rename(&tmp, path).map_err(|e| RlError::Io { path: path.into(), source: e })
+    std::fs::write(&tmp, bytes).map_err(|e| RlError::Io {
+        path: tmp.clone(),
+        source: e,
+    })?;
+    std::fs::rename(&tmp, path).map_err(|e| RlError::Io {
+        path: path.into(),
+        source: e,
+    })
 }

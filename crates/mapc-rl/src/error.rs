@@ -7,8 +7,17 @@ pub enum RlError {
     Io { path: PathBuf, source: std::io::Error },
     #[error("{path}: {msg}")]
     Format { path: PathBuf, msg: String },
-    #[error("policy {policy} expects {expected} observation values (N_AV = {policy_n_av}) but scenario `{scenario}` gives {got} (N_AV = {scenario_n_av})")]
-    ObsMismatch { policy: PathBuf, expected: usize, policy_n_av: usize, scenario: String, got: usize, scenario_n_av: usize },
+    #[error(
+        "policy {policy} expects {expected} observation values (N_AV = {policy_n_av}) but scenario `{scenario}` gives {got} (N_AV = {scenario_n_av})"
+    )]
+    ObsMismatch {
+        policy: PathBuf,
+        expected: usize,
+        policy_n_av: usize,
+        scenario: String,
+        got: usize,
+        scenario_n_av: usize,
+    },
     #[error("scenario `{scenario}`: {msg}")]
     Scenario { scenario: String, msg: String },
     #[error("{0}")]

@@ -22,7 +22,10 @@ pub struct Figure {
 
 impl From<MeanCi> for Figure {
     fn from(m: MeanCi) -> Self {
-        Figure { mean: m.mean, ci95: m.ci95 }
+        Figure {
+            mean: m.mean,
+            ci95: m.ci95,
+        }
     }
 }
 
@@ -38,7 +41,12 @@ pub struct FigureSet {
 impl FigureSet {
     pub fn of(runs: &[EpisodeMetrics]) -> Self {
         let col = |f: fn(&EpisodeMetrics) -> f64| Figure::from(MeanCi::of(&runs.iter().map(f).collect::<Vec<_>>()));
-        FigureSet { outflow: col(|m| m.outflow), inflow: col(|m| m.inflow), speed: col(|m| m.speed), seeds: runs.len() }
+        FigureSet {
+            outflow: col(|m| m.outflow),
+            inflow: col(|m| m.inflow),
+            speed: col(|m| m.speed),
+            seeds: runs.len(),
+        }
     }
     /// Whether the 95% intervals of the outflow do not overlap.
     pub fn outflow_ci_disjoint(&self, other: &FigureSet) -> bool {
@@ -83,13 +91,22 @@ pub fn human_spec(spec: &SimSpec) -> SimSpec {
 }
 
 fn to_episode_metrics(r: &RunMetrics) -> EpisodeMetrics {
-    EpisodeMetrics { outflow: r.outflow_veh_h, inflow: r.inflow_veh_h, speed: r.avg_speed_mps }
+    EpisodeMetrics {
+        outflow: r.outflow_veh_h,
+        inflow: r.inflow_veh_h,
+        speed: r.avg_speed_mps,
+    }
 }
 
 /// The environment config for running a trained policy on a scenario with `scenario_n_av` controlled AVs
 /// (`None`: the policy's). The observation normalisation is always the policy's own (zero-shot transfer keeps
 /// the constants of training).
-pub fn env_config_for(ck: &Checkpoint, policy: &Path, scenario: &str, scenario_n_av: Option<usize>) -> Result<MergeEnvConfig, RlError> {
+pub fn env_config_for(
+    ck: &Checkpoint,
+    policy: &Path,
+    scenario: &str,
+    scenario_n_av: Option<usize>,
+) -> Result<MergeEnvConfig, RlError> {
     let n_av = scenario_n_av.unwrap_or(ck.spec.n_av);
     if PER_AV * n_av != ck.spec.obs_dim {
         return Err(RlError::ObsMismatch {
@@ -104,14 +121,23 @@ pub fn env_config_for(ck: &Checkpoint, policy: &Path, scenario: &str, scenario_n
     Ok(MergeEnvConfig {
         reward: ck.spec.reward.parse().unwrap_or(crate::env::merge::RewardKind::Outflow),
         n_av,
-        norm: ObsNorm { max_speed: ck.spec.max_speed, length: ck.spec.norm_length },
+        norm: ObsNorm {
+            max_speed: ck.spec.max_speed,
+            length: ck.spec.norm_length,
+        },
         accel_min: ck.spec.accel_min,
         accel_max: ck.spec.accel_max,
     })
 }
 
 /// Runs the policy on `spec` for each seed (in parallel, results in seed order).
-pub fn run_policy(ck: &Checkpoint, spec: &SimSpec, cfg: &MergeEnvConfig, seeds: &[u64], mode: ActionMode) -> Result<Vec<EpisodeMetrics>, RlError> {
+pub fn run_policy(
+    ck: &Checkpoint,
+    spec: &SimSpec,
+    cfg: &MergeEnvConfig,
+    seeds: &[u64],
+    mode: ActionMode,
+) -> Result<Vec<EpisodeMetrics>, RlError> {
     let probe = MergeEnv::new(spec.clone(), cfg.clone())?;
     let horizon = probe.horizon();
     let factory = || -> Box<dyn Env> { Box::new(MergeEnv::new(spec.clone(), cfg.clone()).expect("validated above")) };
@@ -122,8 +148,10 @@ pub fn run_policy(ck: &Checkpoint, spec: &SimSpec, cfg: &MergeEnvConfig, seeds: 
 
 /// The human baseline on the same seeds.
 pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<EpisodeMetrics>, RlError> {
-    let runs = mapc_sim::run_baseline(&human_spec(spec), seeds)
-        .map_err(|e| RlError::Scenario { scenario: spec.graph.source.file.clone(), msg: e.to_string() })?;
+    let runs = mapc_sim::run_baseline_spec(&human_spec(spec), seeds).map_err(|e| RlError::Scenario {
+        scenario: spec.graph.source.file.clone(),
+        msg: e.to_string(),
+    })?;
     Ok(runs.iter().map(to_episode_metrics).collect())
 }
 
@@ -142,5 +170,10 @@ pub fn compare(policy: &[EpisodeMetrics], baseline: &[EpisodeMetrics]) -> Compar
 
 /// Summary of simulator runs in the evaluation's shape (for `Summary` users).
 pub fn figures_of_summary(s: &Summary) -> FigureSet {
-    FigureSet { outflow: s.outflow.into(), inflow: s.inflow.into(), speed: s.speed.into(), seeds: s.seeds }
+    FigureSet {
+        outflow: s.outflow.into(),
+        inflow: s.inflow.into(),
+        speed: s.speed.into(),
+        seeds: s.seeds,
+    }
 }

@@ -18,15 +18,29 @@ pub struct TrainingLog {
 impl TrainingLog {
     /// Reads an existing log (for `--resume`).
     pub fn read(path: &Path) -> Result<Self, RlError> {
-        let mut rdr = csv::Reader::from_path(path).map_err(|e| RlError::Format { path: path.into(), msg: e.to_string() })?;
-        let headers = rdr.headers().map_err(|e| RlError::Format { path: path.into(), msg: e.to_string() })?.clone();
+        let mut rdr = csv::Reader::from_path(path).map_err(|e| RlError::Format {
+            path: path.into(),
+            msg: e.to_string(),
+        })?;
+        let headers = rdr
+            .headers()
+            .map_err(|e| RlError::Format {
+                path: path.into(),
+                msg: e.to_string(),
+            })?
+            .clone();
         if headers.iter().collect::<Vec<_>>().join(",") != CSV_HEADER {
-            return Err(RlError::Format { path: path.into(), msg: format!("header is not `{CSV_HEADER}`") });
+            return Err(RlError::Format {
+                path: path.into(),
+                msg: format!("header is not `{CSV_HEADER}`"),
+            });
         }
         let mut rows = Vec::new();
         for (i, rec) in rdr.deserialize().enumerate() {
-            let row: IterationStats =
-                rec.map_err(|e| RlError::Format { path: path.into(), msg: format!("row {}: {e}", i + 2) })?;
+            let row: IterationStats = rec.map_err(|e| RlError::Format {
+                path: path.into(),
+                msg: format!("row {}: {e}", i + 2),
+            })?;
             rows.push(row);
         }
         Ok(Self { rows })
@@ -66,7 +80,13 @@ mod tests {
     #[test]
     fn csv_round_trip() {
         let log = TrainingLog {
-            rows: vec![IterationStats { iteration: 1, env_steps: 2000, mean_outflow: 1555.5, kl: 0.01, ..Default::default() }],
+            rows: vec![IterationStats {
+                iteration: 1,
+                env_steps: 2000,
+                mean_outflow: 1555.5,
+                kl: 0.01,
+                ..Default::default()
+            }],
         };
         let dir = std::env::temp_dir().join(format!("mapc-rl-log-{}", std::process::id()));
         let p = dir.join("train.csv");

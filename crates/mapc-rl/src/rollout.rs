@@ -123,7 +123,9 @@ pub fn run_episode(
     ep.end = Some(if terminal {
         EpisodeEnd::Terminal
     } else {
-        EpisodeEnd::Truncated { bootstrap_value: if record { model.value(&obs, scratch) } else { 0.0 } }
+        EpisodeEnd::Truncated {
+            bootstrap_value: if record { model.value(&obs, scratch) } else { 0.0 },
+        }
     });
     ep.metrics = env.metrics();
     Ok(ep)
@@ -143,7 +145,16 @@ pub fn collect(
         .map_init(
             || (factory(), Scratch::default()),
             |(env, scratch), &(env_seed, noise_seed)| {
-                run_episode(env.as_mut(), model, scratch, env_seed, noise_seed, horizon, mode, record)
+                run_episode(
+                    env.as_mut(),
+                    model,
+                    scratch,
+                    env_seed,
+                    noise_seed,
+                    horizon,
+                    mode,
+                    record,
+                )
             },
         )
         .collect()

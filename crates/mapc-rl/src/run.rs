@@ -33,9 +33,18 @@ impl TrainRun {
                 dir.display()
             )));
         }
-        std::fs::create_dir_all(dir).map_err(|e| RlError::Io { path: dir.into(), source: e })?;
+        std::fs::create_dir_all(dir).map_err(|e| RlError::Io {
+            path: dir.into(),
+            source: e,
+        })?;
         let state = TrainerState::new(config, spec.obs_dim, spec.act_dim);
-        Ok(Self { dir: dir.into(), spec, state, log: TrainingLog::default(), checkpoint_every: checkpoint_every.max(1) })
+        Ok(Self {
+            dir: dir.into(),
+            spec,
+            state,
+            log: TrainingLog::default(),
+            checkpoint_every: checkpoint_every.max(1),
+        })
     }
 
     /// Reopens a run; the log is cut back to the checkpoint's iteration (rows written after the last checkpoint
@@ -43,9 +52,19 @@ impl TrainRun {
     pub fn resume(dir: &Path, checkpoint_every: u64) -> Result<Self, RlError> {
         let ck = Checkpoint::load(&checkpoint_path(dir))?;
         let lp = log_path(dir);
-        let mut log = if lp.exists() { TrainingLog::read(&lp)? } else { TrainingLog::default() };
+        let mut log = if lp.exists() {
+            TrainingLog::read(&lp)?
+        } else {
+            TrainingLog::default()
+        };
         log.rows.retain(|r| r.iteration <= ck.state.iteration);
-        Ok(Self { dir: dir.into(), spec: ck.spec, state: ck.state, log, checkpoint_every: checkpoint_every.max(1) })
+        Ok(Self {
+            dir: dir.into(),
+            spec: ck.spec,
+            state: ck.state,
+            log,
+            checkpoint_every: checkpoint_every.max(1),
+        })
     }
 
     pub fn done(&self) -> bool {
@@ -53,7 +72,11 @@ impl TrainRun {
     }
 
     pub fn checkpoint(&self) -> Checkpoint {
-        Checkpoint { format_version: FORMAT_VERSION, spec: self.spec.clone(), state: self.state.clone() }
+        Checkpoint {
+            format_version: FORMAT_VERSION,
+            spec: self.spec.clone(),
+            state: self.state.clone(),
+        }
     }
 
     pub fn save(&self) -> Result<(), RlError> {

@@ -170,3 +170,28 @@ mod tests {
         assert!(err.contains("2 lanes"), "{err}");
     }
 }
+
+/// The paper's corridor on the real map (REFERENCE.md sec. 6).
+#[cfg(test)]
+mod real_map_tests {
+    use super::*;
+    use std::path::Path;
+
+    pub(crate) const PAPER_VIA: [&str; 3] = ["osm-way:59440544", "osm-way:8667198", "osm-way:8708084"];
+
+    #[test]
+    fn i696_paper_route_gives_the_papers_merge() {
+        let map = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../maps/i696.osm");
+        let raw = mapc_import::import_path(&map, &mapc_import::ImportOptions::default()).unwrap();
+        let opts = SimplifyOptions { via: PAPER_VIA.map(String::from).to_vec(), ..Default::default() };
+        let s = simplify(&raw, &opts).unwrap();
+        let merges = corridor_merges(&s.graph, &s.roles);
+        let m = merges.iter().find(|m| m.osm_node == Some(61862553)).expect("the I-696 merge is on the corridor");
+        // The importer's ellipsoidal lengths run ~0.1-0.25% above a spherical estimate (3187 / 2434 / 5034 m).
+        assert!((m.main_before_m - 3187.0).abs() < 20.0, "{m:?}");
+        assert!((m.merge_m - 2434.0).abs() < 15.0, "{m:?}");
+        assert!((m.main_after_m - 5034.0).abs() < 25.0, "{m:?}");
+        assert!(m.merging_is_major, "I-696 has the right of way: {m:?}");
+        assert!(m.merging_label.contains("696"), "{m:?}");
+    }
+}

@@ -28,7 +28,15 @@ pub struct IdmParams {
 
 impl IdmParams {
     /// Parameters with SUMO's sub-stepping rule for the step `dt` (IDM stepping 0.25 s).
-    pub fn new(accel: f64, decel: f64, emergency_decel: f64, tau: f64, min_gap: f64, delta: f64, dt: f64) -> Self {
+    pub fn new(
+        accel: f64,
+        decel: f64,
+        emergency_decel: f64,
+        tau: f64,
+        min_gap: f64,
+        delta: f64,
+        dt: f64,
+    ) -> Self {
         Self::with_stepping(accel, decel, emergency_decel, tau, min_gap, delta, dt, 0.25)
     }
 
@@ -45,7 +53,16 @@ impl IdmParams {
         stepping: f64,
     ) -> Self {
         let iterations = ((dt / stepping + 0.5) as u32).max(1);
-        IdmParams { accel, decel, emergency_decel, tau, min_gap, delta, iterations, dt }
+        IdmParams {
+            accel,
+            decel,
+            emergency_decel,
+            tau,
+            min_gap,
+            delta,
+            iterations,
+            dt,
+        }
     }
 
     fn two_sqrt_ab(&self) -> f64 {
@@ -65,12 +82,23 @@ impl IdmParams {
     /// SUMO's `MSCFModel_IDM::_v`: the speed after one step behind a leader at bumper gap `gap` driving at
     /// `leader_speed`, integrating IDM's acceleration in `iterations` sub-steps (the gap shrinks between sub-steps;
     /// the leader is assumed to keep its speed). `respect_min_gap` adds s0 to both the gap and the desired gap.
-    pub fn next_speed(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64, respect_min_gap: bool) -> f64 {
+    pub fn next_speed(
+        &self,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+        respect_min_gap: bool,
+    ) -> f64 {
         let n = self.iterations as f64;
         let two_sqrt_ab = self.two_sqrt_ab();
         let des = desired_speed.max(NUMERICAL_EPS);
         let mut v = speed;
-        let mut g = if respect_min_gap { gap + self.min_gap } else { gap };
+        let mut g = if respect_min_gap {
+            gap + self.min_gap
+        } else {
+            gap
+        };
         for _ in 0..self.iterations {
             let dv = v - leader_speed;
             let mut s = (v * self.tau + v * dv / two_sqrt_ab).max(0.0);
@@ -124,7 +152,13 @@ impl IdmParams {
 
     /// The highest speed a vehicle may be inserted with at `gap` behind a leader, starting from `speed`
     /// (SUMO's `insertionFollowSpeed`).
-    pub fn insertion_follow_speed(&self, speed: f64, gap: f64, leader_speed: f64, desired_speed: f64) -> f64 {
+    pub fn insertion_follow_speed(
+        &self,
+        speed: f64,
+        gap: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+    ) -> f64 {
         let mut v = speed;
         for _ in 0..64 {
             if gap >= self.secure_gap(v, leader_speed) {
@@ -161,7 +195,8 @@ impl IdmParams {
         let b = self.decel * self.dt;
         let s = self.dt;
         let t = 0.0;
-        let n = (0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s).floor();
+        let n = (0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s)
+            .floor();
         let h = 0.5 * n * (n - 1.0) * b * s + n * b * t;
         let r = (g - h) / (n * s + t);
         // n steps of driving: the last at speed r, each earlier one b faster
@@ -177,7 +212,11 @@ impl IdmParams {
         if arrival_speed <= NUMERICAL_EPS && speed <= NUMERICAL_EPS {
             return 1e6;
         }
-        let accel = if arrival_speed >= speed { self.accel } else { -self.decel };
+        let accel = if arrival_speed >= speed {
+            self.accel
+        } else {
+            -self.decel
+        };
         let accel_time = (arrival_speed - speed) / accel;
         let accel_way = accel_time * (arrival_speed + speed) * 0.5;
         if dist >= accel_way {
@@ -210,8 +249,14 @@ mod tests {
     #[test]
     fn sub_steps_follow_sumo_rule() {
         assert_eq!(paper().iterations, 2);
-        assert_eq!(IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, 0.1).iterations, 1);
-        assert_eq!(IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, 1.0).iterations, 4);
+        assert_eq!(
+            IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, 0.1).iterations,
+            1
+        );
+        assert_eq!(
+            IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, 1.0).iterations,
+            4
+        );
     }
 
     #[test]
@@ -265,7 +310,10 @@ mod tests {
                 d += x * 0.5;
                 x -= b;
             }
-            assert!((d - (gap - NUMERICAL_EPS)).abs() < 1e-6, "gap {gap}: v {v} covers {d}");
+            assert!(
+                (d - (gap - NUMERICAL_EPS)).abs() < 1e-6,
+                "gap {gap}: v {v} covers {d}"
+            );
         }
     }
 

@@ -55,7 +55,8 @@ pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleV
 pub use spec::{FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
 
 /// Header of trace CSV files.
-pub const TRACE_HEADER: &str = "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled";
+pub const TRACE_HEADER: &str =
+    "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled";
 
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
@@ -67,8 +68,16 @@ pub enum SimError {
     UnknownVehicle(VehicleId),
     #[error("vehicle {0} is not a controlled vehicle")]
     NotControlled(VehicleId),
-    #[error("collision at t = {time_s} s: vehicle {follower} is {gap_m:.3} m into vehicle {leader} ({place})")]
-    Collision { time_s: f64, leader: VehicleId, follower: VehicleId, gap_m: f64, place: String },
+    #[error(
+        "collision at t = {time_s} s: vehicle {follower} is {gap_m:.3} m into vehicle {leader} ({place})"
+    )]
+    Collision {
+        time_s: f64,
+        leader: VehicleId,
+        follower: VehicleId,
+        gap_m: f64,
+        place: String,
+    },
 }
 
 #[cfg(test)]

@@ -41,24 +41,41 @@ impl MeanCi {
     pub fn of(xs: &[f64]) -> MeanCi {
         let n = xs.len();
         if n == 0 {
-            return MeanCi { mean: f64::NAN, ci95: f64::NAN, std: f64::NAN, n };
+            return MeanCi {
+                mean: f64::NAN,
+                ci95: f64::NAN,
+                std: f64::NAN,
+                n,
+            };
         }
         // sequential sums in the given order: the same numbers for any thread count
         let mean = xs.iter().sum::<f64>() / n as f64;
         if n == 1 {
-            return MeanCi { mean, ci95: 0.0, std: 0.0, n };
+            return MeanCi {
+                mean,
+                ci95: 0.0,
+                std: 0.0,
+                n,
+            };
         }
         let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1) as f64;
         let std = var.sqrt();
         let t = t_quantile_975(n - 1);
-        MeanCi { mean, ci95: t * std / (n as f64).sqrt(), std, n }
+        MeanCi {
+            mean,
+            ci95: t * std / (n as f64).sqrt(),
+            std,
+            n,
+        }
     }
 }
 
 /// The 97.5% quantile of Student's t with `dof` degrees of freedom.
 pub fn t_quantile_975(dof: usize) -> f64 {
     use statrs::distribution::{ContinuousCDF, StudentsT};
-    StudentsT::new(0.0, 1.0, dof as f64).map(|t| t.inverse_cdf(0.975)).unwrap_or(1.959964)
+    StudentsT::new(0.0, 1.0, dof as f64)
+        .map(|t| t.inverse_cdf(0.975))
+        .unwrap_or(1.959964)
 }
 
 /// Metrics over seeds.

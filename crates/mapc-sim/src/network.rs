@@ -64,11 +64,17 @@ impl Network {
         let mut lane_names = Vec::new();
         for (i, r) in g.roads.iter().enumerate() {
             if !(r.length_m > 0.0) || !r.length_m.is_finite() {
-                return Err(SimError::Network(format!("road {} has length {} m", r.id, r.length_m)));
+                return Err(SimError::Network(format!(
+                    "road {} has length {} m",
+                    r.id, r.length_m
+                )));
             }
             let speed = r.speed_mps();
             if !(speed > 0.0) {
-                return Err(SimError::Network(format!("road {} has speed limit {} m/s", r.id, speed)));
+                return Err(SimError::Network(format!(
+                    "road {} has speed limit {} m/s",
+                    r.id, speed
+                )));
             }
             road_lane.insert(r.id, i as LaneIdx);
             lanes.push(SimLane {
@@ -88,7 +94,8 @@ impl Network {
             if seen.contains_key(&(c.from_road, c.to_road)) {
                 continue;
             }
-            let (Some(&from), Some(&to)) = (road_lane.get(&c.from_road), road_lane.get(&c.to_road)) else {
+            let (Some(&from), Some(&to)) = (road_lane.get(&c.from_road), road_lane.get(&c.to_road))
+            else {
                 return Err(SimError::Network(format!(
                     "connection {} -> {} at {} names a missing road",
                     c.from_road, c.to_road, c.junction
@@ -101,7 +108,10 @@ impl Network {
             lanes.push(SimLane {
                 kind: LaneKind::Via(link_idx),
                 length: c.via_length_m.max(MIN_VIA_LENGTH_M),
-                speed_limit: c.via_speed_mps.filter(|s| *s > 0.0).unwrap_or(from_speed.min(to_speed)),
+                speed_limit: c
+                    .via_speed_mps
+                    .filter(|s| *s > 0.0)
+                    .unwrap_or(from_speed.min(to_speed)),
                 out_links: Vec::new(),
                 via_target: Some(to),
                 downstream_m: 0.0,
@@ -121,13 +131,21 @@ impl Network {
         for i in 0..links.len() {
             let foes: Vec<LinkIdx> = (0..links.len())
                 .filter(|&j| {
-                    j != i && links[j].to_lane == links[i].to_lane && links[j].from_lane != links[i].from_lane
+                    j != i
+                        && links[j].to_lane == links[i].to_lane
+                        && links[j].from_lane != links[i].from_lane
                 })
                 .map(|j| j as LinkIdx)
                 .collect();
             links[i].foes = foes;
         }
-        let mut net = Network { lanes, links, road_ids: g.roads.iter().map(|r| r.id).collect(), road_lane, lane_names };
+        let mut net = Network {
+            lanes,
+            links,
+            road_ids: g.roads.iter().map(|r| r.id).collect(),
+            road_lane,
+            lane_names,
+        };
         net.compute_downstream()?;
         Ok(net)
     }
@@ -169,7 +187,11 @@ impl Network {
             }
         }
         for &lane in &order {
-            let best = self.successors(lane as LaneIdx).iter().map(|&s| self.lanes[s as usize].downstream_m).fold(0.0, f64::max);
+            let best = self
+                .successors(lane as LaneIdx)
+                .iter()
+                .map(|&s| self.lanes[s as usize].downstream_m)
+                .fold(0.0, f64::max);
             self.lanes[lane].downstream_m = self.lanes[lane].length + best;
         }
         Ok(())
@@ -178,7 +200,11 @@ impl Network {
     fn successors(&self, lane: LaneIdx) -> Vec<LaneIdx> {
         let l = &self.lanes[lane as usize];
         match l.kind {
-            LaneKind::Road(_) => l.out_links.iter().map(|&k| self.links[k as usize].via_lane).collect(),
+            LaneKind::Road(_) => l
+                .out_links
+                .iter()
+                .map(|&k| self.links[k as usize].via_lane)
+                .collect(),
             LaneKind::Via(_) => l.via_target.into_iter().collect(),
         }
     }
@@ -193,20 +219,31 @@ impl Network {
 
     /// Route as lanes from `from` to `to` (or, without `to`, downstream to a sink taking the through road at each
     /// diverge: highest priority, then most lanes, then the smallest turning angle).
-    pub fn route(&self, g: &LaneGraph, from: RoadId, to: Option<RoadId>) -> Result<Vec<LaneIdx>, SimError> {
-        let &start = self.road_lane.get(&from).ok_or_else(|| SimError::Network(format!("unknown road {from}")))?;
+    pub fn route(
+        &self,
+        g: &LaneGraph,
+        from: RoadId,
+        to: Option<RoadId>,
+    ) -> Result<Vec<LaneIdx>, SimError> {
+        let &start = self
+            .road_lane
+            .get(&from)
+            .ok_or_else(|| SimError::Network(format!("unknown road {from}")))?;
         let roads: Vec<RoadId> = match to {
             Some(to) => {
                 if !self.road_lane.contains_key(&to) {
                     return Err(SimError::Network(format!("unknown road {to}")));
                 }
-                self.road_path(from, to).ok_or_else(|| SimError::Network(format!("no route from {from} to {to}")))?
+                self.road_path(from, to)
+                    .ok_or_else(|| SimError::Network(format!("no route from {from} to {to}")))?
             }
             None => {
                 let mut path = vec![from];
                 let mut cur = start;
                 for _ in 0..self.lanes.len() {
-                    let Some(next) = self.through_link(g, cur) else { break };
+                    let Some(next) = self.through_link(g, cur) else {
+                        break;
+                    };
                     let to_lane = self.links[next as usize].to_lane;
                     path.push(self.road_ids[self.road_of(to_lane).unwrap()]);
                     cur = to_lane;
@@ -223,7 +260,9 @@ impl Network {
                 .iter()
                 .copied()
                 .find(|&k| self.links[k as usize].to_lane == b)
-                .ok_or_else(|| SimError::Network(format!("no connection from {} to {}", w[0], w[1])))?;
+                .ok_or_else(|| {
+                    SimError::Network(format!("no connection from {} to {}", w[0], w[1]))
+                })?;
             lanes.push(self.links[link as usize].via_lane);
             lanes.push(b);
         }
@@ -245,7 +284,11 @@ impl Network {
                     c = p;
                 }
                 path.reverse();
-                return Some(path.into_iter().map(|l| self.road_ids[self.road_of(l).unwrap()]).collect());
+                return Some(
+                    path.into_iter()
+                        .map(|l| self.road_ids[self.road_of(l).unwrap()])
+                        .collect(),
+                );
             }
             for &k in &self.lanes[cur as usize].out_links {
                 let nxt = self.links[k as usize].to_lane;

@@ -42,14 +42,15 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
         names
             .iter()
             .position(|n| n.as_str() == name)
-            .ok_or_else(|| SimError::Spec(format!("{}: {what}: no vehicle type `{name}`", rs.origin)))
+            .ok_or_else(|| {
+                SimError::Spec(format!("{}: {what}: no vehicle type `{name}`", rs.origin))
+            })
     };
     let mut flows = Vec::with_capacity(sc.flows.len());
     for (i, f) in sc.flows.iter().enumerate() {
-        let (from, to) = *rs
-            .flow_roads
-            .get(i)
-            .ok_or_else(|| SimError::Spec(format!("{}: flows[{i}] has no resolved roads", rs.origin)))?;
+        let (from, to) = *rs.flow_roads.get(i).ok_or_else(|| {
+            SimError::Spec(format!("{}: flows[{i}] has no resolved roads", rs.origin))
+        })?;
         flows.push(FlowSpec {
             from,
             to,
@@ -62,7 +63,10 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
     }
     // Main line: the route of the busiest flow.
     let net = Network::from_graph(&rs.graph)?;
-    let main_line: Vec<RoadId> = match flows.iter().max_by(|a, b| a.vehs_per_hour.total_cmp(&b.vehs_per_hour)) {
+    let main_line: Vec<RoadId> = match flows
+        .iter()
+        .max_by(|a, b| a.vehs_per_hour.total_cmp(&b.vehs_per_hour))
+    {
         Some(f) => net
             .route(&rs.graph, f.from, f.to)?
             .into_iter()
@@ -74,7 +78,14 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
     let mut initial = Vec::new();
     if let Some(iv) = &sc.initial_vehicles {
         let vt = type_index(&iv.vehicle_type, "initial_vehicles.vehicle_type")?;
-        initial = initial_placement(&rs.graph, &net, &main_line, iv.count as usize, iv.speed_mps, vt)?;
+        initial = initial_placement(
+            &rs.graph,
+            &net,
+            &main_line,
+            iv.count as usize,
+            iv.speed_mps,
+            vt,
+        )?;
     }
     let step_s = sc.step_s;
     Ok(SimSpec {
@@ -86,7 +97,11 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
         horizon_steps: sc.horizon_steps as u64,
         warmup_steps: sc.warmup_steps as u64,
         start_time_s: SETUP_STEPS * step_s,
-        control_region: if rs.region_roads.is_empty() { None } else { Some(rs.region_roads.clone()) },
+        control_region: if rs.region_roads.is_empty() {
+            None
+        } else {
+            Some(rs.region_roads.clone())
+        },
         n_av: sc.control.as_ref().map_or(0, |c| c.n_av as usize),
         main_line,
     })
@@ -107,7 +122,9 @@ fn initial_placement(
         return Ok(Vec::new());
     }
     let Some(&first) = main_line.first() else {
-        return Err(SimError::Spec("initial vehicles need a flow to define the main line".into()));
+        return Err(SimError::Spec(
+            "initial vehicles need a flow to define the main line".into(),
+        ));
     };
     let lanes = net.route(g, first, main_line.last().copied())?;
     let total: f64 = g.roads.iter().map(|r| r.length_m).sum();
@@ -125,14 +142,21 @@ fn initial_placement(
                     None => (lanes[k + 1], 0.0),
                 };
                 let road = net.road_ids[net.road_of(lane).unwrap()];
-                out.push(InitialVehicleSpec { road, pos_m: pos, speed, vehicle_type });
+                out.push(InitialVehicleSpec {
+                    road,
+                    pos_m: pos,
+                    speed,
+                    vehicle_type,
+                });
                 placed = true;
                 break;
             }
             x -= len;
         }
         if !placed {
-            return Err(SimError::Spec(format!("initial vehicle {i} does not fit on the main line")));
+            return Err(SimError::Spec(format!(
+                "initial vehicle {i} does not fit on the main line"
+            )));
         }
     }
     Ok(out)

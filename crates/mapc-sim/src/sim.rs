@@ -2,11 +2,11 @@
 //! across lanes and junctions, speed limits ahead, minor-link requests), register junction approaches, decide
 //! links (right of way with impatience), then move every vehicle, front to back, never into its leader.
 
+use crate::SimError;
 use crate::idm::{IdmParams, NUMERICAL_EPS};
 use crate::metrics::RunMetrics;
 use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network};
 use crate::spec::SimSpec;
-use crate::SimError;
 use mapc_graph::RoadId;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
@@ -26,6 +26,9 @@ const POSITION_EPS: f64 = 0.1;
 const LINK_LOOKAHEAD_S: f64 = 1.0;
 /// The arrival time of a foe that could stop is this much later than its normal arrival.
 const BRAKING_ARRIVAL_DELAY_S: f64 = 30.0;
+/// Where merging connections start to conflict, as a share of the shorter one's length before its end
+/// (netconvert's internal lanes come within a lane width of each other about a third of the way from the end).
+const CONFLICT_POINT_SHARE: f64 = 0.35;
 /// Links planned ahead per vehicle.
 const MAX_LINK_ITEMS: usize = 4;
 
@@ -68,7 +71,9 @@ struct LinkItem {
     link: LinkIdx,
     dist: f64,
     v_link_pass: f64,
-    v_link_wait: f64,
+    /// Where the vehicle would stop for this link (the speed to do so is computed only when it must wait).
+    stop_dist: f64,
+    desired_speed: f64,
     arrival_time: f64,
     arrival_speed: f64,
     leave_time: f64,
@@ -167,6 +172,8 @@ pub struct Simulation {
     main_line: Vec<(LaneIdx, f64)>,
     metrics: MetricsAcc,
     check_invariants: bool,
+    /// Longest vehicle of any type (m).
+    max_length: f64,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -191,13 +198,26 @@ impl Simulation {
             .vehicle_types
             .iter()
             .map(|t| {
-                IdmParams::with_stepping(t.accel, t.decel, t.emergency_decel, t.tau, t.min_gap, t.delta, dt, t.idm_stepping_s)
+                IdmParams::with_stepping(
+                    t.accel,
+                    t.decel,
+                    t.emergency_decel,
+                    t.tau,
+                    t.min_gap,
+                    t.delta,
+                    dt,
+                    t.idm_stepping_s,
+                )
             })
             .collect();
         let mut sim = Simulation {
             lane_veh: vec![VecDeque::new(); net.lanes.len()],
             approaches: vec![Vec::new(); net.links.len()],
-            link_has_minor_foe: net.links.iter().map(|l| l.foes.iter().any(|&f| !net.links[f as usize].major)).collect(),
+            link_has_minor_foe: net
+                .links
+                .iter()
+                .map(|l| l.foes.iter().any(|&f| !net.links[f as usize].major))
+                .collect(),
             pending: Vec::new(),
             entry_lanes: Vec::new(),
             lane_order: Vec::new(),
@@ -216,6 +236,11 @@ impl Simulation {
             main_line: Vec::new(),
             metrics: MetricsAcc::default(),
             check_invariants: cfg!(debug_assertions),
+            max_length: spec
+                .vehicle_types
+                .iter()
+                .map(|t| t.length)
+                .fold(0.0, f64::max),
             types,
             net,
             spec,
@@ -223,7 +248,10 @@ impl Simulation {
         // Downstream lanes first, so a leader has moved before its follower.
         let mut order: Vec<LaneIdx> = (0..sim.net.lanes.len() as LaneIdx).collect();
         order.sort_by(|&a, &b| {
-            sim.net.lanes[a as usize].downstream_m.total_cmp(&sim.net.lanes[b as usize].downstream_m).then(a.cmp(&b))
+            sim.net.lanes[a as usize]
+                .downstream_m
+                .total_cmp(&sim.net.lanes[b as usize].downstream_m)
+                .then(a.cmp(&b))
         });
         sim.lane_order = order;
         if let Some(region) = &sim.spec.control_region {
@@ -286,18 +314,23 @@ impl Simulation {
     fn derive_main_line(&mut self) -> Result<Vec<(LaneIdx, f64)>, SimError> {
         let roads: Vec<RoadId> = if !self.spec.main_line.is_empty() {
             self.spec.main_line.clone()
-        } else if let Some(f) = self
-            .spec
-            .flows
-            .iter()
-            .max_by(|a, b| a.vehs_per_hour.total_cmp(&b.vehs_per_hour).then(b.from.cmp(&a.from)))
-        {
+        } else if let Some(f) = self.spec.flows.iter().max_by(|a, b| {
+            a.vehs_per_hour
+                .total_cmp(&b.vehs_per_hour)
+                .then(b.from.cmp(&a.from))
+        }) {
             let lanes = self.net.route(&self.spec.graph, f.from, None)?;
-            lanes.iter().filter_map(|&l| self.net.road_of(l)).map(|r| self.net.road_ids[r]).collect()
+            lanes
+                .iter()
+                .filter_map(|&l| self.net.road_of(l))
+                .map(|r| self.net.road_ids[r])
+                .collect()
         } else {
             return Ok(Vec::new());
         };
-        let lanes = self.net.route(&self.spec.graph, roads[0], roads.last().copied())?;
+        let lanes = self
+            .net
+            .route(&self.spec.graph, roads[0], roads.last().copied())?;
         let mut acc = 0.0;
         let mut out = Vec::with_capacity(lanes.len());
         for l in lanes {
@@ -307,7 +340,13 @@ impl Simulation {
         Ok(out)
     }
 
-    fn create_vehicle(&mut self, vtype: usize, route: u32, depart_s: f64, depart_speed: f64) -> VehicleId {
+    fn create_vehicle(
+        &mut self,
+        vtype: usize,
+        route: u32,
+        depart_s: f64,
+        depart_speed: f64,
+    ) -> VehicleId {
         let t = &self.spec.vehicle_types[vtype];
         let factor = if t.speed_dev > 0.0 {
             // SUMO redraws until the factor lies in [0.2, 2] (at most 10 tries, then the mean).
@@ -359,10 +398,20 @@ impl Simulation {
     }
 
     /// Put a vehicle into the network at the back of `lane`.
-    fn place(&mut self, id: VehicleId, lane: LaneIdx, pos: f64, speed: f64, counted: bool) -> Result<(), SimError> {
+    fn place(
+        &mut self,
+        id: VehicleId,
+        lane: LaneIdx,
+        pos: f64,
+        speed: f64,
+        counted: bool,
+    ) -> Result<(), SimError> {
         let q = &mut self.lane_veh[lane as usize];
         // keep the lane sorted front-first
-        let at = q.iter().position(|&o| self.veh[o as usize].pos < pos).unwrap_or(q.len());
+        let at = q
+            .iter()
+            .position(|&o| self.veh[o as usize].pos < pos)
+            .unwrap_or(q.len());
         q.insert(at, id);
         let v = &mut self.veh[id as usize];
         v.status = VehicleStatus::Active;
@@ -413,7 +462,9 @@ impl Simulation {
     }
     /// Vehicles in the network now, in lane order (downstream lanes first, front first).
     pub fn active_ids(&self) -> impl Iterator<Item = VehicleId> + '_ {
-        self.lane_order.iter().flat_map(move |&l| self.lane_veh[l as usize].iter().copied())
+        self.lane_order
+            .iter()
+            .flat_map(move |&l| self.lane_veh[l as usize].iter().copied())
     }
     /// Number of vehicles in the network.
     pub fn active_count(&self) -> usize {
@@ -460,11 +511,6 @@ impl Simulation {
         }
     }
 
-    #[doc(hidden)]
-    pub fn veh_lane(&self, id: VehicleId) -> LaneIdx {
-        self.veh[id as usize].lane
-    }
-
     /// Whether the vehicle is in the scenario's control region (everywhere when the scenario has none).
     pub fn in_control_region(&self, id: VehicleId) -> bool {
         self.veh
@@ -476,7 +522,10 @@ impl Simulation {
     pub fn route_progress(&self, id: VehicleId) -> Option<(f64, f64)> {
         let v = self.veh.get(id as usize)?;
         let r = &self.routes[v.route as usize];
-        let total = r.start_m.last().copied().unwrap_or(0.0) + r.lanes.last().map_or(0.0, |&l| self.net.lanes[l as usize].length);
+        let total = r.start_m.last().copied().unwrap_or(0.0)
+            + r.lanes
+                .last()
+                .map_or(0.0, |&l| self.net.lanes[l as usize].length);
         let done = match v.status {
             VehicleStatus::Pending => 0.0,
             VehicleStatus::Arrived => total,
@@ -487,8 +536,14 @@ impl Simulation {
 
     /// Distance from the vehicle's front to the next junction where roads merge or split (a link with foes or a
     /// road with several exits), and that junction; `None` if no such junction lies ahead on its route.
-    pub fn distance_to_next_junction(&self, id: VehicleId) -> Option<(f64, mapc_graph::JunctionId)> {
-        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
+    pub fn distance_to_next_junction(
+        &self,
+        id: VehicleId,
+    ) -> Option<(f64, mapc_graph::JunctionId)> {
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
         let r = &self.routes[v.route as usize];
         let mut seen = self.net.lanes[v.lane as usize].length - v.pos;
         for k in (v.route_pos as usize + 1)..r.lanes.len() {
@@ -508,18 +563,31 @@ impl Simulation {
     /// Distance from the vehicle's front to the network's end along its route position's main line
     /// (`corridor_x_m` of traces): `Some` only on main-line roads and their connections.
     pub fn corridor_x(&self, id: VehicleId) -> Option<f64> {
-        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
-        self.main_line.iter().find(|(l, _)| *l == v.lane).map(|(_, start)| start + v.pos)
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
+        self.main_line
+            .iter()
+            .find(|(l, _)| *l == v.lane)
+            .map(|(_, start)| start + v.pos)
     }
 
     /// The nearest vehicle ahead on the route (across lanes and junctions, including vehicles on a merging
     /// connection that are closer to the merge point), within `max_dist` metres.
     pub fn leader(&self, id: VehicleId, max_dist: f64) -> Option<Neighbor> {
-        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
         let mut best: Option<Neighbor> = None;
         self.for_each_leader(id, max_dist, false, |l, gap| {
             if best.is_none_or(|b| gap < b.gap_m) {
-                best = Some(Neighbor { id: l, gap_m: gap, speed: self.veh[l as usize].speed });
+                best = Some(Neighbor {
+                    id: l,
+                    gap_m: gap,
+                    speed: self.veh[l as usize].speed,
+                });
             }
         });
         let _ = v;
@@ -529,14 +597,21 @@ impl Simulation {
     /// The nearest vehicle behind (on this road, the connections into it, and the roads before them, the merging
     /// road included), within `max_dist` metres.
     pub fn follower(&self, id: VehicleId, max_dist: f64) -> Option<Neighbor> {
-        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
         let q = &self.lane_veh[v.lane as usize];
         let idx = q.iter().position(|&o| o == id)?;
         if idx + 1 < q.len() {
             let f = q[idx + 1];
             let fv = &self.veh[f as usize];
             let gap = v.pos - v.length - fv.pos;
-            return (gap <= max_dist).then_some(Neighbor { id: f, gap_m: gap, speed: fv.speed });
+            return (gap <= max_dist).then_some(Neighbor {
+                id: f,
+                gap_m: gap,
+                speed: fv.speed,
+            });
         }
         // Search upstream: distance from the start of a lane to ego's back.
         let mut best: Option<Neighbor> = None;
@@ -552,7 +627,11 @@ impl Simulation {
                     let fv = &self.veh[f as usize];
                     let gap = back_from_start + (len - fv.pos);
                     if f != id && gap <= max_dist && best.is_none_or(|b| gap < b.gap_m) {
-                        best = Some(Neighbor { id: f, gap_m: gap, speed: fv.speed });
+                        best = Some(Neighbor {
+                            id: f,
+                            gap_m: gap,
+                            speed: fv.speed,
+                        });
                     }
                 } else if back_from_start + len <= max_dist {
                     stack.push((up, back_from_start + len));
@@ -581,7 +660,10 @@ impl Simulation {
     /// The vehicle on another road nearest to the merge point that this vehicle's route reaches next, among those
     /// approaching it (on the merging road within `max_dist` of the merge, or inside the junction).
     pub fn nearest_merge_foe(&self, id: VehicleId, max_dist: f64) -> Option<MergeFoe> {
-        let v = self.veh.get(id as usize).filter(|v| v.status == VehicleStatus::Active)?;
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
         let r = &self.routes[v.route as usize];
         // find the next via lane on the route with foes
         let mut k = v.route_pos as usize;
@@ -597,8 +679,15 @@ impl Simulation {
                         let fl = &self.net.links[f as usize];
                         let via_len = self.net.lanes[fl.via_lane as usize].length;
                         let mut consider = |o: VehicleId, d: f64| {
-                            if o != id && d <= max_dist && best.is_none_or(|b| d < b.dist_to_merge_m) {
-                                best = Some(MergeFoe { id: o, dist_to_merge_m: d, speed: self.veh[o as usize].speed });
+                            if o != id
+                                && d <= max_dist
+                                && best.is_none_or(|b| d < b.dist_to_merge_m)
+                            {
+                                best = Some(MergeFoe {
+                                    id: o,
+                                    dist_to_merge_m: d,
+                                    speed: self.veh[o as usize].speed,
+                                });
                             }
                         };
                         for &o in &self.lane_veh[fl.via_lane as usize] {
@@ -620,7 +709,10 @@ impl Simulation {
     /// Set the acceleration a controlled vehicle applies in the next step (clamped to [-decel, accel], then
     /// capped by the safe speed). Ignored for vehicles that are not controlled or not in the network.
     pub fn set_acceleration(&mut self, id: VehicleId, accel: f64) -> Result<(), SimError> {
-        let v = self.veh.get_mut(id as usize).ok_or(SimError::UnknownVehicle(id))?;
+        let v = self
+            .veh
+            .get_mut(id as usize)
+            .ok_or(SimError::UnknownVehicle(id))?;
         if !v.controlled {
             return Err(SimError::NotControlled(id));
         }
@@ -636,9 +728,21 @@ impl Simulation {
         RunMetrics {
             outflow_veh_h: 3600.0 * m.arrived as f64 / secs,
             inflow_veh_h: 3600.0 * m.departed as f64 / secs,
-            avg_speed_mps: if m.speed_steps > 0 { m.speed_sum / m.speed_steps as f64 } else { 0.0 },
-            mean_travel_time_s: if m.arrived > 0 { m.travel_time_sum / m.arrived as f64 } else { f64::NAN },
-            mean_delay_s: if m.arrived > 0 { m.delay_sum / m.arrived as f64 } else { f64::NAN },
+            avg_speed_mps: if m.speed_steps > 0 {
+                m.speed_sum / m.speed_steps as f64
+            } else {
+                0.0
+            },
+            mean_travel_time_s: if m.arrived > 0 {
+                m.travel_time_sum / m.arrived as f64
+            } else {
+                f64::NAN
+            },
+            mean_delay_s: if m.arrived > 0 {
+                m.delay_sum / m.arrived as f64
+            } else {
+                f64::NAN
+            },
             arrived: m.arrived,
             departed: m.departed,
             steps: m.steps,
@@ -707,14 +811,37 @@ impl Simulation {
     }
 
     fn desired_speed(&self, v: &Veh, lane: LaneIdx) -> f64 {
-        (self.net.lanes[lane as usize].speed_limit * v.speed_factor).min(self.spec.vehicle_types[v.vtype as usize].max_speed)
+        (self.net.lanes[lane as usize].speed_limit * v.speed_factor)
+            .min(self.spec.vehicle_types[v.vtype as usize].max_speed)
     }
 
     /// Calls `f(leader, gap)` for every vehicle the ego must follow within `max_dist` (gap: bumper to bumper).
-    fn for_each_leader(&self, id: VehicleId, max_dist: f64, guard: bool, mut f: impl FnMut(VehicleId, f64)) {
+    fn for_each_leader(
+        &self,
+        id: VehicleId,
+        max_dist: f64,
+        guard: bool,
+        f: impl FnMut(VehicleId, f64),
+    ) {
+        let v = &self.veh[id as usize];
+        let idx = self.lane_veh[v.lane as usize]
+            .iter()
+            .position(|&o| o == id)
+            .unwrap_or(0);
+        self.for_each_leader_at(id, idx, max_dist, guard, f)
+    }
+
+    /// As [`Self::for_each_leader`] for the vehicle at index `idx` of its lane.
+    fn for_each_leader_at(
+        &self,
+        id: VehicleId,
+        idx: usize,
+        max_dist: f64,
+        guard: bool,
+        mut f: impl FnMut(VehicleId, f64),
+    ) {
         let v = &self.veh[id as usize];
         let q = &self.lane_veh[v.lane as usize];
-        let idx = q.iter().position(|&o| o == id).unwrap_or(0);
         if idx > 0 {
             let l = q[idx - 1];
             let lv = &self.veh[l as usize];
@@ -726,7 +853,13 @@ impl Simulation {
 
     /// Leaders beyond the ego's own lane: on the lanes ahead on its route, tails of vehicles that just entered a
     /// connection, and vehicles on merging connections that are closer to the merge point.
-    fn leaders_beyond(&self, id: VehicleId, max_dist: f64, guard: bool, f: &mut impl FnMut(VehicleId, f64)) {
+    fn leaders_beyond(
+        &self,
+        id: VehicleId,
+        max_dist: f64,
+        guard: bool,
+        f: &mut impl FnMut(VehicleId, f64),
+    ) {
         let v = &self.veh[id as usize];
         let r = &self.routes[v.route as usize];
         let cur = &self.net.lanes[v.lane as usize];
@@ -775,7 +908,9 @@ impl Simulation {
         guard: bool,
         f: &mut impl FnMut(VehicleId, f64),
     ) {
-        let LaneKind::Via(link) = self.net.lanes[via as usize].kind else { return };
+        let LaneKind::Via(link) = self.net.lanes[via as usize].kind else {
+            return;
+        };
         let ego_in_junction = self.veh[id as usize].lane == via;
         for &foe in &self.net.links[link as usize].foes {
             let fl = &self.net.links[foe as usize];
@@ -793,12 +928,53 @@ impl Simulation {
                 let d = flen + from_len - ov.pos;
                 // planning: a foe at its stop line may enter this very step ahead of ego (already inside);
                 // moving: a foe that entered in this step (moved past its road's end) leads ego
-                let relevant = if guard { ov.pos > from_len } else { ego_in_junction && d - flen < ov.speed * self.spec.step_s + 1.0 };
+                let relevant = if guard {
+                    ov.pos > from_len
+                } else {
+                    ego_in_junction && d - flen < ov.speed * self.spec.step_s + 1.0
+                };
                 if d < dist_to_merge && relevant {
                     f(o, dist_to_merge - d - ov.length);
                 }
             }
         }
+    }
+
+    /// A minor-road vehicle inside the junction that has not reached the conflict point yet keeps yielding to every
+    /// major-road vehicle inside the junction, even one behind it (SUMO's right of way among junction leaders):
+    /// with a negative gap it brakes as hard as it can.
+    fn yield_inside_junction(&self, id: VehicleId, link: LinkIdx, p: IdmParams, des: f64) -> f64 {
+        let lk = &self.net.links[link as usize];
+        let mut vmax = f64::INFINITY;
+        if lk.major || lk.foes.is_empty() {
+            return vmax;
+        }
+        let v = &self.veh[id as usize];
+        let own_len = self.net.lanes[lk.via_lane as usize].length;
+        let d = own_len - v.pos;
+        for &foe in &lk.foes {
+            let fl = &self.net.links[foe as usize];
+            if !fl.major {
+                continue;
+            }
+            let flen = self.net.lanes[fl.via_lane as usize].length;
+            if d <= CONFLICT_POINT_SHARE * own_len.min(flen) {
+                continue;
+            }
+            for &o in &self.lane_veh[fl.via_lane as usize] {
+                let ov = &self.veh[o as usize];
+                let df = flen - ov.pos;
+                if df >= d {
+                    vmax = vmax.min(p.follow_speed(
+                        d - df - ov.length - p.min_gap,
+                        v.speed,
+                        ov.speed,
+                        des,
+                    ));
+                }
+            }
+        }
+        vmax
     }
 
     fn plan(&mut self, id: VehicleId, qi: usize) {
@@ -823,9 +999,17 @@ impl Simulation {
         } else if let LaneKind::Via(_) = cur.kind {
             let mut m = vv;
             self.junction_foe_leaders(id, v.lane, cur.length - v.pos, false, &mut |o, gap| {
-                m = m.min(p.follow_speed(gap - p.min_gap, speed, self.veh[o as usize].speed, des_cur));
+                m = m.min(p.follow_speed(
+                    gap - p.min_gap,
+                    speed,
+                    self.veh[o as usize].speed,
+                    des_cur,
+                ));
             });
             vv = m;
+        }
+        if let LaneKind::Via(link) = cur.kind {
+            vv = vv.min(self.yield_inside_junction(id, link, p, des_cur));
         }
         if qi == 0 && !matches!(cur.kind, LaneKind::Via(_)) {
             for &k in &cur.out_links {
@@ -843,11 +1027,20 @@ impl Simulation {
             }
         }
 
-        let mut plan = Plan { v_safe: 0.0, n_items: 0, items: [LinkItem::default(); MAX_LINK_ITEMS] };
+        let mut plan = Plan {
+            v_safe: 0.0,
+            n_items: 0,
+            items: [LinkItem::default(); MAX_LINK_ITEMS],
+        };
         let mut seen = cur.length - v.pos;
         let mut k = v.route_pos as usize;
         let mut leader_found = qi > 0;
-        let mut v_link_pass_est = vv;
+        // speed at the next link: reachable by accelerating over the distance, unless a leader holds us back
+        let mut v_link_pass_est = if qi > 0 || vv < max_next.min(des_cur) {
+            vv
+        } else {
+            IdmParams::speed_after_distance(cur.length - v.pos, vv, p.accel).min(des_cur)
+        };
         let mut slowed_for_minor = false;
         loop {
             if k + 1 >= r.lanes.len() {
@@ -858,25 +1051,38 @@ impl Simulation {
                 break;
             }
             let via = r.lanes[k + 1];
-            let LaneKind::Via(link) = self.net.lanes[via as usize].kind else { break };
+            let LaneKind::Via(link) = self.net.lanes[via as usize].kind else {
+                break;
+            };
             let lk = &self.net.links[link as usize];
             let via_lane = &self.net.lanes[via as usize];
             // vehicles already inside the junction on merging connections lead us
-            if !lk.foes.is_empty() && k == v.route_pos as usize && !matches!(cur.kind, LaneKind::Via(_)) {
+            if !lk.foes.is_empty()
+                && k == v.route_pos as usize
+                && !matches!(cur.kind, LaneKind::Via(_))
+            {
                 let mut m = vv;
                 self.junction_foe_leaders(id, via, seen + via_lane.length, false, &mut |o, gap| {
-                    m = m.min(p.follow_speed(gap - p.min_gap, speed, self.veh[o as usize].speed, des_cur));
+                    m = m.min(p.follow_speed(
+                        gap - p.min_gap,
+                        speed,
+                        self.veh[o as usize].speed,
+                        des_cur,
+                    ));
                 });
                 vv = m;
+                v_link_pass_est = v_link_pass_est.min(vv);
             }
             let items_full = (plan.n_items as usize) >= MAX_LINK_ITEMS;
-            if !items_full {
+            // only links where right of way is decided need a request: minor links, and major links with minor foes
+            if !items_full && (!lk.major || self.link_has_minor_foe[link as usize]) {
                 let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).max(0.0);
-                let v_link_wait = vv.min(p.stop_speed(stop_dist, speed, des_cur));
-                let mut arrival_speed = v_link_pass_est.min(vv);
-                if !lk.major && seen >= FOE_VISIBILITY_M && p.brake_gap(speed, p.decel, 0.0) < seen {
+                let mut arrival_speed = v_link_pass_est;
+                if !lk.major && seen >= FOE_VISIBILITY_M && p.brake_gap(speed, p.decel, 0.0) < seen
+                {
                     let max_at_vis = p.maximum_safe_stop_speed(FOE_VISIBILITY_M, speed);
-                    let max_arrival = IdmParams::speed_after_distance(FOE_VISIBILITY_M, max_at_vis, p.accel);
+                    let max_arrival =
+                        IdmParams::speed_after_distance(FOE_VISIBILITY_M, max_at_vis, p.accel);
                     arrival_speed = arrival_speed.min(max_arrival);
                     slowed_for_minor = true;
                 }
@@ -889,18 +1095,26 @@ impl Simulation {
                     } else {
                         IdmParams::speed_after_distance(seen, vv, -p.decel).min(arrival_speed)
                     };
-                    arrival_time_braking =
-                        arrival_time.max(self.time_s + seen / ((vv + arrival_speed_braking) * 0.5).max(NUMERICAL_EPS));
+                    arrival_time_braking = arrival_time.max(
+                        self.time_s
+                            + seen / ((vv + arrival_speed_braking) * 0.5).max(NUMERICAL_EPS),
+                    );
                 }
                 let via_max = self.desired_speed(v, via);
-                let leave_speed = via_max.min(IdmParams::speed_after_distance(via_lane.length, arrival_speed, p.accel));
+                let leave_speed = via_max.min(IdmParams::speed_after_distance(
+                    via_lane.length,
+                    arrival_speed,
+                    p.accel,
+                ));
                 let leave_time = arrival_time
-                    + (via_lane.length + v.length) / (0.5 * (arrival_speed + leave_speed)).max(NUMERICAL_EPS);
+                    + (via_lane.length + v.length)
+                        / (0.5 * (arrival_speed + leave_speed)).max(NUMERICAL_EPS);
                 plan.items[plan.n_items as usize] = LinkItem {
                     link,
                     dist: seen,
                     v_link_pass: vv,
-                    v_link_wait,
+                    stop_dist,
+                    desired_speed: des_cur,
                     arrival_time,
                     arrival_speed,
                     leave_time,
@@ -916,7 +1130,9 @@ impl Simulation {
             }
             // enter the connection: its speed limit and the vehicles on it
             let via_max = self.desired_speed(v, via);
-            vv = vv.min(via_max.max(p.free_speed(speed, seen, via_max, des_cur)));
+            if via_max < vv {
+                vv = vv.min(via_max.max(p.free_speed(speed, seen, via_max, des_cur)));
+            }
             if !leader_found {
                 if let Some(&o) = self.lane_veh[via as usize].back() {
                     let ov = &self.veh[o as usize];
@@ -934,7 +1150,9 @@ impl Simulation {
             let next = r.lanes[k + 1];
             let next_lane = &self.net.lanes[next as usize];
             let next_max = self.desired_speed(v, next);
-            vv = vv.min(next_max.max(p.free_speed(speed, seen, next_max, des_cur)));
+            if next_max < vv {
+                vv = vv.min(next_max.max(p.free_speed(speed, seen, next_max, des_cur)));
+            }
             if !leader_found {
                 if let Some(&o) = self.lane_veh[next as usize].back() {
                     let ov = &self.veh[o as usize];
@@ -943,7 +1161,8 @@ impl Simulation {
                     leader_found = true;
                 }
             }
-            v_link_pass_est = IdmParams::speed_after_distance(next_lane.length, vv, p.accel).min(next_max);
+            v_link_pass_est =
+                IdmParams::speed_after_distance(next_lane.length, vv, p.accel).min(next_max);
             seen += next_lane.length;
             k += 1;
             if seen > lookahead + next_lane.length {
@@ -980,15 +1199,19 @@ impl Simulation {
         let v = &self.veh[id as usize];
         let t = &self.spec.vehicle_types[v.vtype as usize];
         // a driver who can no longer stop takes any gap
-        let impatience =
-            if can_brake { (t.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0) } else { 1.0 };
+        let impatience = if can_brake {
+            (t.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
         let decel = t.decel;
         for &foe in &lk.foes {
             for a in &self.approaches[foe as usize] {
                 if a.veh == id || !a.will_pass {
                     continue;
                 }
-                let foe_arrival = (1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking;
+                let foe_arrival =
+                    (1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking;
                 if a.leave_time < it.arrival_time {
                     // ego would follow the foe
                     if it.arrival_time - a.leave_time < LINK_LOOKAHEAD_S
@@ -998,7 +1221,8 @@ impl Simulation {
                     }
                 } else if foe_arrival > it.leave_time + LINK_LOOKAHEAD_S {
                     // ego would lead the foe
-                    if unsafe_merge_speeds(it.leave_speed, a.arrival_speed_braking, decel, a.decel) {
+                    if unsafe_merge_speeds(it.leave_speed, a.arrival_speed_braking, decel, a.decel)
+                    {
                         return false;
                     }
                 } else {
@@ -1016,7 +1240,7 @@ impl Simulation {
             let lane = self.lane_order[li];
             for qi in 0..self.lane_veh[lane as usize].len() {
                 let id = self.lane_veh[lane as usize][qi];
-                let plan = self.plans[id as usize];
+                let plan = &self.plans[id as usize];
                 let v = &self.veh[id as usize];
                 let p = self.types[v.vtype as usize];
                 let mut v_safe = plan.v_safe;
@@ -1025,23 +1249,24 @@ impl Simulation {
                     if lk.major {
                         continue;
                     }
-                    let can_brake = it.dist > p.brake_gap(v.speed, p.decel, 0.0) || v.speed < p.decel * dt;
+                    let can_brake =
+                        it.dist > p.brake_gap(v.speed, p.decel, 0.0) || v.speed < p.decel * dt;
                     let opened = it.will_pass && self.link_opened(id, it, can_brake);
                     if !opened && (can_brake || !it.will_pass) {
-                        v_safe = v_safe.min(it.v_link_wait);
+                        let v_link_wait = it.v_link_pass.min(p.stop_speed(
+                            it.stop_dist,
+                            v.speed,
+                            it.desired_speed,
+                        ));
+                        v_safe = v_safe.min(v_link_wait);
                         break;
                     }
                 }
-                if std::env::var("MAPC_SIM_DEBUG").is_ok_and(|s| s.split(',').any(|x| x == id.to_string())) {
-                    let items: Vec<String> = plan.items[..plan.n_items as usize]
-                        .iter()
-                        .map(|it| format!("link{} d={:.2} wait={:.2} pass={:.2} at={:.2} lt={:.2} atb={:.2} open={}", it.link, it.dist, it.v_link_wait, it.v_link_pass, it.arrival_time, it.leave_time, it.arrival_time_braking, self.link_opened(id, it, true)))
-                        .collect();
-                    eprintln!("t={:.1} id={id} lane={} pos={:.2} v={:.2} wait={:.1} vsafe_plan={:.2} vsafe={:.2} items={items:?}", self.time_s, self.net.lane_names[v.lane as usize], v.pos, v.speed, v.waiting_s, plan.v_safe, v_safe);
-                }
                 // finalise: acceleration and deceleration bounds (emergency braking allowed when unsafe)
                 let v_max = v_safe.min(v.speed + p.accel * dt);
-                let v_min = (v.speed - p.decel * dt).min(v_safe.max(v.speed - p.emergency_decel * dt)).max(0.0);
+                let v_min = (v.speed - p.decel * dt)
+                    .min(v_safe.max(v.speed - p.emergency_decel * dt))
+                    .max(0.0);
                 let mut next = v_max.max(v_min);
                 if v.controlled && v.accel_cmd.is_finite() && self.in_region[v.lane as usize] {
                     let a = v.accel_cmd.clamp(-p.decel, p.accel);
@@ -1058,11 +1283,18 @@ impl Simulation {
                 let id = self.lane_veh[lane as usize][qi];
                 let mut next = self.plans[id as usize].v_safe;
                 let mut cap = f64::INFINITY;
-                self.for_each_leader(id, next * dt + 1.0, true, |l, gap| {
-                    // the leader's movement this step, if it already moved
-                    let _ = l;
-                    cap = cap.min(gap);
-                });
+                // a leader's back may reach up to its length behind the start of its lane
+                self.for_each_leader_at(
+                    id,
+                    qi,
+                    next * dt + self.max_length + 1.0,
+                    true,
+                    |l, gap| {
+                        // the leader's movement this step, if it already moved
+                        let _ = l;
+                        cap = cap.min(gap);
+                    },
+                );
                 // `for_each_leader` measured gaps from positions partly updated this step: leaders that moved
                 // report their new position, the rest their old one; both are safe bounds.
                 if cap.is_finite() {
@@ -1073,7 +1305,11 @@ impl Simulation {
                 v.speed = next;
                 v.pos += next * dt;
                 v.distance_m += next * dt;
-                v.waiting_s = if next < HALTING_SPEED { v.waiting_s + dt } else { 0.0 };
+                v.waiting_s = if next < HALTING_SPEED {
+                    v.waiting_s + dt
+                } else {
+                    0.0
+                };
                 qi += 1;
             }
         }
@@ -1081,7 +1317,9 @@ impl Simulation {
         for li in 0..self.lane_order.len() {
             let lane = self.lane_order[li];
             loop {
-                let Some(&id) = self.lane_veh[lane as usize].front() else { break };
+                let Some(&id) = self.lane_veh[lane as usize].front() else {
+                    break;
+                };
                 let len = self.net.lanes[lane as usize].length;
                 let v = &self.veh[id as usize];
                 let r = &self.routes[v.route as usize];
@@ -1105,7 +1343,9 @@ impl Simulation {
                 while v_pos > self.net.lanes[r.lanes[rp] as usize].length {
                     v_pos -= self.net.lanes[r.lanes[rp] as usize].length;
                     rp += 1;
-                    if rp + 1 >= r.lanes.len() && v_pos > self.net.lanes[r.lanes[rp] as usize].length - POSITION_EPS {
+                    if rp + 1 >= r.lanes.len()
+                        && v_pos > self.net.lanes[r.lanes[rp] as usize].length - POSITION_EPS
+                    {
                         arrived = true;
                         break;
                     }
@@ -1121,7 +1361,10 @@ impl Simulation {
                 v.lane = new_lane;
                 // behind every vehicle already on the new lane
                 let q = &mut self.lane_veh[new_lane as usize];
-                let at = q.iter().rposition(|&o| self.veh[o as usize].pos >= v_pos).map_or(0, |i| i + 1);
+                let at = q
+                    .iter()
+                    .rposition(|&o| self.veh[o as usize].pos >= v_pos)
+                    .map_or(0, |i| i + 1);
                 q.insert(at, id);
             }
         }
@@ -1195,7 +1438,9 @@ impl Simulation {
                 if gap < 0.0 {
                     return false;
                 }
-                if p.insertion_follow_speed(speed, gap, ov.speed, des) < speed {
+                // with a given depart speed, SUMO refuses whenever the insertion follow speed falls below it,
+                // which for IDM is exactly when the gap is below the desired dynamic gap
+                if gap < p.secure_gap(speed, ov.speed) {
                     return false;
                 }
                 break;
@@ -1207,7 +1452,7 @@ impl Simulation {
                     if let Some(&o) = self.lane_veh[via as usize].back() {
                         let ov = &self.veh[o as usize];
                         let gap = seen + lane_len + ov.pos - ov.length - p.min_gap;
-                        if gap < 0.0 || p.insertion_follow_speed(speed, gap, ov.speed, des) < speed {
+                        if gap < 0.0 || gap < p.secure_gap(speed, ov.speed) {
                             return false;
                         }
                     }
@@ -1220,7 +1465,9 @@ impl Simulation {
             // a minor link ahead must be reachable with a stop
             if k + 1 < route.lanes.len() {
                 if let LaneKind::Via(link) = self.net.lanes[route.lanes[k + 1] as usize].kind {
-                    if !self.net.links[link as usize].major && seen < p.brake_gap(speed, p.decel, 0.0) + speed * self.spec.step_s {
+                    if !self.net.links[link as usize].major
+                        && seen < p.brake_gap(speed, p.decel, 0.0) + speed * self.spec.step_s
+                    {
                         let vs = p.stop_speed((seen - POSITION_EPS).max(0.0), speed, des);
                         if vs < speed {
                             return false;
@@ -1268,7 +1515,8 @@ impl Simulation {
                     for l in self.net.links.iter().filter(|l| l.to_lane as usize == li) {
                         if let Some(&f) = self.lane_veh[l.via_lane as usize].front() {
                             let fv = &self.veh[f as usize];
-                            let gap = lv.pos - lv.length + (self.net.lanes[l.via_lane as usize].length - fv.pos);
+                            let gap = lv.pos - lv.length
+                                + (self.net.lanes[l.via_lane as usize].length - fv.pos);
                             if gap < -EPS {
                                 return Err(err(last, f, gap));
                             }
@@ -1289,8 +1537,11 @@ impl Simulation {
                     for &b in &self.lane_veh[self.net.links[foe as usize].via_lane as usize] {
                         let (av, bv) = (&self.veh[a as usize], &self.veh[b as usize]);
                         let (da, db) = (a_len - av.pos, b_len - bv.pos);
-                        let (lead, fol, gap) =
-                            if da <= db { (a, b, db - da - av.length) } else { (b, a, da - db - bv.length) };
+                        let (lead, fol, gap) = if da <= db {
+                            (a, b, db - da - av.length)
+                        } else {
+                            (b, a, da - db - bv.length)
+                        };
                         if gap < -EPS {
                             return Err(err(lead, fol, gap));
                         }
@@ -1306,7 +1557,10 @@ impl Simulation {
     pub fn write_trace_rows(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
         for id in self.active_ids() {
             let v = &self.veh[id as usize];
-            let x = self.corridor_x(id).map(|x| format!("{x:.3}")).unwrap_or_default();
+            let x = self
+                .corridor_x(id)
+                .map(|x| format!("{x:.3}"))
+                .unwrap_or_default();
             writeln!(
                 out,
                 "{:.2},{},{},{},{:.3},{},{:.3},{}",
@@ -1335,6 +1589,11 @@ impl Simulation {
 }
 
 /// A follower can brake behind a leader at the merge when the leader's braking distance is the longer one.
-fn unsafe_merge_speeds(leader_speed: f64, follower_speed: f64, leader_decel: f64, follower_decel: f64) -> bool {
+fn unsafe_merge_speeds(
+    leader_speed: f64,
+    follower_speed: f64,
+    leader_decel: f64,
+    follower_decel: f64,
+) -> bool {
     leader_speed * leader_speed / leader_decel <= follower_speed * follower_speed / follower_decel
 }

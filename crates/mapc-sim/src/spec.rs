@@ -99,10 +99,15 @@ impl SimSpec {
     /// Check the numbers a run relies on; errors name the item.
     pub fn validate(&self) -> Result<(), SimError> {
         if !(self.step_s > 0.0 && self.step_s <= 10.0) {
-            return Err(SimError::Spec(format!("step_s must be in (0, 10], got {}", self.step_s)));
+            return Err(SimError::Spec(format!(
+                "step_s must be in (0, 10], got {}",
+                self.step_s
+            )));
         }
         for (i, t) in self.vehicle_types.iter().enumerate() {
-            let bad = |what: &str, v: f64| SimError::Spec(format!("vehicle type {i} `{}`: {what} = {v}", t.name));
+            let bad = |what: &str, v: f64| {
+                SimError::Spec(format!("vehicle type {i} `{}`: {what} = {v}", t.name))
+            };
             for (what, v) in [
                 ("accel", t.accel),
                 ("decel", t.decel),
@@ -118,7 +123,11 @@ impl SimSpec {
             if !(t.idm_stepping_s > 0.0) {
                 return Err(bad("idm_stepping_s", t.idm_stepping_s));
             }
-            for (what, v) in [("tau", t.tau), ("min_gap", t.min_gap), ("speed_dev", t.speed_dev)] {
+            for (what, v) in [
+                ("tau", t.tau),
+                ("min_gap", t.min_gap),
+                ("speed_dev", t.speed_dev),
+            ] {
                 if !(v >= 0.0 && v.is_finite()) {
                     return Err(bad(what, v));
                 }
@@ -132,18 +141,30 @@ impl SimSpec {
         }
         for (i, f) in self.flows.iter().enumerate() {
             if f.vehicle_type >= self.vehicle_types.len() {
-                return Err(SimError::Spec(format!("flow {i}: unknown vehicle type index {}", f.vehicle_type)));
+                return Err(SimError::Spec(format!(
+                    "flow {i}: unknown vehicle type index {}",
+                    f.vehicle_type
+                )));
             }
             if !(f.vehs_per_hour >= 0.0 && f.vehs_per_hour.is_finite()) {
-                return Err(SimError::Spec(format!("flow {i}: vehs_per_hour = {}", f.vehs_per_hour)));
+                return Err(SimError::Spec(format!(
+                    "flow {i}: vehs_per_hour = {}",
+                    f.vehs_per_hour
+                )));
             }
             if !(f.depart_speed >= 0.0) {
-                return Err(SimError::Spec(format!("flow {i}: depart_speed = {}", f.depart_speed)));
+                return Err(SimError::Spec(format!(
+                    "flow {i}: depart_speed = {}",
+                    f.depart_speed
+                )));
             }
         }
         for (i, v) in self.initial.iter().enumerate() {
             if v.vehicle_type >= self.vehicle_types.len() {
-                return Err(SimError::Spec(format!("initial vehicle {i}: unknown vehicle type index {}", v.vehicle_type)));
+                return Err(SimError::Spec(format!(
+                    "initial vehicle {i}: unknown vehicle type index {}",
+                    v.vehicle_type
+                )));
             }
         }
         Ok(())

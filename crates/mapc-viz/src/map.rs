@@ -153,10 +153,10 @@ pub fn render_map_with(
     })
 }
 
-const TITLE_H: u32 = 62;
+const TITLE_H: u32 = 70;
 const MARGIN: u32 = 16;
-const LEGEND_W: u32 = 230;
-const LABEL_FONT: f64 = 12.0;
+const LEGEND_W: u32 = 260;
+const LABEL_FONT: f64 = 15.0;
 const HALO: RGBColor = RGBColor(0, 170, 255);
 
 /// Pixel layout: the plot box and the metric window it shows, with one scale for both axes.
@@ -407,7 +407,7 @@ impl Figure for MapFigure<'_> {
         root.draw(&Text::new(
             title,
             (MARGIN as i32, 10),
-            ("sans-serif", 22).into_font().color(&BLACK),
+            ("sans-serif", 26).into_font().color(&BLACK),
         ))
         .d()?;
         let sub = format!(
@@ -419,8 +419,8 @@ impl Figure for MapFigure<'_> {
         );
         root.draw(&Text::new(
             sub,
-            (MARGIN as i32, 38),
-            ("sans-serif", 14).into_font().color(&RGBColor(80, 80, 80)),
+            (MARGIN as i32, 44),
+            ("sans-serif", 16).into_font().color(&RGBColor(80, 80, 80)),
         ))
         .d()?;
 
@@ -557,7 +557,7 @@ impl Figure for MapFigure<'_> {
         root.draw(&Text::new(
             "N",
             (nx, ny + 28),
-            ("sans-serif", 16)
+            ("sans-serif", 18)
                 .into_font()
                 .color(&dark)
                 .pos(Pos::new(HPos::Center, VPos::Top)),
@@ -581,7 +581,7 @@ impl Figure for MapFigure<'_> {
         .d()?;
         root.draw(&Rectangle::new([(sx, sy), (sx + bar_px, sy + 6)], dark.stroke_width(1)))
             .d()?;
-        let small = ("sans-serif", 13)
+        let small = ("sans-serif", 15)
             .into_font()
             .color(&dark)
             .pos(Pos::new(HPos::Center, VPos::Bottom));
@@ -598,8 +598,8 @@ impl Figure for MapFigure<'_> {
         // Legend, right of the plot.
         let lx = bx1 + 18;
         let mut ly = by0 + 4;
-        let head = ("sans-serif", 16).into_font().color(&BLACK);
-        let item = ("sans-serif", 14).into_font().color(&RGBColor(40, 40, 40));
+        let head = ("sans-serif", 19).into_font().color(&BLACK);
+        let item = ("sans-serif", 16).into_font().color(&RGBColor(40, 40, 40));
         root.draw(&Text::new("Road class", (lx, ly), head.clone())).d()?;
         ly += 26;
         for (class, color) in &self.classes {
@@ -647,7 +647,7 @@ impl Figure for MapFigure<'_> {
         }
         if skipped > 0 {
             ly += 8;
-            let note = ("sans-serif", 12).into_font().color(&RGBColor(90, 90, 90));
+            let note = ("sans-serif", 14).into_font().color(&RGBColor(90, 90, 90));
             root.draw(&Text::new(
                 format!("{skipped} merge labels left out"),
                 (lx, ly),

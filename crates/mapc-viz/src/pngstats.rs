@@ -22,7 +22,7 @@ pub struct PngStats {
 pub fn count_near(pixels: &[[u8; 3]], rgb: [u8; 3], tol: u8) -> usize {
     pixels
         .iter()
-        .filter(|p| p.iter().zip(rgb).all(|(a, b)| a.abs_diff(*b) <= tol))
+        .filter(|p| p.iter().zip(rgb).all(|(a, b)| a.abs_diff(b) <= tol))
         .count()
 }
 

@@ -379,6 +379,8 @@ impl Figure for TimeSpaceFigure {
             .configure_mesh()
             .disable_mesh()
             .x_desc("time (s)")
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{v:.0}"))
             .y_desc(self.y_label.as_str())
             .axis_desc_style(("sans-serif", 17))
             .label_style(("sans-serif", 14))
@@ -439,6 +441,7 @@ impl Figure for TimeSpaceFigure {
             .disable_mesh()
             .disable_x_axis()
             .y_desc("speed (m/s)")
+            .y_label_formatter(&|v| format!("{v:.0}"))
             .axis_desc_style(("sans-serif", 16))
             .label_style(("sans-serif", 14))
             .draw()
@@ -505,7 +508,7 @@ mod tests {
         let lines = trajectories(&samples, 1, 0.5, 30.0);
         assert!(lines.len() >= 2);
         assert_eq!(lines[0].bin, 0);
-        assert_eq!(lines.last().unwrap().bin, SPEED_BINS - 1);
+        assert_eq!(lines.last().unwrap().bin, (29.0 / 30.0 * SPEED_BINS as f64) as usize);
     }
 
     #[test]

@@ -336,7 +336,8 @@ impl Figure for TrainingFigure<'_> {
                 .d()?;
             chart
                 .configure_mesh()
-                .light_line_style(RGBColor(235, 235, 235))
+                .light_line_style(RGBColor(240, 240, 240))
+                .max_light_lines(1)
                 .x_desc(self.options.x.label())
                 .x_labels(6)
                 .y_labels(6)

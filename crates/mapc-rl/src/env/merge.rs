@@ -46,7 +46,10 @@ impl FromStr for RewardKind {
 
 /// The paper's normalisation: V = 30 m/s, L = 947.68 m (Simple Merge's total lane length). A transferred policy
 /// keeps the constants it was trained with.
-pub const SIMPLE_MERGE_NORM: ObsNorm = ObsNorm { max_speed: 30.0, length: 947.68 };
+pub const SIMPLE_MERGE_NORM: ObsNorm = ObsNorm {
+    max_speed: 30.0,
+    length: 947.68,
+};
 /// Action bounds (m/s^2): the human driver's comfortable deceleration and maximum acceleration.
 pub const ACCEL_MIN: f64 = -4.5;
 pub const ACCEL_MAX: f64 = 2.6;
@@ -80,11 +83,21 @@ pub struct MergeEnv {
 impl MergeEnv {
     /// An environment over `spec` (the control region, if any, is the spec's).
     pub fn new(spec: SimSpec, cfg: MergeEnvConfig) -> Result<Self, RlError> {
-        spec.validate().map_err(|e| RlError::Scenario { scenario: spec.graph.source.file.clone(), msg: e.to_string() })?;
+        spec.validate().map_err(|e| RlError::Scenario {
+            scenario: spec.graph.source.file.clone(),
+            msg: e.to_string(),
+        })?;
         if cfg.n_av == 0 {
             return Err(RlError::Config("N_AV must be at least 1".into()));
         }
-        Ok(Self { spec, cfg, sim: None, queue: ControlQueue::default(), controlled: vec![], obs_buf: vec![] })
+        Ok(Self {
+            spec,
+            cfg,
+            sim: None,
+            queue: ControlQueue::default(),
+            controlled: vec![],
+            obs_buf: vec![],
+        })
     }
 
     pub fn config(&self) -> &MergeEnvConfig {
@@ -112,7 +125,12 @@ impl MergeEnv {
             .collect();
         present.sort_unstable();
         let ids: Vec<u64> = present.iter().map(|&(_, id)| id as u64).collect();
-        self.controlled = self.queue.update(&ids, self.cfg.n_av).into_iter().map(|id| id as VehicleId).collect();
+        self.controlled = self
+            .queue
+            .update(&ids, self.cfg.n_av)
+            .into_iter()
+            .map(|id| id as VehicleId)
+            .collect();
         let len = self.cfg.norm.length;
         let views: Vec<AvView> = self
             .controlled
@@ -132,7 +150,10 @@ impl MergeEnv {
         match self.cfg.reward {
             RewardKind::Outflow => sim.arrived_last_step().len() as f64,
             RewardKind::Speed | RewardKind::Flow => {
-                let speeds: Vec<f64> = sim.active_ids().filter_map(|id| sim.vehicle(id).map(|v| v.speed)).collect();
+                let speeds: Vec<f64> = sim
+                    .active_ids()
+                    .filter_map(|id| sim.vehicle(id).map(|v| v.speed))
+                    .collect();
                 if self.cfg.reward == RewardKind::Speed {
                     speed_reward(&speeds, self.cfg.norm.max_speed)
                 } else {
@@ -157,16 +178,26 @@ impl MergeEnv {
         for (k, &id) in self.controlled.iter().enumerate() {
             if let Some(&a) = action.get(k) {
                 let a = if a.is_finite() { (a as f64).clamp(lo, hi) } else { 0.0 };
-                sim.set_acceleration(id, a).map_err(|e| RlError::Scenario { scenario: "simulation".into(), msg: e.to_string() })?;
+                sim.set_acceleration(id, a).map_err(|e| RlError::Scenario {
+                    scenario: "simulation".into(),
+                    msg: e.to_string(),
+                })?;
             }
         }
         if !sim.is_done() {
-            sim.step().map_err(|e| RlError::Scenario { scenario: "simulation".into(), msg: e.to_string() })?;
+            sim.step().map_err(|e| RlError::Scenario {
+                scenario: "simulation".into(),
+                msg: e.to_string(),
+            })?;
         }
         // The reward sees the controlled set that acted in this step.
         let reward = self.reward() as f32;
         let obs = self.observe();
-        Ok(Transition { obs, reward, terminal: false })
+        Ok(Transition {
+            obs,
+            reward,
+            terminal: false,
+        })
     }
 
     /// The controlled AVs of the current observation, in slot order.
@@ -183,8 +214,10 @@ impl Env for MergeEnv {
         self.cfg.n_av
     }
     fn reset(&mut self, seed: u64) -> Result<Vec<f32>, RlError> {
-        let mut sim = Simulation::from_spec(self.spec.clone(), seed)
-            .map_err(|e| RlError::Scenario { scenario: self.spec.graph.source.file.clone(), msg: e.to_string() })?;
+        let mut sim = Simulation::from_spec(self.spec.clone(), seed).map_err(|e| RlError::Scenario {
+            scenario: self.spec.graph.source.file.clone(),
+            msg: e.to_string(),
+        })?;
         sim.set_invariant_checks(false);
         self.sim = Some(sim);
         self.queue.clear();
@@ -195,6 +228,10 @@ impl Env for MergeEnv {
     }
     fn metrics(&self) -> EpisodeMetrics {
         let m = self.sim().metrics();
-        EpisodeMetrics { outflow: m.outflow_veh_h, inflow: m.inflow_veh_h, speed: m.avg_speed_mps }
+        EpisodeMetrics {
+            outflow: m.outflow_veh_h,
+            inflow: m.inflow_veh_h,
+            speed: m.avg_speed_mps,
+        }
     }
 }

@@ -1,2 +1,2 @@
-pub mod obs;
 pub mod merge;
+pub mod obs;

@@ -33,7 +33,13 @@ pub fn centralized_obs(avs: &[AvView], n_av: usize, norm: ObsNorm, out: &mut Vec
     for (k, av) in avs.iter().take(n_av).enumerate() {
         let (lead_v, lead_gap) = av.leader.unwrap_or((vmax, len));
         let (fol_v, fol_gap) = av.follower.unwrap_or((0.0, len));
-        let vals = [av.speed / vmax, (lead_v - av.speed) / vmax, lead_gap / len, (av.speed - fol_v) / vmax, fol_gap / len];
+        let vals = [
+            av.speed / vmax,
+            (lead_v - av.speed) / vmax,
+            lead_gap / len,
+            (av.speed - fol_v) / vmax,
+            fol_gap / len,
+        ];
         for (j, x) in vals.iter().enumerate() {
             out[k * PER_AV + j] = x.clamp(-1.0, 1.0) as f32;
         }
@@ -98,24 +104,55 @@ pub fn flow_reward(speeds: &[f64], desired: f64, controlled_headways: &[(f64, f6
 
 /// Average-speed reward: mean speed over all vehicles divided by V (0 with no vehicle).
 pub fn speed_reward(speeds: &[f64], max_speed: f64) -> f64 {
-    if speeds.is_empty() { 0.0 } else { speeds.iter().sum::<f64>() / speeds.len() as f64 / max_speed }
+    if speeds.is_empty() {
+        0.0
+    } else {
+        speeds.iter().sum::<f64>() / speeds.len() as f64 / max_speed
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    const NORM: ObsNorm = ObsNorm { max_speed: 30.0, length: 947.68 };
+    const NORM: ObsNorm = ObsNorm {
+        max_speed: 30.0,
+        length: 947.68,
+    };
 
     #[test]
     fn observation_by_hand() {
         let avs = [
-            AvView { speed: 15.0, leader: Some((20.0, 47.384)), follower: Some((12.0, 94.768)) },
-            AvView { speed: 6.0, leader: None, follower: None },
+            AvView {
+                speed: 15.0,
+                leader: Some((20.0, 47.384)),
+                follower: Some((12.0, 94.768)),
+            },
+            AvView {
+                speed: 6.0,
+                leader: None,
+                follower: None,
+            },
         ];
         let mut o = Vec::new();
         centralized_obs(&avs, 3, NORM, &mut o);
-        let want = [0.5, 1.0 / 6.0, 0.05, 0.1, 0.1, 0.2, 0.8, 1.0, 0.2, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let want = [
+            0.5,
+            1.0 / 6.0,
+            0.05,
+            0.1,
+            0.1,
+            0.2,
+            0.8,
+            1.0,
+            0.2,
+            1.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ];
         assert_eq!(o.len(), 15);
         for (a, b) in o.iter().zip(want) {
             assert!((a - b).abs() < 1e-6, "{o:?}");
@@ -125,7 +162,11 @@ mod tests {
     #[test]
     fn observation_clips_and_truncates() {
         // A leader 2 L away clips to 1; a follower much faster gives (v - v_f)/V < -1, clipped to -1.
-        let avs = [AvView { speed: 40.0, leader: Some((0.0, 2000.0)), follower: Some((75.0, 1.0)) }; 3];
+        let avs = [AvView {
+            speed: 40.0,
+            leader: Some((0.0, 2000.0)),
+            follower: Some((75.0, 1.0)),
+        }; 3];
         let mut o = Vec::new();
         centralized_obs(&avs, 2, NORM, &mut o);
         assert_eq!(o.len(), 10);

@@ -60,7 +60,13 @@ mod tests {
     #[test]
     fn truncated_episode_bootstraps() {
         // Same, but cut by the time limit with V(s_T) = 3: delta_1 = 2 + 2.7 - 1 = 3.7; A_0 = 1.4 + 0.45*3.7.
-        let (a, _) = gae(&[1.0, 2.0], &[0.5, 1.0], EpisodeEnd::Truncated { bootstrap_value: 3.0 }, 0.9, 0.5);
+        let (a, _) = gae(
+            &[1.0, 2.0],
+            &[0.5, 1.0],
+            EpisodeEnd::Truncated { bootstrap_value: 3.0 },
+            0.9,
+            0.5,
+        );
         assert!((a[1] - 3.7).abs() < 1e-6, "{a:?}");
         assert!((a[0] - (1.4 + 0.45 * 3.7)).abs() < 1e-6, "{a:?}");
     }

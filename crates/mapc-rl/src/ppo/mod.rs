@@ -15,7 +15,7 @@ use tensor::{Adam, Architecture, LossCoeffs, LossStats, Minibatch, Model, loss_a
 
 use crate::error::RlError;
 use crate::rng::{Rng, mix_seed};
-use crate::rollout::{ActionMode, Episode, EnvFactory, collect};
+use crate::rollout::{ActionMode, EnvFactory, Episode, collect};
 
 /// What one training iteration did (one row of the CSV log).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -51,7 +51,11 @@ pub struct TrainerState {
 
 impl TrainerState {
     pub fn new(config: PpoConfig, obs_dim: usize, act_dim: usize) -> Self {
-        let arch = Architecture { obs_dim, act_dim, hidden: config.hidden.clone() };
+        let arch = Architecture {
+            obs_dim,
+            act_dim,
+            hidden: config.hidden.clone(),
+        };
         let model = Model::new(arch, mix_seed(&[config.seed, 0xA11CE]));
         let adam = Adam::new(model.params.len());
         Self {
@@ -69,7 +73,12 @@ impl TrainerState {
     /// Environment and noise seeds of the episodes of iteration `it`.
     pub fn episode_seeds(&self, it: u64) -> Vec<(u64, u64)> {
         (0..self.config.episodes_per_iteration() as u64)
-            .map(|k| (mix_seed(&[self.config.seed, it, k, 1]), mix_seed(&[self.config.seed, it, k, 2])))
+            .map(|k| {
+                (
+                    mix_seed(&[self.config.seed, it, k, 1]),
+                    mix_seed(&[self.config.seed, it, k, 2]),
+                )
+            })
             .collect()
     }
 
@@ -78,7 +87,14 @@ impl TrainerState {
         let start = Instant::now();
         let it = self.iteration;
         let seeds = self.episode_seeds(it);
-        let episodes = collect(factory, &self.model, &seeds, self.config.horizon, ActionMode::Sample, true)?;
+        let episodes = collect(
+            factory,
+            &self.model,
+            &seeds,
+            self.config.horizon,
+            ActionMode::Sample,
+            true,
+        )?;
         let batch = Batch::from_episodes(&episodes, &self.config);
         let kl_coeff_used = self.kl_coeff;
         let sgd = self.update(&batch);
@@ -158,8 +174,10 @@ impl TrainerState {
 fn sliced_loss_and_grad(model: &Model, mb: &OwnedMinibatch, c: &LossCoeffs, slices: usize) -> (LossStats, Vec<f32>) {
     let n = mb.n;
     let slices = slices.clamp(1, n.max(1));
-    let bounds: Vec<(usize, usize)> =
-        (0..slices).map(|s| (s * n / slices, (s + 1) * n / slices)).filter(|(a, b)| b > a).collect();
+    let bounds: Vec<(usize, usize)> = (0..slices)
+        .map(|s| (s * n / slices, (s + 1) * n / slices))
+        .filter(|(a, b)| b > a)
+        .collect();
     let parts: Vec<(usize, LossStats, Vec<f32>)> = bounds
         .par_iter()
         .map(|&(lo, hi)| {
@@ -323,15 +341,27 @@ mod tests {
             self.t += 1;
             let reward = -(self.x - 0.5).abs();
             self.total += reward as f64;
-            Ok(Transition { obs: vec![self.x], reward, terminal: false })
+            Ok(Transition {
+                obs: vec![self.x],
+                reward,
+                terminal: false,
+            })
         }
         fn metrics(&self) -> EpisodeMetrics {
-            EpisodeMetrics { outflow: self.total, inflow: 0.0, speed: 0.0 }
+            EpisodeMetrics {
+                outflow: self.total,
+                inflow: 0.0,
+                speed: 0.0,
+            }
         }
     }
 
     fn reach_factory() -> Box<dyn Env> {
-        Box::new(Reach { x: 0.0, t: 0, total: 0.0 })
+        Box::new(Reach {
+            x: 0.0,
+            t: 0,
+            total: 0.0,
+        })
     }
 
     fn tiny_config() -> PpoConfig {
@@ -370,7 +400,10 @@ mod tests {
                 c.grad_slices = 3;
                 let mut st = TrainerState::new(c, 1, 1);
                 let s: Vec<IterationStats> = (0..3).map(|_| st.iterate(&reach_factory).unwrap()).collect();
-                (st.model.params.clone(), s.iter().map(|x| x.mean_return).collect::<Vec<_>>())
+                (
+                    st.model.params.clone(),
+                    s.iter().map(|x| x.mean_return).collect::<Vec<_>>(),
+                )
             })
         };
         assert_eq!(run(1), run(3));

@@ -1,0 +1,56 @@
+//! Simulator speed: vehicle-steps per second on one core, and the wall time of the 100-seed baseline on two
+//! threads (`cargo bench -p mapc-sim --bench sim_speed [-- SCENARIO]`). The same figures come from `mapc bench`.
+
+use mapc_scenario::ResolvedScenario;
+use mapc_sim::{Simulation, run_baseline_spec, spec_from_scenario};
+use std::time::Instant;
+
+fn main() {
+    let name = std::env::args()
+        .skip(1)
+        .find(|a| !a.starts_with('-'))
+        .unwrap_or_else(|| "simple_merge".into());
+    let rs = ResolvedScenario::load(&name).expect("scenario");
+    let spec = spec_from_scenario(&rs).expect("spec");
+
+    // warm up caches and the allocator
+    Simulation::from_spec(spec.clone(), 999)
+        .unwrap()
+        .run()
+        .unwrap();
+
+    let seeds = 20u64;
+    let start = Instant::now();
+    let mut vehicle_steps = 0u64;
+    let mut steps = 0u64;
+    for seed in 0..seeds {
+        let mut sim = Simulation::from_spec(spec.clone(), seed).unwrap();
+        sim.set_invariant_checks(false);
+        let m = sim.run().unwrap();
+        vehicle_steps += m.vehicle_steps;
+        steps += m.steps;
+    }
+    let wall = start.elapsed().as_secs_f64();
+    println!(
+        "{}: one core: {seeds} seeds in {wall:.3} s: {:.3e} vehicle-steps/s, {:.0} steps/s, {:.1} vehicles on average",
+        rs.origin,
+        vehicle_steps as f64 / wall,
+        steps as f64 / wall,
+        vehicle_steps as f64 / steps as f64
+    );
+    for threads in [1usize, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let seeds: Vec<u64> = (0..100).collect();
+        let start = Instant::now();
+        let runs = pool.install(|| run_baseline_spec(&spec, &seeds).unwrap());
+        println!(
+            "{}: 100-seed baseline on {threads} thread(s): {:.3} s ({} runs)",
+            rs.origin,
+            start.elapsed().as_secs_f64(),
+            runs.len()
+        );
+    }
+}

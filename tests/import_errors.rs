@@ -1,0 +1,156 @@
+//! Bad input to `mapc import`: one clear message naming the file and the place, exit code 2, never a panic.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn scratch(name: &str, bytes: &[u8]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mapc-import-errors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+/// Run `mapc import FILE`; expect exit 2 and a message with every one of `expected`.
+fn fails_with(file: &PathBuf, expected: &[&str]) -> String {
+    let out_file = std::env::temp_dir().join(format!("mapc-import-errors-{}-never.graph.json", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .args(["import", file.to_str().unwrap(), "-o", out_file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{}: {stderr}", file.display());
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(
+        stderr.contains(&file.display().to_string()),
+        "the message names the file: {stderr}"
+    );
+    for e in expected {
+        assert!(stderr.contains(e), "expected `{e}` in: {stderr}");
+    }
+    assert!(!out_file.exists(), "nothing is written on failure");
+    stderr
+}
+
+fn map(name: &str) -> Vec<u8> {
+    std::fs::read(root().join("maps").join(name)).unwrap()
+}
+
+#[test]
+fn missing_and_empty_files() {
+    fails_with(&root().join("maps/no_such_map.osm"), &["No such file"]);
+    fails_with(&scratch("empty.osm", b""), &["empty"]);
+}
+
+#[test]
+fn truncated_xml() {
+    let osm = map("i696.osm");
+    fails_with(&scratch("cut.osm", &osm[..osm.len() / 2]), &["line ", "truncated"]);
+    let net = map("simple_merge.net.xml");
+    fails_with(&scratch("cut.net.xml", &net[..net.len() - 200]), &["line "]);
+    // Cut inside a tag.
+    fails_with(
+        &scratch(
+            "cut_tag.osm",
+            b"<?xml version=\"1.0\"?>\n<osm version=\"0.6\">\n  <node id=\"1\" lat=\"4",
+        ),
+        &["line 3"],
+    );
+}
+
+#[test]
+fn xml_that_is_not_osm() {
+    fails_with(
+        &scratch("net_in_disguise.osm", &map("simple_merge.net.xml")),
+        &["not OSM", "<net>"],
+    );
+    fails_with(
+        &scratch("osm_in_disguise.net.xml", &map("i696.osm")[..4000]),
+        &["not a SUMO network"],
+    );
+    fails_with(&scratch("text.osm", b"hello, not xml at all"), &["not an XML file"]);
+}
+
+#[test]
+fn coordinate_that_is_not_a_number() {
+    let text = String::from_utf8(map("i696.osm")).unwrap();
+    let bad = text.replacen("lat=\"42.4869153\"", "lat=\"42.48x9153\"", 1);
+    assert_ne!(bad, text);
+    let line = text[..text.find("lat=\"42.4869153\"").unwrap()].lines().count();
+    fails_with(
+        &scratch("badcoord.osm", bad.as_bytes()),
+        &[&format!("line {line}"), "<node id=\"26913188\">", "not a number"],
+    );
+}
+
+#[test]
+fn corrupt_and_truncated_pbf() {
+    let pbf = map("i696.osm.pbf");
+    fails_with(
+        &scratch("cut.osm.pbf", &pbf[..pbf.len() * 2 / 3]),
+        &["byte ", "blob ", "truncated"],
+    );
+    let mut flipped = pbf.clone();
+    for b in &mut flipped[400..600] {
+        *b ^= 0x5a;
+    }
+    fails_with(&scratch("flipped.osm.pbf", &flipped), &["byte ", "blob "]);
+    fails_with(
+        &scratch("text.osm.pbf", b"this is not a pbf file at all"),
+        &["byte 0", "not an OSM PBF"],
+    );
+}
+
+#[test]
+fn net_whose_connection_names_an_unknown_edge() {
+    let text = String::from_utf8(map("simple_merge.net.xml")).unwrap();
+    let bad = text.replacen(
+        "<connection from=\"left\" to=\"center\"",
+        "<connection from=\"left\" to=\"nowhere\"",
+        1,
+    );
+    let line = text[..text.find("<connection from=\"left\" to=\"center\"").unwrap()]
+        .lines()
+        .count();
+    fails_with(
+        &scratch("unknown_edge.net.xml", bad.as_bytes()),
+        &[&format!("line {line}"), "`nowhere`", "edge"],
+    );
+}
+
+#[test]
+fn bad_options_are_errors_too() {
+    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .args([
+            "import",
+            "maps/i696.osm",
+            "--highways",
+            "footway_of_gold",
+            "-o",
+            "/dev/null",
+        ])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no road of the chosen highway classes"));
+    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .args([
+            "import",
+            "maps/i696.osm",
+            "--major",
+            "osm:61862553=osm-way:1",
+            "-o",
+            "/dev/null",
+        ])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("osm-way:1"));
+}
