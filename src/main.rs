@@ -40,11 +40,12 @@ enum Command {
     /// Draw time-space diagrams and training curves.
     #[command(subcommand)]
     Plot(cmd::plot::Command),
+    /// Run the whole job on a map: import, render, simplify, window, baseline, zero-shot evaluation.
+    Pipeline(cmd::pipeline::Args),
 }
 
-fn main() -> ExitCode {
-    let cli = Cli::parse();
-    let result = match cli.command {
+fn dispatch(command: Command) -> anyhow::Result<()> {
+    match command {
         Command::Import(a) => cmd::import::run(a),
         Command::Junctions(a) => cmd::junctions::run(a),
         Command::Export(a) => cmd::export::run(a),
@@ -57,8 +58,19 @@ fn main() -> ExitCode {
         Command::Train(a) => cmd::train::run(a),
         Command::Eval(a) => cmd::eval::run(a),
         Command::Plot(c) => cmd::plot::run(c),
-    };
-    match result {
+        Command::Pipeline(a) => cmd::pipeline::run(a),
+    }
+}
+
+/// Run one `mapc` command line (without the program name), as the pipeline does.
+pub(crate) fn run_command_line(words: &[String]) -> anyhow::Result<()> {
+    let cli = Cli::try_parse_from(std::iter::once("mapc".to_string()).chain(words.iter().cloned()))?;
+    dispatch(cli.command)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match dispatch(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             // Bad input is the usual cause; every message names the file and the place.

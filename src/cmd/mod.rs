@@ -5,6 +5,7 @@ pub mod eval;
 pub mod export;
 pub mod import;
 pub mod junctions;
+pub mod pipeline;
 pub mod plot;
 pub mod render;
 pub mod scenario;

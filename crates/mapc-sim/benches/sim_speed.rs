@@ -19,7 +19,9 @@ fn main() {
         .run()
         .unwrap();
 
-    let seeds = 20u64;
+    // `--profile`: a short run for a profiler (3 seeds, no baseline)
+    let profile = std::env::args().any(|a| a == "--profile");
+    let seeds = if profile { 3u64 } else { 20 };
     let start = Instant::now();
     let mut vehicle_steps = 0u64;
     let mut steps = 0u64;
@@ -38,6 +40,9 @@ fn main() {
         steps as f64 / wall,
         vehicle_steps as f64 / steps as f64
     );
+    if profile {
+        return;
+    }
     for threads in [1usize, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -54,7 +54,6 @@ struct Veh {
     route: u32,
     route_pos: u32,
     waiting_s: f64,
-    scheduled_depart_s: f64,
     depart_s: f64,
     arrive_s: f64,
     /// Order of entering the network (0-based); `u64::MAX` while pending.
@@ -86,6 +85,8 @@ struct LinkItem {
 #[derive(Clone, Copy, Debug, Default)]
 struct Plan {
     v_safe: f64,
+    /// `brake_gap(speed, decel, 0)` at the step's start speed once planning needed it, NaN before.
+    stop_brake_gap: f64,
     n_items: u8,
     items: [LinkItem; MAX_LINK_ITEMS],
 }
@@ -95,7 +96,6 @@ struct Approach {
     veh: VehicleId,
     arrival_time: f64,
     leave_time: f64,
-    arrival_speed: f64,
     leave_speed: f64,
     arrival_time_braking: f64,
     arrival_speed_braking: f64,
@@ -152,7 +152,8 @@ pub struct Simulation {
     types: Vec<IdmParams>,
     routes: Vec<Route>,
     veh: Vec<Veh>,
-    lane_veh: Vec<VecDeque<VehicleId>>,
+    /// Vehicles per lane, front first (a plain vector: lanes are short and indexing is on the hot path).
+    lane_veh: Vec<Vec<VehicleId>>,
     lane_order: Vec<LaneIdx>,
     plans: Vec<Plan>,
     approaches: Vec<Vec<Approach>>,
@@ -174,6 +175,17 @@ pub struct Simulation {
     check_invariants: bool,
     /// Longest vehicle of any type (m).
     max_length: f64,
+    /// Per vehicle type, what the hot loop reads (cached from the spec and the IDM parameters).
+    type_consts: Vec<TypeConsts>,
+}
+
+/// Values of one vehicle type that do not change during a run.
+#[derive(Clone, Copy, Debug)]
+struct TypeConsts {
+    max_speed: f64,
+    impatience: f64,
+    /// Highest arrival speed at a minor link from the foe visibility point (a function of the type only).
+    max_arrival_from_visibility: f64,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -211,7 +223,7 @@ impl Simulation {
             })
             .collect();
         let mut sim = Simulation {
-            lane_veh: vec![VecDeque::new(); net.lanes.len()],
+            lane_veh: vec![Vec::new(); net.lanes.len()],
             approaches: vec![Vec::new(); net.links.len()],
             link_has_minor_foe: net
                 .links
@@ -241,6 +253,20 @@ impl Simulation {
                 .iter()
                 .map(|t| t.length)
                 .fold(0.0, f64::max),
+            type_consts: spec
+                .vehicle_types
+                .iter()
+                .zip(&types)
+                .map(|(t, p)| TypeConsts {
+                    max_speed: t.max_speed,
+                    impatience: t.impatience,
+                    max_arrival_from_visibility: IdmParams::speed_after_distance(
+                        FOE_VISIBILITY_M,
+                        p.maximum_safe_stop_speed(FOE_VISIBILITY_M, 0.0),
+                        p.accel,
+                    ),
+                })
+                .collect(),
             types,
             net,
             spec,
@@ -290,7 +316,7 @@ impl Simulation {
                     iv.pos_m, iv.road
                 )));
             }
-            let id = sim.create_vehicle(iv.vehicle_type, r, sim.time_s, iv.speed);
+            let id = sim.create_vehicle(iv.vehicle_type, r, iv.speed);
             sim.place(id, lane, iv.pos_m, iv.speed, false)?;
         }
         Ok(sim)
@@ -340,13 +366,7 @@ impl Simulation {
         Ok(out)
     }
 
-    fn create_vehicle(
-        &mut self,
-        vtype: usize,
-        route: u32,
-        depart_s: f64,
-        depart_speed: f64,
-    ) -> VehicleId {
+    fn create_vehicle(&mut self, vtype: usize, route: u32, depart_speed: f64) -> VehicleId {
         let t = &self.spec.vehicle_types[vtype];
         let factor = if t.speed_dev > 0.0 {
             // SUMO redraws until the factor lies in [0.2, 2] (at most 10 tries, then the mean).
@@ -384,7 +404,6 @@ impl Simulation {
             route,
             route_pos: 0,
             waiting_s: 0.0,
-            scheduled_depart_s: depart_s,
             depart_s: f64::NAN,
             arrive_s: f64::NAN,
             entry_order: u64::MAX,
@@ -393,7 +412,6 @@ impl Simulation {
             distance_m: 0.0,
             free_flow_s,
         });
-        self.plans.push(Plan::default());
         id
     }
 
@@ -623,7 +641,7 @@ impl Simulation {
                 break;
             }
             for (up, len) in self.upstream_lanes(lane) {
-                if let Some(&f) = self.lane_veh[up as usize].front() {
+                if let Some(&f) = self.lane_veh[up as usize].first() {
                     let fv = &self.veh[f as usize];
                     let gap = back_from_start + (len - fv.pos);
                     if f != id && gap <= max_dist && best.is_none_or(|b| gap < b.gap_m) {
@@ -792,13 +810,21 @@ impl Simulation {
         for a in &mut self.approaches {
             a.clear();
         }
+        // plans are stored in visiting order (lane order, front to back), which the moves visit again unchanged
+        let mut plans = std::mem::take(&mut self.plans);
+        if plans.len() < n as usize {
+            plans.resize(n as usize, Plan::default());
+        }
+        let mut pi = 0;
         for li in 0..self.lane_order.len() {
             let lane = self.lane_order[li];
             for qi in 0..self.lane_veh[lane as usize].len() {
                 let id = self.lane_veh[lane as usize][qi];
-                self.plan(id, qi);
+                self.plan(id, qi, &mut plans[pi]);
+                pi += 1;
             }
         }
+        self.plans = plans;
         self.execute_moves();
         self.time_s += self.spec.step_s;
         self.step += 1;
@@ -871,7 +897,7 @@ impl Simulation {
             // tails of vehicles on any connection out of this road still reach back onto it
             for &k in &cur.out_links {
                 let via = self.net.links[k as usize].via_lane;
-                if let Some(&o) = self.lane_veh[via as usize].back() {
+                if let Some(&o) = self.lane_veh[via as usize].last() {
                     let ov = &self.veh[o as usize];
                     if ov.pos < ov.length && r.lanes.get(v.route_pos as usize + 1) != Some(&via) {
                         f(o, seen + ov.pos - ov.length);
@@ -888,7 +914,7 @@ impl Simulation {
                     self.junction_foe_leaders(id, lane, seen + l.length, guard, f);
                 }
             }
-            if let Some(&o) = self.lane_veh[lane as usize].back() {
+            if let Some(&o) = self.lane_veh[lane as usize].last() {
                 let ov = &self.veh[o as usize];
                 f(o, seen + ov.pos - ov.length);
                 return;
@@ -922,7 +948,7 @@ impl Simulation {
                     f(o, dist_to_merge - d - ov.length);
                 }
             }
-            if let Some(&o) = self.lane_veh[fl.from_lane as usize].front() {
+            if let Some(&o) = self.lane_veh[fl.from_lane as usize].first() {
                 let ov = &self.veh[o as usize];
                 let from_len = self.net.lanes[fl.from_lane as usize].length;
                 let d = flen + from_len - ov.pos;
@@ -977,14 +1003,14 @@ impl Simulation {
         vmax
     }
 
-    fn plan(&mut self, id: VehicleId, qi: usize) {
+    fn plan(&mut self, id: VehicleId, qi: usize, plan: &mut Plan) {
         let dt = self.spec.step_s;
         let v = &self.veh[id as usize];
         let p = self.types[v.vtype as usize];
-        let t = &self.spec.vehicle_types[v.vtype as usize];
+        let tc = self.type_consts[v.vtype as usize];
         let speed = v.speed;
         let des_cur = self.desired_speed(v, v.lane);
-        let max_next = (speed + p.accel * dt).min(t.max_speed);
+        let max_next = (speed + p.accel * dt).min(tc.max_speed);
         let mut vv = max_next.min(des_cur);
         let lookahead = max_next * dt + p.brake_gap(max_next, p.decel, p.tau) + v.length;
         let r = &self.routes[v.route as usize];
@@ -1017,7 +1043,7 @@ impl Simulation {
                 if r.lanes.get(v.route_pos as usize + 1) == Some(&via) {
                     continue;
                 }
-                if let Some(&o) = self.lane_veh[via as usize].back() {
+                if let Some(&o) = self.lane_veh[via as usize].last() {
                     let ov = &self.veh[o as usize];
                     if ov.pos < ov.length {
                         let gap = cur.length - v.pos + ov.pos - ov.length - p.min_gap;
@@ -1027,11 +1053,8 @@ impl Simulation {
             }
         }
 
-        let mut plan = Plan {
-            v_safe: 0.0,
-            n_items: 0,
-            items: [LinkItem::default(); MAX_LINK_ITEMS],
-        };
+        plan.n_items = 0;
+        plan.stop_brake_gap = f64::NAN;
         let mut seen = cur.length - v.pos;
         let mut k = v.route_pos as usize;
         let mut leader_found = qi > 0;
@@ -1078,12 +1101,13 @@ impl Simulation {
             if !items_full && (!lk.major || self.link_has_minor_foe[link as usize]) {
                 let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).max(0.0);
                 let mut arrival_speed = v_link_pass_est;
-                if !lk.major && seen >= FOE_VISIBILITY_M && p.brake_gap(speed, p.decel, 0.0) < seen
-                {
-                    let max_at_vis = p.maximum_safe_stop_speed(FOE_VISIBILITY_M, speed);
-                    let max_arrival =
-                        IdmParams::speed_after_distance(FOE_VISIBILITY_M, max_at_vis, p.accel);
-                    arrival_speed = arrival_speed.min(max_arrival);
+                if !lk.major && seen >= FOE_VISIBILITY_M && {
+                    if plan.stop_brake_gap.is_nan() {
+                        plan.stop_brake_gap = p.brake_gap(speed, p.decel, 0.0);
+                    }
+                    plan.stop_brake_gap < seen
+                } {
+                    arrival_speed = arrival_speed.min(tc.max_arrival_from_visibility);
                     slowed_for_minor = true;
                 }
                 let arrival_time = self.time_s + p.minimal_arrival_time(seen, vv, arrival_speed);
@@ -1134,7 +1158,7 @@ impl Simulation {
                 vv = vv.min(via_max.max(p.free_speed(speed, seen, via_max, des_cur)));
             }
             if !leader_found {
-                if let Some(&o) = self.lane_veh[via as usize].back() {
+                if let Some(&o) = self.lane_veh[via as usize].last() {
                     let ov = &self.veh[o as usize];
                     let gap = seen + ov.pos - ov.length - p.min_gap;
                     vv = vv.min(p.follow_speed(gap, speed, ov.speed, des_cur));
@@ -1154,7 +1178,7 @@ impl Simulation {
                 vv = vv.min(next_max.max(p.free_speed(speed, seen, next_max, des_cur)));
             }
             if !leader_found {
-                if let Some(&o) = self.lane_veh[next as usize].back() {
+                if let Some(&o) = self.lane_veh[next as usize].last() {
                     let ov = &self.veh[o as usize];
                     let gap = seen + ov.pos - ov.length - p.min_gap;
                     vv = vv.min(p.follow_speed(gap, speed, ov.speed, des_cur));
@@ -1178,7 +1202,6 @@ impl Simulation {
                     veh: id,
                     arrival_time: it.arrival_time,
                     leave_time: it.leave_time,
-                    arrival_speed: it.arrival_speed,
                     leave_speed: it.leave_speed,
                     arrival_time_braking: it.arrival_time_braking,
                     arrival_speed_braking: it.arrival_speed_braking,
@@ -1187,7 +1210,6 @@ impl Simulation {
                 });
             }
         }
-        self.plans[id as usize] = plan;
     }
 
     /// SUMO's `MSLink::opened` for a minor link at a merge: blocked by any foe approach that conflicts in time.
@@ -1235,12 +1257,13 @@ impl Simulation {
 
     fn execute_moves(&mut self) {
         let dt = self.spec.step_s;
-        // 1. decide each vehicle's next speed from its plan and the links
+        // 1. decide each vehicle's next speed from its plan and the links (plans are in this visiting order)
+        let mut pi = 0;
         for li in 0..self.lane_order.len() {
             let lane = self.lane_order[li];
             for qi in 0..self.lane_veh[lane as usize].len() {
                 let id = self.lane_veh[lane as usize][qi];
-                let plan = &self.plans[id as usize];
+                let plan = &self.plans[pi];
                 let v = &self.veh[id as usize];
                 let p = self.types[v.vtype as usize];
                 let mut v_safe = plan.v_safe;
@@ -1249,8 +1272,12 @@ impl Simulation {
                     if lk.major {
                         continue;
                     }
-                    let can_brake =
-                        it.dist > p.brake_gap(v.speed, p.decel, 0.0) || v.speed < p.decel * dt;
+                    let stop_brake_gap = if plan.stop_brake_gap.is_nan() {
+                        p.brake_gap(v.speed, p.decel, 0.0)
+                    } else {
+                        plan.stop_brake_gap
+                    };
+                    let can_brake = it.dist > stop_brake_gap || v.speed < p.decel * dt;
                     let opened = it.will_pass && self.link_opened(id, it, can_brake);
                     if !opened && (can_brake || !it.will_pass) {
                         let v_link_wait = it.v_link_pass.min(p.stop_speed(
@@ -1272,16 +1299,19 @@ impl Simulation {
                     let a = v.accel_cmd.clamp(-p.decel, p.accel);
                     next = (v.speed + a * dt).max(0.0).min(v_safe);
                 }
-                self.plans[id as usize].v_safe = next.max(0.0);
+                self.plans[pi].v_safe = next.max(0.0);
+                pi += 1;
             }
         }
         // 2. move, downstream lanes first and front to back, never past the (already moved) leader
+        let mut pi = 0;
         for li in 0..self.lane_order.len() {
             let lane = self.lane_order[li];
             let mut qi = 0;
             while qi < self.lane_veh[lane as usize].len() {
                 let id = self.lane_veh[lane as usize][qi];
-                let mut next = self.plans[id as usize].v_safe;
+                let mut next = self.plans[pi].v_safe;
+                pi += 1;
                 let mut cap = f64::INFINITY;
                 // a leader's back may reach up to its length behind the start of its lane
                 self.for_each_leader_at(
@@ -1317,7 +1347,7 @@ impl Simulation {
         for li in 0..self.lane_order.len() {
             let lane = self.lane_order[li];
             loop {
-                let Some(&id) = self.lane_veh[lane as usize].front() else {
+                let Some(&id) = self.lane_veh[lane as usize].first() else {
                     break;
                 };
                 let len = self.net.lanes[lane as usize].length;
@@ -1326,7 +1356,7 @@ impl Simulation {
                 let last = v.route_pos as usize + 1 >= r.lanes.len();
                 if last {
                     if v.pos > len - POSITION_EPS {
-                        self.lane_veh[lane as usize].pop_front();
+                        self.lane_veh[lane as usize].remove(0);
                         self.arrive(id);
                         continue;
                     }
@@ -1335,7 +1365,7 @@ impl Simulation {
                 if v.pos <= len {
                     break;
                 }
-                self.lane_veh[lane as usize].pop_front();
+                self.lane_veh[lane as usize].remove(0);
                 let mut v_pos = v.pos;
                 let mut rp = v.route_pos as usize;
                 // a fast vehicle may cross a short connection in one step
@@ -1397,7 +1427,7 @@ impl Simulation {
                     break;
                 }
                 let (vt, route, speed) = (flow.vehicle_type, self.flow_route[f], flow.depart_speed);
-                let id = self.create_vehicle(vt, route, depart, speed);
+                let id = self.create_vehicle(vt, route, speed);
                 self.flow_next[f] += 1;
                 let entry = self.routes[route as usize].lanes[0];
                 let ei = self.entry_lanes.iter().position(|&l| l == entry).unwrap();
@@ -1432,7 +1462,7 @@ impl Simulation {
         let reach = speed * self.spec.step_s + p.brake_gap(speed, p.decel, p.tau) + 200.0;
         while k < route.lanes.len() && seen < reach {
             let l = route.lanes[k];
-            if let Some(&o) = self.lane_veh[l as usize].back() {
+            if let Some(&o) = self.lane_veh[l as usize].last() {
                 let ov = &self.veh[o as usize];
                 let gap = seen + ov.pos - ov.length - p.min_gap;
                 if gap < 0.0 {
@@ -1449,7 +1479,7 @@ impl Simulation {
             if k == 0 {
                 for &lk in &self.net.lanes[l as usize].out_links {
                     let via = self.net.links[lk as usize].via_lane;
-                    if let Some(&o) = self.lane_veh[via as usize].back() {
+                    if let Some(&o) = self.lane_veh[via as usize].last() {
                         let ov = &self.veh[o as usize];
                         let gap = seen + lane_len + ov.pos - ov.length - p.min_gap;
                         if gap < 0.0 || gap < p.secure_gap(speed, ov.speed) {
@@ -1510,10 +1540,10 @@ impl Simulation {
             }
             // a road's last vehicle versus the front vehicle of each connection into it
             if let LaneKind::Road(_) = self.net.lanes[li].kind {
-                if let Some(&last) = q.back() {
+                if let Some(&last) = q.last() {
                     let lv = &self.veh[last as usize];
                     for l in self.net.links.iter().filter(|l| l.to_lane as usize == li) {
-                        if let Some(&f) = self.lane_veh[l.via_lane as usize].front() {
+                        if let Some(&f) = self.lane_veh[l.via_lane as usize].first() {
                             let fv = &self.veh[f as usize];
                             let gap = lv.pos - lv.length
                                 + (self.net.lanes[l.via_lane as usize].length - fv.pos);

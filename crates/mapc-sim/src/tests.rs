@@ -245,3 +245,191 @@ fn mean_ci_uses_student_t() {
     assert!((m.ci95 - 3.182446 * 1.290994 / 2.0).abs() < 1e-4, "{m:?}");
     assert!((t_quantile_975(99) - 1.984217).abs() < 1e-5);
 }
+
+// ---------------------------------------------------------------------------------------------------------------
+// Golden results: policies were trained on this simulator, so every change (speed work included) must leave every
+// number bit for bit as it was. The constants below were recorded with the simulator before its speed work.
+// ---------------------------------------------------------------------------------------------------------------
+
+/// FNV-1a over 64-bit words (stable across platforms and Rust versions, unlike `DefaultHasher`).
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn word(&mut self, x: u64) {
+        for b in x.to_le_bytes() {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    fn f(&mut self, x: f64) {
+        self.word(x.to_bits());
+    }
+    fn bytes(&mut self, bs: &[u8]) {
+        for &b in bs {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+}
+
+/// Every number of a run's metrics as exact bit patterns.
+fn metric_bits(m: &RunMetrics) -> [u64; 9] {
+    [
+        m.outflow_veh_h.to_bits(),
+        m.inflow_veh_h.to_bits(),
+        m.avg_speed_mps.to_bits(),
+        m.mean_travel_time_s.to_bits(),
+        m.mean_delay_s.to_bits(),
+        m.arrived,
+        m.departed,
+        m.steps,
+        m.vehicle_steps,
+    ]
+}
+
+/// Hash of the whole state after every step (each active vehicle's id, road, junction flag, exact position and
+/// speed, plus the trace rows) and of the state queries the environment layer makes.
+fn state_hash(sim: &Simulation, h: &mut Fnv) {
+    for id in sim.active_ids() {
+        let v = sim.vehicle(id).unwrap();
+        h.word(id as u64);
+        h.word(v.road.0 as u64);
+        h.word(v.in_junction as u64);
+        h.f(v.pos_m);
+        h.f(v.speed);
+        h.word(v.entry_order);
+        h.f(v.depart_s);
+    }
+    let mut rows = Vec::new();
+    sim.write_trace_rows(&mut rows).unwrap();
+    h.bytes(&rows);
+    h.word(sim.arrived_last_step().len() as u64);
+    for &id in sim.arrived_last_step() {
+        h.word(id as u64);
+    }
+    for &id in sim.departed_last_step() {
+        h.word(id as u64);
+    }
+    h.word(sim.waiting_to_enter() as u64);
+}
+
+fn query_hash(sim: &Simulation, id: VehicleId, h: &mut Fnv) {
+    let nb = |h: &mut Fnv, n: Option<Neighbor>| match n {
+        Some(n) => {
+            h.word(n.id as u64);
+            h.f(n.gap_m);
+            h.f(n.speed);
+        }
+        None => h.word(u64::MAX),
+    };
+    nb(h, sim.leader(id, 1000.0));
+    nb(h, sim.follower(id, 1000.0));
+    nb(h, sim.leader(id, 50.0));
+    nb(h, sim.follower(id, 50.0));
+    match sim.nearest_merge_foe(id, 200.0) {
+        Some(f) => {
+            h.word(f.id as u64);
+            h.f(f.dist_to_merge_m);
+            h.f(f.speed);
+        }
+        None => h.word(u64::MAX),
+    }
+    match sim.distance_to_next_junction(id) {
+        Some((d, j)) => {
+            h.f(d);
+            h.bytes(j.to_string().as_bytes());
+        }
+        None => h.word(u64::MAX),
+    }
+    let (done, total) = sim.route_progress(id).unwrap();
+    h.f(done);
+    h.f(total);
+    match sim.corridor_x(id) {
+        Some(x) => h.f(x),
+        None => h.word(u64::MAX),
+    }
+    h.word(sim.in_control_region(id) as u64);
+}
+
+/// Seed 0 of the built-in Simple Merge (its own vehicle types, AVs left to drive as humans): metrics and a hash of
+/// the full state after every step.
+fn golden_free_run(seed: u64, trace: bool) -> ([u64; 9], u64) {
+    let mut sim = Simulation::from_spec(simple_merge_spec(), seed).unwrap();
+    let mut h = Fnv::new();
+    while !sim.is_done() {
+        sim.step().unwrap();
+        if trace {
+            state_hash(&sim, &mut h);
+        }
+    }
+    (metric_bits(&sim.metrics()), h.0)
+}
+
+/// Seed 5 with every controlled vehicle in the control region commanded a = 2 sin(0.01 step + id) each step; the
+/// hash covers the state and, every 10th step, every query the environment layer makes for every vehicle.
+fn golden_controlled_run() -> ([u64; 9], u64, u64) {
+    let mut sim = Simulation::from_spec(simple_merge_spec(), 5).unwrap();
+    let mut h = Fnv::new();
+    let mut commanded = 0u64;
+    while !sim.is_done() {
+        let step = sim.step_index();
+        let ids: Vec<VehicleId> = sim.active_ids().collect();
+        for &id in &ids {
+            let v = sim.vehicle(id).unwrap();
+            if v.controlled && sim.in_control_region(id) {
+                let a = 2.0 * (0.01 * step as f64 + id as f64).sin();
+                sim.set_acceleration(id, a).unwrap();
+                commanded += 1;
+            }
+            if step % 10 == 0 {
+                query_hash(&sim, id, &mut h);
+            }
+        }
+        sim.step().unwrap();
+        state_hash(&sim, &mut h);
+    }
+    (metric_bits(&sim.metrics()), h.0, commanded)
+}
+
+#[test]
+fn results_are_bit_identical_to_the_recorded_ones() {
+    let mut got = Vec::new();
+    for seed in 0..3 {
+        let (m, h) = golden_free_run(seed, seed == 0);
+        got.push((format!("seed {seed}"), m, h));
+    }
+    let (m, h, commanded) = golden_controlled_run();
+    assert_eq!(commanded, 2531);
+    got.push((format!("controlled ({commanded} commands)"), m, h));
+    for (name, m, h) in &got {
+        eprintln!("{name}: {m:?} hash {h:#018x}");
+    }
+    let want: [([u64; 9], u64); 4] = GOLDEN;
+    for (i, (name, m, h)) in got.iter().enumerate() {
+        assert_eq!(*m, want[i].0, "{name}: metrics changed");
+        assert_eq!(*h, want[i].1, "{name}: trace hash changed");
+    }
+}
+
+/// Recorded before the speed work (seeds 0, 1, 2 without commands; the commanded run of seed 5, 2531 commands).
+const GOLDEN: [([u64; 9], u64); 4] = [
+    (
+        [4654966314533860147, 4655678798068658995, 4620673598708920360, 4636098057380507094, 4634432194945011809, 458, 503, 2000, 89298],
+        0x1437f013a93eda32,
+    ),
+    (
+        [4654966314533860147, 4655678798068658995, 4620675357966377096, 4636112038943214883, 4634443428960964479, 458, 503, 2000, 89361],
+        0xcbf29ce484222325,
+    ),
+    (
+        [4654855483761780326, 4655552134329139200, 4620449267113346608, 4636311724282031901, 4634645339889826613, 451, 495, 2000, 90490],
+        0xcbf29ce484222325,
+    ),
+    (
+        [4648942750032252109, 4649164411576411750, 4623622328215431581, 4630633483158010184, 4625653507037085458, 181, 188, 2000, 14706],
+        0xf725bb0a8edcbe46,
+    ),
+];

@@ -47,6 +47,9 @@ pub struct TrainerState {
     pub wall_s: f64,
     /// Minibatch shuffling stream.
     pub rng: Rng,
+    /// Minibatches whose gradient overflowed and was not applied (0 in a healthy run).
+    #[serde(default)]
+    pub skipped_minibatches: u64,
 }
 
 impl TrainerState {
@@ -67,6 +70,7 @@ impl TrainerState {
             iteration: 0,
             env_steps: 0,
             wall_s: 0.0,
+            skipped_minibatches: 0,
         }
     }
 
@@ -143,6 +147,11 @@ impl TrainerState {
             for idx in order.chunks(mb_size) {
                 let mb = b.gather(idx);
                 let (stats, grad) = sliced_loss_and_grad(&self.model, &mb, &coeffs, c.grad_slices);
+                // One overflowing minibatch (a collapsing log-std) must not poison the weights and Adam's moments.
+                if !grad.iter().all(|g| g.is_finite()) {
+                    self.skipped_minibatches += 1;
+                    continue;
+                }
                 self.adam.step(&mut self.model.params, &grad, c.lr);
                 if epoch + 1 == c.epochs {
                     let w = idx.len() as f32;

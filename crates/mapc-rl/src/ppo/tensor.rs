@@ -276,7 +276,8 @@ pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs, device: &Dev
     let logp = (z.square().mul_scalar(-0.5) - log_std.clone())
         .sum_dim(1)
         .sub_scalar(0.5 * LN_2PI * a as f32);
-    let ratio = (logp - old_logp).exp();
+    // exp(20) is far past any clip range; bounding the log-ratio keeps an outlier from overflowing to inf.
+    let ratio = (logp - old_logp).clamp(-20.0, 20.0).exp();
     let surr = (adv.clone() * ratio.clone()).min_pair(adv * ratio.clamp(1.0 - c.clip, 1.0 + c.clip));
     // KL(old || new) of diagonal Gaussians.
     let old_var = old_log_std.clone().mul_scalar(2.0).exp();
