@@ -64,7 +64,8 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
 
 /// Run one `mapc` command line (without the program name), as the pipeline does.
 pub(crate) fn run_command_line(words: &[String]) -> anyhow::Result<()> {
-    let cli = Cli::try_parse_from(std::iter::once("mapc".to_string()).chain(words.iter().cloned()))?;
+    let cli =
+        Cli::try_parse_from(std::iter::once("mapc".to_string()).chain(words.iter().cloned()))?;
     dispatch(cli.command)
 }
 

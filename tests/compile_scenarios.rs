@@ -3,11 +3,17 @@
 //! (the same convention as the import goldens); paths of written files are left out of the goldens.
 
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
-const PAPER_VIA: [&str; 6] =
-    ["--via", "osm-way:59440544", "--via", "osm-way:8667198", "--via", "osm-way:8708084"];
+const PAPER_VIA: [&str; 6] = [
+    "--via",
+    "osm-way:59440544",
+    "--via",
+    "osm-way:8667198",
+    "--via",
+    "osm-way:8708084",
+];
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -20,7 +26,11 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn mapc(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_mapc")).args(args).current_dir(root()).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap();
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -31,7 +41,8 @@ fn mapc(args: &[&str]) -> (i32, String, String) {
 fn mapc_json(args: &[&str]) -> Value {
     let (code, stdout, stderr) = mapc(args);
     assert_eq!(code, 0, "mapc {args:?} failed: {stderr}");
-    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("mapc {args:?}: not JSON ({e}): {stdout}"))
+    serde_json::from_str(&stdout)
+        .unwrap_or_else(|e| panic!("mapc {args:?}: not JSON ({e}): {stdout}"))
 }
 
 fn golden(map: &str, name: &str, mut value: Value) {
@@ -39,28 +50,53 @@ fn golden(map: &str, name: &str, mut value: Value) {
         value.as_object_mut().unwrap().remove(key);
     }
     let text = serde_json::to_string_pretty(&value).unwrap() + "\n";
-    let path = root().join("tests/golden").join(map).join(format!("{name}.json"));
+    let path = root()
+        .join("tests/golden")
+        .join(map)
+        .join(format!("{name}.json"));
     let bless = std::env::var_os("MAPC_BLESS").is_some_and(|v| !v.is_empty() && v != "0");
     if bless {
-        assert!(std::env::var_os("CI").is_none(), "MAPC_BLESS is set in CI: goldens must not be rewritten there");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "MAPC_BLESS is set in CI: goldens must not be rewritten there"
+        );
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
         std::fs::write(&path, &text).unwrap();
         return;
     }
-    let want = std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("{}: {e} (run with MAPC_BLESS=1 to create it)", path.display()));
-    assert!(want == text, "{} differs (MAPC_BLESS=1 rewrites it after a deliberate change):\n{text}", path.display());
+    let want = std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (run with MAPC_BLESS=1 to create it)",
+            path.display()
+        )
+    });
+    assert!(
+        want == text,
+        "{} differs (MAPC_BLESS=1 rewrites it after a deliberate change):\n{text}",
+        path.display()
+    );
 }
 
 fn the_merge(report: &Value, node: i64) -> &Value {
-    report["merges"].as_array().unwrap().iter().find(|m| m["osm_node"] == node).expect("merge on the corridor")
+    report["merges"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["osm_node"] == node)
+        .expect("merge on the corridor")
 }
 
 #[test]
 fn i696_simplify_gives_the_papers_merge() {
     let dir = scratch("simplify");
     let out = dir.join("i696.corridor.graph.json");
-    let mut args = vec!["simplify", "maps/i696.osm", "-o", out.to_str().unwrap(), "--json"];
+    let mut args = vec![
+        "simplify",
+        "maps/i696.osm",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ];
     args.extend(PAPER_VIA);
     let report = mapc_json(&args);
     let m = the_merge(&report, 61862553);
@@ -69,8 +105,23 @@ fn i696_simplify_gives_the_papers_merge() {
     assert!((1900.0..=2450.0).contains(&f("merge_m")), "{m}");
     assert!((f("main_after_m") - 5034.0).abs() < 25.0, "{m}");
     assert_eq!(m["merging_is_major"], true);
-    let names: Vec<&str> = report["steps"].as_array().unwrap().iter().map(|s| s["step"].as_str().unwrap()).collect();
-    assert_eq!(names, ["pick_route", "keep_feeders", "drop_diverges", "prune", "collapse_lanes", "join_chains"]);
+    let names: Vec<String> = report["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["step"].as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "pick_route",
+            "keep_feeders",
+            "drop_diverges",
+            "prune",
+            "collapse_lanes",
+            "join_chains"
+        ]
+    );
     // The corridor file is a sound single-lane graph.
     let g = mapc_graph::LaneGraph::load(&out).unwrap();
     assert!(g.invariant_violations().is_empty());
@@ -78,7 +129,13 @@ fn i696_simplify_gives_the_papers_merge() {
     golden("i696", "simplify", report);
 
     // --explain names every step.
-    let mut args = vec!["simplify", "maps/i696.osm", "-o", out.to_str().unwrap(), "--explain"];
+    let mut args = vec![
+        "simplify",
+        "maps/i696.osm",
+        "-o",
+        out.to_str().unwrap(),
+        "--explain",
+    ];
     args.extend(PAPER_VIA);
     let (code, stdout, _) = mapc(&args);
     assert_eq!(code, 0);
@@ -92,7 +149,12 @@ fn i696_simplify_gives_the_papers_merge() {
 fn i696_window_matches_the_simple_merge() {
     let dir = scratch("window");
     let corridor = dir.join("i696.corridor.graph.json");
-    let mut args = vec!["simplify", "maps/i696.osm", "-o", corridor.to_str().unwrap()];
+    let mut args = vec![
+        "simplify",
+        "maps/i696.osm",
+        "-o",
+        corridor.to_str().unwrap(),
+    ];
     args.extend(PAPER_VIA);
     assert_eq!(mapc(&args).0, 0);
     let scenario = dir.join("w.toml");
@@ -107,23 +169,48 @@ fn i696_window_matches_the_simple_merge() {
         scenario.to_str().unwrap(),
         "--json",
     ]);
-    for (k, want) in [("upstream_m", 600.0), ("merge_m", 200.0), ("downstream_m", 100.0)] {
-        assert!((report[k].as_f64().unwrap() - want).abs() <= 0.5, "{k}: {report}");
+    for (k, want) in [
+        ("upstream_m", 600.0),
+        ("merge_m", 200.0),
+        ("downstream_m", 100.0),
+    ] {
+        assert!(
+            (report[k].as_f64().unwrap() - want).abs() <= 0.5,
+            "{k}: {report}"
+        );
     }
     assert_eq!(report["osm_node"], 61862553);
     // The scenario loads, round-trips through TOML exactly, and its region is the window.
     let resolved = mapc_scenario::ResolvedScenario::load(scenario.to_str().unwrap()).unwrap();
     let s = &resolved.scenario;
-    assert_eq!(mapc_scenario::Scenario::from_toml(&s.to_toml(), &scenario).unwrap(), *s);
+    assert_eq!(
+        mapc_scenario::Scenario::from_toml(&s.to_toml(), &scenario).unwrap(),
+        *s
+    );
     assert_eq!(s.flows.len(), 3);
-    assert_eq!(resolved.region_roads.len(), report["region"].as_array().unwrap().len());
+    assert_eq!(
+        resolved.region_roads.len(),
+        report["region"].as_array().unwrap().len()
+    );
     assert!(dir.join("w.graph.json").exists());
     golden("i696", "window", report);
 
     // A raw map is simplified first; the result is the same window.
-    let raw = mapc_json(&["window", "maps/i696.osm", "--junction", "osm:61862553", "-o",
-        dir.join("raw.toml").to_str().unwrap(), "--json", "--via", "osm-way:59440544", "--via", "osm-way:8667198",
-        "--via", "osm-way:8708084"]);
+    let raw = mapc_json(&[
+        "window",
+        "maps/i696.osm",
+        "--junction",
+        "osm:61862553",
+        "-o",
+        dir.join("raw.toml").to_str().unwrap(),
+        "--json",
+        "--via",
+        "osm-way:59440544",
+        "--via",
+        "osm-way:8667198",
+        "--via",
+        "osm-way:8708084",
+    ]);
     assert_eq!(raw["upstream_m"], 600.0);
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -143,14 +230,28 @@ fn proxy_net_window_at_gnej18() {
         scenario.to_str().unwrap(),
         "--json",
     ]);
-    for (k, want) in [("upstream_m", 600.0), ("merge_m", 200.0), ("downstream_m", 100.0)] {
-        assert!((report[k].as_f64().unwrap() - want).abs() <= 0.5, "{k}: {report}");
+    for (k, want) in [
+        ("upstream_m", 600.0),
+        ("merge_m", 200.0),
+        ("downstream_m", 100.0),
+    ] {
+        assert!(
+            (report[k].as_f64().unwrap() - want).abs() <= 0.5,
+            "{k}: {report}"
+        );
     }
     assert_eq!(report["sumo_id"], "gneJ18");
     golden("i696_onelane_proxy", "window", report);
     let corridor = dir.join("p.corridor.graph.json");
-    let simplified = mapc_json(&["simplify", "maps/i696_onelane_proxy.net.xml", "--via", "gneJ18", "-o",
-        corridor.to_str().unwrap(), "--json"]);
+    let simplified = mapc_json(&[
+        "simplify",
+        "maps/i696_onelane_proxy.net.xml",
+        "--via",
+        "gneJ18",
+        "-o",
+        corridor.to_str().unwrap(),
+        "--json",
+    ]);
     golden("i696_onelane_proxy", "simplify", simplified);
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -159,14 +260,33 @@ fn proxy_net_window_at_gnej18() {
 fn bad_junctions_are_clear_errors() {
     let dir = scratch("errors");
     let corridor = dir.join("c.graph.json");
-    let mut args = vec!["simplify", "maps/i696.osm", "-o", corridor.to_str().unwrap()];
+    let mut args = vec![
+        "simplify",
+        "maps/i696.osm",
+        "-o",
+        corridor.to_str().unwrap(),
+    ];
     args.extend(PAPER_VIA);
     assert_eq!(mapc(&args).0, 0);
     let c = corridor.to_str().unwrap();
-    let (code, _, stderr) = mapc(&["window", c, "--junction", "osm:1", "-o", dir.join("x.toml").to_str().unwrap()]);
+    let (code, _, stderr) = mapc(&[
+        "window",
+        c,
+        "--junction",
+        "osm:1",
+        "-o",
+        dir.join("x.toml").to_str().unwrap(),
+    ]);
     assert_eq!(code, 2);
     assert!(stderr.contains("osm:1"), "{stderr}");
-    let (code, _, stderr) = mapc(&["window", c, "--junction", "osm:61862553", "--match", "nonesuch"]);
+    let (code, _, stderr) = mapc(&[
+        "window",
+        c,
+        "--junction",
+        "osm:61862553",
+        "--match",
+        "nonesuch",
+    ]);
     assert_eq!(code, 2);
     assert!(stderr.contains("nonesuch"), "{stderr}");
     let (code, _, stderr) = mapc(&["simplify", "maps/i696.osm", "--via", "osm-way:1", "-o", c]);

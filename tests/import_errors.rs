@@ -17,9 +17,17 @@ fn scratch(name: &str, bytes: &[u8]) -> PathBuf {
 
 /// Run `mapc import FILE`; expect exit 2 and a message with every one of `expected`.
 fn fails_with(file: &PathBuf, expected: &[&str]) -> String {
-    let out_file = std::env::temp_dir().join(format!("mapc-import-errors-{}-never.graph.json", std::process::id()));
+    let out_file = std::env::temp_dir().join(format!(
+        "mapc-import-errors-{}-never.graph.json",
+        std::process::id()
+    ));
     let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
-        .args(["import", file.to_str().unwrap(), "-o", out_file.to_str().unwrap()])
+        .args([
+            "import",
+            file.to_str().unwrap(),
+            "-o",
+            out_file.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
@@ -50,7 +58,10 @@ fn missing_and_empty_files() {
 #[test]
 fn truncated_xml() {
     let osm = map("i696.osm");
-    fails_with(&scratch("cut.osm", &osm[..osm.len() / 2]), &["line ", "truncated"]);
+    fails_with(
+        &scratch("cut.osm", &osm[..osm.len() / 2]),
+        &["line ", "truncated"],
+    );
     let net = map("simple_merge.net.xml");
     fails_with(&scratch("cut.net.xml", &net[..net.len() - 200]), &["line "]);
     // Cut inside a tag.
@@ -73,7 +84,10 @@ fn xml_that_is_not_osm() {
         &scratch("osm_in_disguise.net.xml", &map("i696.osm")[..4000]),
         &["not a SUMO network"],
     );
-    fails_with(&scratch("text.osm", b"hello, not xml at all"), &["not an XML file"]);
+    fails_with(
+        &scratch("text.osm", b"hello, not xml at all"),
+        &["not an XML file"],
+    );
 }
 
 #[test]
@@ -81,10 +95,16 @@ fn coordinate_that_is_not_a_number() {
     let text = String::from_utf8(map("i696.osm")).unwrap();
     let bad = text.replacen("lat=\"42.4869153\"", "lat=\"42.48x9153\"", 1);
     assert_ne!(bad, text);
-    let line = text[..text.find("lat=\"42.4869153\"").unwrap()].lines().count();
+    let line = text[..text.find("lat=\"42.4869153\"").unwrap()]
+        .lines()
+        .count();
     fails_with(
         &scratch("badcoord.osm", bad.as_bytes()),
-        &[&format!("line {line}"), "<node id=\"26913188\">", "not a number"],
+        &[
+            &format!("line {line}"),
+            "<node id=\"26913188\">",
+            "not a number",
+        ],
     );
 }
 
@@ -114,7 +134,9 @@ fn net_whose_connection_names_an_unknown_edge() {
         "<connection from=\"left\" to=\"nowhere\"",
         1,
     );
-    let line = text[..text.find("<connection from=\"left\" to=\"center\"").unwrap()]
+    let line = text[..text
+        .find("<connection from=\"left\" to=\"center\"")
+        .unwrap()]
         .lines()
         .count();
     fails_with(

@@ -46,7 +46,11 @@ fn tiny_train(dir: &PathBuf, iters: u64) -> std::process::Output {
 fn tiny_training_resume_and_eval() {
     let dir = tmp("run");
     let out = tiny_train(&dir, 2);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let csv = std::fs::read_to_string(dir.join("progress.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
@@ -63,7 +67,11 @@ fn tiny_training_resume_and_eval() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let straight = tmp("straight");
     assert!(tiny_train(&straight, 3).status.success());
     let row3 = |d: &PathBuf| {
@@ -89,7 +97,11 @@ fn tiny_training_resume_and_eval() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     for k in ["outflow", "inflow", "speed"] {
         assert!(v[k]["mean"].as_f64().unwrap() > 0.0, "{v}");
@@ -123,9 +135,20 @@ fn policy_with_another_observation_size_is_a_clear_error() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let out = mapc()
-        .args(["eval", "--seeds", "2", "--scenario", "simple_merge", "--policy"])
+        .args([
+            "eval",
+            "--seeds",
+            "2",
+            "--scenario",
+            "simple_merge",
+            "--policy",
+        ])
         .arg(&dir)
         .output()
         .unwrap();
@@ -151,6 +174,9 @@ fn a_corrupt_checkpoint_names_the_file() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("policy.json") && err.contains("line 1"), "{err}");
+    assert!(
+        err.contains("policy.json") && err.contains("line 1"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

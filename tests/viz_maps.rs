@@ -25,7 +25,8 @@ fn json_of(out: &Output) -> serde_json::Value {
         "mapc failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stdout)))
+    serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stdout)))
 }
 
 fn s(p: &Path) -> &str {
@@ -62,9 +63,16 @@ fn i696_renders_to_a_real_png() {
 fn i696_exports_to_geojson_in_michigan() {
     let dir = temp_dir("i696-geojson");
     let out = dir.join("i696.geojson");
-    let summary = json_of(&mapc(&["export", "maps/i696.osm", "--geojson", s(&out), "--json"]));
+    let summary = json_of(&mapc(&[
+        "export",
+        "maps/i696.osm",
+        "--geojson",
+        s(&out),
+        "--json",
+    ]));
     assert_eq!(summary["coordinates"], "wgs84");
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(v["type"], "FeatureCollection");
     let features = v["features"].as_array().unwrap();
     let roads = summary["roads"].as_u64().unwrap() as usize;
@@ -85,7 +93,12 @@ fn i696_exports_to_geojson_in_michigan() {
         .iter()
         .find(|f| f["properties"]["class"] == "motorway")
         .expect("a motorway");
-    assert!(!road["properties"]["osm_ways"].as_array().unwrap().is_empty());
+    assert!(
+        !road["properties"]["osm_ways"]
+            .as_array()
+            .unwrap()
+            .is_empty()
+    );
     assert!(road["geometry"]["coordinates"].as_array().unwrap().len() >= 2);
     let merge = features
         .iter()
@@ -109,11 +122,21 @@ fn simple_merge_renders_svg_and_exports_local_metres() {
         "--highlight",
         "R4",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg") && text.contains("\nJ0\n"));
     let gj = dir.join("merge.geojson");
-    let summary = json_of(&mapc(&["export", "simple_merge", "--geojson", s(&gj), "--json"]));
+    let summary = json_of(&mapc(&[
+        "export",
+        "simple_merge",
+        "--geojson",
+        s(&gj),
+        "--json",
+    ]));
     assert_eq!(summary["coordinates"], "local_metres");
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -24,7 +24,8 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-const HEADER: &str = "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled";
+const HEADER: &str =
+    "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled";
 
 /// 40 vehicles on a 600 m corridor through a jam that moves upstream; every tenth is an AV.
 fn wave_trace() -> String {
@@ -55,7 +56,11 @@ fn timespace_diagram_shows_the_jam() {
     std::fs::write(&trace, wave_trace()).unwrap();
     let png = dir.join("ts.png");
     let out = mapc(&["plot", "timespace", s(&trace), "-o", s(&png), "--json"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(summary["vehicles"], 40);
     assert_eq!(summary["controlled_vehicles"], 4);
@@ -67,9 +72,25 @@ fn timespace_diagram_shows_the_jam() {
         "the jam is not drawn red"
     );
     let svg = dir.join("ts.svg");
-    let out = mapc(&["plot", "timespace", s(&trace), "-o", s(&svg), "--road-filter", "R1"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(std::fs::read_to_string(&svg).unwrap().contains("speed (m/s)"));
+    let out = mapc(&[
+        "plot",
+        "timespace",
+        s(&trace),
+        "-o",
+        s(&svg),
+        "--road-filter",
+        "R1",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        std::fs::read_to_string(&svg)
+            .unwrap()
+            .contains("speed (m/s)")
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -86,7 +107,9 @@ fn bad_traces_exit_2_naming_file_line_and_column() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("trace.csv") && err.contains(&format!("line {line}")) && err.contains("speed_mps"),
+        err.contains("trace.csv")
+            && err.contains(&format!("line {line}"))
+            && err.contains("speed_mps"),
         "{err}"
     );
 
@@ -94,7 +117,10 @@ fn bad_traces_exit_2_naming_file_line_and_column() {
     let out = mapc(&["plot", "timespace", s(&trace), "-o", s(&png)]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(err.contains("missing columns") && err.contains("corridor_x_m"), "{err}");
+    assert!(
+        err.contains("missing columns") && err.contains("corridor_x_m"),
+        "{err}"
+    );
 
     let out = mapc(&["plot", "timespace", s(&dir.join("none.csv")), "-o", s(&png)]);
     assert_eq!(out.status.code(), Some(2));
@@ -127,7 +153,7 @@ fn training_curves_of_two_runs_with_a_baseline() {
             )
             .unwrap();
         }
-        std::fs::write(d.join("log.csv"), text).unwrap();
+        std::fs::write(d.join("progress.csv"), text).unwrap();
     }
     let png = dir.join("curves.png");
     let out = mapc(&[
@@ -141,19 +167,27 @@ fn training_curves_of_two_runs_with_a_baseline() {
         "1420",
         "--json",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(summary["runs"].as_array().unwrap().len(), 2);
     assert_eq!(summary["runs"][0]["rows"], 30);
     let (stats, _) = read_png(&png).unwrap();
     assert!(stats.colors > 20, "{stats:?}");
 
-    std::fs::write(dir.join("a/log.csv"), "iteration,mean_return\n1,5\n2,x\n").unwrap();
+    std::fs::write(
+        dir.join("a/progress.csv"),
+        "iteration,mean_return\n1,5\n2,x\n",
+    )
+    .unwrap();
     let out = mapc(&["plot", "training", s(&dir.join("a")), "-o", s(&png)]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("log.csv") && err.contains("line 3") && err.contains("mean_return"),
+        err.contains("progress.csv") && err.contains("line 3") && err.contains("mean_return"),
         "{err}"
     );
     std::fs::remove_dir_all(dir).unwrap();

@@ -48,7 +48,10 @@ fn policy_file(p: &Path) -> PathBuf {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(t).build_global().ok();
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .ok();
     }
     if args.seeds == 0 {
         anyhow::bail!("--seeds must be at least 1");
@@ -64,8 +67,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         ActionMode::Mean
     };
-    let runs =
-        run_policy(&ck, &sc.spec, &cfg, &seeds, mode).with_context(|| format!("evaluating {}", file.display()))?;
+    let runs = run_policy(&ck, &sc.spec, &cfg, &seeds, mode)
+        .with_context(|| format!("evaluating {}", file.display()))?;
     let figs = FigureSet::of(&runs);
     let (baseline, comparison) = if args.no_baseline {
         (None, None)
@@ -96,20 +99,35 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let row = |name: &str, f: &FigureSet| {
         println!(
             "  {name:<8} outflow {:8.2} ± {:5.2} veh/h   inflow {:8.2} ± {:5.2} veh/h   speed {:6.2} ± {:4.2} m/s",
-            f.outflow.mean, f.outflow.ci95, f.inflow.mean, f.inflow.ci95, f.speed.mean, f.speed.ci95
+            f.outflow.mean,
+            f.outflow.ci95,
+            f.inflow.mean,
+            f.inflow.ci95,
+            f.speed.mean,
+            f.speed.ci95
         )
     };
     row("policy", &figs);
     if let (Some(b), Some(c)) = (&report.baseline, &report.comparison) {
         row("human", b);
         let p = |t: &Option<mapc_rl::stats::WelchTest>| {
-            t.map_or("n/a".to_string(), |t| format!("t = {:.2}, p = {:.2e}", t.t, t.p_value))
+            t.map_or("n/a".to_string(), |t| {
+                format!("t = {:.2}, p = {:.2e}", t.t, t.p_value)
+            })
         };
         println!(
             "  outflow {:+.1}% vs human ({}; 95% CIs {}); Welch outflow {}, speed {}",
             c.outflow_change_pct,
-            if c.outflow_change_pct >= 0.0 { "higher" } else { "lower" },
-            if c.outflow_ci_disjoint { "disjoint" } else { "overlap" },
+            if c.outflow_change_pct >= 0.0 {
+                "higher"
+            } else {
+                "lower"
+            },
+            if c.outflow_ci_disjoint {
+                "disjoint"
+            } else {
+                "overlap"
+            },
             p(&c.outflow),
             p(&c.speed)
         );

@@ -69,7 +69,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("{} -> {}", args.file.display(), output.display());
         println!(
             "  {} junctions ({} merges, {} diverges), {} roads, {} lanes, {} connections",
-            summary.junctions, summary.merges, summary.diverges, summary.roads, summary.lanes, summary.connections
+            summary.junctions,
+            summary.merges,
+            summary.diverges,
+            summary.roads,
+            summary.lanes,
+            summary.connections
         );
         println!(
             "  total length {:.3} km of road, {:.3} km of lane",

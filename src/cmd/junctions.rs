@@ -138,9 +138,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("{} {:?} ({}){at}", j.id, j.kind, j.provenance);
         for (dir, roads) in [("in ", &j.incoming), ("out", &j.outgoing)] {
             for r in roads {
+                let from = if !r.osm_ways.is_empty() {
+                    format!(
+                        "way {}",
+                        r.osm_ways
+                            .iter()
+                            .map(i64::to_string)
+                            .collect::<Vec<_>>()
+                            .join(",")
+                    )
+                } else {
+                    format!("edge {}", r.sumo_ids.join(","))
+                };
                 println!(
-                    "    {dir} {:<5} {:<40} {:<14} {} lanes {:>9.1} m",
-                    r.id, r.label, r.class, r.lanes, r.length_m
+                    "    {dir} {:<5} {:<36} {:<20} {:<16} {} lanes {:>9.1} m",
+                    r.id, r.label, from, r.class, r.lanes, r.length_m
                 );
             }
         }

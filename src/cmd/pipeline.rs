@@ -46,8 +46,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let trace = file(format!("{stem}_window_human_trace.csv"));
     let seeds = args.seeds.to_string();
     let map = path_text(&args.map);
-    let via: Vec<String> =
-        if args.via.is_empty() { I696_VIA.iter().map(|s| s.to_string()).collect() } else { args.via.clone() };
+    let via: Vec<String> = if args.via.is_empty() {
+        I696_VIA.iter().map(|s| s.to_string()).collect()
+    } else {
+        args.via.clone()
+    };
 
     let mut steps: Vec<Vec<String>> = vec![
         cmd(&["import", &map, "-o", &graph]),
@@ -71,9 +74,31 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "--render",
         &file(format!("{stem}_window.png")),
     ]));
-    steps.push(cmd(&["sim", "--scenario", &window, "--seeds", "1", "--trace", &trace]));
-    steps.push(cmd(&["plot", "timespace", &trace, "-o", &file(format!("{stem}_window_timespace.png"))]));
-    steps.push(cmd(&["eval", "--policy", &path_text(&args.policy), "--scenario", &window, "--seeds", &seeds]));
+    steps.push(cmd(&[
+        "sim",
+        "--scenario",
+        &window,
+        "--seeds",
+        "1",
+        "--trace",
+        &trace,
+    ]));
+    steps.push(cmd(&[
+        "plot",
+        "timespace",
+        &trace,
+        "-o",
+        &file(format!("{stem}_window_timespace.png")),
+    ]));
+    steps.push(cmd(&[
+        "eval",
+        "--policy",
+        &path_text(&args.policy),
+        "--scenario",
+        &window,
+        "--seeds",
+        &seeds,
+    ]));
     if args.json {
         for s in &mut steps {
             if !matches!(s[0].as_str(), "render" | "plot") {
@@ -85,7 +110,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         eprintln!("\n$ mapc {}", s.join(" "));
         crate::run_command_line(&s)?;
     }
-    eprintln!("\npipeline done in {:.1} s; outputs in {}", start.elapsed().as_secs_f64(), out.display());
+    eprintln!(
+        "\npipeline done in {:.1} s; outputs in {}",
+        start.elapsed().as_secs_f64(),
+        out.display()
+    );
     Ok(())
 }
 

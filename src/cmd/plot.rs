@@ -8,7 +8,7 @@ use std::path::PathBuf;
 pub enum Command {
     /// Time-space diagram of a trace (`mapc sim --trace`): time across, corridor position up, colour = speed.
     Timespace(TimespaceArgs),
-    /// Training curves of one or more runs (RUN_DIR/log.csv), overlaid.
+    /// Training curves of one or more runs (RUN_DIR/progress.csv), overlaid.
     Training(TrainingArgs),
 }
 
@@ -43,7 +43,7 @@ pub struct TimespaceArgs {
 
 #[derive(clap::Args)]
 pub struct TrainingArgs {
-    /// Run directories (each with a log.csv) or log files; several are overlaid.
+    /// Run directories (each with a progress.csv) or log files; several are overlaid.
     #[arg(required = true, value_name = "RUN_DIR")]
     pub runs: Vec<PathBuf>,
     /// Output picture: .png or .svg.
@@ -133,7 +133,11 @@ fn training(a: TrainingArgs) -> anyhow::Result<()> {
         println!("wrote {}: {}", s.path.display(), rows.join(", "));
         for r in &s.runs {
             if !r.missing_columns.is_empty() {
-                println!("  {}: no column {}", r.log.display(), r.missing_columns.join(", "));
+                println!(
+                    "  {}: no column {}",
+                    r.log.display(),
+                    r.missing_columns.join(", ")
+                );
             }
         }
     }

@@ -44,7 +44,9 @@ pub struct Args {
 /// Any map argument as a lane graph: a file mapc reads, a scenario file, or a built-in scenario name.
 pub fn load_map(arg: &str) -> anyhow::Result<LaneGraph> {
     let path = Path::new(arg);
-    let is_toml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    let is_toml = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
     if is_toml || (!path.exists() && mapc_scenario::Scenario::builtin(arg).is_some()) {
         let resolved = mapc_scenario::ResolvedScenario::load(arg)?;
         return Ok(resolved.graph);
@@ -75,13 +77,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(window) = &args.window {
         add_window(&graph, window, &mut highlight)?;
     }
-    if args.zoom && highlight.roads.is_empty() && highlight.paths.is_empty() && highlight.junctions.is_empty() {
+    if args.zoom
+        && highlight.roads.is_empty()
+        && highlight.paths.is_empty()
+        && highlight.junctions.is_empty()
+    {
         anyhow::bail!("--zoom needs something to zoom onto: --window, --highlight or --label");
     }
     let summary = mapc_viz::render_map_with(
         &graph,
         &highlight,
-        &RenderOptions { width_px: args.width },
+        &RenderOptions {
+            width_px: args.width,
+        },
         &args.output,
     )?;
     if args.json {
@@ -120,8 +128,16 @@ fn add_window(graph: &LaneGraph, window: &str, highlight: &mut Highlight) -> any
             highlight.paths.push(r.geometry.clone());
         }
         for m in &graph.roads {
-            let shares_way = r.provenance.osm_ways.iter().any(|w| m.provenance.osm_ways.contains(w));
-            let shares_sumo = r.provenance.sumo_ids.iter().any(|s| m.provenance.sumo_ids.contains(s));
+            let shares_way = r
+                .provenance
+                .osm_ways
+                .iter()
+                .any(|w| m.provenance.osm_ways.contains(w));
+            let shares_sumo = r
+                .provenance
+                .sumo_ids
+                .iter()
+                .any(|s| m.provenance.sumo_ids.contains(s));
             if shares_way || shares_sumo {
                 found.insert(m.id);
             }
@@ -139,7 +155,12 @@ fn add_window(graph: &LaneGraph, window: &str, highlight: &mut Highlight) -> any
             graph.source.file
         );
     }
-    if let Some(info) = resolved.scenario.control.as_ref().and_then(|c| c.window.as_ref()) {
+    if let Some(info) = resolved
+        .scenario
+        .control
+        .as_ref()
+        .and_then(|c| c.window.as_ref())
+    {
         let j: Option<JunctionId> = graph.find_junction(&info.junction).ok();
         highlight.junctions.extend(j);
         highlight.label = Some(format!(

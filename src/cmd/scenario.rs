@@ -63,8 +63,17 @@ fn show(a: ShowArgs) -> anyhow::Result<()> {
         g.total_lane_length_m()
     );
     for (f, (from, to)) in r.scenario.flows.iter().zip(&r.flow_roads) {
-        let to = to.map(road_text).unwrap_or_else(|| "end of corridor".into());
-        println!("# flow {}: {} veh/h of {} from {} to {}", f.id, f.vehs_per_hour, f.vehicle_type, road_text(*from), to);
+        let to = to
+            .map(road_text)
+            .unwrap_or_else(|| "end of corridor".into());
+        println!(
+            "# flow {}: {} veh/h of {} from {} to {}",
+            f.id,
+            f.vehs_per_hour,
+            f.vehicle_type,
+            road_text(*from),
+            to
+        );
     }
     if !r.region_roads.is_empty() {
         let roads: Vec<String> = r.region_roads.iter().map(|x| road_text(*x)).collect();

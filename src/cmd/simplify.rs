@@ -20,7 +20,11 @@ pub struct RouteArgs {
     #[arg(long)]
     pub keep_exits: bool,
     /// Road classes the main road may use where --via does not pin it (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "motorway,motorway_link,trunk,trunk_link")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "motorway,motorway_link,trunk,trunk_link"
+    )]
     pub classes: Vec<String>,
 }
 
@@ -54,8 +58,20 @@ pub struct Args {
 
 /// `maps/i696.osm` -> `i696`.
 pub fn map_stem(path: &Path) -> String {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "map".into());
-    for ext in [".corridor.graph.json", ".graph.json", ".osm.pbf", ".net.xml", ".osm", ".json", ".xml", ".pbf"] {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "map".into());
+    for ext in [
+        ".corridor.graph.json",
+        ".graph.json",
+        ".osm.pbf",
+        ".net.xml",
+        ".osm",
+        ".json",
+        ".xml",
+        ".pbf",
+    ] {
         if let Some(stem) = name.strip_suffix(ext) {
             return stem.to_string();
         }
@@ -98,11 +114,16 @@ pub fn corridor_json(s: &Simplified, map: &Path, output: &Path) -> serde_json::V
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let s = run_simplify(&args.map, &args.route)?;
-    let output =
-        args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.corridor.graph.json", map_stem(&args.map))));
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}.corridor.graph.json", map_stem(&args.map))));
     s.graph.save(&output)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&corridor_json(&s, &args.map, &output))?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&corridor_json(&s, &args.map, &output))?
+        );
         return Ok(());
     }
     if args.explain {
@@ -119,12 +140,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Corridor::chain_length_m(g, &s.roles.main),
         output.display()
     );
-    println!("{:<8} {:>12} {:>10} {:>10} {:>10}  merging road", "merge", "osm node", "before m", "merge m", "after m");
+    println!(
+        "{:<8} {:>12} {:>10} {:>10} {:>10}  merging road",
+        "merge", "osm node", "before m", "merge m", "after m"
+    );
     for m in corridor_merges(g, &s.roles) {
         println!(
             "{:<8} {:>12} {:>10.1} {:>10.1} {:>10.1}  {} {}{}",
             m.junction,
-            m.osm_node.map_or_else(|| m.sumo_id.clone().unwrap_or_default(), |n| n.to_string()),
+            m.osm_node
+                .map_or_else(|| m.sumo_id.clone().unwrap_or_default(), |n| n.to_string()),
             m.main_before_m,
             m.merge_m,
             m.main_after_m,

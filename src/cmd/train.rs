@@ -6,7 +6,9 @@ use anyhow::{Context, bail};
 use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressStyle};
 use mapc_rl::checkpoint::PolicySpec;
-use mapc_rl::env::merge::{ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM};
+use mapc_rl::env::merge::{
+    ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM,
+};
 use mapc_rl::env::obs::PER_AV;
 use mapc_rl::rollout::Env;
 use mapc_rl::run::{TrainRun, log_path};
@@ -86,7 +88,8 @@ pub struct LoadedScenario {
 /// Resolves `simple_merge` or a scenario file into a simulator spec.
 pub fn load_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
     let resolved = mapc_scenario::ResolvedScenario::load(arg)?;
-    let spec = mapc_sim::spec_from_scenario(&resolved).with_context(|| format!("scenario {arg}"))?;
+    let spec =
+        mapc_sim::spec_from_scenario(&resolved).with_context(|| format!("scenario {arg}"))?;
     let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
     Ok(LoadedScenario {
         spec,
@@ -118,9 +121,11 @@ fn apply_flags(c: &mut PpoConfig, a: &Args) {
 }
 
 fn read_config(path: &Path, base: PpoConfig) -> anyhow::Result<PpoConfig> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     // Keys absent from the file keep the preset's values.
-    let mut table: toml::Table = toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
+    let mut table: toml::Table =
+        toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
     let base_value = toml::Table::try_from(&base)?;
     for (k, v) in base_value {
         table.entry(k).or_insert(v);
@@ -135,12 +140,22 @@ fn validate(c: &PpoConfig) -> anyhow::Result<()> {
     if c.hidden.is_empty() || c.hidden.contains(&0) {
         bail!("hidden layer sizes must be positive, got {:?}", c.hidden);
     }
-    for (name, v) in [("lr", c.lr), ("gamma", c.gamma), ("lambda", c.lambda), ("clip", c.clip)] {
+    for (name, v) in [
+        ("lr", c.lr),
+        ("gamma", c.gamma),
+        ("lambda", c.lambda),
+        ("clip", c.clip),
+    ] {
         if !(v > 0.0 && v.is_finite()) {
             bail!("{name} must be a positive number, got {v}");
         }
     }
-    if c.minibatch == 0 || c.epochs == 0 || c.train_batch_size == 0 || c.horizon == 0 || c.grad_slices == 0 {
+    if c.minibatch == 0
+        || c.epochs == 0
+        || c.train_batch_size == 0
+        || c.horizon == 0
+        || c.grad_slices == 0
+    {
         bail!("minibatch, epochs, batch, horizon and grad_slices must be at least 1");
     }
     Ok(())
@@ -148,7 +163,10 @@ fn validate(c: &PpoConfig) -> anyhow::Result<()> {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(t).build_global().ok();
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .ok();
     }
     let mut run = if let Some(dir) = &args.resume {
         let mut r = TrainRun::resume(dir, args.checkpoint_every)?;
@@ -208,8 +226,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             probe.obs_dim()
         );
     }
-    let factory =
-        move || -> Box<dyn Env> { Box::new(MergeEnv::new(spec.clone(), env_cfg.clone()).expect("validated")) };
+    let factory = move || -> Box<dyn Env> {
+        Box::new(MergeEnv::new(spec.clone(), env_cfg.clone()).expect("validated"))
+    };
 
     let total = run.state.config.iterations;
     let bar = if args.json {
@@ -251,7 +270,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 s.iteration, s.mean_return, s.mean_outflow, s.mean_speed, s.wall_s
             );
         }
-        println!("checkpoint: {}\nlog: {}", ck.display(), log_path(&run.dir).display());
+        println!(
+            "checkpoint: {}\nlog: {}",
+            ck.display(),
+            log_path(&run.dir).display()
+        );
     }
     Ok(())
 }

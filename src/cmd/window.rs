@@ -19,7 +19,11 @@ pub struct Args {
     #[arg(long, value_name = "J")]
     pub junction: String,
     /// The source scenario whose lengths and demand the window takes: a built-in name or a scenario file.
-    #[arg(long = "match", value_name = "SCENARIO", default_value = "simple_merge")]
+    #[arg(
+        long = "match",
+        value_name = "SCENARIO",
+        default_value = "simple_merge"
+    )]
     pub match_: String,
     /// Where to write the scenario; the cut corridor graph goes beside it as `<name>.graph.json`.
     /// Default: `<map name>_window.toml` in the current directory.
@@ -56,31 +60,57 @@ fn corridor_of(map: &Path, junction: &str, route: &RouteArgs) -> anyhow::Result<
     if opts.via.is_empty() {
         opts.via = vec![junction.to_string()];
     }
-    Ok(simplify(&g, &opts).map_err(|e| anyhow::anyhow!("{}: {e}", map.display()))?.graph)
+    Ok(simplify(&g, &opts)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", map.display()))?
+        .graph)
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    for (name, v) in [("--main-vph", args.main_vph), ("--merge-vph", args.merge_vph)] {
+    for (name, v) in [
+        ("--main-vph", args.main_vph),
+        ("--merge-vph", args.merge_vph),
+    ] {
         if let Some(v) = v {
-            anyhow::ensure!(v.is_finite() && v >= 0.0, "{name} must be zero or a positive rate, not {v}");
+            anyhow::ensure!(
+                v.is_finite() && v >= 0.0,
+                "{name} must be zero or a positive rate, not {v}"
+            );
         }
     }
     let corridor = corridor_of(&args.map, &args.junction, &args.route)?;
-    let source = ResolvedScenario::load(&args.match_).with_context(|| format!("--match {}", args.match_))?;
+    let source =
+        ResolvedScenario::load(&args.match_).with_context(|| format!("--match {}", args.match_))?;
     let shape = SourceShape::of(&source)?;
-    let cut = cut_window(&corridor, &args.junction, &shape).map_err(|e| anyhow::anyhow!("{}: {e}", args.map.display()))?;
-    let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_window.toml", map_stem(&args.map))));
-    let name = output.file_name().and_then(|n| n.to_str()).map(|n| n.trim_end_matches(".toml").to_string());
-    let name = name.filter(|n| !n.is_empty()).unwrap_or_else(|| "window".into());
+    let cut = cut_window(&corridor, &args.junction, &shape)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.map.display()))?;
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}_window.toml", map_stem(&args.map))));
+    let name = output
+        .file_name()
+        .and_then(|n| n.to_str())
+        .map(|n| n.trim_end_matches(".toml").to_string());
+    let name = name
+        .filter(|n| !n.is_empty())
+        .unwrap_or_else(|| "window".into());
     let graph_file = format!("{name}.graph.json");
     let graph_path = output.parent().unwrap_or(Path::new("")).join(&graph_file);
-    let demand = DemandOverride { main_vph: args.main_vph, merge_vph: args.merge_vph, n_av: args.n_av };
+    let demand = DemandOverride {
+        main_vph: args.main_vph,
+        merge_vph: args.merge_vph,
+        n_av: args.n_av,
+    };
     let scenario = window_scenario(&cut, &source, &shape, &name, &graph_file, &demand)?;
     cut.graph.save(&graph_path)?;
     scenario.save(&output)?;
     // What was written must read back as a sound scenario.
-    ResolvedScenario::load(&output.display().to_string())
-        .with_context(|| format!("the written scenario {} does not load back", output.display()))?;
+    ResolvedScenario::load(&output.display().to_string()).with_context(|| {
+        format!(
+            "the written scenario {} does not load back",
+            output.display()
+        )
+    })?;
     let render = match &args.render {
         Some(png) => {
             let mut h = mapc_viz::Highlight::window(cut.region(), [cut.junction]);

@@ -23,7 +23,18 @@ macro_rules! opaque_id {
                 s.strip_prefix($prefix)
                     .and_then(|n| n.parse::<u32>().ok())
                     .map($name)
-                    .ok_or_else(|| format!(concat!("`{}` is not a ", $what, " id (expected ", $prefix, "<number>)"), s))
+                    .ok_or_else(|| {
+                        format!(
+                            concat!(
+                                "`{}` is not a ",
+                                $what,
+                                " id (expected ",
+                                $prefix,
+                                "<number>)"
+                            ),
+                            s
+                        )
+                    })
             }
         }
 

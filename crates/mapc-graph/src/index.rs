@@ -16,14 +16,22 @@ impl RoadIndex {
         let segments: Vec<Segment> = g
             .roads
             .iter()
-            .flat_map(|r| r.geometry.windows(2).map(move |w| GeomWithData::new(Line::new(w[0], w[1]), r.id)))
+            .flat_map(|r| {
+                r.geometry
+                    .windows(2)
+                    .map(move |w| GeomWithData::new(Line::new(w[0], w[1]), r.id))
+            })
             .collect();
-        RoadIndex { tree: RTree::bulk_load(segments) }
+        RoadIndex {
+            tree: RTree::bulk_load(segments),
+        }
     }
 
     /// The road whose centre line passes nearest `pos`, with the distance in metres.
     pub fn nearest_road(&self, pos: [f64; 2]) -> Option<(RoadId, f64)> {
-        self.tree.nearest_neighbor(pos).map(|s| (s.data, s.geom().distance_2(&pos).sqrt()))
+        self.tree
+            .nearest_neighbor(pos)
+            .map(|s| (s.data, s.geom().distance_2(&pos).sqrt()))
     }
 
     /// Every road with a segment within `radius_m` of `pos`, nearest first, each once.

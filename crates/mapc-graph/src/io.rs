@@ -7,9 +7,17 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum GraphFileError {
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: line {line}, column {column}: {message}")]
-    Parse { path: PathBuf, line: usize, column: usize, message: String },
+    Parse {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
     #[error("{path}: not a mapc graph file (format is `{found}`, expected `{FORMAT_NAME}`)")]
     NotAGraph { path: PathBuf, found: String },
     #[error(
@@ -20,9 +28,15 @@ pub enum GraphFileError {
 
 /// Write `bytes` to `path` so that a reader never sees half a file: a temporary file beside it, then a rename.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir)?;
-    let file_name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let file_name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let tmp = dir.join(format!(".{file_name}.{}.tmp", std::process::id()));
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
@@ -42,13 +56,17 @@ impl LaneGraph {
     }
 
     pub fn save(&self, path: &Path) -> Result<(), GraphFileError> {
-        write_atomically(path, self.to_json().as_bytes())
-            .map_err(|source| GraphFileError::Io { path: path.to_path_buf(), source })
+        write_atomically(path, self.to_json().as_bytes()).map_err(|source| GraphFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
     }
 
     pub fn load(path: &Path) -> Result<LaneGraph, GraphFileError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| GraphFileError::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| GraphFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
         Self::from_json(&text, path)
     }
 
@@ -69,11 +87,17 @@ impl LaneGraph {
         let header: Header = serde_json::from_str(text).map_err(parse_err)?;
         let format = header.format.unwrap_or_default();
         if format != FORMAT_NAME {
-            return Err(GraphFileError::NotAGraph { path: path.to_path_buf(), found: format });
+            return Err(GraphFileError::NotAGraph {
+                path: path.to_path_buf(),
+                found: format,
+            });
         }
         let version = header.version.unwrap_or(0);
         if version != FORMAT_VERSION {
-            return Err(GraphFileError::Version { path: path.to_path_buf(), found: version });
+            return Err(GraphFileError::Version {
+                path: path.to_path_buf(),
+                found: version,
+            });
         }
         serde_json::from_str(text).map_err(parse_err)
     }

@@ -73,7 +73,10 @@ mod tests {
     /// A Y: two roads merge at J2 into one.
     pub(crate) fn tiny_merge() -> LaneGraph {
         let mut g = LaneGraph::new(
-            Source { file: "test".into(), format: SourceFormat::Generator },
+            Source {
+                file: "test".into(),
+                format: SourceFormat::Generator,
+            },
             Projection::Plane { offset: [0.0, 0.0] },
         );
         let junction = |id, pos| Junction {
@@ -84,7 +87,12 @@ mod tests {
             outgoing: vec![],
             provenance: Provenance::sumo(format!("n{id}")),
         };
-        g.junctions = vec![junction(0, [0.0, 0.0]), junction(1, [0.0, -100.0]), junction(2, [100.0, 0.0]), junction(3, [200.0, 0.0])];
+        g.junctions = vec![
+            junction(0, [0.0, 0.0]),
+            junction(1, [0.0, -100.0]),
+            junction(2, [100.0, 0.0]),
+            junction(3, [200.0, 0.0]),
+        ];
         let road = |id, from: u32, to: u32, a: [f64; 2], b: [f64; 2], priority| Road {
             id: RoadId(id),
             from: JunctionId(from),
@@ -93,7 +101,12 @@ mod tests {
             name: None,
             ref_: None,
             priority,
-            lanes: vec![Lane { index: 0, speed_mps: 30.0, width_m: 3.5, length_m: 100.0 }],
+            lanes: vec![Lane {
+                index: 0,
+                speed_mps: 30.0,
+                width_m: 3.5,
+                length_m: 100.0,
+            }],
             geometry: vec![a, b],
             length_m: ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt(),
             provenance: Provenance::sumo(format!("e{id}")),
@@ -125,16 +138,27 @@ mod tests {
     fn junction_kinds_follow_the_roads() {
         let g = tiny_merge();
         assert_eq!(g.junction(JunctionId(2)).unwrap().kind, JunctionKind::Merge);
-        assert_eq!(g.junction(JunctionId(0)).unwrap().kind, JunctionKind::Source);
+        assert_eq!(
+            g.junction(JunctionId(0)).unwrap().kind,
+            JunctionKind::Source
+        );
         assert_eq!(g.junction(JunctionId(3)).unwrap().kind, JunctionKind::Sink);
-        assert!(g.invariant_violations().is_empty(), "{:?}", g.invariant_violations());
+        assert!(
+            g.invariant_violations().is_empty(),
+            "{:?}",
+            g.invariant_violations()
+        );
     }
 
     #[test]
     fn invariants_catch_a_dangling_road() {
         let mut g = tiny_merge();
         g.roads[2].to = JunctionId(99);
-        assert!(g.invariant_violations().iter().any(|v| v.contains("missing junction J99")));
+        assert!(
+            g.invariant_violations()
+                .iter()
+                .any(|v| v.contains("missing junction J99"))
+        );
     }
 
     #[test]
@@ -150,7 +174,10 @@ mod tests {
     #[test]
     fn routes_and_distances() {
         let g = tiny_merge();
-        assert_eq!(g.shortest_route(JunctionId(1), JunctionId(3)).unwrap(), vec![RoadId(1), RoadId(2)]);
+        assert_eq!(
+            g.shortest_route(JunctionId(1), JunctionId(3)).unwrap(),
+            vec![RoadId(1), RoadId(2)]
+        );
         assert!(g.shortest_route(JunctionId(3), JunctionId(0)).is_none());
         let d = g.distances_from(JunctionId(0));
         assert!((d[&JunctionId(3)] - 200.0).abs() < 1e-9);
@@ -177,8 +204,12 @@ mod tests {
 
         let older = g.to_json().replacen("\"version\": 1", "\"version\": 0", 1);
         let err = LaneGraph::from_json(&older, Path::new("old.graph.json")).unwrap_err();
-        assert!(matches!(err, GraphFileError::Version { found: 0, .. }), "{err}");
-        let err = LaneGraph::from_json("{\"type\": \"FeatureCollection\"}", Path::new("x.json")).unwrap_err();
+        assert!(
+            matches!(err, GraphFileError::Version { found: 0, .. }),
+            "{err}"
+        );
+        let err = LaneGraph::from_json("{\"type\": \"FeatureCollection\"}", Path::new("x.json"))
+            .unwrap_err();
         assert!(err.to_string().contains("not a mapc graph file"), "{err}");
         let err = LaneGraph::from_json("{\"format\": ", Path::new("cut.json")).unwrap_err();
         assert!(err.to_string().starts_with("cut.json: line 1"), "{err}");

@@ -11,21 +11,37 @@ pub enum LookupError {
     #[error("no road `{0}` in this graph")]
     NoRoad(String),
     #[error("`{query}` names {count} junctions ({examples}); use a mapc id")]
-    AmbiguousJunction { query: String, count: usize, examples: String },
+    AmbiguousJunction {
+        query: String,
+        count: usize,
+        examples: String,
+    },
 }
 
 impl LaneGraph {
     pub fn junction(&self, id: JunctionId) -> Option<&Junction> {
-        self.junctions.binary_search_by_key(&id, |j| j.id).ok().map(|i| &self.junctions[i])
+        self.junctions
+            .binary_search_by_key(&id, |j| j.id)
+            .ok()
+            .map(|i| &self.junctions[i])
     }
     pub fn junction_mut(&mut self, id: JunctionId) -> Option<&mut Junction> {
-        self.junctions.binary_search_by_key(&id, |j| j.id).ok().map(|i| &mut self.junctions[i])
+        self.junctions
+            .binary_search_by_key(&id, |j| j.id)
+            .ok()
+            .map(|i| &mut self.junctions[i])
     }
     pub fn road(&self, id: RoadId) -> Option<&Road> {
-        self.roads.binary_search_by_key(&id, |r| r.id).ok().map(|i| &self.roads[i])
+        self.roads
+            .binary_search_by_key(&id, |r| r.id)
+            .ok()
+            .map(|i| &self.roads[i])
     }
     pub fn road_mut(&mut self, id: RoadId) -> Option<&mut Road> {
-        self.roads.binary_search_by_key(&id, |r| r.id).ok().map(|i| &mut self.roads[i])
+        self.roads
+            .binary_search_by_key(&id, |r| r.id)
+            .ok()
+            .map(|i| &mut self.roads[i])
     }
 
     /// `J12`, `osm:61862553` or a SUMO junction id.
@@ -36,10 +52,20 @@ impl LaneGraph {
             }
         }
         let matches: Vec<JunctionId> = if let Some(node) = query.strip_prefix("osm:") {
-            let node: i64 = node.parse().map_err(|_| LookupError::NoJunction(query.to_string()))?;
-            self.junctions.iter().filter(|j| j.provenance.osm_nodes.contains(&node)).map(|j| j.id).collect()
+            let node: i64 = node
+                .parse()
+                .map_err(|_| LookupError::NoJunction(query.to_string()))?;
+            self.junctions
+                .iter()
+                .filter(|j| j.provenance.osm_nodes.contains(&node))
+                .map(|j| j.id)
+                .collect()
         } else {
-            self.junctions.iter().filter(|j| j.provenance.sumo_ids.iter().any(|s| s == query)).map(|j| j.id).collect()
+            self.junctions
+                .iter()
+                .filter(|j| j.provenance.sumo_ids.iter().any(|s| s == query))
+                .map(|j| j.id)
+                .collect()
         };
         match matches.as_slice() {
             [] => Err(LookupError::NoJunction(query.to_string())),
@@ -47,7 +73,12 @@ impl LaneGraph {
             many => Err(LookupError::AmbiguousJunction {
                 query: query.to_string(),
                 count: many.len(),
-                examples: many.iter().take(4).map(|j| j.to_string()).collect::<Vec<_>>().join(", "),
+                examples: many
+                    .iter()
+                    .take(4)
+                    .map(|j| j.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
             }),
         }
     }
@@ -61,10 +92,18 @@ impl LaneGraph {
             }
         }
         let found: Vec<&Road> = if let Some(way) = query.strip_prefix("osm-way:") {
-            let way: i64 = way.parse().map_err(|_| LookupError::NoRoad(query.to_string()))?;
-            self.roads.iter().filter(|r| r.provenance.osm_ways.contains(&way)).collect()
+            let way: i64 = way
+                .parse()
+                .map_err(|_| LookupError::NoRoad(query.to_string()))?;
+            self.roads
+                .iter()
+                .filter(|r| r.provenance.osm_ways.contains(&way))
+                .collect()
         } else {
-            self.roads.iter().filter(|r| r.provenance.sumo_ids.iter().any(|s| s == query)).collect()
+            self.roads
+                .iter()
+                .filter(|r| r.provenance.sumo_ids.iter().any(|s| s == query))
+                .collect()
         };
         if found.is_empty() {
             return Err(LookupError::NoRoad(query.to_string()));
@@ -80,7 +119,10 @@ fn order_along_travel(roads: &[&Road]) -> Vec<RoadId> {
     let mut out = Vec::with_capacity(remaining.len());
     while !remaining.is_empty() {
         // Start a chain at a piece no other remaining piece leads into.
-        let start = remaining.iter().position(|r| !remaining.iter().any(|o| o.to == r.from)).unwrap_or(0);
+        let start = remaining
+            .iter()
+            .position(|r| !remaining.iter().any(|o| o.to == r.from))
+            .unwrap_or(0);
         let mut cur = remaining.remove(start);
         out.push(cur.id);
         while let Some(next) = remaining.iter().position(|o| o.from == cur.to) {

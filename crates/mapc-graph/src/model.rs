@@ -29,13 +29,22 @@ pub struct Provenance {
 
 impl Provenance {
     pub fn osm_node(node: i64) -> Self {
-        Provenance { osm_nodes: vec![node], ..Default::default() }
+        Provenance {
+            osm_nodes: vec![node],
+            ..Default::default()
+        }
     }
     pub fn sumo(id: impl Into<String>) -> Self {
-        Provenance { sumo_ids: vec![id.into()], ..Default::default() }
+        Provenance {
+            sumo_ids: vec![id.into()],
+            ..Default::default()
+        }
     }
     pub fn made_by(step: impl Into<String>) -> Self {
-        Provenance { made_by: vec![step.into()], ..Default::default() }
+        Provenance {
+            made_by: vec![step.into()],
+            ..Default::default()
+        }
     }
     /// Everything both provenances name, in order, without repeats.
     pub fn merged(&self, other: &Provenance) -> Provenance {

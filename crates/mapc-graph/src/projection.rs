@@ -16,7 +16,11 @@ const UTM_FALSE_NORTHING_SOUTH: f64 = 10_000_000.0;
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Projection {
     /// local = UTM(zone) + offset.
-    Utm { zone: u8, north: bool, offset: [f64; 2] },
+    Utm {
+        zone: u8,
+        north: bool,
+        offset: [f64; 2],
+    },
     /// A frame with no geographic reference (a generated or abstract SUMO net): local = plane + offset.
     Plane { offset: [f64; 2] },
 }
@@ -27,11 +31,18 @@ impl Projection {
         let zone = (((lon + 180.0) / 6.0).floor() as i64).clamp(0, 59) as u8 + 1;
         let north = lat >= 0.0;
         let [e, n] = utm_forward(zone, north, lon, lat);
-        Projection::Utm { zone, north, offset: [-e.round(), -n.round()] }
+        Projection::Utm {
+            zone,
+            north,
+            offset: [-e.round(), -n.round()],
+        }
     }
 
     /// Parse SUMO's `<location netOffset=".." projParameter="..">`.
-    pub fn from_sumo_location(net_offset: [f64; 2], proj_parameter: &str) -> Result<Projection, String> {
+    pub fn from_sumo_location(
+        net_offset: [f64; 2],
+        proj_parameter: &str,
+    ) -> Result<Projection, String> {
         let p = proj_parameter.trim();
         if p == "!" || p.is_empty() {
             return Ok(Projection::Plane { offset: net_offset });
@@ -51,8 +62,14 @@ impl Projection {
             }
         }
         match (is_utm, zone) {
-            (true, Some(zone)) => Ok(Projection::Utm { zone, north, offset: net_offset }),
-            _ => Err(format!("unsupported projection `{p}` (mapc reads UTM projections and `!`)")),
+            (true, Some(zone)) => Ok(Projection::Utm {
+                zone,
+                north,
+                offset: net_offset,
+            }),
+            _ => Err(format!(
+                "unsupported projection `{p}` (mapc reads UTM projections and `!`)"
+            )),
         }
     }
 
@@ -63,7 +80,11 @@ impl Projection {
     /// Local metric position of a WGS84 point; `None` for a frame with no geographic reference.
     pub fn to_local(&self, lon: f64, lat: f64) -> Option<[f64; 2]> {
         match *self {
-            Projection::Utm { zone, north, offset } => {
+            Projection::Utm {
+                zone,
+                north,
+                offset,
+            } => {
                 let [e, n] = utm_forward(zone, north, lon, lat);
                 Some([e + offset[0], n + offset[1]])
             }
@@ -74,9 +95,16 @@ impl Projection {
     /// WGS84 `[lon, lat]` of a local position; `None` for a frame with no geographic reference.
     pub fn to_lonlat(&self, pos: [f64; 2]) -> Option<[f64; 2]> {
         match *self {
-            Projection::Utm { zone, north, offset } => {
-                Some(utm_inverse(zone, north, pos[0] - offset[0], pos[1] - offset[1]))
-            }
+            Projection::Utm {
+                zone,
+                north,
+                offset,
+            } => Some(utm_inverse(
+                zone,
+                north,
+                pos[0] - offset[0],
+                pos[1] - offset[1],
+            )),
             Projection::Plane { .. } => None,
         }
     }
@@ -109,7 +137,8 @@ pub fn utm_forward(zone: u8, north: bool, lon: f64, lat: f64) -> [f64; 2] {
     let m = meridian_arc(e2, phi);
     let x = UTM_K0
         * n
-        * (a + (1.0 - t + cc) * a.powi(3) / 6.0 + (5.0 - 18.0 * t + t * t + 72.0 * cc - 58.0 * ep2) * a.powi(5) / 120.0)
+        * (a + (1.0 - t + cc) * a.powi(3) / 6.0
+            + (5.0 - 18.0 * t + t * t + 72.0 * cc - 58.0 * ep2) * a.powi(5) / 120.0)
         + UTM_FALSE_EASTING;
     let mut y = UTM_K0
         * (m + n
@@ -129,7 +158,11 @@ pub fn utm_inverse(zone: u8, north: bool, easting: f64, northing: f64) -> [f64; 
     let ep2 = e2 / (1.0 - e2);
     let e4 = e2 * e2;
     let e6 = e4 * e2;
-    let y = if north { northing } else { northing - UTM_FALSE_NORTHING_SOUTH };
+    let y = if north {
+        northing
+    } else {
+        northing - UTM_FALSE_NORTHING_SOUTH
+    };
     let m = y / UTM_K0;
     let mu = m / (WGS84_A * (1.0 - e2 / 4.0 - 3.0 * e4 / 64.0 - 5.0 * e6 / 256.0));
     let e1 = (1.0 - (1.0 - e2).sqrt()) / (1.0 + (1.0 - e2).sqrt());
@@ -146,12 +179,18 @@ pub fn utm_inverse(zone: u8, north: bool, easting: f64, northing: f64) -> [f64; 
     let d = (easting - UTM_FALSE_EASTING) / (n1 * UTM_K0);
     let phi = phi1
         - (n1 * s1 / c1 / r1)
-            * (d * d / 2.0 - (5.0 + 3.0 * t1 + 10.0 * cc1 - 4.0 * cc1 * cc1 - 9.0 * ep2) * d.powi(4) / 24.0
-                + (61.0 + 90.0 * t1 + 298.0 * cc1 + 45.0 * t1 * t1 - 252.0 * ep2 - 3.0 * cc1 * cc1) * d.powi(6)
+            * (d * d / 2.0
+                - (5.0 + 3.0 * t1 + 10.0 * cc1 - 4.0 * cc1 * cc1 - 9.0 * ep2) * d.powi(4) / 24.0
+                + (61.0 + 90.0 * t1 + 298.0 * cc1 + 45.0 * t1 * t1
+                    - 252.0 * ep2
+                    - 3.0 * cc1 * cc1)
+                    * d.powi(6)
                     / 720.0);
     let lambda = central_meridian_rad(zone)
         + (d - (1.0 + 2.0 * t1 + cc1) * d.powi(3) / 6.0
-            + (5.0 - 2.0 * cc1 + 28.0 * t1 - 3.0 * cc1 * cc1 + 8.0 * ep2 + 24.0 * t1 * t1) * d.powi(5) / 120.0)
+            + (5.0 - 2.0 * cc1 + 28.0 * t1 - 3.0 * cc1 * cc1 + 8.0 * ep2 + 24.0 * t1 * t1)
+                * d.powi(5)
+                / 120.0)
             / c1;
     [lambda.to_degrees(), phi.to_degrees()]
 }
@@ -170,7 +209,12 @@ mod tests {
 
     #[test]
     fn utm_round_trips_to_a_millimetre() {
-        for &(lon, lat) in &[(-83.4877071, 42.4878973), (-83.3429, 42.5261), (-80.9, 43.0), (-84.0, 41.9)] {
+        for &(lon, lat) in &[
+            (-83.4877071, 42.4878973),
+            (-83.3429, 42.5261),
+            (-80.9, 43.0),
+            (-84.0, 41.9),
+        ] {
             let [e, n] = utm_forward(17, true, lon, lat);
             let [lon2, lat2] = utm_inverse(17, true, e, n);
             let err_m = ((lon2 - lon) * 82_000.0).hypot((lat2 - lat) * 111_000.0);
@@ -185,8 +229,18 @@ mod tests {
             "+proj=utm +zone=17 +ellps=WGS84 +datum=WGS84 +units=m +no_defs",
         )
         .unwrap();
-        assert_eq!(p, Projection::Utm { zone: 17, north: true, offset: [-291727.60, -4702987.13] });
-        assert_eq!(Projection::from_sumo_location([1.0, 2.0], "!").unwrap(), Projection::Plane { offset: [1.0, 2.0] });
+        assert_eq!(
+            p,
+            Projection::Utm {
+                zone: 17,
+                north: true,
+                offset: [-291727.60, -4702987.13]
+            }
+        );
+        assert_eq!(
+            Projection::from_sumo_location([1.0, 2.0], "!").unwrap(),
+            Projection::Plane { offset: [1.0, 2.0] }
+        );
         assert!(Projection::from_sumo_location([0.0, 0.0], "+proj=merc").is_err());
     }
 }

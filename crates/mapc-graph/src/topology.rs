@@ -15,8 +15,11 @@ pub struct Topology {
 impl Topology {
     pub fn new(g: &LaneGraph) -> Topology {
         let mut graph = DiGraph::with_capacity(g.junctions.len(), g.roads.len());
-        let node_of: HashMap<JunctionId, NodeIndex> =
-            g.junctions.iter().map(|j| (j.id, graph.add_node(j.id))).collect();
+        let node_of: HashMap<JunctionId, NodeIndex> = g
+            .junctions
+            .iter()
+            .map(|j| (j.id, graph.add_node(j.id)))
+            .collect();
         for r in &g.roads {
             if let (Some(&a), Some(&b)) = (node_of.get(&r.from), node_of.get(&r.to)) {
                 graph.add_edge(a, b, r.id);
@@ -60,7 +63,9 @@ impl LaneGraph {
     /// Road-length distance from `from` to every junction reachable from it.
     pub fn distances_from(&self, from: JunctionId) -> HashMap<JunctionId, f64> {
         let topo = Topology::new(self);
-        let Some(&start) = topo.node_of.get(&from) else { return HashMap::new() };
+        let Some(&start) = topo.node_of.get(&from) else {
+            return HashMap::new();
+        };
         let length_of = |rid: RoadId| self.road(rid).map_or(f64::INFINITY, |r| r.length_m);
         dijkstra(&topo.graph, start, None, |e| length_of(*e.weight()))
             .into_iter()

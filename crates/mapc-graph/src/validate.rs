@@ -18,7 +18,11 @@ impl LaneGraph {
                 match self.junction(end) {
                     None => out.push(format!("road {} names missing junction {end}", r.id)),
                     Some(j) => {
-                        let listed = if end == r.from { j.outgoing.contains(&r.id) } else { j.incoming.contains(&r.id) };
+                        let listed = if end == r.from {
+                            j.outgoing.contains(&r.id)
+                        } else {
+                            j.incoming.contains(&r.id)
+                        };
                         if !listed {
                             out.push(format!("junction {end} does not list its road {}", r.id));
                         }
@@ -44,7 +48,10 @@ impl LaneGraph {
             }
             let expected = JunctionKind::classify(j.incoming.len(), j.outgoing.len());
             if j.kind != expected {
-                out.push(format!("junction {} is marked {:?} but has the roads of a {expected:?}", j.id, j.kind));
+                out.push(format!(
+                    "junction {} is marked {:?} but has the roads of a {expected:?}",
+                    j.id, j.kind
+                ));
             }
         }
         for c in &self.connections {
@@ -53,10 +60,16 @@ impl LaneGraph {
                 continue;
             };
             if from.to != c.junction || to.from != c.junction {
-                out.push(format!("connection {} -> {} is not at junction {}", c.from_road, c.to_road, c.junction));
+                out.push(format!(
+                    "connection {} -> {} is not at junction {}",
+                    c.from_road, c.to_road, c.junction
+                ));
             }
             if c.from_lane as usize >= from.lanes.len() || c.to_lane as usize >= to.lanes.len() {
-                out.push(format!("connection {} -> {} names a missing lane", c.from_road, c.to_road));
+                out.push(format!(
+                    "connection {} -> {} names a missing lane",
+                    c.from_road, c.to_road
+                ));
             }
         }
         out
@@ -64,7 +77,10 @@ impl LaneGraph {
 
     /// Total driving length: every road's length times its lanes, plus every connection's internal length.
     pub fn total_lane_length_m(&self) -> f64 {
-        self.roads.iter().map(|r| r.length_m * r.lanes.len() as f64).sum::<f64>()
+        self.roads
+            .iter()
+            .map(|r| r.length_m * r.lanes.len() as f64)
+            .sum::<f64>()
             + self.connections.iter().map(|c| c.via_length_m).sum::<f64>()
     }
 }

@@ -6,8 +6,14 @@ fn main() {
         eprintln!("usage: import_map MAP");
         std::process::exit(2);
     };
-    match mapc_import::import_path(std::path::Path::new(&path), &mapc_import::ImportOptions::default()) {
-        Ok(g) => println!("{}", serde_json::to_string(&mapc_import::Summary::of(&g)).unwrap()),
+    match mapc_import::import_path(
+        std::path::Path::new(&path),
+        &mapc_import::ImportOptions::default(),
+    ) {
+        Ok(g) => println!(
+            "{}",
+            serde_json::to_string(&mapc_import::Summary::of(&g)).unwrap()
+        ),
         Err(e) => {
             eprintln!("error: {e}");
             std::process::exit(2);

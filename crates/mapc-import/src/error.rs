@@ -5,7 +5,10 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum ImportError {
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: the file is empty")]
     Empty { path: PathBuf },
     /// A problem at a known place in the input: `line 12, column 5 (byte 345), in <way id="7">`.
@@ -61,7 +64,10 @@ pub(crate) fn line_and_column(text: &[u8], byte: u64) -> (usize, usize) {
     let end = (byte as usize).min(text.len());
     let before = &text[..end];
     let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-    let line_start = before.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |p| p + 1);
     (line, end - line_start + 1)
 }
 

@@ -54,7 +54,13 @@ impl Default for ImportOptions {
 }
 
 /// The OSM classes kept unless `--highways` says otherwise.
-pub const DEFAULT_HIGHWAYS: [&str; 5] = ["motorway", "motorway_link", "trunk", "trunk_link", "primary"];
+pub const DEFAULT_HIGHWAYS: [&str; 5] = [
+    "motorway",
+    "motorway_link",
+    "trunk",
+    "trunk_link",
+    "primary",
+];
 
 /// "At junction `junction`, the roads named by `road` are major and every other road in yields". Both are
 /// lookups as `mapc_graph` understands them: `osm:61862553`, `J4`, a SUMO id; `osm-way:124433709`, `R7`, an edge id.
@@ -68,9 +74,9 @@ impl std::str::FromStr for MajorRoad {
     type Err = String;
     /// `JUNCTION=ROAD`, e.g. `osm:61862553=osm-way:124433709`.
     fn from_str(s: &str) -> Result<Self, String> {
-        let (j, r) = s
-            .split_once('=')
-            .ok_or_else(|| format!("`{s}`: expected JUNCTION=ROAD, e.g. osm:61862553=osm-way:124433709"))?;
+        let (j, r) = s.split_once('=').ok_or_else(|| {
+            format!("`{s}`: expected JUNCTION=ROAD, e.g. osm:61862553=osm-way:124433709")
+        })?;
         if j.trim().is_empty() || r.trim().is_empty() {
             return Err(format!("`{s}`: expected JUNCTION=ROAD"));
         }
@@ -132,7 +138,10 @@ impl MapFormat {
 pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
     let meta = std::fs::metadata(path).map_err(|e| ImportError::io(path, e))?;
     if meta.is_dir() {
-        return Err(ImportError::unsupported(path, "is a directory, not a map file"));
+        return Err(ImportError::unsupported(
+            path,
+            "is a directory, not a map file",
+        ));
     }
     if meta.len() == 0 {
         return Err(ImportError::Empty {
@@ -169,13 +178,17 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, Im
     };
     let graph = match format {
         MapFormat::OsmXml => {
-            let (ways, nodes) = osm_xml::read(open, &options.highways).map_err(|e| located.error(e))?;
-            osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
+            let (ways, nodes) =
+                osm_xml::read(open, &options.highways).map_err(|e| located.error(e))?;
+            osm::build_graph(ways, &nodes, source, options)
+                .map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::OsmPbf => {
             let bytes = std::fs::read(path).map_err(|e| ImportError::io(path, e))?;
-            let (ways, nodes) = osm_pbf::read(&bytes, &options.highways).map_err(|e| binary_error(path, e))?;
-            osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
+            let (ways, nodes) =
+                osm_pbf::read(&bytes, &options.highways).map_err(|e| binary_error(path, e))?;
+            osm::build_graph(ways, &nodes, source, options)
+                .map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::SumoNet => {
             let input = open().map_err(|e| located.error(e))?;
@@ -205,12 +218,16 @@ pub fn import_bytes(
     let located = Located::Bytes(path, bytes);
     let graph = match format {
         MapFormat::OsmXml => {
-            let (ways, nodes) = osm_xml::read(|| Ok(bytes), &options.highways).map_err(|e| located.error(e))?;
-            osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
+            let (ways, nodes) =
+                osm_xml::read(|| Ok(bytes), &options.highways).map_err(|e| located.error(e))?;
+            osm::build_graph(ways, &nodes, source, options)
+                .map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::OsmPbf => {
-            let (ways, nodes) = osm_pbf::read(bytes, &options.highways).map_err(|e| binary_error(path, e))?;
-            osm::build_graph(ways, &nodes, source, options).map_err(|m| ImportError::unsupported(path, m))?
+            let (ways, nodes) =
+                osm_pbf::read(bytes, &options.highways).map_err(|e| binary_error(path, e))?;
+            osm::build_graph(ways, &nodes, source, options)
+                .map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::SumoNet => sumo::read(bytes, source).map_err(|e| located.error(e))?,
     };
@@ -231,7 +248,11 @@ fn binary_error(path: &Path, e: ParseError) -> ImportError {
 }
 
 /// Overrides, then a last invariant check (a failure here is a bug in the importer, reported rather than panicking).
-fn finish(mut graph: LaneGraph, path: &Path, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
+fn finish(
+    mut graph: LaneGraph,
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<LaneGraph, ImportError> {
     for m in &options.major_roads {
         apply_major_road(&mut graph, m).map_err(|msg| ImportError::unsupported(path, msg))?;
     }
@@ -239,7 +260,10 @@ fn finish(mut graph: LaneGraph, path: &Path, options: &ImportOptions) -> Result<
     if !problems.is_empty() {
         return Err(ImportError::unsupported(
             path,
-            format!("the imported graph is inconsistent: {}", problems.join("; ")),
+            format!(
+                "the imported graph is inconsistent: {}",
+                problems.join("; ")
+            ),
         ));
     }
     Ok(graph)

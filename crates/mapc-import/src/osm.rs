@@ -5,8 +5,8 @@
 use crate::ImportOptions;
 use geo::{Distance, Geodesic, Point};
 use mapc_graph::{
-    Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance, RightOfWay, Road, RoadId,
-    Source, Warnings,
+    Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance,
+    RightOfWay, Road, RoadId, Source, Warnings,
 };
 use std::collections::{BTreeSet, HashMap, HashSet};
 
@@ -84,7 +84,10 @@ impl NodePos {
 
 /// Parse a decimal degree (`-83.4877071`) to 1e-7 degree fixed point, checking its range.
 pub fn parse_degrees(text: &str, limit: f64) -> Result<i32, String> {
-    let v: f64 = text.trim().parse().map_err(|_| format!("`{text}` is not a number"))?;
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
     if !v.is_finite() || v.abs() > limit {
         return Err(format!("{text} is outside -{limit}..{limit}"));
     }
@@ -114,7 +117,9 @@ pub fn class_defaults(class: &str) -> (u8, f64, i32) {
 /// `70 mph`, `100`, `100 km/h`, `20 knots` -> m/s. `None` for anything else (`US:urban`, `none`, `signals`).
 pub fn parse_maxspeed(text: &str) -> Option<f64> {
     let t = text.split(';').next()?.trim();
-    let digits_end = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
+    let digits_end = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
     let value: f64 = t[..digits_end].parse().ok()?;
     let unit = t[digits_end..].trim();
     let factor = match unit {
@@ -339,7 +344,12 @@ pub fn build_graph(
     }
 
     // The local frame: UTM around the centre of the kept nodes' bounding box.
-    let mut bbox = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut bbox = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     for p in &pieces {
         for n in &p.nodes {
             let pos = nodes[n];
@@ -354,7 +364,9 @@ pub fn build_graph(
     let projection = Projection::utm_around((bbox[0] + bbox[2]) / 2.0, (bbox[1] + bbox[3]) / 2.0);
     let local = |n: i64| -> [f64; 2] {
         let p = nodes[&n];
-        projection.to_local(p.lon(), p.lat()).expect("UTM frame is geographic")
+        projection
+            .to_local(p.lon(), p.lat())
+            .expect("UTM frame is geographic")
     };
 
     // Junctions sorted by OSM node id.
@@ -430,12 +442,18 @@ pub fn build_graph(
             let mut length = 0.0;
             for w in seq.windows(2) {
                 let (a, b) = (nodes[&w[0]], nodes[&w[1]]);
-                length += Geodesic.distance(Point::new(a.lon(), a.lat()), Point::new(b.lon(), b.lat()));
+                length +=
+                    Geodesic.distance(Point::new(a.lon(), a.lat()), Point::new(b.lon(), b.lat()));
             }
             if !(length > 0.01) {
                 warnings.add(
                     "zero_length_road",
-                    format!("way {} between nodes {} and {}", way.id, seq[0], seq[seq.len() - 1]),
+                    format!(
+                        "way {} between nodes {} and {}",
+                        way.id,
+                        seq[0],
+                        seq[seq.len() - 1]
+                    ),
                 );
                 length = length.max(0.01);
             }
@@ -567,7 +585,11 @@ mod tests {
     #[test]
     fn degrees_are_checked() {
         assert_eq!(parse_degrees("-83.4877071", 180.0).unwrap(), -834_877_071);
-        assert!(parse_degrees("abc", 90.0).unwrap_err().contains("not a number"));
+        assert!(
+            parse_degrees("abc", 90.0)
+                .unwrap_err()
+                .contains("not a number")
+        );
         assert!(parse_degrees("91", 90.0).is_err());
         assert!(parse_degrees("NaN", 90.0).is_err());
     }
@@ -596,7 +618,11 @@ mod tests {
             backward: false,
         };
         assert_eq!(
-            lane_counts(&way(1, &[], &[("highway", "primary"), ("lanes", "5")]), two, &mut w),
+            lane_counts(
+                &way(1, &[], &[("highway", "primary"), ("lanes", "5")]),
+                two,
+                &mut w
+            ),
             (3, 2)
         );
         assert_eq!(
@@ -604,7 +630,11 @@ mod tests {
                 &way(
                     1,
                     &[],
-                    &[("highway", "primary"), ("lanes", "5"), ("lanes:forward", "2")]
+                    &[
+                        ("highway", "primary"),
+                        ("lanes", "5"),
+                        ("lanes:forward", "2")
+                    ]
                 ),
                 two,
                 &mut w
@@ -612,7 +642,11 @@ mod tests {
             (2, 3)
         );
         assert_eq!(
-            lane_counts(&way(1, &[], &[("highway", "motorway"), ("lanes", "4")]), one, &mut w),
+            lane_counts(
+                &way(1, &[], &[("highway", "motorway"), ("lanes", "4")]),
+                one,
+                &mut w
+            ),
             (4, 0)
         );
         assert!(w.is_empty());
@@ -632,8 +666,14 @@ mod tests {
         };
         assert_eq!(d(&[("highway", "motorway")], &mut w), (true, false));
         assert_eq!(d(&[("highway", "primary")], &mut w), (true, true));
-        assert_eq!(d(&[("highway", "primary"), ("oneway", "-1")], &mut w), (false, true));
-        assert_eq!(d(&[("highway", "motorway"), ("oneway", "no")], &mut w), (true, true));
+        assert_eq!(
+            d(&[("highway", "primary"), ("oneway", "-1")], &mut w),
+            (false, true)
+        );
+        assert_eq!(
+            d(&[("highway", "motorway"), ("oneway", "no")], &mut w),
+            (true, true)
+        );
         assert!(w.is_empty());
     }
 
@@ -672,7 +712,11 @@ mod tests {
             &ImportOptions::default(),
         )
         .unwrap();
-        assert!(g.invariant_violations().is_empty(), "{:?}", g.invariant_violations());
+        assert!(
+            g.invariant_violations().is_empty(),
+            "{:?}",
+            g.invariant_violations()
+        );
         assert_eq!(g.junctions.len(), 4);
         assert_eq!(g.roads.len(), 3);
         let merge = g.find_junction("osm:20").unwrap();
@@ -683,7 +727,11 @@ mod tests {
             .iter()
             .filter(|c| c.right_of_way == RightOfWay::Major && c.junction == merge)
             .collect();
-        assert!(major.iter().all(|c| g.road(c.from_road).unwrap().class == "motorway"));
+        assert!(
+            major
+                .iter()
+                .all(|c| g.road(c.from_road).unwrap().class == "motorway")
+        );
         let r0 = g.road(RoadId(0)).unwrap();
         assert!((r0.length_m - 828.5).abs() < 1.0, "{}", r0.length_m);
         assert_eq!(r0.provenance.osm_nodes, vec![10, 20]);

@@ -37,26 +37,40 @@ fn frame(bytes: &[u8]) -> Result<Vec<BlobAt>, ParseError> {
     while pos < bytes.len() {
         let offset = pos as u64;
         let Some(len_bytes) = bytes.get(pos..pos + 4) else {
-            return Err(err(offset, index, "the file ends inside a blob's length (truncated?)"));
+            return Err(err(
+                offset,
+                index,
+                "the file ends inside a blob's length (truncated?)",
+            ));
         };
         let header_len = u32::from_be_bytes(len_bytes.try_into().expect("4 bytes")) as usize;
         if header_len == 0 || header_len > MAX_HEADER {
             return Err(err(
                 offset,
                 index,
-                format!("blob header length {header_len} is not 1..{MAX_HEADER}: not an OSM PBF file, or corrupt"),
+                format!(
+                    "blob header length {header_len} is not 1..{MAX_HEADER}: not an OSM PBF file, or corrupt"
+                ),
             ));
         }
         pos += 4;
         let Some(header_bytes) = bytes.get(pos..pos + header_len) else {
-            return Err(err(offset, index, "the file ends inside a blob header (truncated?)"));
+            return Err(err(
+                offset,
+                index,
+                "the file ends inside a blob header (truncated?)",
+            ));
         };
         let header = BlobHeader::parse_from_bytes(header_bytes)
             .map_err(|e| err(offset, index, format!("bad blob header: {e}")))?;
         pos += header_len;
         let size = header.datasize();
         if size < 0 || size as usize > MAX_BLOB {
-            return Err(err(offset, index, format!("blob size {size} is not 0..{MAX_BLOB}")));
+            return Err(err(
+                offset,
+                index,
+                format!("blob size {size} is not 0..{MAX_BLOB}"),
+            ));
         }
         let size = size as usize;
         if pos + size > bytes.len() {
@@ -116,7 +130,10 @@ fn unpack(bytes: &[u8], at: &BlobAt) -> Result<Vec<u8>, ParseError> {
             return Err(err(
                 at.offset,
                 at.index,
-                format!("unpacked to {} bytes, the header says {raw_size}", out.len()),
+                format!(
+                    "unpacked to {} bytes, the header says {raw_size}",
+                    out.len()
+                ),
             ));
         }
         return Ok(out);
@@ -130,8 +147,8 @@ fn unpack(bytes: &[u8], at: &BlobAt) -> Result<Vec<u8>, ParseError> {
 
 fn check_header(bytes: &[u8], at: &BlobAt) -> Result<(), ParseError> {
     let data = unpack(bytes, at)?;
-    let header =
-        HeaderBlock::parse_from_bytes(&data).map_err(|e| err(at.offset, at.index, format!("bad header block: {e}")))?;
+    let header = HeaderBlock::parse_from_bytes(&data)
+        .map_err(|e| err(at.offset, at.index, format!("bad header block: {e}")))?;
     for f in &header.required_features {
         if !KNOWN_FEATURES.contains(&f.as_str()) {
             return Err(err(
@@ -146,17 +163,22 @@ fn check_header(bytes: &[u8], at: &BlobAt) -> Result<(), ParseError> {
 
 fn block(bytes: &[u8], at: &BlobAt) -> Result<PrimitiveBlock, ParseError> {
     let data = unpack(bytes, at)?;
-    PrimitiveBlock::parse_from_bytes(&data).map_err(|e| err(at.offset, at.index, format!("bad data block: {e}")))
+    PrimitiveBlock::parse_from_bytes(&data)
+        .map_err(|e| err(at.offset, at.index, format!("bad data block: {e}")))
 }
 
 fn string<'a>(b: &'a PrimitiveBlock, i: u32, at: &BlobAt) -> Result<&'a [u8], ParseError> {
-    b.stringtable.s.get(i as usize).map(Vec::as_slice).ok_or_else(|| {
-        err(
-            at.offset,
-            at.index,
-            format!("string index {i} outside the block's table"),
-        )
-    })
+    b.stringtable
+        .s
+        .get(i as usize)
+        .map(Vec::as_slice)
+        .ok_or_else(|| {
+            err(
+                at.offset,
+                at.index,
+                format!("string index {i} outside the block's table"),
+            )
+        })
 }
 
 /// Coordinate in 1e-7 degree: offset + granularity * value nanodegrees, checked.
@@ -181,7 +203,11 @@ fn coordinate(
     Ok(e7 as i32)
 }
 
-fn read_ways(bytes: &[u8], blobs: &[BlobAt], classes: &[String]) -> Result<Vec<OsmWay>, ParseError> {
+fn read_ways(
+    bytes: &[u8],
+    blobs: &[BlobAt],
+    classes: &[String],
+) -> Result<Vec<OsmWay>, ParseError> {
     let mut ways = Vec::new();
     for at in blobs.iter().filter(|b| b.kind == "OSMData") {
         let b = block(bytes, at)?;
@@ -191,7 +217,12 @@ fn read_ways(bytes: &[u8], blobs: &[BlobAt], classes: &[String]) -> Result<Vec<O
                     return Err(err(
                         at.offset,
                         at.index,
-                        format!("way {}: {} keys but {} values", w.id(), w.keys.len(), w.vals.len()),
+                        format!(
+                            "way {}: {} keys but {} values",
+                            w.id(),
+                            w.keys.len(),
+                            w.vals.len()
+                        ),
                     ));
                 }
                 let mut tags = WayTags::default();
@@ -206,9 +237,13 @@ fn read_ways(bytes: &[u8], blobs: &[BlobAt], classes: &[String]) -> Result<Vec<O
                 let mut id = 0i64;
                 let mut nodes = Vec::with_capacity(w.refs.len());
                 for &delta in &w.refs {
-                    id = id
-                        .checked_add(delta)
-                        .ok_or_else(|| err(at.offset, at.index, format!("way {}: node id overflows", w.id())))?;
+                    id = id.checked_add(delta).ok_or_else(|| {
+                        err(
+                            at.offset,
+                            at.index,
+                            format!("way {}: node id overflows", w.id()),
+                        )
+                    })?;
                     nodes.push(id);
                 }
                 ways.push(OsmWay {
@@ -222,13 +257,21 @@ fn read_ways(bytes: &[u8], blobs: &[BlobAt], classes: &[String]) -> Result<Vec<O
     Ok(ways)
 }
 
-fn read_nodes(bytes: &[u8], blobs: &[BlobAt], needed: &HashSet<i64>) -> Result<HashMap<i64, NodePos>, ParseError> {
+fn read_nodes(
+    bytes: &[u8],
+    blobs: &[BlobAt],
+    needed: &HashSet<i64>,
+) -> Result<HashMap<i64, NodePos>, ParseError> {
     let mut out = HashMap::with_capacity(needed.len());
     for at in blobs.iter().filter(|b| b.kind == "OSMData") {
         let b = block(bytes, at)?;
         let (gran, lat_off, lon_off) = (b.granularity(), b.lat_offset(), b.lon_offset());
         if gran <= 0 {
-            return Err(err(at.offset, at.index, format!("granularity {gran} is not positive")));
+            return Err(err(
+                at.offset,
+                at.index,
+                format!("granularity {gran} is not positive"),
+            ));
         }
         let mut keep = |id: i64, lat: i64, lon: i64| -> Result<(), ParseError> {
             let lat_e7 = coordinate(lat_off, gran, lat, 90, at, "latitude", id)?;
@@ -265,7 +308,10 @@ fn read_nodes(bytes: &[u8], blobs: &[BlobAt], needed: &HashSet<i64>) -> Result<H
 }
 
 /// Both passes over a PBF file held in memory (it is compressed: a tenth of the XML's size).
-pub(crate) fn read(bytes: &[u8], classes: &[String]) -> Result<(Vec<OsmWay>, HashMap<i64, NodePos>), ParseError> {
+pub(crate) fn read(
+    bytes: &[u8],
+    classes: &[String],
+) -> Result<(Vec<OsmWay>, HashMap<i64, NodePos>), ParseError> {
     let blobs = frame(bytes)?;
     check_header(bytes, &blobs[0])?;
     let ways = read_ways(bytes, &blobs, classes)?;

@@ -16,13 +16,18 @@ pub(crate) struct WaysPass {
 }
 
 fn id_of(element: &quick_xml::events::BytesStart<'_>, at: u64) -> Result<i64, ParseError> {
-    let raw = crate::xml::attr_value(element, "id").map_err(|m| ParseError::new(at, Some(describe(element)), m))?;
+    let raw = crate::xml::attr_value(element, "id")
+        .map_err(|m| ParseError::new(at, Some(describe(element)), m))?;
     let Some(raw) = raw else {
         return Err(ParseError::new(at, Some(describe(element)), "missing `id`"));
     };
-    raw.trim()
-        .parse()
-        .map_err(|_| ParseError::new(at, Some(describe(element)), format!("id `{raw}` is not an integer")))
+    raw.trim().parse().map_err(|_| {
+        ParseError::new(
+            at,
+            Some(describe(element)),
+            format!("id `{raw}` is not an integer"),
+        )
+    })
 }
 
 /// Pass one: the kept ways, in file order.
@@ -60,7 +65,9 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                         return Err(ParseError::new(
                             at,
                             Some(format!("<{name}>")),
-                            format!("this is XML but not OSM (root element <{name}>, expected <osm>)"),
+                            format!(
+                                "this is XML but not OSM (root element <{name}>, expected <osm>)"
+                            ),
                         ));
                     }
                     continue;
@@ -82,9 +89,15 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                     "nd" => {
                         if let Some((way_id, nodes, _)) = current.as_mut() {
                             let r = crate::xml::attr_value(&element, "ref")
-                                .map_err(|m| ParseError::new(at, Some(format!("<nd> of way {way_id}")), m))?
+                                .map_err(|m| {
+                                    ParseError::new(at, Some(format!("<nd> of way {way_id}")), m)
+                                })?
                                 .ok_or_else(|| {
-                                    ParseError::new(at, Some(format!("<nd> of way {way_id}")), "missing `ref`")
+                                    ParseError::new(
+                                        at,
+                                        Some(format!("<nd> of way {way_id}")),
+                                        "missing `ref`",
+                                    )
                                 })?;
                             let r: i64 = r.trim().parse().map_err(|_| {
                                 ParseError::new(
@@ -98,8 +111,9 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                     }
                     "tag" => {
                         if let Some((way_id, _, tags)) = current.as_mut() {
-                            let kv = attrs(&element)
-                                .map_err(|m| ParseError::new(at, Some(format!("<tag> of way {way_id}")), m))?;
+                            let kv = attrs(&element).map_err(|m| {
+                                ParseError::new(at, Some(format!("<tag> of way {way_id}")), m)
+                            })?;
                             let k = kv.iter().find(|(k, _)| *k == "k").map(|(_, v)| v.as_ref());
                             let v = kv.iter().find(|(k, _)| *k == "v").map(|(_, v)| v.as_ref());
                             if let (Some(k), Some(v)) = (k, v) {
@@ -131,7 +145,8 @@ pub(crate) fn read_nodes<R: BufRead>(
             Item::Start { element, at, .. } => match element.name().as_ref() {
                 "node" => {
                     let (mut id, mut lat, mut lon) = (None, None, None);
-                    let kv = attrs(&element).map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
+                    let kv = attrs(&element)
+                        .map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
                     for (k, v) in kv {
                         match k {
                             "id" => id = Some(v),
@@ -142,18 +157,17 @@ pub(crate) fn read_nodes<R: BufRead>(
                     }
                     let el = || Some(describe(&element));
                     let id: i64 = match id {
-                        Some(v) => v
-                            .trim()
-                            .parse()
-                            .map_err(|_| ParseError::new(at, el(), format!("id `{v}` is not an integer")))?,
+                        Some(v) => v.trim().parse().map_err(|_| {
+                            ParseError::new(at, el(), format!("id `{v}` is not an integer"))
+                        })?,
                         None => return Err(ParseError::new(at, el(), "missing `id`")),
                     };
                     let lat = lat.ok_or_else(|| ParseError::new(at, el(), "missing `lat`"))?;
                     let lon = lon.ok_or_else(|| ParseError::new(at, el(), "missing `lon`"))?;
-                    let lat_e7 =
-                        parse_degrees(&lat, 90.0).map_err(|m| ParseError::new(at, el(), format!("lat: {m}")))?;
-                    let lon_e7 =
-                        parse_degrees(&lon, 180.0).map_err(|m| ParseError::new(at, el(), format!("lon: {m}")))?;
+                    let lat_e7 = parse_degrees(&lat, 90.0)
+                        .map_err(|m| ParseError::new(at, el(), format!("lat: {m}")))?;
+                    let lon_e7 = parse_degrees(&lon, 180.0)
+                        .map_err(|m| ParseError::new(at, el(), format!("lon: {m}")))?;
                     if needed.contains(&id) {
                         out.insert(id, NodePos { lat_e7, lon_e7 });
                     }

@@ -43,7 +43,10 @@ impl Summary {
         }
         let source = std::path::Path::new(&graph.source.file)
             .file_name()
-            .map_or_else(|| graph.source.file.clone(), |n| n.to_string_lossy().into_owned());
+            .map_or_else(
+                || graph.source.file.clone(),
+                |n| n.to_string_lossy().into_owned(),
+            );
         Summary {
             source,
             format: graph.source.format,

@@ -5,8 +5,8 @@
 use crate::error::ParseError;
 use crate::xml::{Item, XmlStream, attrs, describe};
 use mapc_graph::{
-    Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance, RightOfWay, Road, RoadId,
-    Source, Warnings,
+    Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance,
+    RightOfWay, Road, RoadId, Source, Warnings,
 };
 use std::collections::HashMap;
 use std::io::BufRead;
@@ -68,10 +68,14 @@ impl Element<'_> {
         ParseError::new(self.at, Some(self.described.clone()), message)
     }
     fn get(&self, key: &str) -> Option<&str> {
-        self.kv.iter().find(|(k, _)| *k == key).map(|(_, v)| v.as_ref())
+        self.kv
+            .iter()
+            .find(|(k, _)| *k == key)
+            .map(|(_, v)| v.as_ref())
     }
     fn req(&self, key: &str) -> Result<&str, ParseError> {
-        self.get(key).ok_or_else(|| self.err(format!("missing `{key}`")))
+        self.get(key)
+            .ok_or_else(|| self.err(format!("missing `{key}`")))
     }
     fn num(&self, key: &str) -> Result<Option<f64>, ParseError> {
         match self.get(key) {
@@ -86,7 +90,8 @@ impl Element<'_> {
         }
     }
     fn req_num(&self, key: &str) -> Result<f64, ParseError> {
-        self.num(key)?.ok_or_else(|| self.err(format!("missing `{key}`")))
+        self.num(key)?
+            .ok_or_else(|| self.err(format!("missing `{key}`")))
     }
     fn int<T: std::str::FromStr>(&self, key: &str) -> Result<Option<T>, ParseError> {
         match self.get(key) {
@@ -99,14 +104,24 @@ impl Element<'_> {
         }
     }
     fn shape(&self, key: &str) -> Result<Option<Vec<[f64; 2]>>, ParseError> {
-        let Some(text) = self.get(key) else { return Ok(None) };
+        let Some(text) = self.get(key) else {
+            return Ok(None);
+        };
         let mut out = Vec::new();
         for point in text.split_whitespace() {
             let mut it = point.split(',');
-            let mut coord = || it.next().and_then(|c| c.parse::<f64>().ok()).filter(|c| c.is_finite());
+            let mut coord = || {
+                it.next()
+                    .and_then(|c| c.parse::<f64>().ok())
+                    .filter(|c| c.is_finite())
+            };
             match (coord(), coord()) {
                 (Some(x), Some(y)) => out.push([x, y]),
-                _ => return Err(self.err(format!("`{key}` has the point `{point}`, not x,y numbers"))),
+                _ => {
+                    return Err(
+                        self.err(format!("`{key}` has the point `{point}`, not x,y numbers"))
+                    );
+                }
             }
         }
         Ok(Some(out))
@@ -151,12 +166,15 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                         return Err(ParseError::new(
                             at,
                             Some(format!("<{name}>")),
-                            format!("this is XML but not a SUMO network (root element <{name}>, expected <net>)"),
+                            format!(
+                                "this is XML but not a SUMO network (root element <{name}>, expected <net>)"
+                            ),
                         ));
                     }
                     continue;
                 }
-                let kv = attrs(&element).map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
+                let kv = attrs(&element)
+                    .map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
                 let el = Element {
                     kv,
                     at,
@@ -171,7 +189,8 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                         let (Some(Some(x)), Some(Some(y))) = (parts.next(), parts.next()) else {
                             return Err(el.err(format!("netOffset `{offset}` is not two numbers")));
                         };
-                        net.location = Some(([x, y], el.get("projParameter").unwrap_or("!").to_string()));
+                        net.location =
+                            Some(([x, y], el.get("projParameter").unwrap_or("!").to_string()));
                     }
                     (2, "edge") => {
                         let function = el.get("function").unwrap_or("normal");
@@ -200,14 +219,17 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                         in_edge = !empty;
                     }
                     (3, "lane") if in_edge => {
-                        let index: u8 = el.int("index")?.ok_or_else(|| el.err("missing `index`"))?;
+                        let index: u8 =
+                            el.int("index")?.ok_or_else(|| el.err("missing `index`"))?;
                         let lane = SumoLane {
                             id: el.req("id")?.to_string(),
                             index,
                             speed: el.req_num("speed")?,
                             length: el.req_num("length")?,
                             width: el.num("width")?.unwrap_or(SUMO_DEFAULT_LANE_WIDTH_M),
-                            shape: el.shape("shape")?.ok_or_else(|| el.err("missing `shape`"))?,
+                            shape: el
+                                .shape("shape")?
+                                .ok_or_else(|| el.err("missing `shape`"))?,
                         };
                         if lane.length < 0.0 || lane.speed < 0.0 {
                             return Err(el.err("negative length or speed"));
@@ -231,7 +253,8 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                         in_junction = !empty;
                     }
                     (3, "request") if in_junction => {
-                        let index: usize = el.int("index")?.ok_or_else(|| el.err("missing `index`"))?;
+                        let index: usize =
+                            el.int("index")?.ok_or_else(|| el.err("missing `index`"))?;
                         let response = el.req("response")?.to_string();
                         net.junctions
                             .last_mut()
@@ -244,8 +267,12 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                             at,
                             from: el.req("from")?.to_string(),
                             to: el.req("to")?.to_string(),
-                            from_lane: el.int("fromLane")?.ok_or_else(|| el.err("missing `fromLane`"))?,
-                            to_lane: el.int("toLane")?.ok_or_else(|| el.err("missing `toLane`"))?,
+                            from_lane: el
+                                .int("fromLane")?
+                                .ok_or_else(|| el.err("missing `fromLane`"))?,
+                            to_lane: el
+                                .int("toLane")?
+                                .ok_or_else(|| el.err("missing `toLane`"))?,
                             via: el.get("via").map(str::to_string),
                             state: el.get("state").map(str::to_string),
                         });
@@ -279,7 +306,10 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     let mut warnings = Warnings::default();
     let projection = match &net.location {
         None => {
-            warnings.add("no_location", "the net has no <location>; coordinates kept as they are");
+            warnings.add(
+                "no_location",
+                "the net has no <location>; coordinates kept as they are",
+            );
             Projection::Plane { offset: [0.0, 0.0] }
         }
         Some((offset, proj)) => Projection::from_sumo_location(*offset, proj).unwrap_or_else(|m| {
@@ -328,7 +358,10 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             continue;
         }
         if !used.contains_key(sj.id.as_str()) {
-            warnings.add("isolated_junction", format!("junction {} has no road", sj.id));
+            warnings.add(
+                "isolated_junction",
+                format!("junction {} has no road", sj.id),
+            );
             continue;
         }
         let id = JunctionId(junctions.len() as u32);
@@ -370,14 +403,22 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         let mut lanes: Vec<&SumoLane> = e.lanes.iter().collect();
         lanes.sort_by_key(|l| l.index);
         if lanes.iter().enumerate().any(|(i, l)| l.index as usize != i) {
-            return Err(ParseError::new(e.at, place(), "lane indices are not 0, 1, 2, ..."));
+            return Err(ParseError::new(
+                e.at,
+                place(),
+                "lane indices are not 0, 1, 2, ...",
+            ));
         }
         let geometry = match &e.shape {
             Some(s) if s.len() >= 2 => s.clone(),
             _ => centre_line(&lanes),
         };
         if geometry.len() < 2 {
-            return Err(ParseError::new(e.at, place(), "shape has fewer than two points"));
+            return Err(ParseError::new(
+                e.at,
+                place(),
+                "shape has fewer than two points",
+            ));
         }
         let mut length = lanes.iter().map(|l| l.length).sum::<f64>() / lanes.len() as f64;
         if !(length > 0.0) {
@@ -416,7 +457,8 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     }
 
     // Request tables by SUMO junction id, for connections without a state.
-    let requests: HashMap<&str, &SumoJunction> = net.junctions.iter().map(|j| (j.id.as_str(), j)).collect();
+    let requests: HashMap<&str, &SumoJunction> =
+        net.junctions.iter().map(|j| (j.id.as_str(), j)).collect();
     // Connections leaving internal lanes, by (internal edge, lane).
     let internal_next: HashMap<(&str, u8), &SumoConnection> = net
         .connections
@@ -460,13 +502,19 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                 format!("`from` names edge `{}`, which the net lacks", c.from),
             )
         })?;
-        let to_edge = edge_index
-            .get(c.to.as_str())
-            .ok_or_else(|| ParseError::new(c.at, el(), format!("`to` names edge `{}`, which the net lacks", c.to)))?;
+        let to_edge = edge_index.get(c.to.as_str()).ok_or_else(|| {
+            ParseError::new(
+                c.at,
+                el(),
+                format!("`to` names edge `{}`, which the net lacks", c.to),
+            )
+        })?;
         if from_edge.internal || to_edge.internal {
             continue;
         }
-        if c.from_lane as usize >= from_edge.lanes.len() || c.to_lane as usize >= to_edge.lanes.len() {
+        if c.from_lane as usize >= from_edge.lanes.len()
+            || c.to_lane as usize >= to_edge.lanes.len()
+        {
             return Err(ParseError::new(
                 c.at,
                 el(),
@@ -490,13 +538,21 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         let mut steps = 0;
         while let Some(lane) = next.take() {
             let &(len, speed) = internal_lanes.get(lane.as_str()).ok_or_else(|| {
-                ParseError::new(c.at, el(), format!("`via` names lane `{lane}`, which the net lacks"))
+                ParseError::new(
+                    c.at,
+                    el(),
+                    format!("`via` names lane `{lane}`, which the net lacks"),
+                )
             })?;
             via_length += len;
             via_speed = Some(via_speed.map_or(speed, |s: f64| s.min(speed)));
             steps += 1;
             if steps > 16 {
-                return Err(ParseError::new(c.at, el(), "the internal lanes after `via` loop"));
+                return Err(ParseError::new(
+                    c.at,
+                    el(),
+                    "the internal lanes after `via` loop",
+                ));
             }
             // An internal lane that leads into another internal lane (an internal junction) continues the path.
             let (edge_id, lane_index) = lane.rsplit_once('_').unwrap_or((lane.as_str(), "0"));
@@ -509,7 +565,11 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                         edge_index
                             .get(k.to.as_str())
                             .filter(|e| e.internal)
-                            .map(|e| e.lanes[(k.to_lane as usize).min(e.lanes.len() - 1)].id.clone())
+                            .map(|e| {
+                                e.lanes[(k.to_lane as usize).min(e.lanes.len() - 1)]
+                                    .id
+                                    .clone()
+                            })
                     })
                 });
         }
@@ -522,7 +582,11 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                     .get(from_edge.to.as_str())
                     .and_then(|j| j.requests.iter().find(|(i, _)| *i == link))
                     .is_some_and(|(_, response)| response.contains('1'));
-                if yields { RightOfWay::Minor } else { RightOfWay::Major }
+                if yields {
+                    RightOfWay::Minor
+                } else {
+                    RightOfWay::Major
+                }
             }
         };
         let mut provenance = Provenance::default();

@@ -64,7 +64,14 @@ impl<R: BufRead> XmlStream<R> {
                     return Err(ParseError::new(
                         at,
                         self.open.last().map(|n| format!("<{n}>")),
-                        format!("not well-formed XML: {e}"),
+                        match e {
+                            quick_xml::Error::Syntax(_) => {
+                                format!(
+                                    "not well-formed XML: {e} (the file ends too early: truncated?)"
+                                )
+                            }
+                            _ => format!("not well-formed XML: {e}"),
+                        },
                     ));
                 }
             };
@@ -75,7 +82,11 @@ impl<R: BufRead> XmlStream<R> {
                         unreachable!()
                     };
                     if self.open.is_empty() && self.root.is_some() {
-                        return Err(ParseError::new(self.start, None, "more than one root element"));
+                        return Err(ParseError::new(
+                            self.start,
+                            None,
+                            "more than one root element",
+                        ));
                     }
                     let name = element.name().as_ref().to_string();
                     if self.root.is_none() {
@@ -105,7 +116,11 @@ impl<R: BufRead> XmlStream<R> {
                         ));
                     }
                     if self.root.is_none() {
-                        return Err(ParseError::new(self.start, None, "no XML element in the file"));
+                        return Err(ParseError::new(
+                            self.start,
+                            None,
+                            "no XML element in the file",
+                        ));
                     }
                     return Ok(Item::Eof);
                 }
@@ -126,7 +141,10 @@ impl<R: BufRead> XmlStream<R> {
 }
 
 /// Attribute value as text with XML entities (`&amp;`) resolved.
-pub(crate) fn attr_value<'a>(element: &'a BytesStart<'_>, key: &str) -> Result<Option<Cow<'a, str>>, String> {
+pub(crate) fn attr_value<'a>(
+    element: &'a BytesStart<'_>,
+    key: &str,
+) -> Result<Option<Cow<'a, str>>, String> {
     for a in element.attributes() {
         let a = a.map_err(|e| format!("bad attribute: {e}"))?;
         if a.key.as_ref() == key {
@@ -140,7 +158,9 @@ pub(crate) fn attr_value<'a>(element: &'a BytesStart<'_>, key: &str) -> Result<O
 }
 
 /// All attributes as (key, raw value) pairs; values with `&` are resolved.
-pub(crate) fn attrs<'a>(element: &'a BytesStart<'_>) -> Result<Vec<(&'a str, Cow<'a, str>)>, String> {
+pub(crate) fn attrs<'a>(
+    element: &'a BytesStart<'_>,
+) -> Result<Vec<(&'a str, Cow<'a, str>)>, String> {
     let mut out = Vec::with_capacity(8);
     for a in element.attributes() {
         let a = a.map_err(|e| format!("bad attribute: {e}"))?;

@@ -9,13 +9,20 @@ use std::sync::OnceLock;
 fn bytes(name: &str) -> &'static [u8] {
     static CACHE: OnceLock<Vec<(String, Vec<u8>)>> = OnceLock::new();
     let all = CACHE.get_or_init(|| {
-        ["i696.osm", "i696.osm.pbf", "simple_merge.net.xml", "us_merge.net.xml"]
-            .iter()
-            .map(|n| {
-                let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../maps").join(n);
-                (n.to_string(), std::fs::read(p).unwrap())
-            })
-            .collect()
+        [
+            "i696.osm",
+            "i696.osm.pbf",
+            "simple_merge.net.xml",
+            "us_merge.net.xml",
+        ]
+        .iter()
+        .map(|n| {
+            let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../../maps")
+                .join(n);
+            (n.to_string(), std::fs::read(p).unwrap())
+        })
+        .collect()
     });
     &all.iter().find(|(n, _)| n == name).unwrap().1
 }

@@ -5,7 +5,9 @@ use mapc_import::{ImportOptions, import_path};
 use std::path::PathBuf;
 
 fn map(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../maps").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../maps")
+        .join(name)
 }
 
 fn i696() -> LaneGraph {
@@ -27,13 +29,19 @@ fn i696_osm_summary() {
 }
 
 /// The merges the issue names: (node, the way that joins, a way of the road it joins).
-const I696_MERGES: [(i64, i64); 3] = [(61862553, 124433709), (61860453, 8666737), (62339796, 178253095)];
+const I696_MERGES: [(i64, i64); 3] = [
+    (61862553, 124433709),
+    (61860453, 8666737),
+    (62339796, 178253095),
+];
 
 #[test]
 fn i696_named_merges() {
     let g = i696();
     for (node, joining_way) in I696_MERGES {
-        let j = g.junction(g.find_junction(&format!("osm:{node}")).unwrap()).unwrap();
+        let j = g
+            .junction(g.find_junction(&format!("osm:{node}")).unwrap())
+            .unwrap();
         assert_eq!(j.kind, JunctionKind::Merge, "node {node}");
         let ins: Vec<_> = j.incoming.iter().map(|&r| g.road(r).unwrap()).collect();
         let out = g.road(j.outgoing[0]).unwrap();
@@ -92,8 +100,16 @@ fn simple_merge_net_lengths_and_right_of_way() {
             .clone()
     };
     let (main, ramp) = (conn("left"), conn("bottom"));
-    assert!((main.via_length_m - 24.53).abs() < 1e-9, "{}", main.via_length_m);
-    assert!((ramp.via_length_m - 22.95).abs() < 1e-9, "{}", ramp.via_length_m);
+    assert!(
+        (main.via_length_m - 24.53).abs() < 1e-9,
+        "{}",
+        main.via_length_m
+    );
+    assert!(
+        (ramp.via_length_m - 22.95).abs() < 1e-9,
+        "{}",
+        ramp.via_length_m
+    );
     assert_eq!(ramp.via_speed_mps, Some(15.67));
     assert_eq!(
         ramp.right_of_way,
@@ -131,8 +147,16 @@ fn sumo_proxy_junctions_lie_on_their_osm_nodes() {
         distances.push(((there[0] - here[0]).hypot(there[1] - here[1]), node));
     }
     distances.sort_by(|a, b| b.0.total_cmp(&a.0));
-    eprintln!("compared {} junctions, farthest {:?}", distances.len(), &distances[..3]);
-    assert!(distances.len() >= 50, "only {} junctions in common", distances.len());
+    eprintln!(
+        "compared {} junctions, farthest {:?}",
+        distances.len(),
+        &distances[..3]
+    );
+    assert!(
+        distances.len() >= 50,
+        "only {} junctions in common",
+        distances.len()
+    );
     let far: Vec<_> = distances.iter().filter(|(d, _)| *d > 1.0).collect();
     assert!(far.iter().all(|(_, node)| *node == 4815187016), "{far:?}");
     assert!(distances[1].0 < 0.1, "{:?}", distances[1]);
@@ -176,7 +200,11 @@ fn highways_option_and_major_override() {
     let wide = import_path(
         &map("i696.osm"),
         &ImportOptions {
-            highways: vec!["motorway".into(), "motorway_link".into(), "secondary".into()],
+            highways: vec![
+                "motorway".into(),
+                "motorway_link".into(),
+                "secondary".into(),
+            ],
             ..Default::default()
         },
     )

@@ -14,7 +14,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ck = Checkpoint::load(&file)?;
     let resolved = mapc_scenario::ResolvedScenario::load(scenario)?;
     let spec = mapc_sim::spec_from_scenario(&resolved)?;
-    let n_av = resolved.scenario.control.as_ref().map_or(5, |c| c.n_av as usize);
+    let n_av = resolved
+        .scenario
+        .control
+        .as_ref()
+        .map_or(5, |c| c.n_av as usize);
     let cfg = env_config_for(&ck, &file, scenario, Some(n_av))?;
     let seeds: Vec<u64> = (0..n).collect();
     let runs = run_policy(&ck, &spec, &cfg, &seeds, ActionMode::Mean)?;

@@ -3,7 +3,9 @@
 
 use mapc_rl::PpoConfig;
 use mapc_rl::checkpoint::PolicySpec;
-use mapc_rl::env::merge::{ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM};
+use mapc_rl::env::merge::{
+    ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM,
+};
 use mapc_rl::env::obs::PER_AV;
 use mapc_rl::rollout::Env;
 use mapc_rl::run::TrainRun;
@@ -21,7 +23,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let seed: u64 = a.get(5).map_or(Ok(0), |s| s.parse())?;
     let resolved = mapc_scenario::ResolvedScenario::load(scenario)?;
     let spec = mapc_sim::spec_from_scenario(&resolved)?;
-    let n_av = resolved.scenario.control.as_ref().map_or(5, |c| c.n_av as usize);
+    let n_av = resolved
+        .scenario
+        .control
+        .as_ref()
+        .map_or(5, |c| c.n_av as usize);
     let cfg = MergeEnvConfig {
         reward,
         n_av,
@@ -53,7 +59,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         TrainRun::create(&out, pspec, config, 5)?
     };
-    let factory = move || -> Box<dyn Env> { Box::new(MergeEnv::new(spec.clone(), cfg.clone()).expect("valid spec")) };
+    let factory = move || -> Box<dyn Env> {
+        Box::new(MergeEnv::new(spec.clone(), cfg.clone()).expect("valid spec"))
+    };
     while !run.done() {
         let s = run.step(&factory)?;
         println!(

@@ -40,7 +40,9 @@ pub struct FigureSet {
 
 impl FigureSet {
     pub fn of(runs: &[EpisodeMetrics]) -> Self {
-        let col = |f: fn(&EpisodeMetrics) -> f64| Figure::from(MeanCi::of(&runs.iter().map(f).collect::<Vec<_>>()));
+        let col = |f: fn(&EpisodeMetrics) -> f64| {
+            Figure::from(MeanCi::of(&runs.iter().map(f).collect::<Vec<_>>()))
+        };
         FigureSet {
             outflow: col(|m| m.outflow),
             inflow: col(|m| m.inflow),
@@ -119,7 +121,11 @@ pub fn env_config_for(
         });
     }
     Ok(MergeEnvConfig {
-        reward: ck.spec.reward.parse().unwrap_or(crate::env::merge::RewardKind::Outflow),
+        reward: ck
+            .spec
+            .reward
+            .parse()
+            .unwrap_or(crate::env::merge::RewardKind::Outflow),
         n_av,
         norm: ObsNorm {
             max_speed: ck.spec.max_speed,
@@ -140,7 +146,9 @@ pub fn run_policy(
 ) -> Result<Vec<EpisodeMetrics>, RlError> {
     let probe = MergeEnv::new(spec.clone(), cfg.clone())?;
     let horizon = probe.horizon();
-    let factory = || -> Box<dyn Env> { Box::new(MergeEnv::new(spec.clone(), cfg.clone()).expect("validated above")) };
+    let factory = || -> Box<dyn Env> {
+        Box::new(MergeEnv::new(spec.clone(), cfg.clone()).expect("validated above"))
+    };
     let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, mix_seed(&[s, 0xE7A1]))).collect();
     let eps = collect(&factory, &ck.state.model, &pairs, horizon, mode, false)?;
     Ok(eps.into_iter().map(|e| e.metrics).collect())
@@ -148,16 +156,18 @@ pub fn run_policy(
 
 /// The human baseline on the same seeds.
 pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<EpisodeMetrics>, RlError> {
-    let runs = mapc_sim::run_baseline_spec(&human_spec(spec), seeds).map_err(|e| RlError::Scenario {
-        scenario: spec.graph.source.file.clone(),
-        msg: e.to_string(),
-    })?;
+    let runs =
+        mapc_sim::run_baseline_spec(&human_spec(spec), seeds).map_err(|e| RlError::Scenario {
+            scenario: spec.graph.source.file.clone(),
+            msg: e.to_string(),
+        })?;
     Ok(runs.iter().map(to_episode_metrics).collect())
 }
 
 /// Welch tests and the outflow change of `policy` against `baseline`.
 pub fn compare(policy: &[EpisodeMetrics], baseline: &[EpisodeMetrics]) -> Comparison {
-    let col = |r: &[EpisodeMetrics], f: fn(&EpisodeMetrics) -> f64| r.iter().map(f).collect::<Vec<_>>();
+    let col =
+        |r: &[EpisodeMetrics], f: fn(&EpisodeMetrics) -> f64| r.iter().map(f).collect::<Vec<_>>();
     let (p, b) = (FigureSet::of(policy), FigureSet::of(baseline));
     Comparison {
         outflow: welch_t_test(&col(policy, |m| m.outflow), &col(baseline, |m| m.outflow)),

@@ -6,8 +6,7 @@ use crate::checkpoint::write_atomic;
 use crate::error::RlError;
 use crate::ppo::IterationStats;
 
-pub const CSV_HEADER: &str =
-    "iteration,env_steps,wall_s,mean_return,mean_outflow,mean_speed,policy_loss,value_loss,kl,entropy,kl_coeff";
+pub const CSV_HEADER: &str = "iteration,env_steps,wall_s,mean_return,mean_outflow,mean_speed,policy_loss,value_loss,kl,entropy,kl_coeff";
 
 /// Rows of a training log, rewritten atomically after each iteration (it is small).
 #[derive(Default, Debug, Clone)]

@@ -106,7 +106,8 @@ pub fn run_episode(
         };
         let tr = env.step(&action)?;
         if record {
-            ep.log_probs.push(gaussian_log_prob(&action, &out.mean, &out.log_std));
+            ep.log_probs
+                .push(gaussian_log_prob(&action, &out.mean, &out.log_std));
             ep.obs.extend_from_slice(&obs);
             ep.actions.extend_from_slice(&action);
             ep.means.extend_from_slice(&out.mean);
@@ -124,7 +125,11 @@ pub fn run_episode(
         EpisodeEnd::Terminal
     } else {
         EpisodeEnd::Truncated {
-            bootstrap_value: if record { model.value(&obs, scratch) } else { 0.0 },
+            bootstrap_value: if record {
+                model.value(&obs, scratch)
+            } else {
+                0.0
+            },
         }
     });
     ep.metrics = env.metrics();

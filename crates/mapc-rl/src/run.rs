@@ -25,7 +25,12 @@ pub struct TrainRun {
 
 impl TrainRun {
     /// A new run in `dir` (created; an existing checkpoint there is an error: resume it or pick another dir).
-    pub fn create(dir: &Path, spec: PolicySpec, config: PpoConfig, checkpoint_every: u64) -> Result<Self, RlError> {
+    pub fn create(
+        dir: &Path,
+        spec: PolicySpec,
+        config: PpoConfig,
+        checkpoint_every: u64,
+    ) -> Result<Self, RlError> {
         if checkpoint_path(dir).exists() {
             return Err(RlError::Config(format!(
                 "{} already holds a run; continue it with --resume {} or choose another -o",

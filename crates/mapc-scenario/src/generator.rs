@@ -3,8 +3,8 @@
 
 use crate::model::{MajorRoad, SimpleMergeParams};
 use mapc_graph::{
-    Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance, RightOfWay, Road, RoadId,
-    Source, SourceFormat,
+    Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance,
+    RightOfWay, Road, RoadId, Source, SourceFormat,
 };
 
 pub const SIMPLE_MERGE: &str = "simple_merge";
@@ -25,7 +25,9 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
         ("speed_limit_mps", p.speed_limit_mps),
     ] {
         if !(v.is_finite() && v > 0.0) {
-            return Err(format!("network.simple_merge.{name} must be a positive number, not {v}"));
+            return Err(format!(
+                "network.simple_merge.{name} must be a positive number, not {v}"
+            ));
         }
     }
     for (name, v) in [
@@ -34,18 +36,26 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
         ("through_internal_m", p.through_internal_m),
     ] {
         if !(v.is_finite() && v >= 0.0) {
-            return Err(format!("network.simple_merge.{name} must be zero or positive, not {v}"));
+            return Err(format!(
+                "network.simple_merge.{name} must be zero or positive, not {v}"
+            ));
         }
     }
     if !(p.angle_deg > 0.0 && p.angle_deg < 90.0) {
-        return Err(format!("network.simple_merge.angle_deg must be between 0 and 90, not {}", p.angle_deg));
+        return Err(format!(
+            "network.simple_merge.angle_deg must be between 0 and 90, not {}",
+            p.angle_deg
+        ));
     }
     if p.lanes == 0 {
         return Err("network.simple_merge.lanes must be at least 1".to_string());
     }
     let (sin, cos) = p.angle_deg.to_radians().sin_cos();
     let made_by = || Provenance::made_by(crate::generator::SIMPLE_MERGE);
-    let with_sumo = |id: &str| Provenance { sumo_ids: vec![id.to_string()], ..made_by() };
+    let with_sumo = |id: &str| Provenance {
+        sumo_ids: vec![id.to_string()],
+        ..made_by()
+    };
     let l = p.inflow_edge_m;
     let x_merge = p.pre_merge_m;
     let ramp_total = p.merge_m + l;
@@ -55,11 +65,17 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
         ("left", [0.0, 0.0]),
         ("center", [x_merge, 0.0]),
         ("right", [x_merge + p.post_merge_m, 0.0]),
-        ("inflow_merge", [x_merge - ramp_total * cos, -ramp_total * sin]),
+        (
+            "inflow_merge",
+            [x_merge - ramp_total * cos, -ramp_total * sin],
+        ),
         ("bottom", [x_merge - p.merge_m * cos, -p.merge_m * sin]),
     ];
     let mut g = LaneGraph::new(
-        Source { file: SIMPLE_MERGE.to_string(), format: SourceFormat::Generator },
+        Source {
+            file: SIMPLE_MERGE.to_string(),
+            format: SourceFormat::Generator,
+        },
         Projection::Plane { offset: [0.0, 0.0] },
     );
     g.junctions = nodes
@@ -80,11 +96,46 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
         MajorRoad::Main => (1, -1),
     };
     let edges: [(&str, &str, &str, f64, &str, i32); 5] = [
-        (MAIN_ENTRY, "inflow_highway", "left", l, "highway", main_priority),
-        (MAIN_PRE_MERGE, "left", "center", p.pre_merge_m, "highway", main_priority),
-        (RAMP_ENTRY, "inflow_merge", "bottom", l, "merge", ramp_priority),
-        (RAMP_PRE_MERGE, "bottom", "center", p.merge_m, "merge", ramp_priority),
-        (POST_MERGE, "center", "right", p.post_merge_m, "highway", main_priority),
+        (
+            MAIN_ENTRY,
+            "inflow_highway",
+            "left",
+            l,
+            "highway",
+            main_priority,
+        ),
+        (
+            MAIN_PRE_MERGE,
+            "left",
+            "center",
+            p.pre_merge_m,
+            "highway",
+            main_priority,
+        ),
+        (
+            RAMP_ENTRY,
+            "inflow_merge",
+            "bottom",
+            l,
+            "merge",
+            ramp_priority,
+        ),
+        (
+            RAMP_PRE_MERGE,
+            "bottom",
+            "center",
+            p.merge_m,
+            "merge",
+            ramp_priority,
+        ),
+        (
+            POST_MERGE,
+            "center",
+            "right",
+            p.post_merge_m,
+            "highway",
+            main_priority,
+        ),
     ];
     g.roads = edges
         .iter()
@@ -98,7 +149,12 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
             ref_: None,
             priority,
             lanes: (0..p.lanes)
-                .map(|index| Lane { index, speed_mps: p.speed_limit_mps, width_m: LANE_WIDTH_M, length_m })
+                .map(|index| Lane {
+                    index,
+                    speed_mps: p.speed_limit_mps,
+                    width_m: LANE_WIDTH_M,
+                    length_m,
+                })
                 .collect(),
             geometry: vec![nodes[jid(from).0 as usize].1, nodes[jid(to).0 as usize].1],
             length_m,
@@ -150,7 +206,8 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
             });
         }
     }
-    g.connections.sort_by_key(|c| (c.junction, c.from_road, c.from_lane, c.to_road, c.to_lane));
+    g.connections
+        .sort_by_key(|c| (c.junction, c.from_road, c.from_lane, c.to_road, c.to_lane));
     g.rebuild_junction_links();
     Ok(g)
 }
@@ -162,28 +219,57 @@ mod tests {
     #[test]
     fn simple_merge_has_the_papers_lengths_and_right_of_way() {
         let g = simple_merge(&SimpleMergeParams::default()).unwrap();
-        assert!(g.invariant_violations().is_empty(), "{:?}", g.invariant_violations());
+        assert!(
+            g.invariant_violations().is_empty(),
+            "{:?}",
+            g.invariant_violations()
+        );
         let center = g.find_junction("center").unwrap();
         assert_eq!(g.junction(center).unwrap().kind, JunctionKind::Merge);
-        let main_before: f64 = [MAIN_ENTRY, MAIN_PRE_MERGE].iter().map(|n| g.road(g.find_roads(n).unwrap()[0]).unwrap().length_m).sum();
-        let ramp: f64 = [RAMP_ENTRY, RAMP_PRE_MERGE].iter().map(|n| g.road(g.find_roads(n).unwrap()[0]).unwrap().length_m).sum();
+        let main_before: f64 = [MAIN_ENTRY, MAIN_PRE_MERGE]
+            .iter()
+            .map(|n| g.road(g.find_roads(n).unwrap()[0]).unwrap().length_m)
+            .sum();
+        let ramp: f64 = [RAMP_ENTRY, RAMP_PRE_MERGE]
+            .iter()
+            .map(|n| g.road(g.find_roads(n).unwrap()[0]).unwrap().length_m)
+            .sum();
         assert_eq!((main_before, ramp), (600.0, 200.0));
         // REFERENCE.md sec. 1: the total lane length the original code normalises by.
-        assert!((g.total_lane_length_m() - 947.68).abs() < 1e-9, "{}", g.total_lane_length_m());
-        let ramp_conn = g.connections_from(g.find_roads(RAMP_PRE_MERGE).unwrap()[0]).next().unwrap();
+        assert!(
+            (g.total_lane_length_m() - 947.68).abs() < 1e-9,
+            "{}",
+            g.total_lane_length_m()
+        );
+        let ramp_conn = g
+            .connections_from(g.find_roads(RAMP_PRE_MERGE).unwrap()[0])
+            .next()
+            .unwrap();
         assert_eq!(ramp_conn.right_of_way, RightOfWay::Major);
-        let main_conn = g.connections_from(g.find_roads(MAIN_PRE_MERGE).unwrap()[0]).next().unwrap();
+        let main_conn = g
+            .connections_from(g.find_roads(MAIN_PRE_MERGE).unwrap()[0])
+            .next()
+            .unwrap();
         assert_eq!(main_conn.right_of_way, RightOfWay::Minor);
         // The ramp's start lies (merge_m + inflow) away from the merge at 45 degrees.
-        let start = g.junction(g.find_junction("inflow_merge").unwrap()).unwrap().pos;
+        let start = g
+            .junction(g.find_junction("inflow_merge").unwrap())
+            .unwrap()
+            .pos;
         assert!(((start[0] - 500.0).hypot(start[1]) - 200.0).abs() < 1e-9);
     }
 
     #[test]
     fn bad_parameters_are_named() {
-        let p = SimpleMergeParams { pre_merge_m: -3.0, ..Default::default() };
+        let p = SimpleMergeParams {
+            pre_merge_m: -3.0,
+            ..Default::default()
+        };
         assert!(simple_merge(&p).unwrap_err().contains("pre_merge_m"));
-        let p = SimpleMergeParams { angle_deg: 95.0, ..Default::default() };
+        let p = SimpleMergeParams {
+            angle_deg: 95.0,
+            ..Default::default()
+        };
         assert!(simple_merge(&p).unwrap_err().contains("angle_deg"));
     }
 }

@@ -24,16 +24,28 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: {message}")]
     Toml { path: PathBuf, message: String },
     #[error("{path}: {key}: {message}")]
-    Invalid { path: PathBuf, key: String, message: String },
+    Invalid {
+        path: PathBuf,
+        key: String,
+        message: String,
+    },
     #[error("{path}: network: {source}")]
-    Graph { path: PathBuf, source: mapc_graph::GraphFileError },
+    Graph {
+        path: PathBuf,
+        source: mapc_graph::GraphFileError,
+    },
     #[error("{path}: network: {message}")]
     Network { path: PathBuf, message: String },
-    #[error("no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge)")]
+    #[error(
+        "no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge)"
+    )]
     Unknown(String),
 }
 
@@ -54,7 +66,10 @@ impl Scenario {
     /// The paper's Simple Merge exactly (REFERENCE.md sec. 1).
     pub fn simple_merge() -> Scenario {
         let human = VehicleType::default();
-        let av = VehicleType { controlled: true, ..VehicleType::default() };
+        let av = VehicleType {
+            controlled: true,
+            ..VehicleType::default()
+        };
         let flow = |id: &str, from: &str, vph: f64, vtype: &str, speed: f64| Flow {
             id: id.to_string(),
             from: from.to_string(),
@@ -94,13 +109,18 @@ impl Scenario {
     }
 
     pub fn from_toml(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
-        let s: Scenario =
-            toml::from_str(text).map_err(|e| ScenarioError::Toml { path: path.to_path_buf(), message: e.to_string() })?;
+        let s: Scenario = toml::from_str(text).map_err(|e| ScenarioError::Toml {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
         if s.version != SCENARIO_VERSION {
             return Err(ScenarioError::Invalid {
                 path: path.to_path_buf(),
                 key: "version".into(),
-                message: format!("scenario version {}, but this mapc reads version {SCENARIO_VERSION}", s.version),
+                message: format!(
+                    "scenario version {}, but this mapc reads version {SCENARIO_VERSION}",
+                    s.version
+                ),
             });
         }
         Ok(s)
@@ -111,14 +131,20 @@ impl Scenario {
     }
 
     pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| ScenarioError::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
         Scenario::from_toml(&text, path)
     }
 
     pub fn save(&self, path: &Path) -> Result<(), ScenarioError> {
-        mapc_graph::write_atomically(path, self.to_toml().as_bytes())
-            .map_err(|source| ScenarioError::Io { path: path.to_path_buf(), source })
+        mapc_graph::write_atomically(path, self.to_toml().as_bytes()).map_err(|source| {
+            ScenarioError::Io {
+                path: path.to_path_buf(),
+                source,
+            }
+        })
     }
 }
 
@@ -132,26 +158,55 @@ impl ResolvedScenario {
             return ResolvedScenario::resolve(scenario, &base, file_or_name);
         }
         match Scenario::builtin(file_or_name) {
-            Some(s) => ResolvedScenario::resolve(s, Path::new("."), &format!("builtin:{file_or_name}")),
+            Some(s) => {
+                ResolvedScenario::resolve(s, Path::new("."), &format!("builtin:{file_or_name}"))
+            }
             None => Err(ScenarioError::Unknown(file_or_name.to_string())),
         }
     }
 
     /// Build or load the network (paths relative to `base_dir`) and check every reference. `origin` names the
     /// scenario in errors.
-    pub fn resolve(scenario: Scenario, base_dir: &Path, origin: &str) -> Result<ResolvedScenario, ScenarioError> {
+    pub fn resolve(
+        scenario: Scenario,
+        base_dir: &Path,
+        origin: &str,
+    ) -> Result<ResolvedScenario, ScenarioError> {
         let path = PathBuf::from(origin);
-        let invalid = |key: String, message: String| ScenarioError::Invalid { path: path.clone(), key, message };
+        let invalid = |key: String, message: String| ScenarioError::Invalid {
+            path: path.clone(),
+            key,
+            message,
+        };
         let graph = match &scenario.network {
-            NetworkSpec::SimpleMerge(p) => generator::simple_merge(p)
-                .map_err(|message| ScenarioError::Network { path: path.clone(), message })?,
-            NetworkSpec::Graph(g) => LaneGraph::load(&base_dir.join(g))
-                .map_err(|source| ScenarioError::Graph { path: path.clone(), source })?,
-            NetworkSpec::Map(m) => mapc_import::import_path(&base_dir.join(m), &mapc_import::ImportOptions::default())
-                .map_err(|e| ScenarioError::Network { path: path.clone(), message: e.to_string() })?,
+            NetworkSpec::SimpleMerge(p) => {
+                generator::simple_merge(p).map_err(|message| ScenarioError::Network {
+                    path: path.clone(),
+                    message,
+                })?
+            }
+            NetworkSpec::Graph(g) => {
+                LaneGraph::load(&base_dir.join(g)).map_err(|source| ScenarioError::Graph {
+                    path: path.clone(),
+                    source,
+                })?
+            }
+            NetworkSpec::Map(m) => {
+                mapc_import::import_path(&base_dir.join(m), &mapc_import::ImportOptions::default())
+                    .map_err(|e| ScenarioError::Network {
+                        path: path.clone(),
+                        message: e.to_string(),
+                    })?
+            }
         };
         if !(scenario.step_s.is_finite() && scenario.step_s > 0.0) {
-            return Err(invalid("step_s".into(), format!("must be a positive number of seconds, not {}", scenario.step_s)));
+            return Err(invalid(
+                "step_s".into(),
+                format!(
+                    "must be a positive number of seconds, not {}",
+                    scenario.step_s
+                ),
+            ));
         }
         if scenario.horizon_steps == 0 {
             return Err(invalid("horizon_steps".into(), "must be at least 1".into()));
@@ -170,33 +225,52 @@ impl ResolvedScenario {
                 ("idm_stepping_s", t.idm_stepping_s, true),
             ] {
                 if !v.is_finite() || v < 0.0 || (positive && v == 0.0) {
-                    return Err(invalid(format!("vehicle_types.{name}.{field}"), format!("bad value {v}")));
+                    return Err(invalid(
+                        format!("vehicle_types.{name}.{field}"),
+                        format!("bad value {v}"),
+                    ));
                 }
             }
             if !(0.0..=1.0).contains(&t.impatience) {
-                return Err(invalid(format!("vehicle_types.{name}.impatience"), "must be between 0 and 1".into()));
+                return Err(invalid(
+                    format!("vehicle_types.{name}.impatience"),
+                    "must be between 0 and 1".into(),
+                ));
             }
         }
         let find_road = |key: String, r: &str| -> Result<RoadId, ScenarioError> {
-            let found = graph.find_roads(r).map_err(|e| invalid(key.clone(), e.to_string()))?;
+            let found = graph
+                .find_roads(r)
+                .map_err(|e| invalid(key.clone(), e.to_string()))?;
             Ok(found[0])
         };
         let mut flow_roads = Vec::new();
         for (i, f) in scenario.flows.iter().enumerate() {
             if !scenario.vehicle_types.contains_key(&f.vehicle_type) {
-                return Err(invalid(format!("flows[{i}].vehicle_type"), format!("no vehicle type `{}`", f.vehicle_type)));
+                return Err(invalid(
+                    format!("flows[{i}].vehicle_type"),
+                    format!("no vehicle type `{}`", f.vehicle_type),
+                ));
             }
             if !(f.vehs_per_hour.is_finite() && f.vehs_per_hour >= 0.0) {
-                return Err(invalid(format!("flows[{i}].vehs_per_hour"), format!("bad value {}", f.vehs_per_hour)));
+                return Err(invalid(
+                    format!("flows[{i}].vehs_per_hour"),
+                    format!("bad value {}", f.vehs_per_hour),
+                ));
             }
             if !(f.depart_speed_mps.is_finite() && f.depart_speed_mps >= 0.0) {
-                return Err(invalid(format!("flows[{i}].depart_speed_mps"), format!("bad value {}", f.depart_speed_mps)));
+                return Err(invalid(
+                    format!("flows[{i}].depart_speed_mps"),
+                    format!("bad value {}", f.depart_speed_mps),
+                ));
             }
             let from = find_road(format!("flows[{i}].from"), &f.from)?;
             let to = match &f.to {
                 Some(t) => {
                     // The last piece of a way the route ends on.
-                    let found = graph.find_roads(t).map_err(|e| invalid(format!("flows[{i}].to"), e.to_string()))?;
+                    let found = graph
+                        .find_roads(t)
+                        .map_err(|e| invalid(format!("flows[{i}].to"), e.to_string()))?;
                     Some(*found.last().unwrap())
                 }
                 None => None,
@@ -214,13 +288,21 @@ impl ResolvedScenario {
         let mut region_roads = Vec::new();
         if let Some(c) = &scenario.control {
             for (i, r) in c.region.iter().enumerate() {
-                let found = graph.find_roads(r).map_err(|e| invalid(format!("control.region[{i}]"), e.to_string()))?;
+                let found = graph
+                    .find_roads(r)
+                    .map_err(|e| invalid(format!("control.region[{i}]"), e.to_string()))?;
                 region_roads.extend(found);
             }
             region_roads.sort();
             region_roads.dedup();
         }
-        Ok(ResolvedScenario { scenario, graph, origin: origin.to_string(), flow_roads, region_roads })
+        Ok(ResolvedScenario {
+            scenario,
+            graph,
+            origin: origin.to_string(),
+            flow_roads,
+            region_roads,
+        })
     }
 }
 
@@ -244,11 +326,17 @@ mod tests {
             Scenario::simple_merge().to_toml()
         );
         if std::env::var_os("MAPC_BLESS").is_some() {
-            assert!(std::env::var_os("CI").is_none(), "MAPC_BLESS is set in CI: golden files would be rewritten, not checked");
+            assert!(
+                std::env::var_os("CI").is_none(),
+                "MAPC_BLESS is set in CI: golden files would be rewritten, not checked"
+            );
             std::fs::write(&path, &expected).unwrap();
         }
         let shipped = std::fs::read_to_string(&path).unwrap();
-        assert_eq!(shipped, expected, "scenarios/simple_merge.toml differs from the generator's; rerun with MAPC_BLESS=1");
+        assert_eq!(
+            shipped, expected,
+            "scenarios/simple_merge.toml differs from the generator's; rerun with MAPC_BLESS=1"
+        );
         assert_eq!(Scenario::load(&path).unwrap(), Scenario::simple_merge());
     }
 
@@ -261,18 +349,35 @@ mod tests {
 
     #[test]
     fn unknown_keys_and_bad_references_are_named() {
-        let text = Scenario::simple_merge().to_toml().replace("horizon_steps", "horizon_stepz");
-        let err = Scenario::from_toml(&text, Path::new("bad.toml")).unwrap_err().to_string();
-        assert!(err.contains("bad.toml") && err.contains("horizon_stepz"), "{err}");
+        let text = Scenario::simple_merge()
+            .to_toml()
+            .replace("horizon_steps", "horizon_stepz");
+        let err = Scenario::from_toml(&text, Path::new("bad.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("bad.toml") && err.contains("horizon_stepz"),
+            "{err}"
+        );
 
         let mut s = Scenario::simple_merge();
         s.flows[1].vehicle_type = "robot".into();
-        let err = ResolvedScenario::resolve(s, Path::new("."), "s.toml").unwrap_err().to_string();
-        assert_eq!(err, "s.toml: flows[1].vehicle_type: no vehicle type `robot`");
+        let err = ResolvedScenario::resolve(s, Path::new("."), "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "s.toml: flows[1].vehicle_type: no vehicle type `robot`"
+        );
 
         let mut s = Scenario::simple_merge();
         s.flows[0].from = "nowhere".into();
-        let err = ResolvedScenario::resolve(s, Path::new("."), "s.toml").unwrap_err().to_string();
-        assert!(err.starts_with("s.toml: flows[0].from: no road `nowhere`"), "{err}");
+        let err = ResolvedScenario::resolve(s, Path::new("."), "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("s.toml: flows[0].from: no road `nowhere`"),
+            "{err}"
+        );
     }
 }

@@ -3,7 +3,9 @@
 //! internal length of a junction that remains (a merge) is not counted, that of a removed joint is part of the
 //! joined road.
 
-use crate::transform::{self, Corridor, CorridorRoles, SimplifyOptions, StepReport, TransformError};
+use crate::transform::{
+    self, Corridor, CorridorRoles, SimplifyOptions, StepReport, TransformError,
+};
 use mapc_graph::{JunctionId, LaneGraph, RoadId, Source, SourceFormat};
 use serde::Serialize;
 
@@ -42,19 +44,36 @@ pub struct MergeSummary {
 pub fn simplify(raw: &LaneGraph, opts: &SimplifyOptions) -> Result<Simplified, TransformError> {
     if let Some(l) = opts.feeder_length_m {
         if !(l.is_finite() && l > 0.0) {
-            return Err(TransformError::NoRoute(format!("--feeder-length must be a positive length, not {l}")));
+            return Err(TransformError::NoRoute(format!(
+                "--feeder-length must be a positive length, not {l}"
+            )));
         }
     }
     let mut corridor = Corridor::new(raw.clone());
-    corridor.graph.source = Source { file: raw.source.file.clone(), format: SourceFormat::Derived };
+    corridor.graph.source = Source {
+        file: raw.source.file.clone(),
+        format: SourceFormat::Derived,
+    };
     let steps = transform::simplify_steps(opts);
     let reports = transform::run_steps(&mut corridor, &steps, opts)?;
-    let roles = CorridorRoles { main: corridor.main, feeders: corridor.feeders, exits: corridor.exits };
-    Ok(Simplified { graph: corridor.graph, roles, steps: reports })
+    let roles = CorridorRoles {
+        main: corridor.main,
+        feeders: corridor.feeders,
+        exits: corridor.exits,
+    };
+    Ok(Simplified {
+        graph: corridor.graph,
+        roles,
+        steps: reports,
+    })
 }
 
 fn road_sum(g: &LaneGraph, roads: &[RoadId]) -> f64 {
-    roads.iter().filter_map(|r| g.road(*r)).map(|r| r.length_m).sum()
+    roads
+        .iter()
+        .filter_map(|r| g.road(*r))
+        .map(|r| r.length_m)
+        .sum()
 }
 
 /// Every merge on the corridor's main road, in driving order.
@@ -62,11 +81,18 @@ pub fn corridor_merges(g: &LaneGraph, roles: &CorridorRoles) -> Vec<MergeSummary
     let mut out = Vec::new();
     for (i, rid) in roles.main.iter().enumerate().skip(1) {
         let j: JunctionId = g.road(*rid).unwrap().from;
-        for feeder in roles.feeders.iter().filter(|f| g.road(*f.last().unwrap()).unwrap().to == j) {
+        for feeder in roles
+            .feeders
+            .iter()
+            .filter(|f| g.road(*f.last().unwrap()).unwrap().to == j)
+        {
             let junction = g.junction(j).unwrap();
             let last = *feeder.last().unwrap();
             let row = |from: RoadId| {
-                g.connections.iter().find(|k| k.from_road == from && k.to_road == *rid).map(|k| k.right_of_way)
+                g.connections
+                    .iter()
+                    .find(|k| k.from_road == from && k.to_road == *rid)
+                    .map(|k| k.right_of_way)
             };
             out.push(MergeSummary {
                 junction: j.to_string(),
@@ -103,7 +129,17 @@ mod tests {
         let raw = highway();
         let s = simplify(&raw, &SimplifyOptions::default()).unwrap();
         let names: Vec<&str> = s.steps.iter().map(|r| r.step.as_str()).collect();
-        assert_eq!(names, ["pick_route", "keep_feeders", "drop_diverges", "prune", "collapse_lanes", "join_chains"]);
+        assert_eq!(
+            names,
+            [
+                "pick_route",
+                "keep_feeders",
+                "drop_diverges",
+                "prune",
+                "collapse_lanes",
+                "join_chains"
+            ]
+        );
         assert!(s.graph.invariant_violations().is_empty());
         assert!(s.graph.roads.iter().all(|r| r.lanes.len() == 1));
         // Main road R0+R1 (joint J1 gone) and R4+R8+R7: the bent collector R8 is longer than R6, so the longest
@@ -117,12 +153,22 @@ mod tests {
         assert_eq!((m.junction.as_str(), m.osm_node), ("J2", Some(1002)));
         let len = |i| raw.road(RoadId(i)).unwrap().length_m;
         let after = len(4) + len(8) + len(7);
-        assert!(close(m.main_before_m, 1500.0) && close(m.merge_m, len(2) + len(3)) && close(m.main_after_m, after), "{m:?}");
+        assert!(
+            close(m.main_before_m, 1500.0)
+                && close(m.merge_m, len(2) + len(3))
+                && close(m.main_after_m, after),
+            "{m:?}"
+        );
         assert!(s.graph.road(RoadId(6)).is_none());
         // Joined roads keep every piece's provenance and say which steps made them.
         let main0 = s.graph.road(RoadId(0)).unwrap();
         assert_eq!(main0.provenance.osm_ways, vec![500, 501]);
-        assert!(main0.provenance.made_by.contains(&"join_chains".to_string()));
+        assert!(
+            main0
+                .provenance
+                .made_by
+                .contains(&"join_chains".to_string())
+        );
         // The roles read back from the graph alone.
         assert_eq!(CorridorRoles::of(&s.graph).unwrap(), s.roles);
     }
@@ -130,7 +176,11 @@ mod tests {
     #[test]
     fn via_pins_the_route_and_exits_can_be_kept() {
         let raw = highway();
-        let opts = SimplifyOptions { via: vec!["osm-way:506".into()], keep_exits: true, ..Default::default() };
+        let opts = SimplifyOptions {
+            via: vec!["osm-way:506".into()],
+            keep_exits: true,
+            ..Default::default()
+        };
         let s = simplify(&raw, &opts).unwrap();
         // Pinned through the shorter R6: the collector R8 leaves and rejoins the route (dropped); R5 is kept as an
         // exit, so J5 stays a diverge and the main road is R0+R1, R4, R6+R7.
@@ -138,15 +188,30 @@ mod tests {
         assert_eq!(s.roles.main, vec![RoadId(0), RoadId(4), RoadId(6)]);
         assert_eq!(s.roles.exits, vec![vec![RoadId(5)]]);
         assert_eq!(s.steps[2].step, "keep_exits");
-        let err = simplify(&raw, &SimplifyOptions { via: vec!["osm-way:42".into()], ..Default::default() });
+        let err = simplify(
+            &raw,
+            &SimplifyOptions {
+                via: vec!["osm-way:42".into()],
+                ..Default::default()
+            },
+        );
         assert!(err.unwrap_err().to_string().contains("osm-way:42"));
-        let err = simplify(&raw, &SimplifyOptions { via: vec!["osm:42".into()], ..Default::default() });
+        let err = simplify(
+            &raw,
+            &SimplifyOptions {
+                via: vec!["osm:42".into()],
+                ..Default::default()
+            },
+        );
         assert!(err.unwrap_err().to_string().contains("osm:42"));
     }
 
     #[test]
     fn feeder_length_trims_the_merging_road() {
-        let opts = SimplifyOptions { feeder_length_m: Some(120.0), ..Default::default() };
+        let opts = SimplifyOptions {
+            feeder_length_m: Some(120.0),
+            ..Default::default()
+        };
         let s = simplify(&highway(), &opts).unwrap();
         assert_eq!(s.steps.last().unwrap().step, "trim_feeders");
         let m = &corridor_merges(&s.graph, &s.roles)[0];
@@ -160,13 +225,23 @@ mod tests {
         let opts = SimplifyOptions::default();
         let steps = crate::transform::simplify_steps(&opts);
         crate::transform::run_steps(&mut c, &steps, &opts).unwrap();
-        let before = (Corridor::chain_length_m(&c.graph, &c.main), vec![Corridor::chain_length_m(&c.graph, &c.feeders[0])]);
+        let before = (
+            Corridor::chain_length_m(&c.graph, &c.main),
+            vec![Corridor::chain_length_m(&c.graph, &c.feeders[0])],
+        );
         c.graph.roads[0].length_m += 5.0;
-        let err = crate::transform::check(&c, "broken", Some(&before)).unwrap_err().to_string();
-        assert!(err.contains("broken") && err.contains("main road's length"), "{err}");
+        let err = crate::transform::check(&c, "broken", Some(&before))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("broken") && err.contains("main road's length"),
+            "{err}"
+        );
         let lane = c.graph.roads[1].lanes[0].clone();
         c.graph.roads[1].lanes.push(lane);
-        let err = crate::transform::check(&c, "broken", None).unwrap_err().to_string();
+        let err = crate::transform::check(&c, "broken", None)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("2 lanes"), "{err}");
     }
 }
@@ -177,16 +252,23 @@ mod real_map_tests {
     use super::*;
     use std::path::Path;
 
-    pub(crate) const PAPER_VIA: [&str; 3] = ["osm-way:59440544", "osm-way:8667198", "osm-way:8708084"];
+    pub(crate) const PAPER_VIA: [&str; 3] =
+        ["osm-way:59440544", "osm-way:8667198", "osm-way:8708084"];
 
     #[test]
     fn i696_paper_route_gives_the_papers_merge() {
         let map = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../maps/i696.osm");
         let raw = mapc_import::import_path(&map, &mapc_import::ImportOptions::default()).unwrap();
-        let opts = SimplifyOptions { via: PAPER_VIA.map(String::from).to_vec(), ..Default::default() };
+        let opts = SimplifyOptions {
+            via: PAPER_VIA.map(String::from).to_vec(),
+            ..Default::default()
+        };
         let s = simplify(&raw, &opts).unwrap();
         let merges = corridor_merges(&s.graph, &s.roles);
-        let m = merges.iter().find(|m| m.osm_node == Some(61862553)).expect("the I-696 merge is on the corridor");
+        let m = merges
+            .iter()
+            .find(|m| m.osm_node == Some(61862553))
+            .expect("the I-696 merge is on the corridor");
         // The importer's ellipsoidal lengths run ~0.1-0.25% above a spherical estimate (3187 / 2434 / 5034 m).
         assert!((m.main_before_m - 3187.0).abs() < 20.0, "{m:?}");
         assert!((m.merge_m - 2434.0).abs() < 15.0, "{m:?}");

@@ -6,7 +6,7 @@
 //! ([`crate::transform::cut_road`]) unless an existing junction lies within [`SNAP_M`] of the point.
 
 use crate::transform::{self, CorridorRoles, TransformError, pick_route::describe_junction};
-use crate::{Control, Flow, NetworkSpec, ResolvedScenario, Scenario, SCENARIO_VERSION, WindowInfo};
+use crate::{Control, Flow, NetworkSpec, ResolvedScenario, SCENARIO_VERSION, Scenario, WindowInfo};
 use mapc_graph::{JunctionId, JunctionKind, LaneGraph, RoadId};
 use serde::Serialize;
 use std::collections::HashSet;
@@ -42,7 +42,9 @@ fn chain_back(g: &LaneGraph, road: RoadId) -> Vec<RoadId> {
 fn chain_forward(g: &LaneGraph, road: RoadId) -> Vec<RoadId> {
     let mut chain = vec![road];
     loop {
-        let j = g.junction(g.road(*chain.last().unwrap()).unwrap().to).unwrap();
+        let j = g
+            .junction(g.road(*chain.last().unwrap()).unwrap().to)
+            .unwrap();
         if j.incoming.len() != 1 || j.outgoing.len() != 1 || chain.contains(&j.outgoing[0]) {
             return chain;
         }
@@ -59,7 +61,11 @@ impl SourceShape {
     /// (the one that is not the ramp), the merging road the other.
     pub fn of(source: &ResolvedScenario) -> Result<SourceShape, TransformError> {
         let g = &source.graph;
-        let merges: Vec<_> = g.junctions.iter().filter(|j| j.kind == JunctionKind::Merge).collect();
+        let merges: Vec<_> = g
+            .junctions
+            .iter()
+            .filter(|j| j.kind == JunctionKind::Merge)
+            .collect();
         if merges.len() != 1 {
             return Err(TransformError::NotACorridor(format!(
                 "{}: a window matches a scenario with one merge, this one has {}",
@@ -104,8 +110,13 @@ pub struct WindowCut {
 
 impl WindowCut {
     pub fn region(&self) -> Vec<RoadId> {
-        let mut r: Vec<RoadId> =
-            self.upstream_roads.iter().chain(&self.merge_roads).chain(&self.downstream_roads).copied().collect();
+        let mut r: Vec<RoadId> = self
+            .upstream_roads
+            .iter()
+            .chain(&self.merge_roads)
+            .chain(&self.downstream_roads)
+            .copied()
+            .collect();
         r.sort();
         r
     }
@@ -131,7 +142,11 @@ fn boundary_upstream(g: &LaneGraph, chain: &[RoadId], distance: f64) -> Option<B
         }
         if acc + len + SNAP_M >= distance {
             let offset = acc + len - distance;
-            return Some(if offset <= SNAP_M { Boundary::AtStartOf(k) } else { Boundary::Inside(k, offset) });
+            return Some(if offset <= SNAP_M {
+                Boundary::AtStartOf(k)
+            } else {
+                Boundary::Inside(k, offset)
+            });
         }
         acc += len;
     }
@@ -148,7 +163,11 @@ fn boundary_downstream(g: &LaneGraph, chain: &[RoadId], distance: f64) -> Option
         }
         if acc + len + SNAP_M >= distance {
             let offset = distance - acc;
-            return Some(if len - offset <= SNAP_M { Boundary::AtEndOf(k) } else { Boundary::Inside(k, offset) });
+            return Some(if len - offset <= SNAP_M {
+                Boundary::AtEndOf(k)
+            } else {
+                Boundary::Inside(k, offset)
+            });
         }
         acc += len;
     }
@@ -161,26 +180,47 @@ fn merge_list(g: &LaneGraph, roles: &CorridorRoles) -> String {
         .iter()
         .map(|m| match m.osm_node {
             Some(n) => format!("{} (osm:{n})", m.junction),
-            None => m.sumo_id.as_ref().map_or(m.junction.clone(), |s| format!("{} ({s})", m.junction)),
+            None => m
+                .sumo_id
+                .as_ref()
+                .map_or(m.junction.clone(), |s| format!("{} ({s})", m.junction)),
         })
         .collect();
-    if list.is_empty() { "none".into() } else { list.join(", ") }
+    if list.is_empty() {
+        "none".into()
+    } else {
+        list.join(", ")
+    }
 }
 
 /// Cut the window around merge `junction` (any id `find_junction` takes) of a corridor graph.
-pub fn cut_window(corridor: &LaneGraph, junction: &str, shape: &SourceShape) -> Result<WindowCut, TransformError> {
+pub fn cut_window(
+    corridor: &LaneGraph,
+    junction: &str,
+    shape: &SourceShape,
+) -> Result<WindowCut, TransformError> {
     let mut g = corridor.clone();
     let roles = CorridorRoles::of(&g)?;
-    let j = g.find_junction(junction).map_err(|e| TransformError::NotACorridor(format!("--junction: {e}")))?;
+    let j = g
+        .find_junction(junction)
+        .map_err(|e| TransformError::NotACorridor(format!("--junction: {e}")))?;
     let name = describe_junction(&g, j);
-    let Some(i) = roles.main.iter().position(|r| g.road(*r).unwrap().from == j).filter(|i| *i > 0) else {
+    let Some(i) = roles
+        .main
+        .iter()
+        .position(|r| g.road(*r).unwrap().from == j)
+        .filter(|i| *i > 0)
+    else {
         return Err(TransformError::NotACorridor(format!(
             "{name} is not inside the corridor's main road; merges on this corridor: {}",
             merge_list(&g, &roles)
         )));
     };
-    let feeders: Vec<&Vec<RoadId>> =
-        roles.feeders.iter().filter(|f| g.road(*f.last().unwrap()).unwrap().to == j).collect();
+    let feeders: Vec<&Vec<RoadId>> = roles
+        .feeders
+        .iter()
+        .filter(|f| g.road(*f.last().unwrap()).unwrap().to == j)
+        .collect();
     if feeders.len() != 1 {
         let kind = g.junction(j).unwrap().kind;
         return Err(TransformError::NotACorridor(format!(
@@ -205,30 +245,55 @@ pub fn cut_window(corridor: &LaneGraph, junction: &str, shape: &SourceShape) -> 
     let down = boundary_downstream(&g, &after, shape.downstream_m)
         .ok_or_else(|| short("the main road after", sum(&g, &after), shape.downstream_m))?;
     let mut notes = Vec::new();
-    for (what, chain, b) in [("upstream", &before, up), ("merging road", &feeder, mb), ("downstream", &after, down)] {
+    for (what, chain, b) in [
+        ("upstream", &before, up),
+        ("merging road", &feeder, mb),
+        ("downstream", &after, down),
+    ] {
         match b {
             Boundary::Inside(k, offset) => {
                 let (_, _, nj) = transform::cut_road(&mut g, chain[k], offset)?;
-                notes.push(format!("{what}: cut road {} at {offset:.2} m from its start (new junction {nj})", chain[k]));
+                notes.push(format!(
+                    "{what}: cut road {} at {offset:.2} m from its start (new junction {nj})",
+                    chain[k]
+                ));
             }
             Boundary::AtStartOf(k) => {
                 let at = g.road(chain[k]).unwrap().from;
-                notes.push(format!("{what}: boundary at junction {}", describe_junction(&g, at)));
+                notes.push(format!(
+                    "{what}: boundary at junction {}",
+                    describe_junction(&g, at)
+                ));
             }
             Boundary::AtEndOf(k) => {
                 let at = g.road(chain[k]).unwrap().to;
-                notes.push(format!("{what}: boundary at junction {}", describe_junction(&g, at)));
+                notes.push(format!(
+                    "{what}: boundary at junction {}",
+                    describe_junction(&g, at)
+                ));
             }
         }
     }
     let problems = g.invariant_violations();
     if !problems.is_empty() {
-        return Err(TransformError::Invariant { step: transform::CUT_AT.into(), violations: problems });
+        return Err(TransformError::Invariant {
+            step: transform::CUT_AT.into(),
+            violations: problems,
+        });
     }
     // Read the roles again (cut pieces carry their road's role) and collect the roads within the boundaries.
     let roles = CorridorRoles::of(&g)?;
-    let i = roles.main.iter().position(|r| g.road(*r).unwrap().from == j).unwrap();
-    let feeder = roles.feeders.iter().find(|f| g.road(*f.last().unwrap()).unwrap().to == j).unwrap().clone();
+    let i = roles
+        .main
+        .iter()
+        .position(|r| g.road(*r).unwrap().from == j)
+        .unwrap();
+    let feeder = roles
+        .feeders
+        .iter()
+        .find(|f| g.road(*f.last().unwrap()).unwrap().to == j)
+        .unwrap()
+        .clone();
     let take_back = |chain: &[RoadId], limit: f64| -> Vec<RoadId> {
         let mut acc = 0.0;
         let mut out = Vec::new();
@@ -320,15 +385,31 @@ pub fn window_scenario(
         roles.push(role);
     }
     for (f, role) in s.flows.iter().zip(roles) {
-        let wanted = if role == 0 { demand.main_vph } else { demand.merge_vph };
+        let wanted = if role == 0 {
+            demand.main_vph
+        } else {
+            demand.merge_vph
+        };
         let vph = match wanted {
             Some(total) if totals[role] > 0.0 => f.vehs_per_hour * total / totals[role],
             _ => f.vehs_per_hour,
         };
-        let entry = if role == 0 { cut.main_entry } else { cut.merge_entry };
-        flows.push(Flow { from: entry.to_string(), to: None, vehs_per_hour: vph, ..f.clone() });
+        let entry = if role == 0 {
+            cut.main_entry
+        } else {
+            cut.merge_entry
+        };
+        flows.push(Flow {
+            from: entry.to_string(),
+            to: None,
+            vehs_per_hour: vph,
+            ..f.clone()
+        });
     }
-    let n_av = demand.n_av.or(s.control.as_ref().map(|c| c.n_av)).unwrap_or(0);
+    let n_av = demand
+        .n_av
+        .or(s.control.as_ref().map(|c| c.n_av))
+        .unwrap_or(0);
     let junction = cut.graph.junction(cut.junction).unwrap();
     let junction_name = junction
         .provenance
@@ -337,7 +418,11 @@ pub fn window_scenario(
         .map(|n| format!("osm:{n}"))
         .or_else(|| junction.provenance.sumo_ids.first().cloned())
         .unwrap_or_else(|| cut.junction.to_string());
-    let matched_to = source.origin.strip_prefix("builtin:").unwrap_or(&source.origin).to_string();
+    let matched_to = source
+        .origin
+        .strip_prefix("builtin:")
+        .unwrap_or(&source.origin)
+        .to_string();
     Ok(Scenario {
         version: SCENARIO_VERSION,
         name: name.to_string(),
@@ -376,16 +461,23 @@ mod tests {
     use proptest::prelude::*;
 
     fn corridor() -> LaneGraph {
-        simplify(&highway(), &SimplifyOptions::default()).unwrap().graph
+        simplify(&highway(), &SimplifyOptions::default())
+            .unwrap()
+            .graph
     }
 
     #[test]
     fn simple_merge_shape_is_600_200_100() {
         let source = ResolvedScenario::load("simple_merge").unwrap();
         let shape = SourceShape::of(&source).unwrap();
-        assert_eq!((shape.upstream_m, shape.merge_m, shape.downstream_m), (600.0, 200.0, 100.0));
+        assert_eq!(
+            (shape.upstream_m, shape.merge_m, shape.downstream_m),
+            (600.0, 200.0, 100.0)
+        );
         let names = |rs: &[RoadId]| -> Vec<String> {
-            rs.iter().map(|r| source.graph.road(*r).unwrap().name.clone().unwrap()).collect()
+            rs.iter()
+                .map(|r| source.graph.road(*r).unwrap().name.clone().unwrap())
+                .collect()
         };
         assert_eq!(names(&shape.main_roads), ["inflow_highway", "left"]);
         assert_eq!(names(&shape.merge_roads), ["inflow_merge", "bottom"]);
@@ -405,14 +497,34 @@ mod tests {
         // Three cuts: three new roads above the largest id, three new through junctions.
         assert_eq!(cut.graph.roads.len(), g.roads.len() + 3);
         assert_eq!(cut.main_entry, RoadId(0));
-        let scenario = window_scenario(&cut, &source, &shape, "w", "w.graph.json", &DemandOverride::default()).unwrap();
-        let flows: Vec<(&str, f64)> = scenario.flows.iter().map(|f| (f.from.as_str(), f.vehs_per_hour)).collect();
-        assert_eq!(flows, [("R0", 1800.0), ("R0", 200.0), (cut.merge_entry.to_string().as_str(), 200.0)]);
+        let scenario = window_scenario(
+            &cut,
+            &source,
+            &shape,
+            "w",
+            "w.graph.json",
+            &DemandOverride::default(),
+        )
+        .unwrap();
+        let flows: Vec<(&str, f64)> = scenario
+            .flows
+            .iter()
+            .map(|f| (f.from.as_str(), f.vehs_per_hour))
+            .collect();
+        assert_eq!(
+            flows,
+            [
+                ("R0", 1800.0),
+                ("R0", 200.0),
+                (cut.merge_entry.to_string().as_str(), 200.0)
+            ]
+        );
         let control = scenario.control.as_ref().unwrap();
         assert_eq!(control.n_av, 5);
         assert_eq!(control.region.len(), cut.region().len());
         // The scenario comes back from TOML exactly, and resolves against its graph.
-        let back = Scenario::from_toml(&scenario.to_toml(), std::path::Path::new("w.toml")).unwrap();
+        let back =
+            Scenario::from_toml(&scenario.to_toml(), std::path::Path::new("w.toml")).unwrap();
         assert_eq!(back, scenario);
         let dir = std::env::temp_dir().join(format!("mapc-window-test-{}", std::process::id()));
         cut.graph.save(&dir.join("w.graph.json")).unwrap();
@@ -428,13 +540,19 @@ mod tests {
         let mut shape = SourceShape::of(&source).unwrap();
         shape.upstream_m = 1600.0;
         let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
-        assert!(err.contains("main road before J2") && err.contains("100.0 m short"), "{err}");
+        assert!(
+            err.contains("main road before J2") && err.contains("100.0 m short"),
+            "{err}"
+        );
         shape.upstream_m = 600.0;
         shape.merge_m = 2000.0;
         let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
         assert!(err.contains("merging road into J2"), "{err}");
         let err = cut_window(&g, "J0", &shape).unwrap_err().to_string();
-        assert!(err.contains("not inside the corridor's main road") && err.contains("J2 (osm:1002)"), "{err}");
+        assert!(
+            err.contains("not inside the corridor's main road") && err.contains("J2 (osm:1002)"),
+            "{err}"
+        );
         let err = cut_window(&g, "osm:77", &shape).unwrap_err().to_string();
         assert!(err.contains("osm:77"), "{err}");
     }
@@ -447,7 +565,11 @@ mod tests {
         shape.upstream_m = 1499.8; // the corridor's start is 1500 m before the merge
         let cut = cut_window(&g, "J2", &shape).unwrap();
         assert_eq!(cut.upstream_m, 1500.0);
-        assert!(cut.notes[0].contains("boundary at junction J0"), "{:?}", cut.notes);
+        assert!(
+            cut.notes[0].contains("boundary at junction J0"),
+            "{:?}",
+            cut.notes
+        );
     }
 
     proptest! {

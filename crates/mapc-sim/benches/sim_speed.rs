@@ -33,6 +33,27 @@ fn main() {
         steps += m.steps;
     }
     let wall = start.elapsed().as_secs_f64();
+    if profile {
+        // a fingerprint of the results, to compare builds bit for bit
+        let mut fp = 0xcbf2_9ce4_8422_2325u64;
+        for seed in 0..seeds {
+            let m = Simulation::from_spec(spec.clone(), seed)
+                .unwrap()
+                .run()
+                .unwrap();
+            for x in [
+                m.outflow_veh_h,
+                m.inflow_veh_h,
+                m.avg_speed_mps,
+                m.mean_travel_time_s,
+                m.mean_delay_s,
+            ] {
+                fp = (fp ^ x.to_bits()).wrapping_mul(0x0000_0100_0000_01b3);
+            }
+            fp = (fp ^ m.vehicle_steps).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        println!("{}: results fingerprint {fp:#018x}", rs.origin);
+    }
     println!(
         "{}: one core: {seeds} seeds in {wall:.3} s: {:.3e} vehicle-steps/s, {:.0} steps/s, {:.1} vehicles on average",
         rs.origin,

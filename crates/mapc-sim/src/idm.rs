@@ -97,6 +97,7 @@ impl IdmParams {
     /// SUMO's `MSCFModel_IDM::_v`: the speed after one step behind a leader at bumper gap `gap` driving at
     /// `leader_speed`, integrating IDM's acceleration in `iterations` sub-steps (the gap shrinks between sub-steps;
     /// the leader is assumed to keep its speed). `respect_min_gap` adds s0 to both the gap and the desired gap.
+    #[inline]
     pub fn next_speed(
         &self,
         gap: f64,
@@ -105,7 +106,62 @@ impl IdmParams {
         desired_speed: f64,
         respect_min_gap: bool,
     ) -> f64 {
-        let n = self.iterations as f64;
+        // The common sub-step counts get a loop the compiler unrolls, with the division by the count (a power of
+        // two) done as the multiplication by its exact reciprocal: the same bits, without a division.
+        match self.iterations {
+            2 => self.next_speed_sub::<2>(gap, speed, leader_speed, desired_speed, respect_min_gap),
+            1 => self.next_speed_sub::<1>(gap, speed, leader_speed, desired_speed, respect_min_gap),
+            4 => self.next_speed_sub::<4>(gap, speed, leader_speed, desired_speed, respect_min_gap),
+            n => {
+                let n_f = n as f64;
+                self.next_speed_with(
+                    n,
+                    |x| x / n_f,
+                    gap,
+                    speed,
+                    leader_speed,
+                    desired_speed,
+                    respect_min_gap,
+                )
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn next_speed_sub<const N: u32>(
+        &self,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+        respect_min_gap: bool,
+    ) -> f64 {
+        const { assert!(N.is_power_of_two()) };
+        let inv_n = 1.0 / N as f64;
+        self.next_speed_with(
+            N,
+            |x| x * inv_n,
+            gap,
+            speed,
+            leader_speed,
+            desired_speed,
+            respect_min_gap,
+        )
+    }
+
+    /// The IDM sub-step loop; `per_sub_step(x)` is `x / iterations`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn next_speed_with(
+        &self,
+        iterations: u32,
+        per_sub_step: impl Fn(f64) -> f64,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+        respect_min_gap: bool,
+    ) -> f64 {
         let two_sqrt_ab = self.two_sqrt_ab();
         let des = desired_speed.max(NUMERICAL_EPS);
         let mut v = speed;
@@ -114,7 +170,7 @@ impl IdmParams {
         } else {
             gap
         };
-        for _ in 0..self.iterations {
+        for _ in 0..iterations {
             let dv = v - leader_speed;
             let mut s = (v * self.tau + v * dv / two_sqrt_ab).max(0.0);
             if respect_min_gap {
@@ -122,8 +178,8 @@ impl IdmParams {
             }
             g = g.max(NUMERICAL_EPS);
             let acc = self.accel * (1.0 - self.speed_ratio_pow(v / des) - (s * s) / (g * g));
-            v = (v + acc * self.dt / n).max(0.0);
-            g -= ((v - leader_speed) * self.dt / n).max(0.0);
+            v = (v + per_sub_step(acc * self.dt)).max(0.0);
+            g -= per_sub_step((v - leader_speed) * self.dt).max(0.0);
         }
         v.max(0.0)
     }
@@ -262,11 +318,92 @@ mod tests {
         IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, 0.5)
     }
 
+    /// `next_speed` as first written (a division by the sub-step count every time).
+    fn next_speed_reference(
+        p: &IdmParams,
+        gap: f64,
+        speed: f64,
+        leader: f64,
+        des: f64,
+        mg: bool,
+    ) -> f64 {
+        let n = p.iterations as f64;
+        let two_sqrt_ab = 2.0 * (p.accel * p.decel).sqrt();
+        let des = des.max(NUMERICAL_EPS);
+        let mut v = speed;
+        let mut g = if mg { gap + p.min_gap } else { gap };
+        for _ in 0..p.iterations {
+            let dv = v - leader;
+            let mut s = (v * p.tau + v * dv / two_sqrt_ab).max(0.0);
+            if mg {
+                s += p.min_gap;
+            }
+            g = g.max(NUMERICAL_EPS);
+            let acc = p.accel * (1.0 - p.speed_ratio_pow(v / des) - (s * s) / (g * g));
+            v = (v + acc * p.dt / n).max(0.0);
+            g -= ((v - leader) * p.dt / n).max(0.0);
+        }
+        v.max(0.0)
+    }
+
+    #[test]
+    fn next_speed_is_bit_identical_to_the_reference() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut unit = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for dt in [0.1, 0.5, 0.75, 1.0, 1.5, 2.0] {
+            let p = IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, dt);
+            for _ in 0..20_000 {
+                let (gap, v, l, des) = (
+                    unit() * 200.0 - 5.0,
+                    unit() * 35.0,
+                    unit() * 35.0,
+                    unit() * 40.0,
+                );
+                for mg in [false, true] {
+                    assert_eq!(
+                        p.next_speed(gap, v, l, des, mg).to_bits(),
+                        next_speed_reference(&p, gap, v, l, des, mg).to_bits(),
+                        "dt {dt} gap {gap} v {v} l {l} des {des}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn floor_exact_is_floor_bit_for_bit() {
-        let mut xs = vec![0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5, 2.0 - 1e-16, 4.4e15, -4.4e15, 1e300, -1e300];
-        xs.extend([f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::MIN_POSITIVE, -f64::MIN_POSITIVE]);
-        xs.extend([4_503_599_627_370_495.5, -4_503_599_627_370_495.5, 4_503_599_627_370_496.0]);
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1.5,
+            -1.5,
+            2.0 - 1e-16,
+            4.4e15,
+            -4.4e15,
+            1e300,
+            -1e300,
+        ];
+        xs.extend([
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+        ]);
+        xs.extend([
+            4_503_599_627_370_495.5,
+            -4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+        ]);
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         for _ in 0..100_000 {
             state ^= state << 13;

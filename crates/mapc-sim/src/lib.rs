@@ -36,6 +36,9 @@
 //! let runs = run_baseline(&resolved, &(0..100).collect::<Vec<u64>>())?; // rayon, seed order
 //! let s = Summary::of(&runs);                             // mean and Student-t 95% CI per metric
 //! ```
+//! Results are pinned bit for bit (policies are trained on them): the test
+//! `results_are_bit_identical_to_the_recorded_ones` holds recorded metrics and state hashes; speed work must keep
+//! every floating-point operation and its order (docs/perf_sim.md).
 //! Time: `time_s()` is SUMO's clock (step 0 starts at the spec's `start_time_s`), `step_index()` counts steps.
 //! Accelerations are clamped to [-decel, accel] and the resulting speed is capped by the safe speed, including
 //! waiting at a minor link when a major vehicle has the right of way (SUMO's speed mode 9).

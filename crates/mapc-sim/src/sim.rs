@@ -186,6 +186,27 @@ struct TypeConsts {
     impatience: f64,
     /// Highest arrival speed at a minor link from the foe visibility point (a function of the type only).
     max_arrival_from_visibility: f64,
+    /// 1 / (2 decel), for [`TypeConsts::brake_gap_above`].
+    inv_two_decel: f64,
+}
+
+impl TypeConsts {
+    /// A bound strictly above `IdmParams::brake_gap(speed, decel, headway)` as computed in floating point: the
+    /// Euler sum is a right Riemann sum of the continuous stop, so it never exceeds v^2 / 2b + v headway; the
+    /// margin lies far above rounding. Infinite (no shortcut) where that does not apply. Comparisons against it
+    /// decide the far cases without the exact gap, which is computed only when the bound cannot decide.
+    #[inline]
+    fn brake_gap_above(&self, speed: f64, headway: f64) -> f64 {
+        if speed >= 0.0
+            && headway >= 0.0
+            && self.inv_two_decel > 0.0
+            && self.inv_two_decel.is_finite()
+        {
+            (speed * speed * self.inv_two_decel + speed * headway) * (1.0 + 1e-9) + 1e-6
+        } else {
+            f64::INFINITY
+        }
+    }
 }
 
 #[derive(Clone, Debug, Default)]
@@ -260,6 +281,7 @@ impl Simulation {
                 .map(|(t, p)| TypeConsts {
                     max_speed: t.max_speed,
                     impatience: t.impatience,
+                    inv_two_decel: 0.5 / p.decel,
                     max_arrival_from_visibility: IdmParams::speed_after_distance(
                         FOE_VISIBILITY_M,
                         p.maximum_safe_stop_speed(FOE_VISIBILITY_M, 0.0),
@@ -838,7 +860,7 @@ impl Simulation {
 
     fn desired_speed(&self, v: &Veh, lane: LaneIdx) -> f64 {
         (self.net.lanes[lane as usize].speed_limit * v.speed_factor)
-            .min(self.spec.vehicle_types[v.vtype as usize].max_speed)
+            .min(self.type_consts[v.vtype as usize].max_speed)
     }
 
     /// Calls `f(leader, gap)` for every vehicle the ego must follow within `max_dist` (gap: bumper to bumper).
@@ -938,6 +960,8 @@ impl Simulation {
             return;
         };
         let ego_in_junction = self.veh[id as usize].lane == via;
+        // only a moving check or an ego inside the junction looks at foes still before their stop line
+        let check_from = guard || ego_in_junction;
         for &foe in &self.net.links[link as usize].foes {
             let fl = &self.net.links[foe as usize];
             let flen = self.net.lanes[fl.via_lane as usize].length;
@@ -947,6 +971,9 @@ impl Simulation {
                 if d < dist_to_merge {
                     f(o, dist_to_merge - d - ov.length);
                 }
+            }
+            if !check_from {
+                continue;
             }
             if let Some(&o) = self.lane_veh[fl.from_lane as usize].first() {
                 let ov = &self.veh[o as usize];
@@ -1012,7 +1039,18 @@ impl Simulation {
         let des_cur = self.desired_speed(v, v.lane);
         let max_next = (speed + p.accel * dt).min(tc.max_speed);
         let mut vv = max_next.min(des_cur);
-        let lookahead = max_next * dt + p.brake_gap(max_next, p.decel, p.tau) + v.length;
+        // `lookahead` is exact; it is computed only when `lookahead_above` (a bound above it) cannot decide
+        let lookahead_above = max_next * dt + tc.brake_gap_above(max_next, p.tau) + v.length;
+        let mut lookahead = f64::NAN;
+        let mut beyond_lookahead = |x: f64, extra: f64| {
+            if x > lookahead_above + extra {
+                return true;
+            }
+            if lookahead.is_nan() {
+                lookahead = max_next * dt + p.brake_gap(max_next, p.decel, p.tau) + v.length;
+            }
+            x > lookahead + extra
+        };
         let r = &self.routes[v.route as usize];
         let cur = &self.net.lanes[v.lane as usize];
 
@@ -1079,6 +1117,7 @@ impl Simulation {
             };
             let lk = &self.net.links[link as usize];
             let via_lane = &self.net.lanes[via as usize];
+            let via_max = self.desired_speed(v, via);
             // vehicles already inside the junction on merging connections lead us
             if !lk.foes.is_empty()
                 && k == v.route_pos as usize
@@ -1102,10 +1141,14 @@ impl Simulation {
                 let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).max(0.0);
                 let mut arrival_speed = v_link_pass_est;
                 if !lk.major && seen >= FOE_VISIBILITY_M && {
-                    if plan.stop_brake_gap.is_nan() {
-                        plan.stop_brake_gap = p.brake_gap(speed, p.decel, 0.0);
+                    if seen > tc.brake_gap_above(speed, 0.0) {
+                        true
+                    } else {
+                        if plan.stop_brake_gap.is_nan() {
+                            plan.stop_brake_gap = p.brake_gap(speed, p.decel, 0.0);
+                        }
+                        plan.stop_brake_gap < seen
                     }
-                    plan.stop_brake_gap < seen
                 } {
                     arrival_speed = arrival_speed.min(tc.max_arrival_from_visibility);
                     slowed_for_minor = true;
@@ -1113,7 +1156,8 @@ impl Simulation {
                 let arrival_time = self.time_s + p.minimal_arrival_time(seen, vv, arrival_speed);
                 let mut arrival_speed_braking = 0.0;
                 let mut arrival_time_braking = arrival_time + BRAKING_ARRIVAL_DELAY_S;
-                if seen < p.brake_gap(vv, p.decel, p.tau) {
+                // the bound decides the far case without the exact gap
+                if seen < tc.brake_gap_above(vv, p.tau) && seen < p.brake_gap(vv, p.decel, p.tau) {
                     arrival_speed_braking = if seen < vv * dt {
                         arrival_speed
                     } else {
@@ -1124,7 +1168,6 @@ impl Simulation {
                             + seen / ((vv + arrival_speed_braking) * 0.5).max(NUMERICAL_EPS),
                     );
                 }
-                let via_max = self.desired_speed(v, via);
                 let leave_speed = via_max.min(IdmParams::speed_after_distance(
                     via_lane.length,
                     arrival_speed,
@@ -1149,11 +1192,10 @@ impl Simulation {
                 };
                 plan.n_items += 1;
             }
-            if seen > lookahead || items_full {
+            if items_full || beyond_lookahead(seen, 0.0) {
                 break;
             }
             // enter the connection: its speed limit and the vehicles on it
-            let via_max = self.desired_speed(v, via);
             if via_max < vv {
                 vv = vv.min(via_max.max(p.free_speed(speed, seen, via_max, des_cur)));
             }
@@ -1189,7 +1231,7 @@ impl Simulation {
                 IdmParams::speed_after_distance(next_lane.length, vv, p.accel).min(next_max);
             seen += next_lane.length;
             k += 1;
-            if seen > lookahead + next_lane.length {
+            if beyond_lookahead(seen, next_lane.length) {
                 break;
             }
         }
@@ -1219,21 +1261,20 @@ impl Simulation {
             return true;
         }
         let v = &self.veh[id as usize];
-        let t = &self.spec.vehicle_types[v.vtype as usize];
+        let tc = &self.type_consts[v.vtype as usize];
         // a driver who can no longer stop takes any gap
         let impatience = if can_brake {
-            (t.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0)
+            (tc.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0)
         } else {
             1.0
         };
-        let decel = t.decel;
+        // the spec's deceleration, which the IDM parameters carry unchanged
+        let decel = self.types[v.vtype as usize].decel;
         for &foe in &lk.foes {
             for a in &self.approaches[foe as usize] {
                 if a.veh == id || !a.will_pass {
                     continue;
                 }
-                let foe_arrival =
-                    (1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking;
                 if a.leave_time < it.arrival_time {
                     // ego would follow the foe
                     if it.arrival_time - a.leave_time < LINK_LOOKAHEAD_S
@@ -1241,7 +1282,10 @@ impl Simulation {
                     {
                         return false;
                     }
-                } else if foe_arrival > it.leave_time + LINK_LOOKAHEAD_S {
+                } else if (1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking
+                    > it.leave_time + LINK_LOOKAHEAD_S
+                {
+                    // (the left side is the foe's arrival as an impatient driver expects it)
                     // ego would lead the foe
                     if unsafe_merge_speeds(it.leave_speed, a.arrival_speed_braking, decel, a.decel)
                     {
@@ -1272,12 +1316,15 @@ impl Simulation {
                     if lk.major {
                         continue;
                     }
-                    let stop_brake_gap = if plan.stop_brake_gap.is_nan() {
-                        p.brake_gap(v.speed, p.decel, 0.0)
-                    } else {
-                        plan.stop_brake_gap
-                    };
-                    let can_brake = it.dist > stop_brake_gap || v.speed < p.decel * dt;
+                    let tc = &self.type_consts[v.vtype as usize];
+                    let can_brake = it.dist > tc.brake_gap_above(v.speed, 0.0)
+                        || it.dist
+                            > if plan.stop_brake_gap.is_nan() {
+                                p.brake_gap(v.speed, p.decel, 0.0)
+                            } else {
+                                plan.stop_brake_gap
+                            }
+                        || v.speed < p.decel * dt;
                     let opened = it.will_pass && self.link_opened(id, it, can_brake);
                     if !opened && (can_brake || !it.will_pass) {
                         let v_link_wait = it.v_link_pass.min(p.stop_speed(
@@ -1626,4 +1673,29 @@ fn unsafe_merge_speeds(
     follower_decel: f64,
 ) -> bool {
     leader_speed * leader_speed / leader_decel <= follower_speed * follower_speed / follower_decel
+}
+
+#[cfg(test)]
+mod bound_tests {
+    use super::*;
+
+    #[test]
+    fn brake_gap_bound_lies_above_the_exact_gap() {
+        for (decel, dt) in [(4.5, 0.5), (4.5, 0.1), (1.0, 1.0), (7.5, 0.2), (3.0, 2.0)] {
+            let p = IdmParams::new(2.6, decel, 9.0, 1.0, 2.5, 4.0, dt);
+            let tc = TypeConsts {
+                max_speed: 30.0,
+                impatience: 0.5,
+                max_arrival_from_visibility: 0.0,
+                inv_two_decel: 0.5 / p.decel,
+            };
+            for i in 0..200_000 {
+                let v = i as f64 * 0.000_37;
+                for h in [0.0, 1.0, 1.6] {
+                    let exact = p.brake_gap(v, p.decel, h);
+                    assert!(tc.brake_gap_above(v, h) > exact, "v {v} h {h}: {exact}");
+                }
+            }
+        }
+    }
 }

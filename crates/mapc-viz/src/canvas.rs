@@ -42,7 +42,11 @@ pub(crate) fn picture_kind(path: &Path) -> Result<PictureKind, VizError> {
 
 /// Draw `figure` into `out` (`.png` or `.svg`), `size` pixels, replacing any old file only once the new one is
 /// complete.
-pub(crate) fn draw_to_file(out: &Path, size: (u32, u32), figure: &impl Figure) -> Result<(), VizError> {
+pub(crate) fn draw_to_file(
+    out: &Path,
+    size: (u32, u32),
+    figure: &impl Figure,
+) -> Result<(), VizError> {
     let kind = picture_kind(out)?;
     let draw_err = |message: String| VizError::Draw {
         path: out.to_path_buf(),

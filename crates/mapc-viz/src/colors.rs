@@ -73,7 +73,11 @@ pub fn speed_color(t: f64) -> RGBColor {
         (0.75, [166.0, 217.0, 106.0]),
         (1.0, [0.0, 104.0, 55.0]),
     ];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     for w in STOPS.windows(2) {
         let ((t0, c0), (t1, c1)) = (w[0], w[1]);
         if t <= t1 {
@@ -116,9 +120,15 @@ mod tests {
 
     #[test]
     fn classes_get_distinct_colours_in_importance_order() {
-        let classes: Vec<String> = ["primary", "highway.motorway", "weird", "motorway_link", "other"]
-            .map(String::from)
-            .to_vec();
+        let classes: Vec<String> = [
+            "primary",
+            "highway.motorway",
+            "weird",
+            "motorway_link",
+            "other",
+        ]
+        .map(String::from)
+        .to_vec();
         let cc = class_colors(&classes);
         assert_eq!(cc[0].0, "highway.motorway");
         assert_eq!(cc[1].0, "motorway_link");

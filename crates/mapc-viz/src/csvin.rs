@@ -46,19 +46,30 @@ impl CsvInput {
 
     /// The indices of `names`, or an error listing every missing one and the header found.
     pub fn require(&self, names: &[&str]) -> Result<Vec<usize>, VizError> {
-        let missing: Vec<&str> = names.iter().copied().filter(|n| self.column(n).is_none()).collect();
+        let missing: Vec<&str> = names
+            .iter()
+            .copied()
+            .filter(|n| self.column(n).is_none())
+            .collect();
         if !missing.is_empty() {
             return Err(VizError::Input {
                 path: self.path.clone(),
                 message: format!(
                     "line 1: missing column{} {} (header is `{}`)",
                     if missing.len() > 1 { "s" } else { "" },
-                    missing.iter().map(|m| format!("`{m}`")).collect::<Vec<_>>().join(", "),
+                    missing
+                        .iter()
+                        .map(|m| format!("`{m}`"))
+                        .collect::<Vec<_>>()
+                        .join(", "),
                     self.headers.join(",")
                 ),
             });
         }
-        Ok(names.iter().map(|n| self.column(n).expect("checked above")).collect())
+        Ok(names
+            .iter()
+            .map(|n| self.column(n).expect("checked above"))
+            .collect())
     }
 
     /// Call `each` with every data row and its line number.
@@ -116,7 +127,13 @@ impl Fields {
     }
 
     /// Like [`Fields::number`] but the field must be there and finite.
-    pub fn required(&self, record: &csv::StringRecord, idx: usize, name: &str, line: u64) -> Result<f64, VizError> {
+    pub fn required(
+        &self,
+        record: &csv::StringRecord,
+        idx: usize,
+        name: &str,
+        line: u64,
+    ) -> Result<f64, VizError> {
         match self.number(record, idx, name, line)? {
             Some(v) if v.is_finite() => Ok(v),
             Some(v) => Err(self.error(line, name, format!("`{v}` is not a finite number"))),
@@ -125,7 +142,13 @@ impl Fields {
     }
 
     /// `true`/`false` (also `1`/`0`, any case; empty is false).
-    pub fn boolean(&self, record: &csv::StringRecord, idx: usize, name: &str, line: u64) -> Result<bool, VizError> {
+    pub fn boolean(
+        &self,
+        record: &csv::StringRecord,
+        idx: usize,
+        name: &str,
+        line: u64,
+    ) -> Result<bool, VizError> {
         let text = record.get(idx).unwrap_or("").trim();
         match text.to_ascii_lowercase().as_str() {
             "true" | "1" => Ok(true),
@@ -147,7 +170,9 @@ impl Fields {
 fn csv_error(path: &Path, e: csv::Error) -> VizError {
     let line = e.position().map(|p| p.line());
     let message = match e.kind() {
-        csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => {
             format!("{len} fields where the header has {expected_len}")
         }
         csv::ErrorKind::Utf8 { .. } => "not UTF-8 text".to_string(),

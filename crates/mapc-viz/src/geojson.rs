@@ -42,7 +42,12 @@ pub fn to_geojson(graph: &LaneGraph) -> (Value, [f64; 4]) {
             ],
         }
     };
-    let mut bbox = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut bbox = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     let mut grow = |c: [f64; 2]| {
         bbox = [
             bbox[0].min(c[0]),

@@ -10,7 +10,7 @@
 //!   (`time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled`).
 //! - **time-space diagram**: vehicle trajectories with time across and corridor position up, coloured by speed;
 //!   stop-and-go waves show as red bands running upstream ([`timespace`]).
-//! - **training log**: a run directory's `log.csv`, one row per PPO iteration; drawn as curves ([`training`]).
+//! - **training log**: a run directory's `progress.csv`, one row per PPO iteration; drawn as curves ([`training`]).
 //!
 //! The output kind follows the file name: `.png` is drawn on a bitmap, `.svg` as vector graphics. Every file is
 //! written atomically (a temporary file beside it, then a rename).
@@ -33,7 +33,10 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum VizError {
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: line {line}, column `{column}`: {message}")]
     Field {
         path: PathBuf,

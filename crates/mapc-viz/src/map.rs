@@ -50,7 +50,10 @@ impl Default for Highlight {
 
 impl Highlight {
     /// Highlight these roads (a transfer window) and label these junctions, on top of the merges.
-    pub fn window(roads: impl IntoIterator<Item = RoadId>, junctions: impl IntoIterator<Item = JunctionId>) -> Self {
+    pub fn window(
+        roads: impl IntoIterator<Item = RoadId>,
+        junctions: impl IntoIterator<Item = JunctionId>,
+    ) -> Self {
         Highlight {
             roads: roads.into_iter().collect(),
             junctions: junctions.into_iter().collect(),
@@ -100,7 +103,11 @@ pub struct MapRenderSummary {
 /// Draw `graph` into `out` (`.png` or `.svg`, chosen by the name) at the default size. The scenario tools call this
 /// to show a transfer window on its map: put the window's roads in `highlight.roads` and its merge in
 /// `highlight.junctions`.
-pub fn render_map(graph: &LaneGraph, highlight: &Highlight, out: &Path) -> Result<MapRenderSummary, VizError> {
+pub fn render_map(
+    graph: &LaneGraph,
+    highlight: &Highlight,
+    out: &Path,
+) -> Result<MapRenderSummary, VizError> {
     render_map_with(graph, highlight, &RenderOptions::default(), out)
 }
 
@@ -192,7 +199,8 @@ impl Layout {
         let plot_w = width.saturating_sub(2 * MARGIN + LEGEND_W).max(200);
         let aspect = (y1 - y0) / (x1 - x0);
         let max_plot_h = (1.5 * width as f64) as u32;
-        let plot_h = ((plot_w as f64 * aspect).round() as u32).clamp(min_plot_h.min(max_plot_h), max_plot_h);
+        let plot_h =
+            ((plot_w as f64 * aspect).round() as u32).clamp(min_plot_h.min(max_plot_h), max_plot_h);
         // Equal aspect: widen whichever extent is short of the box's shape, about the centre.
         let scale = (plot_w as f64 / (x1 - x0)).min(plot_h as f64 / (y1 - y0));
         let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
@@ -280,7 +288,12 @@ fn clip_segment(a: [f64; 2], b: [f64; 2], bx: [f64; 4]) -> Option<([f64; 2], [f6
             }
         }
     }
-    (t0 <= t1).then(|| ([a[0] + t0 * dx, a[1] + t0 * dy], [a[0] + t1 * dx, a[1] + t1 * dy]))
+    (t0 <= t1).then(|| {
+        (
+            [a[0] + t0 * dx, a[1] + t0 * dy],
+            [a[0] + t1 * dx, a[1] + t1 * dy],
+        )
+    })
 }
 
 /// The largest 1, 2 or 5 times a power of ten not above `x` (metres).
@@ -340,7 +353,10 @@ impl<'a> MapFigure<'a> {
     fn frame_note(&self) -> String {
         match self.graph.projection {
             Projection::Utm { zone, north, .. } => {
-                format!("UTM zone {zone}{} (grid north up)", if north { "N" } else { "S" })
+                format!(
+                    "UTM zone {zone}{} (grid north up)",
+                    if north { "N" } else { "S" }
+                )
             }
             Projection::Plane { .. } => "local plane, no geographic frame".to_string(),
         }
@@ -349,10 +365,20 @@ impl<'a> MapFigure<'a> {
 
 /// The metric box of what is shown: the whole graph, or the highlighted part with surroundings.
 fn bounds(graph: &LaneGraph, highlight: &Highlight) -> [f64; 4] {
-    let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut b = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     let mut add = |p: &[f64; 2]| {
         if p[0].is_finite() && p[1].is_finite() {
-            b = [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])];
+            b = [
+                b[0].min(p[0]),
+                b[1].min(p[1]),
+                b[2].max(p[0]),
+                b[3].max(p[1]),
+            ];
         }
     };
     if highlight.zoom_to_highlight && !(highlight.is_empty() && highlight.junctions.is_empty()) {
@@ -360,7 +386,11 @@ fn bounds(graph: &LaneGraph, highlight: &Highlight) -> [f64; 4] {
             r.geometry.iter().for_each(&mut add);
         }
         highlight.paths.iter().flatten().for_each(&mut add);
-        for j in highlight.junctions.iter().filter_map(|id| graph.junction(*id)) {
+        for j in highlight
+            .junctions
+            .iter()
+            .filter_map(|id| graph.junction(*id))
+        {
             add(&j.pos);
         }
         // Surroundings: a quarter of the window's size each side, at least 150 m.
@@ -435,7 +465,12 @@ impl Figure for MapFigure<'_> {
         // Halos under the roads.
         let halo = HALO.mix(0.35).stroke_width(12);
         let mut halo_lines: Vec<&[[f64; 2]]> = Vec::new();
-        for r in self.highlight.roads.iter().filter_map(|id| self.graph.road(*id)) {
+        for r in self
+            .highlight
+            .roads
+            .iter()
+            .filter_map(|id| self.graph.road(*id))
+        {
             halo_lines.push(&r.geometry);
         }
         for p in &self.highlight.paths {
@@ -452,7 +487,9 @@ impl Figure for MapFigure<'_> {
         order.sort_by_key(|&i| std::cmp::Reverse(class_rank(&self.graph.roads[i].class)));
         for i in order {
             let r = &self.graph.roads[i];
-            let style = self.class_color(&r.class).stroke_width(road_width_px(r.lane_count()));
+            let style = self
+                .class_color(&r.class)
+                .stroke_width(road_width_px(r.lane_count()));
             for piece in l.clipped_pixels(&r.geometry) {
                 root.draw(&PathElement::new(piece, style)).d()?;
             }
@@ -481,13 +518,20 @@ impl Figure for MapFigure<'_> {
         }
 
         // Labels: asked-for junctions first, then merges; each tries four places around its marker.
-        let mut to_label: Vec<(JunctionId, bool)> = self.highlight.junctions.iter().map(|j| (*j, true)).collect();
+        let mut to_label: Vec<(JunctionId, bool)> = self
+            .highlight
+            .junctions
+            .iter()
+            .map(|j| (*j, true))
+            .collect();
         if self.highlight.label_merges {
             to_label.extend(
                 self.graph
                     .junctions
                     .iter()
-                    .filter(|j| j.kind == JunctionKind::Merge && !self.highlight.junctions.contains(&j.id))
+                    .filter(|j| {
+                        j.kind == JunctionKind::Merge && !self.highlight.junctions.contains(&j.id)
+                    })
                     .map(|j| (j.id, false)),
             );
         }
@@ -496,7 +540,9 @@ impl Figure for MapFigure<'_> {
             .graph
             .junctions
             .iter()
-            .filter(|j| matches!(j.kind, JunctionKind::Merge | JunctionKind::Diverge) && l.inside(j.pos))
+            .filter(|j| {
+                matches!(j.kind, JunctionKind::Merge | JunctionKind::Diverge) && l.inside(j.pos)
+            })
             .map(|j| {
                 let (x, y) = l.px(j.pos);
                 [x - 3, y - 3, x + 3, y + 3]
@@ -504,13 +550,18 @@ impl Figure for MapFigure<'_> {
             .collect();
         let (mut drawn, mut skipped) = (0, 0);
         for (id, asked) in to_label {
-            let Some(j) = self.graph.junction(id) else { continue };
+            let Some(j) = self.graph.junction(id) else {
+                continue;
+            };
             if !l.inside(j.pos) {
                 continue;
             }
             let text = id.to_string();
             let color = if asked { RGBColor(0, 90, 160) } else { dark };
-            let font = ("sans-serif", if asked { LABEL_FONT + 3.0 } else { LABEL_FONT })
+            let font = (
+                "sans-serif",
+                if asked { LABEL_FONT + 3.0 } else { LABEL_FONT },
+            )
                 .into_font()
                 .color(&color);
             let (tw, th) = root.estimate_text_size(&text, &font).d()?;
@@ -543,14 +594,20 @@ impl Figure for MapFigure<'_> {
                 WHITE.mix(0.8).filled(),
             ))
             .d()?;
-            root.draw(&Text::new(text, (bx[0] + 2, bx[1] + 1), font)).d()?;
+            root.draw(&Text::new(text, (bx[0] + 2, bx[1] + 1), font))
+                .d()?;
         }
         *self.placed.borrow_mut() = (drawn, skipped);
 
         // North arrow, top left of the plot.
         let (nx, ny) = (bx0 + 28, by0 + 16);
         root.draw(&Polygon::new(
-            vec![(nx, ny), (nx - 9, ny + 24), (nx, ny + 18), (nx + 9, ny + 24)],
+            vec![
+                (nx, ny),
+                (nx - 9, ny + 24),
+                (nx, ny + 18),
+                (nx + 9, ny + 24),
+            ],
             dark.filled(),
         ))
         .d()?;
@@ -572,22 +629,33 @@ impl Figure for MapFigure<'_> {
             WHITE.mix(0.85).filled(),
         ))
         .d()?;
-        root.draw(&Rectangle::new([(sx, sy), (sx + bar_px / 2, sy + 6)], dark.filled()))
-            .d()?;
+        root.draw(&Rectangle::new(
+            [(sx, sy), (sx + bar_px / 2, sy + 6)],
+            dark.filled(),
+        ))
+        .d()?;
         root.draw(&Rectangle::new(
             [(sx + bar_px / 2, sy), (sx + bar_px, sy + 6)],
             WHITE.filled(),
         ))
         .d()?;
-        root.draw(&Rectangle::new([(sx, sy), (sx + bar_px, sy + 6)], dark.stroke_width(1)))
-            .d()?;
+        root.draw(&Rectangle::new(
+            [(sx, sy), (sx + bar_px, sy + 6)],
+            dark.stroke_width(1),
+        ))
+        .d()?;
         let small = ("sans-serif", 15)
             .into_font()
             .color(&dark)
             .pos(Pos::new(HPos::Center, VPos::Bottom));
-        root.draw(&Text::new("0", (sx, sy - 3), small.clone())).d()?;
-        root.draw(&Text::new(format_metres(l.scale_bar_m), (sx + bar_px, sy - 3), small))
+        root.draw(&Text::new("0", (sx, sy - 3), small.clone()))
             .d()?;
+        root.draw(&Text::new(
+            format_metres(l.scale_bar_m),
+            (sx + bar_px, sy - 3),
+            small,
+        ))
+        .d()?;
 
         root.draw(&Rectangle::new(
             [(bx0, by0), (bx1, by1)],
@@ -600,17 +668,27 @@ impl Figure for MapFigure<'_> {
         let mut ly = by0 + 4;
         let head = ("sans-serif", 19).into_font().color(&BLACK);
         let item = ("sans-serif", 16).into_font().color(&RGBColor(40, 40, 40));
-        root.draw(&Text::new("Road class", (lx, ly), head.clone())).d()?;
+        root.draw(&Text::new("Road class", (lx, ly), head.clone()))
+            .d()?;
         ly += 26;
         for (class, color) in &self.classes {
-            let n = self.graph.roads.iter().filter(|r| &r.class == class).count();
+            let n = self
+                .graph
+                .roads
+                .iter()
+                .filter(|r| &r.class == class)
+                .count();
             root.draw(&PathElement::new(
                 vec![(lx, ly + 8), (lx + 30, ly + 8)],
                 color.stroke_width(4),
             ))
             .d()?;
-            root.draw(&Text::new(format!("{class} ({n})"), (lx + 40, ly), item.clone()))
-                .d()?;
+            root.draw(&Text::new(
+                format!("{class} ({n})"),
+                (lx + 40, ly),
+                item.clone(),
+            ))
+            .d()?;
             ly += 22;
         }
         if !self.highlight.is_empty() {
@@ -624,19 +702,26 @@ impl Figure for MapFigure<'_> {
                 .label
                 .clone()
                 .unwrap_or_else(|| "highlighted roads".to_string());
-            root.draw(&Text::new(label, (lx + 40, ly), item.clone())).d()?;
+            root.draw(&Text::new(label, (lx + 40, ly), item.clone()))
+                .d()?;
             ly += 22;
         }
         ly += 12;
         root.draw(&Text::new("Junctions", (lx, ly), head)).d()?;
         ly += 26;
-        root.draw(&Circle::new((lx + 15, ly + 8), 3, dark.filled())).d()?;
-        root.draw(&Text::new("merge (labelled Jn)", (lx + 40, ly), item.clone()))
+        root.draw(&Circle::new((lx + 15, ly + 8), 3, dark.filled()))
             .d()?;
+        root.draw(&Text::new(
+            "merge (labelled Jn)",
+            (lx + 40, ly),
+            item.clone(),
+        ))
+        .d()?;
         ly += 22;
         root.draw(&Circle::new((lx + 15, ly + 8), 3, dark.stroke_width(1)))
             .d()?;
-        root.draw(&Text::new("diverge", (lx + 40, ly), item.clone())).d()?;
+        root.draw(&Text::new("diverge", (lx + 40, ly), item.clone()))
+            .d()?;
         ly += 22;
         if !self.highlight.junctions.is_empty() {
             root.draw(&Circle::new((lx + 15, ly + 8), 6, HALO.stroke_width(2)))
@@ -654,10 +739,18 @@ impl Figure for MapFigure<'_> {
                 note.clone(),
             ))
             .d()?;
-            root.draw(&Text::new("where they would overlap;", (lx, ly + 16), note.clone()))
-                .d()?;
-            root.draw(&Text::new("`mapc junctions` lists all", (lx, ly + 32), note))
-                .d()?;
+            root.draw(&Text::new(
+                "where they would overlap;",
+                (lx, ly + 16),
+                note.clone(),
+            ))
+            .d()?;
+            root.draw(&Text::new(
+                "`mapc junctions` lists all",
+                (lx, ly + 32),
+                note,
+            ))
+            .d()?;
         }
         Ok(())
     }
@@ -689,7 +782,10 @@ mod tests {
             Some(([0.0, 5.0], [5.0, 5.0]))
         );
         assert_eq!(clip_segment([-5.0, 20.0], [5.0, 20.0], bx), None);
-        assert_eq!(clip_segment([1.0, 1.0], [2.0, 2.0], bx), Some(([1.0, 1.0], [2.0, 2.0])));
+        assert_eq!(
+            clip_segment([1.0, 1.0], [2.0, 2.0], bx),
+            Some(([1.0, 1.0], [2.0, 2.0]))
+        );
     }
 
     #[test]

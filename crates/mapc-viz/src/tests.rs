@@ -43,7 +43,8 @@ fn simple_merge_renders_to_png_with_classes_and_labels() {
     assert!(stats.colors > 20, "{stats:?}");
     assert!(stats.ink_fraction > 0.05, "{stats:?}");
     // Both road classes are drawn in their legend colours.
-    let cc = crate::colors::class_colors(&g.roads.iter().map(|r| r.class.clone()).collect::<Vec<_>>());
+    let cc =
+        crate::colors::class_colors(&g.roads.iter().map(|r| r.class.clone()).collect::<Vec<_>>());
     for (class, c) in cc {
         assert!(
             count_near(&pixels, [c.0, c.1, c.2], 2) > 200,
@@ -70,13 +71,21 @@ fn svg_render_carries_labels_and_highlight() {
     let dir = temp_dir("render-svg");
     let out = dir.join("merge.svg");
     let g = merge_graph();
-    let merge = g.junctions.iter().find(|j| j.kind == JunctionKind::Merge).unwrap().id;
+    let merge = g
+        .junctions
+        .iter()
+        .find(|j| j.kind == JunctionKind::Merge)
+        .unwrap()
+        .id;
     let h = Highlight::window([RoadId(1), RoadId(4)], [JunctionId(0)]);
     let s = render_map(&g, &h, &out).unwrap();
     assert_eq!(s.roads_highlighted, 2);
     let svg = std::fs::read_to_string(&out).unwrap();
     assert!(svg.starts_with("<svg"), "{}", &svg[..60]);
-    assert!(svg.contains(&format!("\n{merge}\n")), "merge label {merge} missing");
+    assert!(
+        svg.contains(&format!("\n{merge}\n")),
+        "merge label {merge} missing"
+    );
     assert!(svg.contains("\nJ0\n"), "asked-for label missing");
     assert!(svg.contains("transfer window"));
     assert!(svg.contains("\nN\n"), "north arrow missing");
@@ -94,7 +103,10 @@ fn zoomed_render_shows_less_than_the_whole_map() {
         ..Highlight::default()
     };
     let zoom = render_map(&g, &h, &dir.join("b.png")).unwrap();
-    assert!(zoom.metres_per_px < whole.metres_per_px, "{zoom:?} vs {whole:?}");
+    assert!(
+        zoom.metres_per_px < whole.metres_per_px,
+        "{zoom:?} vs {whole:?}"
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -126,7 +138,10 @@ fn geojson_has_a_feature_per_road_and_junction() {
         .iter()
         .filter(|f| f["geometry"]["type"] == "LineString")
         .count();
-    let points = features.iter().filter(|f| f["geometry"]["type"] == "Point").count();
+    let points = features
+        .iter()
+        .filter(|f| f["geometry"]["type"] == "Point")
+        .count();
     assert_eq!((lines, points), (g.roads.len(), g.junctions.len()));
     // WGS84 around the point the frame was made at, lon first.
     assert!(
@@ -145,10 +160,16 @@ fn geojson_has_a_feature_per_road_and_junction() {
         "osm_ways",
         "sumo_ids",
     ] {
-        assert!(road["properties"].get(key).is_some(), "road property {key} missing");
+        assert!(
+            road["properties"].get(key).is_some(),
+            "road property {key} missing"
+        );
     }
     assert_eq!(road["properties"]["sumo_ids"][0], "inflow_highway");
-    let junction = features.iter().find(|f| f["properties"]["kind"] == "merge").unwrap();
+    let junction = features
+        .iter()
+        .find(|f| f["properties"]["kind"] == "merge")
+        .unwrap();
     assert!(junction["properties"]["sumo_id"].is_string());
     assert_eq!(v["mapc_coordinates"], "wgs84");
     // Lengths survive the round trip through longitude/latitude to within a metre.
@@ -175,7 +196,8 @@ fn geojson_of_a_plane_graph_says_it_is_in_metres() {
     let g = merge_graph();
     let s = geojson::write_geojson(&g, &out).unwrap();
     assert_eq!(s.coordinates, "local_metres");
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(v["mapc_coordinates"], "local_metres");
     assert!(v["mapc_note"].as_str().unwrap().contains("metres"));
     assert!(v.get("crs").is_none());
@@ -195,10 +217,18 @@ fn wave_trace() -> String {
         let mut t = depart;
         while x < 1000.0 && t < 200.0 {
             let wave_at = 900.0 - 5.0 * t;
-            let speed = if (x - wave_at).abs() < 60.0 { 2.0 } else { 25.0 };
+            let speed = if (x - wave_at).abs() < 60.0 {
+                2.0
+            } else {
+                25.0
+            };
             let controlled = v % 5 == 0;
             let vtype = if controlled { "av" } else { "human" };
-            writeln!(s, "{t:.2},{v},{vtype},R2,{x:.3},{x:.3},{speed:.3},{controlled}").unwrap();
+            writeln!(
+                s,
+                "{t:.2},{v},{vtype},R2,{x:.3},{x:.3},{speed:.3},{controlled}"
+            )
+            .unwrap();
             x += speed * dt;
             t += dt;
         }
@@ -255,7 +285,9 @@ fn bad_traces_are_reported_with_file_line_and_column() {
     assert!(missing.to_string().contains("absent.csv"), "{missing}");
 
     std::fs::write(&path, "time_s,vehicle_id,road,speed_mps\n0,1,R1,3\n").unwrap();
-    let err = read_trace(&path, &RoadFilter::Main).unwrap_err().to_string();
+    let err = read_trace(&path, &RoadFilter::Main)
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("t.csv") && err.contains("`corridor_x_m`") && err.contains("`controlled`"),
         "{err}"
@@ -268,7 +300,11 @@ fn bad_traces_are_reported_with_file_line_and_column() {
     let err = read_trace(&path, &RoadFilter::Main).unwrap_err();
     match &err {
         VizError::Field { line, column, .. } => {
-            assert_eq!((*line as usize, column.as_str()), (bad_line, "speed_mps"), "{err}");
+            assert_eq!(
+                (*line as usize, column.as_str()),
+                (bad_line, "speed_mps"),
+                "{err}"
+            );
         }
         other => panic!("{other}"),
     }
@@ -276,10 +312,15 @@ fn bad_traces_are_reported_with_file_line_and_column() {
 
     std::fs::write(
         &path,
-        format!("{}\n0,1,human,R1,2,2,3\n", crate::timespace::TRACE_COLUMNS.join(",")),
+        format!(
+            "{}\n0,1,human,R1,2,2,3\n",
+            crate::timespace::TRACE_COLUMNS.join(",")
+        ),
     )
     .unwrap();
-    let err = read_trace(&path, &RoadFilter::Main).unwrap_err().to_string();
+    let err = read_trace(&path, &RoadFilter::Main)
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("line 2") && err.contains("7 fields where the header has 8"),
         "{err}"
@@ -328,7 +369,7 @@ fn write_log(dir: &std::path::Path, header: &str, rows: usize, scale: f64) {
         s.push_str(&row.join(","));
         s.push('\n');
     }
-    std::fs::write(dir.join("log.csv"), s).unwrap();
+    std::fs::write(dir.join("progress.csv"), s).unwrap();
 }
 
 #[test]
@@ -336,7 +377,12 @@ fn training_curves_overlay_runs_and_tolerate_missing_columns() {
     let dir = temp_dir("training");
     let full = crate::training::LOG_COLUMNS.join(",");
     write_log(&dir.join("run_a"), &full, 60, 1.0);
-    write_log(&dir.join("run_b"), "iteration,mean_return,mean_outflow,kl", 40, 0.9);
+    write_log(
+        &dir.join("run_b"),
+        "iteration,mean_return,mean_outflow,kl",
+        40,
+        0.9,
+    );
     let out = dir.join("curves.png");
     let opts = TrainingPlotOptions {
         baseline_outflow: Some(1550.0),
@@ -346,14 +392,21 @@ fn training_curves_overlay_runs_and_tolerate_missing_columns() {
     assert_eq!(s.runs.len(), 2);
     assert_eq!(s.runs[0].rows, 60);
     assert!(s.runs[0].missing_columns.is_empty());
-    assert!(s.runs[1].missing_columns.contains(&"value_loss".to_string()));
+    assert!(
+        s.runs[1]
+            .missing_columns
+            .contains(&"value_loss".to_string())
+    );
     assert!(s.empty_panels.is_empty(), "run_a fills every panel");
     assert!((s.runs[0].last["mean_outflow"] - 1795.0).abs() < 1e-9);
     let (stats, pixels) = read_png(&out).unwrap();
     assert_eq!((stats.width, stats.height), (1800, 900));
     for i in 0..2 {
         let c = crate::colors::run_color(i);
-        assert!(count_near(&pixels, [c.0, c.1, c.2], 10) > 500, "run {i} curves missing");
+        assert!(
+            count_near(&pixels, [c.0, c.1, c.2], 10) > 500,
+            "run {i} curves missing"
+        );
     }
     // A log of one run with only some columns leaves the others' panels empty.
     let s = plot_training(
@@ -372,17 +425,29 @@ fn bad_training_logs_are_reported() {
     let dir = temp_dir("training-bad");
     let err = read_log(&dir.join("nope")).unwrap_err().to_string();
     assert!(err.contains("nope"), "{err}");
-    std::fs::write(dir.join("log.csv"), "iteration,foo\n1,2\n").unwrap();
+    std::fs::write(dir.join("progress.csv"), "iteration,foo\n1,2\n").unwrap();
     let err = read_log(&dir).unwrap_err().to_string();
-    assert!(err.contains("none of the training log's value columns"), "{err}");
-    std::fs::write(dir.join("log.csv"), "iteration,mean_return\n1,2\n2,abc\n").unwrap();
+    assert!(
+        err.contains("none of the training log's value columns"),
+        "{err}"
+    );
+    std::fs::write(
+        dir.join("progress.csv"),
+        "iteration,mean_return\n1,2\n2,abc\n",
+    )
+    .unwrap();
     let err = read_log(&dir).unwrap_err();
     assert!(
         matches!(&err, VizError::Field { line: 3, column, .. } if column == "mean_return"),
         "{err}"
     );
-    std::fs::write(dir.join("log.csv"), "iteration,mean_return\n").unwrap();
-    let err = plot_training(&[dir.clone()], &dir.join("c.png"), &TrainingPlotOptions::default()).unwrap_err();
+    std::fs::write(dir.join("progress.csv"), "iteration,mean_return\n").unwrap();
+    let err = plot_training(
+        &[dir.clone()],
+        &dir.join("c.png"),
+        &TrainingPlotOptions::default(),
+    )
+    .unwrap_err();
     assert!(err.to_string().contains("no rows"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -93,7 +93,13 @@ pub fn read_trace(path: &Path, filter: &RoadFilter) -> Result<Trace, VizError> {
         let y = match filter {
             RoadFilter::Main => match parser.number(rec, i_x, "corridor_x_m", line)? {
                 Some(x) if x.is_finite() => x,
-                Some(x) => return Err(parser.error(line, "corridor_x_m", format!("`{x}` is not a finite number"))),
+                Some(x) => {
+                    return Err(parser.error(
+                        line,
+                        "corridor_x_m",
+                        format!("`{x}` is not a finite number"),
+                    ));
+                }
                 None => return Ok(()),
             },
             RoadFilter::Roads(roads) => {
@@ -179,7 +185,11 @@ pub struct TimeSpaceSummary {
 }
 
 /// Read `trace` and draw its time-space diagram into `out` (`.png` or `.svg`).
-pub fn plot_timespace(trace: &Path, out: &Path, options: &TimeSpaceOptions) -> Result<TimeSpaceSummary, VizError> {
+pub fn plot_timespace(
+    trace: &Path,
+    out: &Path,
+    options: &TimeSpaceOptions,
+) -> Result<TimeSpaceSummary, VizError> {
     crate::canvas::picture_kind(out)?;
     let mut t = read_trace(trace, &options.filter)?;
     if let Some(start) = options.start_s {
@@ -207,7 +217,12 @@ pub fn plot_timespace(trace: &Path, out: &Path, options: &TimeSpaceOptions) -> R
         &figure,
     )?;
     let controlled = {
-        let mut v: Vec<u32> = t.samples.iter().filter(|s| s.controlled).map(|s| s.vehicle).collect();
+        let mut v: Vec<u32> = t
+            .samples
+            .iter()
+            .filter(|s| s.controlled)
+            .map(|s| s.vehicle)
+            .collect();
         v.sort_unstable();
         v.dedup();
         v.len()
@@ -249,7 +264,8 @@ struct TimeSpaceFigure {
 
 impl TimeSpaceFigure {
     fn new(t: &Trace, options: &TimeSpaceOptions) -> Self {
-        let (mut t0, mut t1, mut y0, mut y1, mut vfast) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN, 0.0f64);
+        let (mut t0, mut t1, mut y0, mut y1, mut vfast) =
+            (f64::MAX, f64::MIN, f64::MAX, f64::MIN, 0.0f64);
         for s in &t.samples {
             t0 = t0.min(s.time_s);
             t1 = t1.max(s.time_s);
@@ -275,7 +291,10 @@ impl TimeSpaceFigure {
             .map(|f| f.to_string_lossy().into_owned())
             .unwrap_or_default();
         let (y_label, what) = match &options.filter {
-            RoadFilter::Main => ("position along the corridor (m)".to_string(), "main line".to_string()),
+            RoadFilter::Main => (
+                "position along the corridor (m)".to_string(),
+                "main line".to_string(),
+            ),
             RoadFilter::Roads(r) => (
                 format!("position on {} (m)", r.join(", ")),
                 format!("road {}", r.join(", ")),
@@ -324,7 +343,11 @@ fn trajectories(samples: &[Sample], n_vehicles: usize, step: f64, vmax: f64) -> 
     for s in samples {
         by_vehicle[s.vehicle as usize].push(s);
     }
-    let max_gap = if step.is_finite() { 2.5 * step } else { f64::INFINITY };
+    let max_gap = if step.is_finite() {
+        2.5 * step
+    } else {
+        f64::INFINITY
+    };
     let bin = |v: f64| (((v / vmax) * SPEED_BINS as f64) as usize).min(SPEED_BINS - 1);
     let mut lines = Vec::new();
     for mut vs in by_vehicle {
@@ -345,7 +368,11 @@ fn trajectories(samples: &[Sample], n_vehicles: usize, step: f64, vmax: f64) -> 
             let k = bin(0.5 * (a.speed_mps + b.speed_mps));
             let controlled = a.controlled || b.controlled;
             match current.as_mut() {
-                Some(p) if p.bin == k && p.controlled == controlled && p.points.last() == Some(&(a.time_s, a.y_m)) => {
+                Some(p)
+                    if p.bin == k
+                        && p.controlled == controlled
+                        && p.points.last() == Some(&(a.time_s, a.y_m)) =>
+                {
                     p.points.push((b.time_s, b.y_m));
                 }
                 _ => {
@@ -391,7 +418,10 @@ impl Figure for TimeSpaceFigure {
         for line in self.lines.iter().filter(|l| !l.controlled) {
             let style = speed_color(bin_speed(line.bin)).stroke_width(2);
             chart
-                .draw_series(std::iter::once(PathElement::new(line.points.clone(), style)))
+                .draw_series(std::iter::once(PathElement::new(
+                    line.points.clone(),
+                    style,
+                )))
                 .d()?;
         }
         let av_lines: Vec<&Polyline> = self.lines.iter().filter(|l| l.controlled).collect();
@@ -406,12 +436,18 @@ impl Figure for TimeSpaceFigure {
         for line in &av_lines {
             let style = speed_color(bin_speed(line.bin)).stroke_width(2);
             chart
-                .draw_series(std::iter::once(PathElement::new(line.points.clone(), style)))
+                .draw_series(std::iter::once(PathElement::new(
+                    line.points.clone(),
+                    style,
+                )))
                 .d()?;
         }
         if !av_lines.is_empty() {
             chart
-                .draw_series(std::iter::once(PathElement::new(Vec::<(f64, f64)>::new(), BLACK)))
+                .draw_series(std::iter::once(PathElement::new(
+                    Vec::<(f64, f64)>::new(),
+                    BLACK,
+                )))
                 .d()?
                 .label("AV (controlled), outlined")
                 .legend(|(x, y)| {
@@ -508,7 +544,10 @@ mod tests {
         let lines = trajectories(&samples, 1, 0.5, 30.0);
         assert!(lines.len() >= 2);
         assert_eq!(lines[0].bin, 0);
-        assert_eq!(lines.last().unwrap().bin, (29.0 / 30.0 * SPEED_BINS as f64) as usize);
+        assert_eq!(
+            lines.last().unwrap().bin,
+            (29.0 / 30.0 * SPEED_BINS as f64) as usize
+        );
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! Training curves from run directories' `log.csv` (one row per PPO iteration): return, outflow, speed, entropy,
+//! Training curves from run directories' `progress.csv` (one row per PPO iteration): return, outflow, speed, entropy,
 //! losses and KL, several runs overlaid. Columns are found by name; a missing one leaves its panel empty.
 
 use crate::VizError;
@@ -60,17 +60,21 @@ impl TrainingLog {
     }
 }
 
-/// Read `RUN_DIR/log.csv`, or a CSV file given directly. Unknown columns are ignored; known ones must hold numbers.
+/// Read `RUN_DIR/progress.csv`, or a CSV file given directly. Unknown columns are ignored; known ones must hold numbers.
 pub fn read_log(run: &Path) -> Result<TrainingLog, VizError> {
     let path = if run.is_dir() {
-        run.join("log.csv")
+        run.join("progress.csv")
     } else {
         run.to_path_buf()
     };
-    let label = if run.is_dir() { run } else { run.parent().unwrap_or(run) }
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| run.display().to_string());
+    let label = if run.is_dir() {
+        run
+    } else {
+        run.parent().unwrap_or(run)
+    }
+    .file_name()
+    .map(|n| n.to_string_lossy().into_owned())
+    .unwrap_or_else(|| run.display().to_string());
     let mut input = CsvInput::open(&path)?;
     let found: Vec<(usize, &str)> = LOG_COLUMNS
         .iter()
@@ -90,8 +94,10 @@ pub fn read_log(run: &Path) -> Result<TrainingLog, VizError> {
         });
     }
     let fields = input.fields();
-    let mut columns: BTreeMap<String, Vec<Option<f64>>> =
-        found.iter().map(|(_, c)| (c.to_string(), Vec::new())).collect();
+    let mut columns: BTreeMap<String, Vec<Option<f64>>> = found
+        .iter()
+        .map(|(_, c)| (c.to_string(), Vec::new()))
+        .collect();
     let mut rows = 0;
     input.for_each_row(|rec, line| {
         for (i, name) in &found {
@@ -142,7 +148,9 @@ impl std::str::FromStr for XAxis {
             "iteration" => Ok(XAxis::Iteration),
             "env_steps" | "env-steps" => Ok(XAxis::EnvSteps),
             "wall_s" | "wall-s" | "wall" => Ok(XAxis::WallS),
-            other => Err(format!("`{other}`: expected iteration, env_steps or wall_s")),
+            other => Err(format!(
+                "`{other}`: expected iteration, env_steps or wall_s"
+            )),
         }
     }
 }
@@ -220,7 +228,10 @@ pub fn plot_training(
             message: "the log has no rows yet".into(),
         });
     }
-    let fig = TrainingFigure { logs: &logs, options };
+    let fig = TrainingFigure {
+        logs: &logs,
+        options,
+    };
     draw_to_file(
         out,
         (
@@ -231,7 +242,10 @@ pub fn plot_training(
     )?;
     let empty_panels = PANELS
         .iter()
-        .filter(|(c, _)| logs.iter().all(|l| l.series(options.x.column(), c).is_empty()))
+        .filter(|(c, _)| {
+            logs.iter()
+                .all(|l| l.series(options.x.column(), c).is_empty())
+        })
         .map(|(c, _)| c.to_string())
         .collect();
     let runs = logs
@@ -247,7 +261,11 @@ pub fn plot_training(
                 .collect(),
             last: PANELS
                 .iter()
-                .filter_map(|(c, _)| l.series(options.x.column(), c).last().map(|(_, y)| (c.to_string(), *y)))
+                .filter_map(|(c, _)| {
+                    l.series(options.x.column(), c)
+                        .last()
+                        .map(|(_, y)| (c.to_string(), *y))
+                })
                 .collect(),
         })
         .collect();
@@ -306,18 +324,28 @@ impl Figure for TrainingFigure<'_> {
                 None
             };
             let xr = padded_range(series.iter().flat_map(|(_, s)| s.iter().map(|p| p.0)));
-            let yr = padded_range(series.iter().flat_map(|(_, s)| s.iter().map(|p| p.1)).chain(baseline));
+            let yr = padded_range(
+                series
+                    .iter()
+                    .flat_map(|(_, s)| s.iter().map(|p| p.1))
+                    .chain(baseline),
+            );
             let (Some((x0, x1)), Some((y0, y1))) = (xr, yr) else {
                 let a = area.margin(10, 10, 10, 10);
                 a.draw(&Rectangle::new(
-                    [(0, 0), (a.dim_in_pixel().0 as i32 - 1, a.dim_in_pixel().1 as i32 - 1)],
+                    [
+                        (0, 0),
+                        (a.dim_in_pixel().0 as i32 - 1, a.dim_in_pixel().1 as i32 - 1),
+                    ],
                     RGBColor(200, 200, 200),
                 ))
                 .d()?;
                 a.draw(&Text::new(
                     format!("{panel_title}: no `{col}` column"),
                     (12, 12),
-                    ("sans-serif", 15).into_font().color(&RGBColor(110, 110, 110)),
+                    ("sans-serif", 15)
+                        .into_font()
+                        .color(&RGBColor(110, 110, 110)),
                 ))
                 .d()?;
                 continue;
@@ -356,7 +384,9 @@ impl Figure for TrainingFigure<'_> {
                 if many || baseline.is_some() {
                     drawn
                         .label(self.logs[*i].label.clone())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                        });
                 }
                 if s.len() == 1 {
                     chart
@@ -375,7 +405,9 @@ impl Figure for TrainingFigure<'_> {
                     ))
                     .d()?
                     .label(format!("human baseline {b:.0} veh/h"))
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey.stroke_width(2)));
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], grey.stroke_width(2))
+                    });
             }
             let show_legend = baseline.is_some() || (many && col == "mean_return");
             if show_legend {

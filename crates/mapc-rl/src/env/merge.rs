@@ -6,7 +6,9 @@ use std::str::FromStr;
 use mapc_sim::{SimSpec, Simulation, VehicleId};
 use serde::{Deserialize, Serialize};
 
-use super::obs::{AvView, ControlQueue, ObsNorm, PER_AV, centralized_obs, flow_reward, speed_reward};
+use super::obs::{
+    AvView, ControlQueue, ObsNorm, PER_AV, centralized_obs, flow_reward, speed_reward,
+};
 use crate::error::RlError;
 use crate::rollout::{Env, EpisodeMetrics, Transition};
 
@@ -177,7 +179,11 @@ impl MergeEnv {
         let sim = self.sim.as_mut().expect("reset before step");
         for (k, &id) in self.controlled.iter().enumerate() {
             if let Some(&a) = action.get(k) {
-                let a = if a.is_finite() { (a as f64).clamp(lo, hi) } else { 0.0 };
+                let a = if a.is_finite() {
+                    (a as f64).clamp(lo, hi)
+                } else {
+                    0.0
+                };
                 sim.set_acceleration(id, a).map_err(|e| RlError::Scenario {
                     scenario: "simulation".into(),
                     msg: e.to_string(),
@@ -214,10 +220,11 @@ impl Env for MergeEnv {
         self.cfg.n_av
     }
     fn reset(&mut self, seed: u64) -> Result<Vec<f32>, RlError> {
-        let mut sim = Simulation::from_spec(self.spec.clone(), seed).map_err(|e| RlError::Scenario {
-            scenario: self.spec.graph.source.file.clone(),
-            msg: e.to_string(),
-        })?;
+        let mut sim =
+            Simulation::from_spec(self.spec.clone(), seed).map_err(|e| RlError::Scenario {
+                scenario: self.spec.graph.source.file.clone(),
+                msg: e.to_string(),
+            })?;
         sim.set_invariant_checks(false);
         self.sim = Some(sim);
         self.queue.clear();

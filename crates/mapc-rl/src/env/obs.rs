@@ -91,7 +91,11 @@ pub fn flow_reward(speeds: &[f64], desired: f64, controlled_headways: &[(f64, f6
         return 0.0;
     }
     let max_cost = (desired * desired * speeds.len() as f64).sqrt();
-    let cost = speeds.iter().map(|v| (v - desired).powi(2)).sum::<f64>().sqrt();
+    let cost = speeds
+        .iter()
+        .map(|v| (v - desired).powi(2))
+        .sum::<f64>()
+        .sqrt();
     let r1 = (max_cost - cost).max(0.0) / (max_cost + 1e-3);
     let t_min = 1.0;
     let r2: f64 = controlled_headways

@@ -10,7 +10,13 @@ pub enum EpisodeEnd {
 
 /// Advantages `A_t = sum_k (gamma lambda)^k delta_{t+k}` with `delta_t = r_t + gamma V_{t+1} - V_t`, and value
 /// targets `A_t + V_t`, for one episode.
-pub fn gae(rewards: &[f32], values: &[f32], end: EpisodeEnd, gamma: f32, lambda: f32) -> (Vec<f32>, Vec<f32>) {
+pub fn gae(
+    rewards: &[f32],
+    values: &[f32],
+    end: EpisodeEnd,
+    gamma: f32,
+    lambda: f32,
+) -> (Vec<f32>, Vec<f32>) {
     assert_eq!(rewards.len(), values.len());
     let n = rewards.len();
     let mut adv = vec![0.0; n];
@@ -53,8 +59,14 @@ mod tests {
         // delta_1 = 2 + 0 - 1 = 1; A_1 = 1.
         // delta_0 = 1 + 0.9*1.0 - 0.5 = 1.4; A_0 = 1.4 + 0.45*1 = 1.85.
         let (a, t) = gae(&[1.0, 2.0], &[0.5, 1.0], EpisodeEnd::Terminal, 0.9, 0.5);
-        assert!((a[0] - 1.85).abs() < 1e-6 && (a[1] - 1.0).abs() < 1e-6, "{a:?}");
-        assert!((t[0] - 2.35).abs() < 1e-6 && (t[1] - 2.0).abs() < 1e-6, "{t:?}");
+        assert!(
+            (a[0] - 1.85).abs() < 1e-6 && (a[1] - 1.0).abs() < 1e-6,
+            "{a:?}"
+        );
+        assert!(
+            (t[0] - 2.35).abs() < 1e-6 && (t[1] - 2.0).abs() < 1e-6,
+            "{t:?}"
+        );
     }
 
     #[test]
@@ -63,7 +75,9 @@ mod tests {
         let (a, _) = gae(
             &[1.0, 2.0],
             &[0.5, 1.0],
-            EpisodeEnd::Truncated { bootstrap_value: 3.0 },
+            EpisodeEnd::Truncated {
+                bootstrap_value: 3.0,
+            },
             0.9,
             0.5,
         );

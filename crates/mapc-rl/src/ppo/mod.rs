@@ -11,7 +11,9 @@ use serde::{Deserialize, Serialize};
 
 pub use config::PpoConfig;
 use gae::{EpisodeEnd, gae, standardize};
-use tensor::{Adam, Architecture, LossCoeffs, LossStats, Minibatch, Model, loss_and_grad, update_device};
+use tensor::{
+    Adam, Architecture, LossCoeffs, LossStats, Minibatch, Model, loss_and_grad, update_device,
+};
 
 use crate::error::RlError;
 use crate::rng::{Rng, mix_seed};
@@ -180,7 +182,12 @@ impl TrainerState {
 
 /// The loss gradient of a minibatch computed on `slices` row ranges in parallel and averaged (weighted by rows,
 /// combined in slice order, so the result depends on `slices` but not on the thread count).
-fn sliced_loss_and_grad(model: &Model, mb: &OwnedMinibatch, c: &LossCoeffs, slices: usize) -> (LossStats, Vec<f32>) {
+fn sliced_loss_and_grad(
+    model: &Model,
+    mb: &OwnedMinibatch,
+    c: &LossCoeffs,
+    slices: usize,
+) -> (LossStats, Vec<f32>) {
     let n = mb.n;
     let slices = slices.clamp(1, n.max(1));
     let bounds: Vec<(usize, usize)> = (0..slices)
@@ -264,7 +271,9 @@ impl OwnedMinibatch {
 impl Batch {
     pub fn from_episodes(episodes: &[Episode], c: &PpoConfig) -> Self {
         let obs_dim = episodes.first().map_or(0, |e| e.obs.len() / e.len().max(1));
-        let act_dim = episodes.first().map_or(0, |e| e.actions.len() / e.len().max(1));
+        let act_dim = episodes
+            .first()
+            .map_or(0, |e| e.actions.len() / e.len().max(1));
         let mut b = Batch {
             n: 0,
             obs_dim,
@@ -403,12 +412,17 @@ mod tests {
     #[test]
     fn same_seed_same_run_for_any_thread_count() {
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             pool.install(|| {
                 let mut c = tiny_config();
                 c.grad_slices = 3;
                 let mut st = TrainerState::new(c, 1, 1);
-                let s: Vec<IterationStats> = (0..3).map(|_| st.iterate(&reach_factory).unwrap()).collect();
+                let s: Vec<IterationStats> = (0..3)
+                    .map(|_| st.iterate(&reach_factory).unwrap())
+                    .collect();
                 (
                     st.model.params.clone(),
                     s.iter().map(|x| x.mean_return).collect::<Vec<_>>(),

@@ -145,7 +145,13 @@ impl Model {
         mlp_forward(pp, &self.arch.policy_sizes(), obs, &mut scratch.a, &mut out);
         let mean = out[..a].to_vec();
         let log_std = out[a..2 * a].to_vec();
-        mlp_forward(vp, &self.arch.value_sizes(), obs, &mut scratch.a, &mut scratch.b);
+        mlp_forward(
+            vp,
+            &self.arch.value_sizes(),
+            obs,
+            &mut scratch.a,
+            &mut scratch.b,
+        );
         PolicyOutput {
             mean,
             log_std,
@@ -240,7 +246,12 @@ pub fn update_device() -> Device {
 /// PPO loss (RLlib's formulation) on one minibatch and its gradient with respect to every parameter:
 /// `mean(-min(A r, A clip(r, 1-c, 1+c)) + kl_coeff KL(old||new) + vf_coeff max((V-R)^2, (V_clipped-R)^2)
 /// - entropy_coeff H)`, `r = exp(logp - old_logp)`, `V_clipped = V_old + clip(V - V_old, -vf_clip, vf_clip)`.
-pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs, device: &Device) -> (LossStats, Vec<f32>) {
+pub fn loss_and_grad(
+    model: &Model,
+    mb: &Minibatch,
+    c: &LossCoeffs,
+    device: &Device,
+) -> (LossStats, Vec<f32>) {
     let n = mb.n;
     let arch = &model.arch;
     let a = arch.act_dim;
@@ -250,9 +261,15 @@ pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs, device: &Dev
     for sizes in [arch.policy_sizes(), arch.value_sizes()] {
         for w in sizes.windows(2) {
             let (n_in, n_out) = (w[0], w[1]);
-            let wt = leaf(model.params[off..off + n_in * n_out].to_vec(), [n_in, n_out], device).require_grad();
+            let wt = leaf(
+                model.params[off..off + n_in * n_out].to_vec(),
+                [n_in, n_out],
+                device,
+            )
+            .require_grad();
             off += n_in * n_out;
-            let bt = leaf(model.params[off..off + n_out].to_vec(), [1, n_out], device).require_grad();
+            let bt =
+                leaf(model.params[off..off + n_out].to_vec(), [1, n_out], device).require_grad();
             off += n_out;
             leaves.push((wt, bt));
         }
@@ -278,14 +295,17 @@ pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs, device: &Dev
         .sub_scalar(0.5 * LN_2PI * a as f32);
     // exp(20) is far past any clip range; bounding the log-ratio keeps an outlier from overflowing to inf.
     let ratio = (logp - old_logp).clamp(-20.0, 20.0).exp();
-    let surr = (adv.clone() * ratio.clone()).min_pair(adv * ratio.clamp(1.0 - c.clip, 1.0 + c.clip));
+    let surr =
+        (adv.clone() * ratio.clone()).min_pair(adv * ratio.clamp(1.0 - c.clip, 1.0 + c.clip));
     // KL(old || new) of diagonal Gaussians.
     let old_var = old_log_std.clone().mul_scalar(2.0).exp();
     let kl = (log_std.clone() - old_log_std
         + (old_var + (old_mean - mean).square()) * inv_std.square().mul_scalar(0.5))
     .sub_scalar(0.5)
     .sum_dim(1);
-    let entropy = log_std.sum_dim(1).add_scalar(0.5 * (LN_2PI + 1.0) * a as f32);
+    let entropy = log_std
+        .sum_dim(1)
+        .add_scalar(0.5 * (LN_2PI + 1.0) * a as f32);
     let value = burn_mlp(obs, &leaves[n_policy_layers..]);
     let vf1 = (value.clone() - targets.clone()).square();
     let vf_clipped = old_value.clone() + (value - old_value).clamp(-c.vf_clip, c.vf_clip);
@@ -296,7 +316,9 @@ pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs, device: &Dev
     let kl_mean = kl.mean();
     let vf_mean = vf_loss.mean();
     let ent_mean = entropy.mean();
-    let total = policy_loss.clone() + kl_mean.clone().mul_scalar(c.kl_coeff) + vf_mean.clone().mul_scalar(c.vf_coeff)
+    let total = policy_loss.clone()
+        + kl_mean.clone().mul_scalar(c.kl_coeff)
+        + vf_mean.clone().mul_scalar(c.vf_coeff)
         - ent_mean.clone().mul_scalar(c.entropy_coeff);
     let stats = LossStats {
         total: total.clone().into_scalar::<f32>(),
@@ -310,7 +332,9 @@ pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs, device: &Dev
     for (w, b) in &leaves {
         for t in [w, b] {
             match t.grad(&grads) {
-                Some(g) => flat.extend_from_slice(g.into_data().as_slice::<f32>().expect("f32 gradient")),
+                Some(g) => {
+                    flat.extend_from_slice(g.into_data().as_slice::<f32>().expect("f32 gradient"))
+                }
                 None => flat.extend(std::iter::repeat_n(0.0, t.shape().num_elements())),
             }
         }
@@ -450,7 +474,12 @@ mod tests {
             gaussian_log_prob(&actions[2..], &o2.mean, &o2.log_std) + 0.05,
         ];
         let old_mean = [o1.mean[0] + 0.01, o1.mean[1], o2.mean[0], o2.mean[1] - 0.02];
-        let old_ls = [o1.log_std[0], o1.log_std[1] + 0.03, o2.log_std[0], o2.log_std[1]];
+        let old_ls = [
+            o1.log_std[0],
+            o1.log_std[1] + 0.03,
+            o2.log_std[0],
+            o2.log_std[1],
+        ];
         let mb = Minibatch {
             n: 2,
             obs: &obs,
@@ -538,6 +567,9 @@ mod tests {
         let mut p = vec![1.0, -2.0];
         let mut a = Adam::new(2);
         a.step(&mut p, &[0.5, -3.0], 0.1);
-        assert!((p[0] - 0.9).abs() < 1e-6 && (p[1] + 1.9).abs() < 1e-6, "{p:?}");
+        assert!(
+            (p[0] - 0.9).abs() < 1e-6 && (p[1] + 1.9).abs() < 1e-6,
+            "{p:?}"
+        );
     }
 }

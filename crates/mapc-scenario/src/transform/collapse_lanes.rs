@@ -24,7 +24,9 @@ pub fn apply(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, Transf
     sort_connections(&mut c.graph);
     let before = c.graph.connections.len();
     let mut seen = HashSet::new();
-    c.graph.connections.retain(|k| seen.insert((k.junction, k.from_road, k.to_road)));
+    c.graph
+        .connections
+        .retain(|k| seen.insert((k.junction, k.from_road, k.to_road)));
     for k in &mut c.graph.connections {
         k.from_lane = 0;
         k.to_lane = 0;

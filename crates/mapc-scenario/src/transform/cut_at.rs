@@ -3,7 +3,9 @@
 //! the same fraction of its drawn length, and lengths are split so that they add up to the road's.
 
 use super::{TransformError, mark, sort_connections};
-use mapc_graph::{Connection, Junction, JunctionId, JunctionKind, LaneGraph, Provenance, RightOfWay, RoadId};
+use mapc_graph::{
+    Connection, Junction, JunctionId, JunctionKind, LaneGraph, Provenance, RightOfWay, RoadId,
+};
 
 pub const CUT_AT: &str = "cut_at";
 
@@ -17,7 +19,13 @@ fn point_along(line: &[[f64; 2]], fraction: f64) -> ([f64; 2], usize) {
         let l = seg_len(w);
         if walked + l >= target && l > 0.0 {
             let t = ((target - walked) / l).clamp(0.0, 1.0);
-            return ([w[0][0] + t * (w[1][0] - w[0][0]), w[0][1] + t * (w[1][1] - w[0][1])], i);
+            return (
+                [
+                    w[0][0] + t * (w[1][0] - w[0][0]),
+                    w[0][1] + t * (w[1][1] - w[0][1]),
+                ],
+                i,
+            );
         }
         walked += l;
     }
@@ -26,8 +34,15 @@ fn point_along(line: &[[f64; 2]], fraction: f64) -> ([f64; 2], usize) {
 
 /// Cut `road` at `at_m` metres from its start (strictly inside it). Returns (first piece, second piece, new
 /// junction).
-pub fn cut_road(g: &mut LaneGraph, road: RoadId, at_m: f64) -> Result<(RoadId, RoadId, JunctionId), TransformError> {
-    let r = g.road(road).ok_or_else(|| TransformError::Cut(format!("no road {road} to cut")))?.clone();
+pub fn cut_road(
+    g: &mut LaneGraph,
+    road: RoadId,
+    at_m: f64,
+) -> Result<(RoadId, RoadId, JunctionId), TransformError> {
+    let r = g
+        .road(road)
+        .ok_or_else(|| TransformError::Cut(format!("no road {road} to cut")))?
+        .clone();
     if !(at_m > 0.0 && at_m < r.length_m) {
         return Err(TransformError::Cut(format!(
             "cannot cut road {road} ({:.2} m long) at {at_m:.2} m from its start",
@@ -43,7 +58,12 @@ pub fn cut_road(g: &mut LaneGraph, road: RoadId, at_m: f64) -> Result<(RoadId, R
         first_geom.push(point);
     }
     let mut second_geom = vec![point];
-    second_geom.extend(r.geometry[seg + 1..].iter().copied().filter(|p| *p != point));
+    second_geom.extend(
+        r.geometry[seg + 1..]
+            .iter()
+            .copied()
+            .filter(|p| *p != point),
+    );
     if second_geom.len() < 2 {
         second_geom.push(*r.geometry.last().unwrap());
     }

@@ -10,7 +10,12 @@ pub const DROP_DIVERGES: &str = "drop_diverges";
 pub const KEEP_EXITS: &str = "keep_exits";
 
 fn diverging_roads(c: &Corridor) -> Vec<RoadId> {
-    let taken: HashSet<RoadId> = c.main.iter().chain(c.feeders.iter().flatten()).copied().collect();
+    let taken: HashSet<RoadId> = c
+        .main
+        .iter()
+        .chain(c.feeders.iter().flatten())
+        .copied()
+        .collect();
     interior_junctions(&c.graph, &c.main)
         .into_iter()
         .flat_map(|j| c.graph.junction(j).unwrap().outgoing.clone())
@@ -25,9 +30,16 @@ pub fn drop_diverges(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String
 
 pub fn keep_exits(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, TransformError> {
     let g = &c.graph;
-    let mut taken: HashSet<RoadId> = c.main.iter().chain(c.feeders.iter().flatten()).copied().collect();
-    let corridor_junctions: HashSet<JunctionId> =
-        taken.iter().flat_map(|r| [g.road(*r).unwrap().from, g.road(*r).unwrap().to]).collect();
+    let mut taken: HashSet<RoadId> = c
+        .main
+        .iter()
+        .chain(c.feeders.iter().flatten())
+        .copied()
+        .collect();
+    let corridor_junctions: HashSet<JunctionId> = taken
+        .iter()
+        .flat_map(|r| [g.road(*r).unwrap().from, g.road(*r).unwrap().to])
+        .collect();
     let mut exits = Vec::new();
     let mut loops = 0;
     for first in diverging_roads(c) {
@@ -36,7 +48,9 @@ pub fn keep_exits(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, T
         }
         let mut chain = vec![first];
         loop {
-            let end = g.junction(g.road(*chain.last().unwrap()).unwrap().to).unwrap();
+            let end = g
+                .junction(g.road(*chain.last().unwrap()).unwrap().to)
+                .unwrap();
             if end.incoming.len() != 1 || end.outgoing.len() != 1 {
                 break;
             }

@@ -20,19 +20,33 @@ pub fn join_at(c: &mut Corridor, j: JunctionId) -> Option<(RoadId, RoadId)> {
     if a_id == b_id || a.from == b.to {
         return None;
     }
-    let via = g.connections.iter().find(|k| k.from_road == a_id && k.to_road == b_id);
+    let via = g
+        .connections
+        .iter()
+        .find(|k| k.from_road == a_id && k.to_road == b_id);
     let via_m = via.map_or(0.0, |k| k.via_length_m);
     let via_speed = via.and_then(|k| k.via_speed_mps).unwrap_or(b.speed_mps());
     let length = a.length_m + via_m + b.length_m;
     let travel_s = a.length_m / a.speed_mps() + via_m / via_speed + b.length_m / b.speed_mps();
-    let speed = if travel_s.is_finite() && travel_s > 0.0 { length / travel_s } else { a.speed_mps() };
+    let speed = if travel_s.is_finite() && travel_s > 0.0 {
+        length / travel_s
+    } else {
+        a.speed_mps()
+    };
     let longer = if b.length_m > a.length_m { b } else { a };
-    let (class, name, ref_) = (longer.class.clone(), longer.name.clone(), longer.ref_.clone());
+    let (class, name, ref_) = (
+        longer.class.clone(),
+        longer.name.clone(),
+        longer.ref_.clone(),
+    );
     let priority = b.priority;
     let mut geometry = a.geometry.clone();
     let skip = usize::from(b.geometry.first() == a.geometry.last());
     geometry.extend_from_slice(&b.geometry[skip..]);
-    let mut provenance = a.provenance.merged(&junction.provenance).merged(&b.provenance);
+    let mut provenance = a
+        .provenance
+        .merged(&junction.provenance)
+        .merged(&b.provenance);
     mark(&mut provenance, NAME);
     let to = b.to;
 
@@ -56,7 +70,10 @@ pub fn join_at(c: &mut Corridor, j: JunctionId) -> Option<(RoadId, RoadId)> {
             k.from_road = a_id;
         }
     }
-    for chain in std::iter::once(&mut c.main).chain(&mut c.feeders).chain(&mut c.exits) {
+    for chain in std::iter::once(&mut c.main)
+        .chain(&mut c.feeders)
+        .chain(&mut c.exits)
+    {
         chain.retain(|r| *r != b_id);
     }
     Some((a_id, b_id))
@@ -65,8 +82,13 @@ pub fn join_at(c: &mut Corridor, j: JunctionId) -> Option<(RoadId, RoadId)> {
 pub fn apply(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, TransformError> {
     let roads_before = c.graph.roads.len();
     let mut joints = 0;
-    let candidates: Vec<JunctionId> =
-        c.graph.junctions.iter().filter(|j| j.kind == JunctionKind::Through).map(|j| j.id).collect();
+    let candidates: Vec<JunctionId> = c
+        .graph
+        .junctions
+        .iter()
+        .filter(|j| j.kind == JunctionKind::Through)
+        .map(|j| j.id)
+        .collect();
     for j in candidates {
         if join_at(c, j).is_some() {
             joints += 1;
@@ -78,6 +100,10 @@ pub fn apply(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, Transf
         "{joints} joints removed: {roads_before} roads joined into {} (main road {} roads, merging roads {})",
         c.graph.roads.len(),
         c.main.len(),
-        c.feeders.iter().map(|f| f.len().to_string()).collect::<Vec<_>>().join("/")
+        c.feeders
+            .iter()
+            .map(|f| f.len().to_string())
+            .collect::<Vec<_>>()
+            .join("/")
     ))
 }

@@ -11,14 +11,20 @@ pub const NAME: &str = "keep_feeders";
 
 /// Junctions inside the main road (not its two ends), in driving order.
 pub fn interior_junctions(g: &LaneGraph, main: &[RoadId]) -> Vec<JunctionId> {
-    main.iter().skip(1).map(|r| g.road(*r).unwrap().from).collect()
+    main.iter()
+        .skip(1)
+        .map(|r| g.road(*r).unwrap().from)
+        .collect()
 }
 
 pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, TransformError> {
     let g = &c.graph;
     let main_set: HashSet<RoadId> = c.main.iter().copied().collect();
-    let main_junctions: HashSet<JunctionId> =
-        c.main.iter().flat_map(|r| [g.road(*r).unwrap().from, g.road(*r).unwrap().to]).collect();
+    let main_junctions: HashSet<JunctionId> = c
+        .main
+        .iter()
+        .flat_map(|r| [g.road(*r).unwrap().from, g.road(*r).unwrap().to])
+        .collect();
     let mut taken: HashSet<RoadId> = main_set.clone();
     let mut feeders = Vec::new();
     let mut loops = Vec::new();
@@ -60,12 +66,19 @@ pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, Transfo
     }
     let pieces: usize = feeders.iter().map(Vec::len).sum();
     c.feeders = feeders;
-    let mut summary = format!("{} merging roads kept ({pieces} road pieces)", c.feeders.len());
+    let mut summary = format!(
+        "{} merging roads kept ({pieces} road pieces)",
+        c.feeders.len()
+    );
     if !loops.is_empty() {
         summary += &format!(
             "; {} roads that leave and rejoin the main road dropped ({})",
             loops.len(),
-            loops.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(", ")
+            loops
+                .iter()
+                .map(|r| r.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
     Ok(summary)

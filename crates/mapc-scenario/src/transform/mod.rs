@@ -18,7 +18,9 @@ pub mod trim_feeders;
 
 pub use cut_at::{CUT_AT, cut_road};
 
-use mapc_graph::{Connection, JunctionId, LaneGraph, LookupError, Provenance, RightOfWay, RoadId, Topology};
+use mapc_graph::{
+    Connection, JunctionId, LaneGraph, LookupError, Provenance, RightOfWay, RoadId, Topology,
+};
 use std::collections::HashSet;
 
 /// How far a step that must keep lengths may change them (metres).
@@ -37,7 +39,10 @@ pub enum TransformError {
     #[error("{0}")]
     NoRoute(String),
     #[error("after step `{step}` the graph breaks its invariants: {}", violations.join("; "))]
-    Invariant { step: String, violations: Vec<String> },
+    Invariant {
+        step: String,
+        violations: Vec<String>,
+    },
     #[error("{0}")]
     NotACorridor(String),
     #[error("{0}")]
@@ -62,7 +67,9 @@ impl Default for SimplifyOptions {
     fn default() -> Self {
         SimplifyOptions {
             via: Vec::new(),
-            classes: ["motorway", "motorway_link", "trunk", "trunk_link"].map(String::from).to_vec(),
+            classes: ["motorway", "motorway_link", "trunk", "trunk_link"]
+                .map(String::from)
+                .to_vec(),
             feeder_length_m: None,
             keep_exits: false,
         }
@@ -94,15 +101,30 @@ pub struct Corridor {
 
 impl Corridor {
     pub fn new(graph: LaneGraph) -> Corridor {
-        Corridor { graph, main: vec![], feeders: vec![], exits: vec![], pruned: false, single_lane: false }
+        Corridor {
+            graph,
+            main: vec![],
+            feeders: vec![],
+            exits: vec![],
+            pruned: false,
+            single_lane: false,
+        }
     }
 
     /// Driving length of a chain of roads: the roads plus the connections between consecutive ones.
     pub fn chain_length_m(g: &LaneGraph, chain: &[RoadId]) -> f64 {
-        let roads: f64 = chain.iter().filter_map(|r| g.road(*r)).map(|r| r.length_m).sum();
+        let roads: f64 = chain
+            .iter()
+            .filter_map(|r| g.road(*r))
+            .map(|r| r.length_m)
+            .sum();
         let vias: f64 = chain
             .windows(2)
-            .filter_map(|w| g.connections.iter().find(|c| c.from_road == w[0] && c.to_road == w[1]))
+            .filter_map(|w| {
+                g.connections
+                    .iter()
+                    .find(|c| c.from_road == w[0] && c.to_road == w[1])
+            })
             .map(|c| c.via_length_m)
             .sum();
         roads + vias
@@ -111,7 +133,10 @@ impl Corridor {
     fn role_lengths(&self) -> (f64, Vec<f64>) {
         (
             Self::chain_length_m(&self.graph, &self.main),
-            self.feeders.iter().map(|f| Self::chain_length_m(&self.graph, f)).collect(),
+            self.feeders
+                .iter()
+                .map(|f| Self::chain_length_m(&self.graph, f))
+                .collect(),
         )
     }
 }
@@ -133,19 +158,51 @@ pub struct StepReport {
 /// The steps of `simplify`, in order, for these options.
 pub fn simplify_steps(opts: &SimplifyOptions) -> Vec<Step> {
     let mut steps = vec![
-        Step { name: pick_route::NAME, changes_lengths: true, apply: pick_route::apply },
-        Step { name: keep_feeders::NAME, changes_lengths: true, apply: keep_feeders::apply },
-        if opts.keep_exits {
-            Step { name: diverges::KEEP_EXITS, changes_lengths: false, apply: diverges::keep_exits }
-        } else {
-            Step { name: diverges::DROP_DIVERGES, changes_lengths: false, apply: diverges::drop_diverges }
+        Step {
+            name: pick_route::NAME,
+            changes_lengths: true,
+            apply: pick_route::apply,
         },
-        Step { name: prune::NAME, changes_lengths: false, apply: prune::apply },
-        Step { name: collapse_lanes::NAME, changes_lengths: false, apply: collapse_lanes::apply },
-        Step { name: join_chains::NAME, changes_lengths: false, apply: join_chains::apply },
+        Step {
+            name: keep_feeders::NAME,
+            changes_lengths: true,
+            apply: keep_feeders::apply,
+        },
+        if opts.keep_exits {
+            Step {
+                name: diverges::KEEP_EXITS,
+                changes_lengths: false,
+                apply: diverges::keep_exits,
+            }
+        } else {
+            Step {
+                name: diverges::DROP_DIVERGES,
+                changes_lengths: false,
+                apply: diverges::drop_diverges,
+            }
+        },
+        Step {
+            name: prune::NAME,
+            changes_lengths: false,
+            apply: prune::apply,
+        },
+        Step {
+            name: collapse_lanes::NAME,
+            changes_lengths: false,
+            apply: collapse_lanes::apply,
+        },
+        Step {
+            name: join_chains::NAME,
+            changes_lengths: false,
+            apply: join_chains::apply,
+        },
     ];
     if opts.feeder_length_m.is_some() {
-        steps.push(Step { name: trim_feeders::NAME, changes_lengths: true, apply: trim_feeders::apply });
+        steps.push(Step {
+            name: trim_feeders::NAME,
+            changes_lengths: true,
+            apply: trim_feeders::apply,
+        });
     }
     steps
 }
@@ -160,19 +217,36 @@ pub fn run_steps(
     for step in steps {
         let before = corridor.role_lengths();
         let summary = (step.apply)(corridor, opts)?;
-        check(corridor, step.name, if step.changes_lengths { None } else { Some(&before) })?;
-        reports.push(StepReport { step: step.name.to_string(), summary });
+        check(
+            corridor,
+            step.name,
+            if step.changes_lengths {
+                None
+            } else {
+                Some(&before)
+            },
+        )?;
+        reports.push(StepReport {
+            step: step.name.to_string(),
+            summary,
+        });
     }
     Ok(reports)
 }
 
 /// The invariants after a step; `lengths_before` is given when the step must keep lengths.
-pub fn check(c: &Corridor, step: &str, lengths_before: Option<&(f64, Vec<f64>)>) -> Result<(), TransformError> {
+pub fn check(
+    c: &Corridor,
+    step: &str,
+    lengths_before: Option<&(f64, Vec<f64>)>,
+) -> Result<(), TransformError> {
     let mut violations = c.graph.invariant_violations();
     if c.pruned {
         let pieces = Topology::new(&c.graph).component_count();
         if pieces != 1 {
-            violations.push(format!("the corridor falls into {pieces} disconnected pieces"));
+            violations.push(format!(
+                "the corridor falls into {pieces} disconnected pieces"
+            ));
         }
     }
     if c.single_lane {
@@ -186,29 +260,51 @@ pub fn check(c: &Corridor, step: &str, lengths_before: Option<&(f64, Vec<f64>)>)
             let (a, b) = (c.graph.road(w[0]), c.graph.road(w[1]));
             if let (Some(a), Some(b)) = (a, b) {
                 if a.to != b.from {
-                    violations.push(format!("roads {} and {} of one chain do not meet", a.id, b.id));
+                    violations.push(format!(
+                        "roads {} and {} of one chain do not meet",
+                        a.id, b.id
+                    ));
                 }
             } else {
-                violations.push(format!("a chain names a missing road ({} or {})", w[0], w[1]));
+                violations.push(format!(
+                    "a chain names a missing road ({} or {})",
+                    w[0], w[1]
+                ));
             }
         }
     }
     if let Some((main_before, feeders_before)) = lengths_before {
         let (main_after, feeders_after) = c.role_lengths();
         if (main_after - main_before).abs() > LENGTH_TOLERANCE_M {
-            violations.push(format!("the main road's length went from {main_before:.2} m to {main_after:.2} m"));
+            violations.push(format!(
+                "the main road's length went from {main_before:.2} m to {main_after:.2} m"
+            ));
         }
         if feeders_before.len() != feeders_after.len() {
-            violations.push(format!("{} merging roads became {}", feeders_before.len(), feeders_after.len()));
+            violations.push(format!(
+                "{} merging roads became {}",
+                feeders_before.len(),
+                feeders_after.len()
+            ));
         } else {
             for (i, (b, a)) in feeders_before.iter().zip(&feeders_after).enumerate() {
                 if (a - b).abs() > LENGTH_TOLERANCE_M {
-                    violations.push(format!("merging road {} went from {b:.2} m to {a:.2} m", i + 1));
+                    violations.push(format!(
+                        "merging road {} went from {b:.2} m to {a:.2} m",
+                        i + 1
+                    ));
                 }
             }
         }
     }
-    if violations.is_empty() { Ok(()) } else { Err(TransformError::Invariant { step: step.to_string(), violations }) }
+    if violations.is_empty() {
+        Ok(())
+    } else {
+        Err(TransformError::Invariant {
+            step: step.to_string(),
+            violations,
+        })
+    }
 }
 
 /// Add `step` to a provenance's `made_by` once.
@@ -221,17 +317,33 @@ pub fn mark(p: &mut Provenance, step: &str) {
 /// A connection from `from` to `to` at their common junction when there is none (OSM input has none on some
 /// joints); the right of way follows the road priorities at that junction.
 pub fn ensure_connection(g: &mut LaneGraph, from: RoadId, to: RoadId, step: &str) {
-    if g.connections.iter().any(|c| c.from_road == from && c.to_road == to) {
+    if g.connections
+        .iter()
+        .any(|c| c.from_road == from && c.to_road == to)
+    {
         return;
     }
-    let (Some(a), Some(b)) = (g.road(from), g.road(to)) else { return };
+    let (Some(a), Some(b)) = (g.road(from), g.road(to)) else {
+        return;
+    };
     let junction = a.to;
     let _ = b;
     let top_priority = g
         .junction(junction)
-        .map(|j| j.incoming.iter().filter_map(|r| g.road(*r)).map(|r| r.priority).max().unwrap_or(a.priority))
+        .map(|j| {
+            j.incoming
+                .iter()
+                .filter_map(|r| g.road(*r))
+                .map(|r| r.priority)
+                .max()
+                .unwrap_or(a.priority)
+        })
         .unwrap_or(a.priority);
-    let right_of_way = if a.priority >= top_priority { RightOfWay::Major } else { RightOfWay::Minor };
+    let right_of_way = if a.priority >= top_priority {
+        RightOfWay::Major
+    } else {
+        RightOfWay::Minor
+    };
     g.connections.push(Connection {
         junction,
         from_road: from,
@@ -248,13 +360,15 @@ pub fn ensure_connection(g: &mut LaneGraph, from: RoadId, to: RoadId, step: &str
 }
 
 pub fn sort_connections(g: &mut LaneGraph) {
-    g.connections.sort_by_key(|c| (c.junction, c.from_road, c.from_lane, c.to_road, c.to_lane));
+    g.connections
+        .sort_by_key(|c| (c.junction, c.from_road, c.from_lane, c.to_road, c.to_lane));
 }
 
 /// Remove roads (and their connections), then junctions left with no road.
 pub fn remove_roads(g: &mut LaneGraph, gone: &HashSet<RoadId>) {
     g.roads.retain(|r| !gone.contains(&r.id));
-    g.connections.retain(|c| !gone.contains(&c.from_road) && !gone.contains(&c.to_road));
+    g.connections
+        .retain(|c| !gone.contains(&c.from_road) && !gone.contains(&c.to_road));
     let used: HashSet<JunctionId> = g.roads.iter().flat_map(|r| [r.from, r.to]).collect();
     g.junctions.retain(|j| used.contains(&j.id));
     g.rebuild_junction_links();
@@ -271,7 +385,11 @@ pub struct CorridorRoles {
 impl CorridorRoles {
     pub fn of(g: &LaneGraph) -> Result<CorridorRoles, TransformError> {
         let with = |role: &str| -> Vec<RoadId> {
-            g.roads.iter().filter(|r| r.provenance.made_by.iter().any(|m| m == role)).map(|r| r.id).collect()
+            g.roads
+                .iter()
+                .filter(|r| r.provenance.made_by.iter().any(|m| m == role))
+                .map(|r| r.id)
+                .collect()
         };
         let main_set = with(ROLE_MAIN);
         if main_set.is_empty() {
@@ -289,7 +407,11 @@ impl CorridorRoles {
             )));
         }
         let main = main.into_iter().next().unwrap();
-        Ok(CorridorRoles { main, feeders: chains_of(g, &with(ROLE_FEEDER)), exits: chains_of(g, &with(ROLE_EXIT)) })
+        Ok(CorridorRoles {
+            main,
+            feeders: chains_of(g, &with(ROLE_FEEDER)),
+            exits: chains_of(g, &with(ROLE_EXIT)),
+        })
     }
 }
 
@@ -302,9 +424,11 @@ pub fn chains_of(g: &LaneGraph, roads: &[RoadId]) -> Vec<Vec<RoadId>> {
     let mut used = HashSet::new();
     for &r in &sorted {
         let road = g.road(r).unwrap();
-        let has_pred = g
-            .junction(road.from)
-            .is_some_and(|j| j.incoming.iter().any(|p| set.contains(p) && !used.contains(p) && *p != r));
+        let has_pred = g.junction(road.from).is_some_and(|j| {
+            j.incoming
+                .iter()
+                .any(|p| set.contains(p) && !used.contains(p) && *p != r)
+        });
         if has_pred || used.contains(&r) {
             continue;
         }
@@ -313,7 +437,11 @@ pub fn chains_of(g: &LaneGraph, roads: &[RoadId]) -> Vec<Vec<RoadId>> {
         let mut cur = r;
         loop {
             let to = g.road(cur).unwrap().to;
-            let next = g.junction(to).and_then(|j| j.outgoing.iter().find(|n| set.contains(n) && !used.contains(n)));
+            let next = g.junction(to).and_then(|j| {
+                j.outgoing
+                    .iter()
+                    .find(|n| set.contains(n) && !used.contains(n))
+            });
             match next {
                 Some(&n) => {
                     used.insert(n);
@@ -340,14 +468,19 @@ pub(crate) mod test_maps {
     use mapc_graph::*;
 
     fn polyline_length(g: &[[f64; 2]]) -> f64 {
-        g.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum()
+        g.windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum()
     }
 
     /// A map from junction positions and roads `(from, to, class, lanes, bends)`; roads are numbered in order,
     /// lengths are their drawn lengths, every pair of consecutive roads is connected lane 0 to lane 0.
     pub fn build(junctions: &[[f64; 2]], roads: &[(u32, u32, &str, u8, &[[f64; 2]])]) -> LaneGraph {
         let mut g = LaneGraph::new(
-            Source { file: "test".into(), format: SourceFormat::Generator },
+            Source {
+                file: "test".into(),
+                format: SourceFormat::Generator,
+            },
             Projection::Plane { offset: [0.0, 0.0] },
         );
         g.junctions = junctions
@@ -378,10 +511,20 @@ pub(crate) mod test_maps {
                     name: None,
                     ref_: None,
                     priority: if class == "motorway" { 13 } else { 12 },
-                    lanes: (0..lanes).map(|index| Lane { index, speed_mps: 30.0, width_m: 3.5, length_m }).collect(),
+                    lanes: (0..lanes)
+                        .map(|index| Lane {
+                            index,
+                            speed_mps: 30.0,
+                            width_m: 3.5,
+                            length_m,
+                        })
+                        .collect(),
                     geometry,
                     length_m,
-                    provenance: Provenance { osm_ways: vec![500 + i as i64], ..Default::default() },
+                    provenance: Provenance {
+                        osm_ways: vec![500 + i as i64],
+                        ..Default::default()
+                    },
                 }
             })
             .collect();
@@ -389,10 +532,19 @@ pub(crate) mod test_maps {
         let pairs: Vec<(RoadId, RoadId, JunctionId)> = g
             .roads
             .iter()
-            .flat_map(|a| g.roads.iter().filter(move |b| b.from == a.to).map(move |b| (a.id, b.id, a.to)))
+            .flat_map(|a| {
+                g.roads
+                    .iter()
+                    .filter(move |b| b.from == a.to)
+                    .map(move |b| (a.id, b.id, a.to))
+            })
             .collect();
         for (a, b, j) in pairs {
-            let row = if g.road(a).unwrap().class == "motorway" { RightOfWay::Major } else { RightOfWay::Minor };
+            let row = if g.road(a).unwrap().class == "motorway" {
+                RightOfWay::Major
+            } else {
+                RightOfWay::Minor
+            };
             g.connections.push(Connection {
                 junction: j,
                 from_road: a,
@@ -431,17 +583,17 @@ pub(crate) mod test_maps {
         build(
             &j,
             &[
-                (0, 1, "motorway", 3, &[]),                     // R0
-                (1, 2, "motorway", 2, &[]),                     // R1
+                (0, 1, "motorway", 3, &[]),                      // R0
+                (1, 2, "motorway", 2, &[]),                      // R1
                 (4, 3, "motorway_link", 1, &[[1100.0, -300.0]]), // R2
-                (3, 2, "motorway_link", 1, &[]),                // R3
-                (2, 5, "motorway", 3, &[]),                     // R4
-                (5, 8, "motorway_link", 1, &[]),                // R5 exit
-                (5, 6, "motorway", 2, &[]),                     // R6
-                (6, 7, "motorway", 2, &[]),                     // R7
-                (5, 6, "motorway_link", 1, &[[2450.0, 60.0]]),  // R8 collector, leaves and rejoins
-                (9, 10, "motorway", 2, &[]),                    // R9
-                (11, 12, "primary", 1, &[]),                    // R10
+                (3, 2, "motorway_link", 1, &[]),                 // R3
+                (2, 5, "motorway", 3, &[]),                      // R4
+                (5, 8, "motorway_link", 1, &[]),                 // R5 exit
+                (5, 6, "motorway", 2, &[]),                      // R6
+                (6, 7, "motorway", 2, &[]),                      // R7
+                (5, 6, "motorway_link", 1, &[[2450.0, 60.0]]),   // R8 collector, leaves and rejoins
+                (9, 10, "motorway", 2, &[]),                     // R9
+                (11, 12, "primary", 1, &[]),                     // R10
             ],
         )
     }

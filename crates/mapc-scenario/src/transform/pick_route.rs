@@ -27,7 +27,11 @@ pub fn resolve_via(g: &LaneGraph, query: &str) -> Result<Waypoint, TransformErro
                 return Err(TransformError::NoRoute(format!(
                     "--via `{query}` names {} separate stretches of road ({}); name one with a mapc id",
                     chains.len(),
-                    chains.iter().map(|c| c[0].to_string()).collect::<Vec<_>>().join(", ")
+                    chains
+                        .iter()
+                        .map(|c| c[0].to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 )));
             }
             return Ok(Waypoint::Roads(chains.into_iter().next().unwrap()));
@@ -37,9 +41,14 @@ pub fn resolve_via(g: &LaneGraph, query: &str) -> Result<Waypoint, TransformErro
         Ok(j) => Ok(Waypoint::Junction(j)),
         Err(source) => {
             if is_junction_syntax {
-                Err(TransformError::Via { query: query.to_string(), source })
+                Err(TransformError::Via {
+                    query: query.to_string(),
+                    source,
+                })
             } else {
-                Err(TransformError::NoRoute(format!("--via `{query}`: no road or junction of that id in this graph")))
+                Err(TransformError::NoRoute(format!(
+                    "--via `{query}`: no road or junction of that id in this graph"
+                )))
             }
         }
     }
@@ -68,7 +77,11 @@ fn longest_route(
     let mut seen = HashSet::from([start]);
     while let Some(&(_, Some(r))) = memo.get(&cur) {
         let road = g.road(r).unwrap();
-        cur = if dir == Direction::Downstream { road.to } else { road.from };
+        cur = if dir == Direction::Downstream {
+            road.to
+        } else {
+            road.from
+        };
         if !seen.insert(cur) {
             break;
         }
@@ -94,12 +107,22 @@ fn longest_from(
         return d;
     }
     in_progress.insert(j);
-    let Some(junction) = g.junction(j) else { return 0.0 };
-    let candidates = if dir == Direction::Downstream { &junction.outgoing } else { &junction.incoming };
+    let Some(junction) = g.junction(j) else {
+        return 0.0;
+    };
+    let candidates = if dir == Direction::Downstream {
+        &junction.outgoing
+    } else {
+        &junction.incoming
+    };
     let mut best: (f64, Option<RoadId>) = (0.0, None);
     for &rid in candidates {
         let road = g.road(rid).unwrap();
-        let next = if dir == Direction::Downstream { road.to } else { road.from };
+        let next = if dir == Direction::Downstream {
+            road.to
+        } else {
+            road.from
+        };
         if !allowed(road) || avoid.contains(&next) || in_progress.contains(&next) || next == j {
             continue;
         }
@@ -131,7 +154,11 @@ pub fn route_through(
         if let Some(e) = end {
             if e != target {
                 let path = g.shortest_route(e, target).ok_or_else(|| {
-                    TransformError::NoRoute(format!("no route from {} to {} (in the --via order)", name(e), name(target)))
+                    TransformError::NoRoute(format!(
+                        "no route from {} to {} (in the --via order)",
+                        name(e),
+                        name(target)
+                    ))
                 })?;
                 route.extend(path);
             }
@@ -159,20 +186,40 @@ pub fn route_through(
             )));
         }
     }
-    let (_, upstream) = longest_route(g, start, Direction::Upstream, allowed, &on_route, &mut HashMap::new());
+    let (_, upstream) = longest_route(
+        g,
+        start,
+        Direction::Upstream,
+        allowed,
+        &on_route,
+        &mut HashMap::new(),
+    );
     on_route.extend(upstream.iter().map(|r| g.road(*r).unwrap().from));
-    let (_, downstream) = longest_route(g, end, Direction::Downstream, allowed, &on_route, &mut HashMap::new());
+    let (_, downstream) = longest_route(
+        g,
+        end,
+        Direction::Downstream,
+        allowed,
+        &on_route,
+        &mut HashMap::new(),
+    );
     let mut full = upstream;
     full.extend(route);
     full.extend(downstream);
     if full.is_empty() {
-        return Err(TransformError::NoRoute(format!("no road of the allowed classes passes {}", name(start))));
+        return Err(TransformError::NoRoute(format!(
+            "no road of the allowed classes passes {}",
+            name(start)
+        )));
     }
     Ok(full)
 }
 
 /// The longest through route of the whole map over allowed roads.
-pub fn longest_through_route(g: &LaneGraph, allowed: &dyn Fn(&Road) -> bool) -> Result<Vec<RoadId>, TransformError> {
+pub fn longest_through_route(
+    g: &LaneGraph,
+    allowed: &dyn Fn(&Road) -> bool,
+) -> Result<Vec<RoadId>, TransformError> {
     let mut memo = HashMap::new();
     let avoid = HashSet::new();
     let mut best: (f64, Option<JunctionId>) = (0.0, None);
@@ -183,7 +230,9 @@ pub fn longest_through_route(g: &LaneGraph, allowed: &dyn Fn(&Road) -> bool) -> 
         }
     }
     let Some(start) = best.1 else {
-        return Err(TransformError::NoRoute("no road of the allowed classes in this map".into()));
+        return Err(TransformError::NoRoute(
+            "no road of the allowed classes in this map".into(),
+        ));
     };
     Ok(longest_route(g, start, Direction::Downstream, allowed, &avoid, &mut memo).1)
 }
@@ -191,7 +240,10 @@ pub fn longest_through_route(g: &LaneGraph, allowed: &dyn Fn(&Road) -> bool) -> 
 /// `J12 (osm:61862553)` or `J12 (gneJ18)`.
 pub fn describe_junction(g: &LaneGraph, j: JunctionId) -> String {
     match g.junction(j) {
-        Some(junction) => match (junction.provenance.osm_nodes.first(), junction.provenance.sumo_ids.first()) {
+        Some(junction) => match (
+            junction.provenance.osm_nodes.first(),
+            junction.provenance.sumo_ids.first(),
+        ) {
             (Some(n), _) => format!("{j} (osm:{n})"),
             (None, Some(s)) => format!("{j} ({s})"),
             (None, None) => j.to_string(),
@@ -205,7 +257,11 @@ pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, Transfo
     let route = if opts.via.is_empty() {
         longest_through_route(&c.graph, &allowed)?
     } else {
-        let waypoints = opts.via.iter().map(|v| resolve_via(&c.graph, v)).collect::<Result<Vec<_>, _>>()?;
+        let waypoints = opts
+            .via
+            .iter()
+            .map(|v| resolve_via(&c.graph, v))
+            .collect::<Result<Vec<_>, _>>()?;
         route_through(&c.graph, &waypoints, &allowed)?
     };
     for r in &route {

@@ -9,18 +9,42 @@ use std::collections::HashSet;
 pub const NAME: &str = "prune";
 
 pub fn apply(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, TransformError> {
-    let keep: HashSet<RoadId> =
-        c.main.iter().chain(c.feeders.iter().flatten()).chain(c.exits.iter().flatten()).copied().collect();
-    let gone: HashSet<RoadId> = c.graph.roads.iter().map(|r| r.id).filter(|r| !keep.contains(r)).collect();
-    let (roads_before, junctions_before, connections_before) =
-        (c.graph.roads.len(), c.graph.junctions.len(), c.graph.connections.len());
+    let keep: HashSet<RoadId> = c
+        .main
+        .iter()
+        .chain(c.feeders.iter().flatten())
+        .chain(c.exits.iter().flatten())
+        .copied()
+        .collect();
+    let gone: HashSet<RoadId> = c
+        .graph
+        .roads
+        .iter()
+        .map(|r| r.id)
+        .filter(|r| !keep.contains(r))
+        .collect();
+    let (roads_before, junctions_before, connections_before) = (
+        c.graph.roads.len(),
+        c.graph.junctions.len(),
+        c.graph.connections.len(),
+    );
     remove_roads(&mut c.graph, &gone);
     let mut pairs: Vec<(RoadId, RoadId)> = Vec::new();
     for chain in std::iter::once(&c.main).chain(&c.feeders).chain(&c.exits) {
         pairs.extend(chain.windows(2).map(|w| (w[0], w[1])));
     }
-    let main_from = |j| c.main.iter().copied().find(|r| c.graph.road(*r).unwrap().from == j);
-    let main_into = |j| c.main.iter().copied().find(|r| c.graph.road(*r).unwrap().to == j);
+    let main_from = |j| {
+        c.main
+            .iter()
+            .copied()
+            .find(|r| c.graph.road(*r).unwrap().from == j)
+    };
+    let main_into = |j| {
+        c.main
+            .iter()
+            .copied()
+            .find(|r| c.graph.road(*r).unwrap().to == j)
+    };
     for f in &c.feeders {
         let last = *f.last().unwrap();
         if let Some(next) = main_from(c.graph.road(last).unwrap().to) {

@@ -8,7 +8,9 @@ use std::collections::HashSet;
 pub const NAME: &str = "trim_feeders";
 
 pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, TransformError> {
-    let Some(limit) = opts.feeder_length_m else { return Ok("no --feeder-length".into()) };
+    let Some(limit) = opts.feeder_length_m else {
+        return Ok("no --feeder-length".into());
+    };
     let mut trimmed = 0;
     for i in 0..c.feeders.len() {
         let total = Corridor::chain_length_m(&c.graph, &c.feeders[i]);
