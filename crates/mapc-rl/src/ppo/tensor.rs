@@ -16,6 +16,11 @@ pub fn fast_tanh(x: f32) -> f32 {
     1.0 - 2.0 / ((2.0 * x).exp() + 1.0)
 }
 
+/// Bounds of the policy's log standard deviation, as the rollout and the loss see it. Without them a collapsing
+/// head drives exp(-log_std) to infinity and every later gradient is NaN; mean actions are unaffected.
+pub const LOG_STD_MIN: f32 = -5.0;
+pub const LOG_STD_MAX: f32 = 2.0;
+
 const LN_2PI: f32 = 1.837_877_1;
 
 /// Sizes of the two networks. The policy net ends in `2 * act_dim` outputs (means then log-stds: the log-std is
@@ -144,7 +149,10 @@ impl Model {
         let mut out = Vec::new();
         mlp_forward(pp, &self.arch.policy_sizes(), obs, &mut scratch.a, &mut out);
         let mean = out[..a].to_vec();
-        let log_std = out[a..2 * a].to_vec();
+        let log_std = out[a..2 * a]
+            .iter()
+            .map(|x| x.clamp(LOG_STD_MIN, LOG_STD_MAX))
+            .collect();
         mlp_forward(
             vp,
             &self.arch.value_sizes(),
@@ -278,7 +286,7 @@ pub fn loss_and_grad(
     let obs = leaf(mb.obs.to_vec(), [n, arch.obs_dim], device);
     let out = burn_mlp(obs.clone(), &leaves[..n_policy_layers]);
     let mean = out.clone().narrow(1, 0, a);
-    let log_std = out.narrow(1, a, a);
+    let log_std = out.narrow(1, a, a).clamp(LOG_STD_MIN, LOG_STD_MAX);
     let actions = leaf(mb.actions.to_vec(), [n, a], device);
     let old_mean = leaf(mb.old_mean.to_vec(), [n, a], device);
     let old_log_std = leaf(mb.old_log_std.to_vec(), [n, a], device);
