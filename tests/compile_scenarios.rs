@@ -4,7 +4,6 @@
 
 use serde_json::Value;
 use std::path::PathBuf;
-use std::process::Command;
 
 const PAPER_VIA: [&str; 6] = [
     "--via",
@@ -15,22 +14,16 @@ const PAPER_VIA: [&str; 6] = [
     "osm-way:8708084",
 ];
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+
+use common::{check_golden, root, run_mapc};
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mapc-compile-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch_dir(&format!("compile-{name}"))
 }
 
 fn mapc(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .unwrap();
+    let out = run_mapc(args);
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -45,35 +38,17 @@ fn mapc_json(args: &[&str]) -> Value {
         .unwrap_or_else(|e| panic!("mapc {args:?}: not JSON ({e}): {stdout}"))
 }
 
+/// Compare with `tests/golden/<map>/<name>.json`, leaving out the paths of written files.
 fn golden(map: &str, name: &str, mut value: Value) {
     for key in ["output", "scenario", "graph", "render", "map"] {
         value.as_object_mut().unwrap().remove(key);
     }
-    let text = serde_json::to_string_pretty(&value).unwrap() + "\n";
-    let path = root()
-        .join("tests/golden")
-        .join(map)
-        .join(format!("{name}.json"));
-    let bless = std::env::var_os("MAPC_BLESS").is_some_and(|v| !v.is_empty() && v != "0");
-    if bless {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "MAPC_BLESS is set in CI: goldens must not be rewritten there"
-        );
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(&path, &text).unwrap();
-        return;
-    }
-    let want = std::fs::read_to_string(&path).unwrap_or_else(|e| {
-        panic!(
-            "{}: {e} (run with MAPC_BLESS=1 to create it)",
-            path.display()
-        )
-    });
-    assert!(
-        want == text,
-        "{} differs (MAPC_BLESS=1 rewrites it after a deliberate change):\n{text}",
-        path.display()
+    check_golden(
+        &root()
+            .join("tests/golden")
+            .join(map)
+            .join(format!("{name}.json")),
+        &value,
     );
 }
 

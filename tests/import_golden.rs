@@ -1,7 +1,7 @@
 //! `mapc import` and `mapc junctions` on the real maps, compared with the golden files in `tests/golden/<map>/`.
 //! `MAPC_BLESS=1 cargo test --test import_golden` rewrites them; with `CI` set, a set `MAPC_BLESS` is an error.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 /// (input, golden folder, summary file): one folder per map, named by its stem as the other goldens are; the PBF
@@ -18,60 +18,22 @@ const MAPS: [(&str, &str, &str); 5] = [
     ("us_merge.net.xml", "us_merge", "summary.json"),
 ];
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
 
-fn blessing() -> bool {
-    let bless = std::env::var_os("MAPC_BLESS").is_some_and(|v| !v.is_empty() && v != "0");
-    assert!(
-        !(bless && std::env::var_os("CI").is_some()),
-        "MAPC_BLESS is set in CI: goldens must not be rewritten there"
-    );
-    bless
-}
+use common::{blessing, check_golden, root, run_mapc};
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mapc-import-golden-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    common::scratch_dir("import-golden").join(name)
 }
 
 fn mapc(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .unwrap();
+    let out = run_mapc(args);
     assert!(
         out.status.success(),
         "mapc {args:?} failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8(out.stdout).unwrap()
-}
-
-/// Compare `actual` JSON with the golden file, or write it when blessing.
-fn check_golden(path: &Path, actual: &serde_json::Value) {
-    let text = serde_json::to_string_pretty(actual).unwrap() + "\n";
-    if blessing() {
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(path, &text).unwrap();
-        return;
-    }
-    let golden = std::fs::read_to_string(path).unwrap_or_else(|e| {
-        panic!(
-            "{}: {e} (run with MAPC_BLESS=1 to create it)",
-            path.display()
-        )
-    });
-    let golden: serde_json::Value = serde_json::from_str(&golden).unwrap();
-    assert_eq!(
-        &golden,
-        actual,
-        "{} differs (MAPC_BLESS=1 rewrites it after a deliberate change)",
-        path.display()
-    );
 }
 
 #[test]

@@ -1,11 +1,10 @@
 //! End-to-end: a tiny training run of `mapc train` on the Simple Merge, resumed, then `mapc eval` of its policy.
 
 use std::path::PathBuf;
-use std::process::Command;
 
-fn mapc() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_mapc"))
-}
+mod common;
+
+use common::mapc_command as mapc;
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("mapc-rl-e2e-{}-{name}", std::process::id()));

@@ -1,10 +1,8 @@
 //! End-to-end tests of `mapc sim` and `mapc bench`.
 
-use std::process::Command;
+mod common;
 
-fn mapc() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_mapc"))
-}
+use common::mapc_command as mapc;
 
 #[test]
 fn sim_json_has_mean_and_ci_per_metric() {

@@ -3,15 +3,10 @@
 use mapc_viz::pngstats::{count_near, read_png};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn mapc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mapc"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("mapc runs")
-}
+mod common;
+
+use common::run_mapc as mapc;
 
 fn temp_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("mapc-viz-e2e-{name}-{}", std::process::id()));

@@ -1,0 +1,67 @@
+//! Helpers shared by the end-to-end tests: running the `mapc` binary from the repository root, scratch folders,
+//! and golden files (`MAPC_BLESS=1` rewrites them; with `CI` set a set `MAPC_BLESS` fails the test instead, so a
+//! flag left on cannot turn the goldens into a test that cannot fail).
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The repository root (where `maps/` and `scenarios/` are).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The `mapc` binary, to run from the repository root.
+pub fn mapc_command() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_mapc"));
+    c.current_dir(root());
+    c
+}
+
+/// Run `mapc ARGS` from the repository root.
+pub fn run_mapc(args: &[&str]) -> Output {
+    mapc_command()
+        .args(args)
+        .output()
+        .expect("the mapc binary runs")
+}
+
+/// A fresh folder of this test process under the system's temporary folder.
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mapc-test-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Whether golden files are being rewritten (`MAPC_BLESS=1`); never in CI.
+pub fn blessing() -> bool {
+    let bless = std::env::var_os("MAPC_BLESS").is_some_and(|v| !v.is_empty() && v != "0");
+    assert!(
+        !(bless && std::env::var_os("CI").is_some()),
+        "MAPC_BLESS is set in CI: goldens must not be rewritten there"
+    );
+    bless
+}
+
+/// Compare `actual` with the golden JSON file at `path`, or write it when blessing.
+pub fn check_golden(path: &Path, actual: &serde_json::Value) {
+    let text = serde_json::to_string_pretty(actual).unwrap() + "\n";
+    if blessing() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, &text).unwrap();
+        return;
+    }
+    let golden = std::fs::read_to_string(path).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (run with MAPC_BLESS=1 to create it)",
+            path.display()
+        )
+    });
+    let golden: serde_json::Value = serde_json::from_str(&golden).unwrap();
+    assert_eq!(
+        &golden,
+        actual,
+        "{} differs (MAPC_BLESS=1 rewrites it after a deliberate change)",
+        path.display()
+    );
+}
