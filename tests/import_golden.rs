@@ -162,11 +162,7 @@ fn default_output_is_the_stem_in_the_current_directory() {
         .current_dir(&dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     assert!(dir.join("us_merge.graph.json").exists());
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(

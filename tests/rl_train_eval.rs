@@ -45,11 +45,7 @@ fn tiny_train(dir: &PathBuf, iters: u64) -> std::process::Output {
 fn tiny_training_resume_and_eval() {
     let dir = tmp("run");
     let out = tiny_train(&dir, 2);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let csv = std::fs::read_to_string(dir.join("progress.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
@@ -66,11 +62,7 @@ fn tiny_training_resume_and_eval() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let straight = tmp("straight");
     assert!(tiny_train(&straight, 3).status.success());
     let row3 = |d: &PathBuf| {
@@ -96,11 +88,7 @@ fn tiny_training_resume_and_eval() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     for k in ["outflow", "inflow", "speed"] {
         assert!(v[k]["mean"].as_f64().unwrap() > 0.0, "{v}");
@@ -134,11 +122,7 @@ fn policy_with_another_observation_size_is_a_clear_error() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let out = mapc()
         .args([
             "eval",

@@ -17,11 +17,7 @@ fn sim_json_has_mean_and_ci_per_metric() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["seeds"], 4);
     for key in ["outflow", "inflow", "speed", "travel_time", "delay"] {
@@ -66,11 +62,7 @@ fn sim_trace_writes_the_csv_header_and_rows() {
         .arg(&trace)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let text = std::fs::read_to_string(&trace).unwrap();
     let mut lines = text.lines();
     assert_eq!(
@@ -116,11 +108,7 @@ fn bench_reports_vehicle_steps_per_second() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(v["single_core"]["vehicle_steps_per_s"].as_f64().unwrap() > 0.0);
     assert_eq!(v["baseline"]["seeds"], 2);

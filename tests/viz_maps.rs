@@ -118,11 +118,7 @@ fn simple_merge_renders_svg_and_exports_local_metres() {
         "--highlight",
         "R4",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg") && text.contains("\nJ0\n"));
     let gj = dir.join("merge.geojson");

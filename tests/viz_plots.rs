@@ -51,11 +51,7 @@ fn timespace_diagram_shows_the_jam() {
     std::fs::write(&trace, wave_trace()).unwrap();
     let png = dir.join("ts.png");
     let out = mapc(&["plot", "timespace", s(&trace), "-o", s(&png), "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(summary["vehicles"], 40);
     assert_eq!(summary["controlled_vehicles"], 4);
@@ -76,11 +72,7 @@ fn timespace_diagram_shows_the_jam() {
         "--road-filter",
         "R1",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     assert!(
         std::fs::read_to_string(&svg)
             .unwrap()
@@ -162,11 +154,7 @@ fn training_curves_of_two_runs_with_a_baseline() {
         "1420",
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_success(&out);
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(summary["runs"].as_array().unwrap().len(), 2);
     assert_eq!(summary["runs"][0]["rows"], 30);

@@ -65,3 +65,12 @@ pub fn check_golden(path: &Path, actual: &serde_json::Value) {
         path.display()
     );
 }
+
+/// Fail with the command's error output unless it succeeded.
+pub fn assert_success(out: &Output) {
+    assert!(
+        out.status.success(),
+        "mapc failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
