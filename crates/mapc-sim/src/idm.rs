@@ -194,7 +194,8 @@ impl IdmParams {
         if gap < 0.01 {
             return 0.0;
         }
-        let v = self.next_speed(gap, speed, 0.0, desired_speed, false);
+        // SUMO 1.8's IDM stop speed keeps the min gap on both sides (`_v` with its default respectMinGap)
+        let v = self.next_speed(gap, speed, 0.0, desired_speed, true);
         if speed < NUMERICAL_EPS && v < NUMERICAL_EPS {
             // IDM alone never starts towards a close stop point; fall back to the kinematic bound.
             return self.maximum_safe_stop_speed(gap, speed);
@@ -277,6 +278,19 @@ impl IdmParams {
 
     /// Time to cover `dist` starting at `speed` and reaching `arrival_speed`, accelerating or braking at the
     /// type's limits and then cruising (SUMO's `getMinimalArrivalTime`).
+    /// The lowest speed at which a vehicle now at `speed` can reach a point `dist` ahead when it brakes
+    /// (SUMO's `getMinimalArrivalSpeedEuler`): within one second of the point braking no longer helps; otherwise
+    /// braking starts after a reaction time of one headway. The last branch returns the deceleration, as SUMO does.
+    pub fn minimal_arrival_speed_euler(&self, dist: f64, speed: f64) -> f64 {
+        if dist < speed {
+            f64::INFINITY
+        } else if 2.0 * (dist - speed * self.tau) * -self.decel + speed * speed >= 0.0 {
+            Self::speed_after_distance(dist - speed * self.tau, speed, -self.decel)
+        } else {
+            self.decel
+        }
+    }
+
     pub fn minimal_arrival_time(&self, dist: f64, speed: f64, arrival_speed: f64) -> f64 {
         if dist <= 0.0 {
             return 0.0;

@@ -468,6 +468,39 @@ impl Simulation {
         Ok(())
     }
 
+    /// Puts a vehicle into the network as another simulator saw it: on the route that starts at road `from`,
+    /// `lane_in_route` lanes along it (roads and connections alternate), front at `pos` m on that lane, with its
+    /// speed, speed factor and time spent halting. For vehicle-by-vehicle comparisons (docs/calibration.md):
+    /// replay a SUMO state, take one step, compare every vehicle's next speed.
+    #[allow(clippy::too_many_arguments)]
+    pub fn place_replica(
+        &mut self,
+        vtype: usize,
+        from: RoadId,
+        lane_in_route: usize,
+        pos: f64,
+        speed: f64,
+        speed_factor: f64,
+        waiting_s: f64,
+    ) -> Result<VehicleId, SimError> {
+        if vtype >= self.spec.vehicle_types.len() {
+            return Err(SimError::Spec(format!("no vehicle type {vtype}")));
+        }
+        let r = self.add_route(from, None)?;
+        let Some(&lane) = self.routes[r as usize].lanes.get(lane_in_route) else {
+            return Err(SimError::Spec(format!(
+                "the route from {from} has no lane {lane_in_route}"
+            )));
+        };
+        let id = self.create_vehicle(vtype, r, speed);
+        let v = &mut self.veh[id as usize];
+        v.speed_factor = speed_factor;
+        v.route_pos = lane_in_route as u32;
+        v.waiting_s = waiting_s;
+        self.place(id, lane, pos, speed, false)?;
+        Ok(id)
+    }
+
     // ----------------------------------------------------------------------------------------------------------
     // Queries
     // ----------------------------------------------------------------------------------------------------------
@@ -931,8 +964,11 @@ impl Simulation {
         while k < r.lanes.len() && seen <= max_dist {
             let lane = r.lanes[k];
             let l = &self.net.lanes[lane as usize];
+            // a moving vehicle that stays before its stop line this step cannot meet vehicles on merging
+            // connections (they meet only inside the junction)
+            let may_enter = !guard || seen < max_dist - self.max_length - 1.0;
             if let LaneKind::Via(link) = l.kind {
-                if !self.net.links[link as usize].foes.is_empty() {
+                if may_enter && !self.net.links[link as usize].foes.is_empty() {
                     self.junction_foe_leaders(id, lane, seen + l.length, guard, f);
                 }
             }
@@ -1030,6 +1066,10 @@ impl Simulation {
         vmax
     }
 
+    /// One vehicle's plan for this step, as SUMO's `MSVehicle::planMoveInternal` builds it: walk the lanes of the
+    /// route ahead, adapting the safe speed to the last vehicle on every lane, to vehicles on merging connections,
+    /// and to each next lane's speed (IDM's free speed); at every link where right of way is decided, record the
+    /// request (arrival and leave times and speeds) that foes check.
     fn plan(&mut self, id: VehicleId, qi: usize, plan: &mut Plan) {
         let dt = self.spec.step_s;
         let v = &self.veh[id as usize];
@@ -1038,31 +1078,31 @@ impl Simulation {
         let speed = v.speed;
         let des_cur = self.desired_speed(v, v.lane);
         let max_next = (speed + p.accel * dt).min(tc.max_speed);
+        let min_comfortable = (speed - p.decel * dt).max(0.0);
         let mut vv = max_next.min(des_cur);
-        // `lookahead` is exact; it is computed only when `lookahead_above` (a bound above it) cannot decide
-        let lookahead_above = max_next * dt + tc.brake_gap_above(max_next, p.tau) + v.length;
-        let mut lookahead = f64::NAN;
-        let mut beyond_lookahead = |x: f64, extra: f64| {
-            if x > lookahead_above + extra {
-                return true;
-            }
-            if lookahead.is_nan() {
-                lookahead = max_next * dt + p.brake_gap(max_next, p.decel, p.tau) + v.length;
-            }
-            x > lookahead + extra
-        };
         let r = &self.routes[v.route as usize];
         let cur = &self.net.lanes[v.lane as usize];
+        let mut seen = cur.length - v.pos;
+        // the speed at the next link: an upper bound, lowered by every leader
+        let mut v_link_pass = IdmParams::speed_after_distance(seen, vv, p.accel).min(des_cur);
+        plan.n_items = 0;
+        plan.stop_brake_gap = f64::NAN;
+        // the request whose leave speed later constraints lower (SUMO's `lastLink`); none before the first link
+        // and after an exit link (those carry no request)
+        let mut last_item: Option<usize> = None;
 
         // Leader on the own lane.
         if qi > 0 {
             let l = self.lane_veh[v.lane as usize][qi - 1];
             let lv = &self.veh[l as usize];
             let gap = lv.pos - lv.length - v.pos - p.min_gap;
-            vv = vv.min(p.follow_speed(gap, speed, lv.speed, des_cur));
+            let vs = p.follow_speed(gap, speed, lv.speed, des_cur);
+            vv = vv.min(vs);
+            v_link_pass = v_link_pass.min(vs);
         } else if let LaneKind::Via(_) = cur.kind {
-            let mut m = vv;
-            self.junction_foe_leaders(id, v.lane, cur.length - v.pos, false, &mut |o, gap| {
+            // inside a junction: vehicles on merging connections closer to the merge point lead
+            let mut m = f64::INFINITY;
+            self.junction_foe_leaders(id, v.lane, seen, false, &mut |o, gap| {
                 m = m.min(p.follow_speed(
                     gap - p.min_gap,
                     speed,
@@ -1070,175 +1110,147 @@ impl Simulation {
                     des_cur,
                 ));
             });
-            vv = m;
+            vv = vv.min(m);
+            v_link_pass = v_link_pass.min(m);
         }
         if let LaneKind::Via(link) = cur.kind {
-            vv = vv.min(self.yield_inside_junction(id, link, p, des_cur));
+            let y = self.yield_inside_junction(id, link, p, des_cur);
+            vv = vv.min(y);
+            v_link_pass = v_link_pass.min(y);
         }
         if qi == 0 && !matches!(cur.kind, LaneKind::Via(_)) {
+            // tails of vehicles that entered a connection out of this road still reach back onto it: they lead
+            // on this road (before any link is considered)
             for &k in &cur.out_links {
                 let via = self.net.links[k as usize].via_lane;
-                if r.lanes.get(v.route_pos as usize + 1) == Some(&via) {
-                    continue;
-                }
                 if let Some(&o) = self.lane_veh[via as usize].last() {
                     let ov = &self.veh[o as usize];
                     if ov.pos < ov.length {
-                        let gap = cur.length - v.pos + ov.pos - ov.length - p.min_gap;
-                        vv = vv.min(p.follow_speed(gap, speed, ov.speed, des_cur));
+                        let gap = seen + ov.pos - ov.length - p.min_gap;
+                        let vs = p.follow_speed(gap, speed, ov.speed, des_cur);
+                        vv = vv.min(vs);
+                        v_link_pass = v_link_pass.min(vs);
                     }
                 }
             }
         }
 
-        plan.n_items = 0;
-        plan.stop_brake_gap = f64::NAN;
-        let mut seen = cur.length - v.pos;
+        // SUMO's look-ahead: continue while links are near (`dist`), and at least past one exit link and 5
+        // vehicle lengths of roads after it
+        let look_dist = max_next * dt + p.brake_gap(max_next, p.decel, p.tau);
+        let mut had_non_internal = false;
+        let mut seen_non_internal = 0.0;
         let mut k = v.route_pos as usize;
-        let mut leader_found = qi > 0;
-        // speed at the next link: reachable by accelerating over the distance, unless a leader holds us back
-        let mut v_link_pass_est = if qi > 0 || vv < max_next.min(des_cur) {
-            vv
-        } else {
-            IdmParams::speed_after_distance(cur.length - v.pos, vv, p.accel).min(des_cur)
-        };
-        let mut slowed_for_minor = false;
+        let mut lane = v.lane;
         loop {
+            let lane_ref = &self.net.lanes[lane as usize];
+            if k > v.route_pos as usize {
+                // the last vehicle on a lane ahead
+                if let Some(&o) = self.lane_veh[lane as usize].last() {
+                    let ov = &self.veh[o as usize];
+                    let gap = seen - lane_ref.length + ov.pos - ov.length - p.min_gap;
+                    let vs = p.follow_speed(gap, speed, ov.speed, des_cur);
+                    vv = vv.min(vs);
+                    v_link_pass = v_link_pass.min(vs);
+                    if let Some(i) = last_item {
+                        let it = &mut plan.items[i];
+                        it.leave_speed = it.leave_speed.min(vs);
+                    }
+                }
+            }
             if k + 1 >= r.lanes.len() {
                 // final lane: drive out at the lane's speed (SUMO's arrival handling)
-                let lane_max = self.desired_speed(v, r.lanes[k]);
-                let va = p.free_speed(speed, seen - lane_max * dt, lane_max, des_cur);
+                let lane_max = self.desired_speed(v, lane);
+                let va = p
+                    .free_speed(speed, seen - lane_max * dt, lane_max, des_cur)
+                    .max(NUMERICAL_EPS);
                 vv = vv.min(va);
-                break;
-            }
-            let via = r.lanes[k + 1];
-            let LaneKind::Via(link) = self.net.lanes[via as usize].kind else {
-                break;
-            };
-            let lk = &self.net.links[link as usize];
-            let via_lane = &self.net.lanes[via as usize];
-            let via_max = self.desired_speed(v, via);
-            // vehicles already inside the junction on merging connections lead us
-            if !lk.foes.is_empty()
-                && k == v.route_pos as usize
-                && !matches!(cur.kind, LaneKind::Via(_))
-            {
-                let mut m = vv;
-                self.junction_foe_leaders(id, via, seen + via_lane.length, false, &mut |o, gap| {
-                    m = m.min(p.follow_speed(
-                        gap - p.min_gap,
-                        speed,
-                        self.veh[o as usize].speed,
-                        des_cur,
-                    ));
-                });
-                vv = m;
-                v_link_pass_est = v_link_pass_est.min(vv);
-            }
-            let items_full = (plan.n_items as usize) >= MAX_LINK_ITEMS;
-            // only links where right of way is decided need a request: minor links, and major links with minor foes
-            if !items_full && (!lk.major || self.link_has_minor_foe[link as usize]) {
-                let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).max(0.0);
-                let mut arrival_speed = v_link_pass_est;
-                if !lk.major && seen >= FOE_VISIBILITY_M && {
-                    if seen > tc.brake_gap_above(speed, 0.0) {
-                        true
-                    } else {
-                        if plan.stop_brake_gap.is_nan() {
-                            plan.stop_brake_gap = p.brake_gap(speed, p.decel, 0.0);
-                        }
-                        plan.stop_brake_gap < seen
-                    }
-                } {
-                    arrival_speed = arrival_speed.min(tc.max_arrival_from_visibility);
-                    slowed_for_minor = true;
+                if let Some(i) = last_item {
+                    let it = &mut plan.items[i];
+                    it.leave_speed = it.leave_speed.min(va);
                 }
-                let arrival_time = self.time_s + p.minimal_arrival_time(seen, vv, arrival_speed);
-                let mut arrival_speed_braking = 0.0;
-                let mut arrival_time_braking = arrival_time + BRAKING_ARRIVAL_DELAY_S;
-                // the bound decides the far case without the exact gap
-                if seen < tc.brake_gap_above(vv, p.tau) && seen < p.brake_gap(vv, p.decel, p.tau) {
-                    arrival_speed_braking = if seen < vv * dt {
-                        arrival_speed
-                    } else {
-                        IdmParams::speed_after_distance(seen, vv, -p.decel).min(arrival_speed)
-                    };
-                    arrival_time_braking = arrival_time.max(
-                        self.time_s
-                            + seen / ((vv + arrival_speed_braking) * 0.5).max(NUMERICAL_EPS),
-                    );
-                }
-                let leave_speed = via_max.min(IdmParams::speed_after_distance(
-                    via_lane.length,
-                    arrival_speed,
-                    p.accel,
-                ));
-                let leave_time = arrival_time
-                    + (via_lane.length + v.length)
-                        / (0.5 * (arrival_speed + leave_speed)).max(NUMERICAL_EPS);
-                plan.items[plan.n_items as usize] = LinkItem {
-                    link,
-                    dist: seen,
-                    v_link_pass: vv,
-                    stop_dist,
-                    desired_speed: des_cur,
-                    arrival_time,
-                    arrival_speed,
-                    leave_time,
-                    leave_speed,
-                    arrival_time_braking,
-                    arrival_speed_braking,
-                    will_pass: vv > 0.0,
-                };
-                plan.n_items += 1;
-            }
-            if items_full || beyond_lookahead(seen, 0.0) {
                 break;
             }
-            // enter the connection: its speed limit and the vehicles on it
-            if via_max < vv {
-                vv = vv.min(via_max.max(p.free_speed(speed, seen, via_max, des_cur)));
-            }
-            if !leader_found {
-                if let Some(&o) = self.lane_veh[via as usize].last() {
-                    let ov = &self.veh[o as usize];
-                    let gap = seen + ov.pos - ov.length - p.min_gap;
-                    vv = vv.min(p.follow_speed(gap, speed, ov.speed, des_cur));
-                    leader_found = true;
-                }
-            }
-            seen += via_lane.length;
-            k += 1;
-            if k + 1 >= r.lanes.len() {
-                break;
-            }
-            // the road after the connection
             let next = r.lanes[k + 1];
-            let next_lane = &self.net.lanes[next as usize];
-            let next_max = self.desired_speed(v, next);
-            if next_max < vv {
-                vv = vv.min(next_max.max(p.free_speed(speed, seen, next_max, des_cur)));
-            }
-            if !leader_found {
-                if let Some(&o) = self.lane_veh[next as usize].last() {
-                    let ov = &self.veh[o as usize];
-                    let gap = seen + ov.pos - ov.length - p.min_gap;
-                    vv = vv.min(p.follow_speed(gap, speed, ov.speed, des_cur));
-                    leader_found = true;
+            let next_ref = &self.net.lanes[next as usize];
+            if let LaneKind::Via(cur_link) = lane_ref.kind {
+                // the exit link of a junction: vehicles on merging connections closer to the merge point lead
+                let cur_major = self.net.links[cur_link as usize].major;
+                if k > v.route_pos as usize && !self.net.links[cur_link as usize].foes.is_empty() {
+                    let mut m = f64::INFINITY;
+                    self.junction_foe_leaders(id, lane, seen, false, &mut |o, gap| {
+                        m = m.min(p.follow_speed(
+                            gap - p.min_gap,
+                            speed,
+                            self.veh[o as usize].speed,
+                            des_cur,
+                        ));
+                    });
+                    if m.is_finite() {
+                        // (the pass speed is reset on the next lane)
+                        vv = vv.min(m);
+                        if let Some(i) = last_item {
+                            let it = &mut plan.items[i];
+                            it.leave_speed = it.leave_speed.min(m);
+                            // not yet inside: a driver without right of way may still drive up to the stop
+                            // line (a driver with right of way gets no such floor: SUMO's FCD shows those
+                            // drivers keep slowing for the lane ahead)
+                            if !cur_major {
+                                let wait = it.v_link_pass.min(p.stop_speed(
+                                    it.stop_dist,
+                                    speed,
+                                    it.desired_speed,
+                                ));
+                                vv = vv.max(wait);
+                            }
+                        }
+                    }
+                }
+                had_non_internal = true;
+                last_item = None;
+            } else if let LaneKind::Via(link) = next_ref.kind {
+                let lk = &self.net.links[link as usize];
+                // only links where right of way is decided need a request: minor links, and major links with
+                // minor foes
+                if (plan.n_items as usize) < MAX_LINK_ITEMS
+                    && (!lk.major || self.link_has_minor_foe[link as usize])
+                {
+                    let i =
+                        self.link_request(v, p, &tc, link, seen, vv, v_link_pass, des_cur, plan);
+                    last_item = Some(i);
+                } else {
+                    last_item = None;
                 }
             }
-            v_link_pass_est =
-                IdmParams::speed_after_distance(next_lane.length, vv, p.accel).min(next_max);
-            seen += next_lane.length;
-            k += 1;
-            if beyond_lookahead(seen, next_lane.length) {
+            if had_non_internal
+                && seen_non_internal > (5.0 * v.length).max(v.length + vv)
+                && (vv <= 0.0 || seen > look_dist)
+            {
                 break;
             }
+            // onto the next lane: arrive there no faster than its speed allows (IDM's free speed), but limits
+            // are no emergencies
+            let next_max = self.desired_speed(v, next);
+            let va = p
+                .free_speed(speed, seen, next_max, des_cur)
+                .max(min_comfortable);
+            vv = vv.min(va);
+            if !matches!(next_ref.kind, LaneKind::Via(_)) {
+                seen_non_internal += next_ref.length;
+            }
+            seen += next_ref.length;
+            v_link_pass =
+                IdmParams::speed_after_distance(next_ref.length, vv, p.accel).min(next_max);
+            lane = next;
+            k += 1;
         }
-        let _ = slowed_for_minor;
         plan.v_safe = vv;
-        // register approaches on links that minor foes check
-        for it in &plan.items[..plan.n_items as usize] {
+        // leave times from the final leave speeds; register approaches on links that minor foes check
+        for it in &mut plan.items[..plan.n_items as usize] {
+            let via_len = self.net.lanes[self.net.links[it.link as usize].via_lane as usize].length;
+            it.leave_time = it.arrival_time
+                + (via_len + v.length)
+                    / (0.5 * (it.arrival_speed + it.leave_speed)).max(NUMERICAL_EPS);
             if self.link_has_minor_foe[it.link as usize] {
                 self.approaches[it.link as usize].push(Approach {
                     veh: id,
@@ -1252,6 +1264,75 @@ impl Simulation {
                 });
             }
         }
+    }
+
+    /// The request for entering the connection `link` at distance `seen` (SUMO's `DriveProcessItem`): arrival time
+    /// and speed (a driver approaching a minor link slows so it could still stop once it sees the foes), the
+    /// arrival when braking now, and the leave speed (lowered later by constraints beyond the link).
+    #[allow(clippy::too_many_arguments)]
+    fn link_request(
+        &self,
+        v: &Veh,
+        p: IdmParams,
+        tc: &TypeConsts,
+        link: LinkIdx,
+        seen: f64,
+        vv: f64,
+        v_link_pass: f64,
+        des_cur: f64,
+        plan: &mut Plan,
+    ) -> usize {
+        let lk = &self.net.links[link as usize];
+        let via = lk.via_lane;
+        let via_lane = &self.net.lanes[via as usize];
+        let speed = v.speed;
+        let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).max(0.0);
+        let mut arrival_speed = v_link_pass;
+        if !lk.major && seen >= FOE_VISIBILITY_M && {
+            if seen > tc.brake_gap_above(speed, 0.0) {
+                true
+            } else {
+                if plan.stop_brake_gap.is_nan() {
+                    plan.stop_brake_gap = p.brake_gap(speed, p.decel, 0.0);
+                }
+                plan.stop_brake_gap < seen
+            }
+        } {
+            arrival_speed = arrival_speed.min(tc.max_arrival_from_visibility);
+        }
+        let arrival_time = self.time_s + p.minimal_arrival_time(seen, vv, arrival_speed);
+        let mut arrival_speed_braking = 0.0;
+        let mut arrival_time_braking = arrival_time + BRAKING_ARRIVAL_DELAY_S;
+        // the bound decides the far case without the exact gap
+        if seen < tc.brake_gap_above(vv, p.tau) && seen < p.brake_gap(vv, p.decel, p.tau) {
+            arrival_speed_braking = p.minimal_arrival_speed_euler(seen, vv).min(arrival_speed);
+            arrival_time_braking = arrival_time
+                .max(self.time_s + seen / ((vv + arrival_speed_braking) * 0.5).max(NUMERICAL_EPS));
+        }
+        let leave_speed = self
+            .desired_speed(v, via)
+            .min(IdmParams::speed_after_distance(
+                via_lane.length,
+                arrival_speed,
+                p.accel,
+            ));
+        let i = plan.n_items as usize;
+        plan.items[i] = LinkItem {
+            link,
+            dist: seen,
+            v_link_pass: vv,
+            stop_dist,
+            desired_speed: des_cur,
+            arrival_time,
+            arrival_speed,
+            leave_time: f64::NAN,
+            leave_speed,
+            arrival_time_braking,
+            arrival_speed_braking,
+            will_pass: vv > 0.0,
+        };
+        plan.n_items += 1;
+        i
     }
 
     /// SUMO's `MSLink::opened` for a minor link at a merge: blocked by any foe approach that conflicts in time.
@@ -1360,7 +1441,8 @@ impl Simulation {
                 let mut next = self.plans[pi].v_safe;
                 pi += 1;
                 let mut cap = f64::INFINITY;
-                // a leader's back may reach up to its length behind the start of its lane
+                // a leader's back may reach up to its length behind the start of its lane (`leaders_beyond`
+                // relies on this margin: max_dist - max_length - 1 is the distance travelled)
                 self.for_each_leader_at(
                     id,
                     qi,
