@@ -205,16 +205,29 @@ impl IdmParams {
 
     /// Speed on free road towards `max_speed`, which applies `seen` metres ahead (SUMO's IDM `freeSpeed`).
     pub fn free_speed(&self, speed: f64, seen: f64, max_speed: f64, desired_speed: f64) -> f64 {
-        let sec_gap = self.secure_gap(max_speed, 0.0);
-        let mut v = if speed <= max_speed {
-            self.next_speed(1e6, speed, max_speed, desired_speed, false)
+        let v = if speed <= max_speed {
+            self.free_speed_below_limit(speed, max_speed, desired_speed)
         } else {
+            let sec_gap = self.secure_gap(max_speed, 0.0);
             self.next_speed(seen.max(sec_gap), speed, 0.0, desired_speed, false)
         };
-        if seen < sec_gap {
-            v = v.min(max_speed);
+        self.free_speed_near_limit(v, seen, max_speed)
+    }
+
+    /// [`Self::free_speed`]'s IDM step for `speed <= max_speed` (independent of the distance).
+    #[inline]
+    pub fn free_speed_below_limit(&self, speed: f64, max_speed: f64, desired_speed: f64) -> f64 {
+        self.next_speed(1e6, speed, max_speed, desired_speed, false)
+    }
+
+    /// [`Self::free_speed`]'s last rule: close to the new limit, do not exceed it.
+    #[inline]
+    pub fn free_speed_near_limit(&self, v: f64, seen: f64, max_speed: f64) -> f64 {
+        if seen < self.secure_gap(max_speed, 0.0) {
+            v.min(max_speed)
+        } else {
+            v
         }
-        v
     }
 
     /// IDM's desired dynamic gap without s0 (SUMO's `getSecureGap` for IDM).

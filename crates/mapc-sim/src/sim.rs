@@ -1135,6 +1135,22 @@ impl Simulation {
             }
         }
 
+        // IDM's free speed towards a lane's limit: below the limit it does not depend on the distance, and
+        // consecutive lanes mostly share a limit, so the IDM integration is kept for the last limit seen
+        let mut free_cache = (f64::NAN, f64::NAN);
+        let mut free_speed = |seen: f64, max_speed: f64| -> f64 {
+            if speed <= max_speed {
+                if free_cache.0 != max_speed {
+                    free_cache = (
+                        max_speed,
+                        p.free_speed_below_limit(speed, max_speed, des_cur),
+                    );
+                }
+                p.free_speed_near_limit(free_cache.1, seen, max_speed)
+            } else {
+                p.free_speed(speed, seen, max_speed, des_cur)
+            }
+        };
         // SUMO's look-ahead: continue while links are near (`dist`), and at least past one exit link and 5
         // vehicle lengths of roads after it
         let look_dist = max_next * dt + p.brake_gap(max_next, p.decel, p.tau);
@@ -1161,9 +1177,7 @@ impl Simulation {
             if k + 1 >= r.lanes.len() {
                 // final lane: drive out at the lane's speed (SUMO's arrival handling)
                 let lane_max = self.desired_speed(v, lane);
-                let va = p
-                    .free_speed(speed, seen - lane_max * dt, lane_max, des_cur)
-                    .max(NUMERICAL_EPS);
+                let va = free_speed(seen - lane_max * dt, lane_max).max(NUMERICAL_EPS);
                 vv = vv.min(va);
                 if let Some(i) = last_item {
                     let it = &mut plan.items[i];
@@ -1231,9 +1245,7 @@ impl Simulation {
             // onto the next lane: arrive there no faster than its speed allows (IDM's free speed), but limits
             // are no emergencies
             let next_max = self.desired_speed(v, next);
-            let va = p
-                .free_speed(speed, seen, next_max, des_cur)
-                .max(min_comfortable);
+            let va = free_speed(seen, next_max).max(min_comfortable);
             vv = vv.min(va);
             if !matches!(next_ref.kind, LaneKind::Via(_)) {
                 seen_non_internal += next_ref.length;
