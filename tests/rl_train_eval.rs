@@ -97,6 +97,31 @@ fn tiny_training_resume_and_eval() {
     }
     assert_eq!(v["seeds"], 3);
     assert!(v["comparison"]["outflow"]["p_value"].is_number(), "{v}");
+
+    // The first seed's trajectories under the policy: mapc sim's trace columns, AVs marked as controlled, the
+    // whole horizon.
+    let trace = dir.join("policy_trace.csv");
+    let out = mapc()
+        .args(["eval", "--seeds", "1", "--no-baseline", "--trace"])
+        .arg(&trace)
+        .arg("--policy")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let csv = std::fs::read_to_string(&trace).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled"
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert!(
+        rows.iter().any(|r| r[7] == "true"),
+        "no controlled AV in the trace"
+    );
+    let last_t: f64 = rows.last().unwrap()[0].parse().unwrap();
+    assert!(last_t > 999.0, "trace ends at {last_t} s");
     std::fs::remove_dir_all(&dir).ok();
     std::fs::remove_dir_all(&straight).ok();
 }

@@ -36,6 +36,10 @@ pub struct Args {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Write the first seed's trajectories under the policy as CSV (the columns of `mapc sim --trace`; draw
+    /// them with `mapc plot timespace`).
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
 }
 
 fn policy_file(p: &Path) -> PathBuf {
@@ -69,6 +73,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let runs = run_policy(&ck, &sc.spec, &cfg, &seeds, mode)
         .with_context(|| format!("evaluating {}", file.display()))?;
+    if let Some(path) = &args.trace {
+        write_policy_trace(&ck, &sc.spec, &cfg, seeds[0], mode, path)?;
+    }
     let figs = FigureSet::of(&runs);
     let (baseline, comparison) = if args.no_baseline {
         (None, None)
@@ -132,6 +139,38 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             p(&c.speed)
         );
     }
+    if let Some(p) = &args.trace {
+        println!(
+            "  trace of seed {} under the policy written to {}",
+            seeds[0],
+            p.display()
+        );
+    }
     println!("  {:.1} s wall", report.wall_s);
+    Ok(())
+}
+
+/// One seed under the policy, every step's vehicles, written atomically (temp file, then rename).
+fn write_policy_trace(
+    ck: &Checkpoint,
+    spec: &mapc_sim::SimSpec,
+    cfg: &mapc_rl::env::merge::MergeEnvConfig,
+    seed: u64,
+    mode: ActionMode,
+    path: &Path,
+) -> anyhow::Result<()> {
+    use std::io::Write;
+    let tmp = path.with_extension("csv.tmp");
+    {
+        let file =
+            std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+        let mut w = std::io::BufWriter::new(file);
+        writeln!(w, "{}", mapc_sim::TRACE_HEADER)?;
+        mapc_rl::eval::trace_policy(ck, spec, cfg, seed, mode, &mut w)?;
+        w.flush()
+            .with_context(|| format!("writing {}", tmp.display()))?;
+    }
+    std::fs::rename(&tmp, path)
+        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
     Ok(())
 }

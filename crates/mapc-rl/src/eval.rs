@@ -154,6 +154,43 @@ pub fn run_policy(
     Ok(eps.into_iter().map(|e| e.metrics).collect())
 }
 
+/// Runs the policy on one seed (mean or sampled actions, the same episode as [`run_policy`] gives for that
+/// seed) and writes every step's vehicles as trace CSV rows (`mapc_sim::TRACE_HEADER`, without the header).
+pub fn trace_policy(
+    ck: &Checkpoint,
+    spec: &SimSpec,
+    cfg: &MergeEnvConfig,
+    seed: u64,
+    mode: ActionMode,
+    out: &mut impl std::io::Write,
+) -> Result<EpisodeMetrics, RlError> {
+    let mut env = MergeEnv::new(spec.clone(), cfg.clone())?;
+    let horizon = env.horizon();
+    let mut scratch = crate::ppo::tensor::Scratch::default();
+    let mut rng = crate::rng::Rng::new(mix_seed(&[seed, 0xE7A1]));
+    let io = |e: std::io::Error| RlError::Io {
+        path: "trace".into(),
+        source: e,
+    };
+    let mut obs = env.reset(seed)?;
+    if let Some(sim) = env.simulation() {
+        sim.write_trace_rows(out).map_err(io)?;
+    }
+    for _ in 0..horizon {
+        let action =
+            crate::rollout::choose_action(&ck.state.model, &obs, &mut scratch, mode, &mut rng);
+        let tr = env.step(&action)?;
+        if let Some(sim) = env.simulation() {
+            sim.write_trace_rows(out).map_err(io)?;
+        }
+        obs = tr.obs;
+        if tr.terminal {
+            break;
+        }
+    }
+    Ok(env.metrics())
+}
+
 /// The human baseline on the same seeds.
 pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<EpisodeMetrics>, RlError> {
     let runs =

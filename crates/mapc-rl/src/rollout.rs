@@ -78,6 +78,30 @@ pub enum ActionMode {
     Mean,
 }
 
+/// The action for a policy output: its mean, or a sample of the Gaussian.
+fn action_of(mean: &[f32], log_std: &[f32], mode: ActionMode, rng: &mut Rng) -> Vec<f32> {
+    match mode {
+        ActionMode::Mean => mean.to_vec(),
+        ActionMode::Sample => mean
+            .iter()
+            .zip(log_std)
+            .map(|(&m, &ls)| m + ls.exp() * rng.normal() as f32)
+            .collect(),
+    }
+}
+
+/// The action the policy takes for `obs` (as in [`run_episode`], whose noise stream `rng` is).
+pub fn choose_action(
+    model: &Model,
+    obs: &[f32],
+    scratch: &mut Scratch,
+    mode: ActionMode,
+    rng: &mut Rng,
+) -> Vec<f32> {
+    let out = model.infer(obs, scratch);
+    action_of(&out.mean, &out.log_std, mode, rng)
+}
+
 /// Runs one episode of at most `horizon` steps. `record` keeps the per-step data needed for training.
 pub fn run_episode(
     env: &mut dyn Env,
@@ -95,15 +119,7 @@ pub fn run_episode(
     let mut terminal = false;
     for _ in 0..horizon {
         let out = model.infer(&obs, scratch);
-        let action: Vec<f32> = match mode {
-            ActionMode::Mean => out.mean.clone(),
-            ActionMode::Sample => out
-                .mean
-                .iter()
-                .zip(&out.log_std)
-                .map(|(&m, &ls)| m + ls.exp() * rng.normal() as f32)
-                .collect(),
-        };
+        let action = action_of(&out.mean, &out.log_std, mode, &mut rng);
         let tr = env.step(&action)?;
         if record {
             ep.log_probs

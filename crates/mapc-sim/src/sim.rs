@@ -1099,8 +1099,10 @@ impl Simulation {
             let vs = p.follow_speed(gap, speed, lv.speed, des_cur);
             vv = vv.min(vs);
             v_link_pass = v_link_pass.min(vs);
-        } else if let LaneKind::Via(_) = cur.kind {
-            // inside a junction: vehicles on merging connections closer to the merge point lead
+        }
+        if let LaneKind::Via(_) = cur.kind {
+            // inside a junction (behind others on the connection or not): vehicles on merging connections closer
+            // to the merge point lead (SUMO checks the exit link's leaders for every vehicle on the connection)
             let mut m = f64::INFINITY;
             self.junction_foe_leaders(id, v.lane, seen, false, &mut |o, gap| {
                 m = m.min(p.follow_speed(

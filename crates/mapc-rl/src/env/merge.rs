@@ -210,6 +210,11 @@ impl MergeEnv {
     pub fn controlled(&self) -> &[VehicleId] {
         &self.controlled
     }
+
+    /// The simulation of the current episode (after `reset`).
+    pub fn simulation(&self) -> Option<&Simulation> {
+        self.sim.as_ref()
+    }
 }
 
 impl Env for MergeEnv {
