@@ -150,7 +150,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One seed under the policy, every step's vehicles, written atomically (temp file, then rename).
+/// One seed under the policy, every step's vehicles, written atomically.
 fn write_policy_trace(
     ck: &Checkpoint,
     spec: &mapc_sim::SimSpec,
@@ -159,18 +159,8 @@ fn write_policy_trace(
     mode: ActionMode,
     path: &Path,
 ) -> anyhow::Result<()> {
-    use std::io::Write;
-    let tmp = path.with_extension("csv.tmp");
-    {
-        let file =
-            std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
-        let mut w = std::io::BufWriter::new(file);
-        writeln!(w, "{}", mapc_sim::TRACE_HEADER)?;
-        mapc_rl::eval::trace_policy(ck, spec, cfg, seed, mode, &mut w)?;
-        w.flush()
-            .with_context(|| format!("writing {}", tmp.display()))?;
-    }
-    std::fs::rename(&tmp, path)
-        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
-    Ok(())
+    super::sim::write_trace_file(path, |w| {
+        mapc_rl::eval::trace_policy(ck, spec, cfg, seed, mode, w)?;
+        Ok(())
+    })
 }

@@ -123,20 +123,32 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
     pb
 }
 
-/// Run one seed and write every step's vehicles, atomically (temp file, then rename).
+/// Run one seed and write every step's vehicles, atomically.
 pub fn write_trace(spec: &SimSpec, seed: u64, path: &Path) -> anyhow::Result<()> {
     let mut sim = Simulation::from_spec(spec.clone(), seed)?;
+    write_trace_file(path, |w| {
+        sim.write_trace_rows(w)?;
+        while !sim.is_done() {
+            sim.step()?;
+            sim.write_trace_rows(w)?;
+        }
+        Ok(())
+    })
+}
+
+/// Writes a trace CSV (header, then the rows `body` writes) to a temporary file and renames it into place, so an
+/// interrupted run never leaves half a trace under the final name.
+pub fn write_trace_file(
+    path: &Path,
+    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
     let tmp = path.with_extension("csv.tmp");
     {
         let file =
             std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
         let mut w = std::io::BufWriter::new(file);
         writeln!(w, "{TRACE_HEADER}")?;
-        sim.write_trace_rows(&mut w)?;
-        while !sim.is_done() {
-            sim.step()?;
-            sim.write_trace_rows(&mut w)?;
-        }
+        body(&mut w)?;
         w.flush()
             .with_context(|| format!("writing {}", tmp.display()))?;
     }
