@@ -46,6 +46,7 @@
 pub mod idm;
 pub mod metrics;
 pub mod network;
+pub mod replay;
 pub mod scenario;
 pub mod sim;
 pub mod spec;
