@@ -3,7 +3,7 @@
 //! (the same convention as the import goldens); paths of written files are left out of the goldens.
 
 use serde_json::Value;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 const PAPER_VIA: [&str; 6] = [
     "--via",
@@ -39,6 +39,14 @@ fn mapc_json(args: &[&str]) -> Value {
 }
 
 /// Compare with `tests/golden/<map>/<name>.json`, leaving out the paths of written files.
+/// Simplifies maps/i696.osm to the paper's corridor, written to `out`.
+fn paper_corridor(out: &Path) -> PathBuf {
+    let mut args = vec!["simplify", "maps/i696.osm", "-o", out.to_str().unwrap()];
+    args.extend(PAPER_VIA);
+    assert_eq!(mapc(&args).0, 0);
+    out.to_path_buf()
+}
+
 fn golden(map: &str, name: &str, mut value: Value) {
     for key in ["output", "scenario", "graph", "render", "map"] {
         value.as_object_mut().unwrap().remove(key);
@@ -123,15 +131,7 @@ fn i696_simplify_gives_the_papers_merge() {
 #[test]
 fn i696_window_matches_the_simple_merge() {
     let dir = scratch("window");
-    let corridor = dir.join("i696.corridor.graph.json");
-    let mut args = vec![
-        "simplify",
-        "maps/i696.osm",
-        "-o",
-        corridor.to_str().unwrap(),
-    ];
-    args.extend(PAPER_VIA);
-    assert_eq!(mapc(&args).0, 0);
+    let corridor = paper_corridor(&dir.join("i696.corridor.graph.json"));
     let scenario = dir.join("w.toml");
     let report = mapc_json(&[
         "window",
@@ -234,15 +234,7 @@ fn proxy_net_window_at_gnej18() {
 #[test]
 fn bad_junctions_are_clear_errors() {
     let dir = scratch("errors");
-    let corridor = dir.join("c.graph.json");
-    let mut args = vec![
-        "simplify",
-        "maps/i696.osm",
-        "-o",
-        corridor.to_str().unwrap(),
-    ];
-    args.extend(PAPER_VIA);
-    assert_eq!(mapc(&args).0, 0);
+    let corridor = paper_corridor(&dir.join("c.graph.json"));
     let c = corridor.to_str().unwrap();
     let (code, _, stderr) = mapc(&[
         "window",

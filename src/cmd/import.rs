@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use mapc_import::{DEFAULT_HIGHWAYS, ImportOptions, MajorRoad, Summary};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -23,20 +23,6 @@ pub struct Args {
     pub json: bool,
 }
 
-/// `i696.osm.pbf` -> `i696`: the file name without the map extensions.
-pub fn map_stem(path: &Path) -> String {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "map".into());
-    for ext in [".osm.pbf", ".osm.xml", ".net.xml", ".osm", ".pbf", ".xml"] {
-        if name.len() > ext.len() && name.to_ascii_lowercase().ends_with(ext) {
-            return name[..name.len() - ext.len()].to_string();
-        }
-    }
-    name
-}
-
 pub fn run(args: Args) -> anyhow::Result<()> {
     let mut options = ImportOptions::default();
     if let Some(h) = args.highways {
@@ -54,9 +40,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     options.major_roads = args.major;
     let graph = mapc_import::import_path(&args.file, &options)?;
-    let output = args
-        .output
-        .unwrap_or_else(|| PathBuf::from(format!("{}.graph.json", map_stem(&args.file))));
+    let output = args.output.unwrap_or_else(|| {
+        PathBuf::from(format!(
+            "{}.graph.json",
+            super::simplify::map_stem(&args.file)
+        ))
+    });
     graph
         .save(&output)
         .with_context(|| format!("writing the graph to {}", output.display()))?;

@@ -56,24 +56,26 @@ pub struct Args {
     pub json: bool,
 }
 
-/// `maps/i696.osm` -> `i696`.
+/// `maps/i696.osm` -> `i696`: the file name without the map or graph extensions (any case).
 pub fn map_stem(path: &Path) -> String {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "map".into());
+    let lower = name.to_ascii_lowercase();
     for ext in [
         ".corridor.graph.json",
         ".graph.json",
         ".osm.pbf",
+        ".osm.xml",
         ".net.xml",
         ".osm",
         ".json",
         ".xml",
         ".pbf",
     ] {
-        if let Some(stem) = name.strip_suffix(ext) {
-            return stem.to_string();
+        if lower.len() > ext.len() && lower.ends_with(ext) {
+            return name[..name.len() - ext.len()].to_string();
         }
     }
     name

@@ -10,6 +10,15 @@ fn main() {
         .skip(1)
         .find(|a| !a.starts_with('-'))
         .unwrap_or_else(|| "simple_merge".into());
+    // cargo runs benches in the crate's folder: a path relative to the workspace root works too
+    let in_root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(&name);
+    let name = if !std::path::Path::new(&name).exists() && in_root.exists() {
+        in_root.to_string_lossy().into_owned()
+    } else {
+        name
+    };
     let rs = ResolvedScenario::load(&name).expect("scenario");
     let spec = spec_from_scenario(&rs).expect("spec");
 

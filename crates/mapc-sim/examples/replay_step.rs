@@ -22,10 +22,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("no human type")?;
     let out = std::io::stdout();
     let mut out = out.lock();
-    for line in std::io::BufReader::new(std::fs::File::open(&path)?).lines() {
-        let v: serde_json::Value = serde_json::from_str(&line?)?;
-        let t = v["t"].as_f64().ok_or("t")?;
-        let vehicles = parse_vehicles(&v)?;
+    for (n, line) in std::io::BufReader::new(std::fs::File::open(&path)?)
+        .lines()
+        .enumerate()
+    {
+        let at = |what: &dyn std::fmt::Display| format!("{path}:{}: {what}", n + 1);
+        let v: serde_json::Value = serde_json::from_str(&line?).map_err(|e| at(&e))?;
+        let t = v["t"].as_f64().ok_or_else(|| at(&"no time `t`"))?;
+        let vehicles = parse_vehicles(&v).map_err(|e| at(&e))?;
         let next: serde_json::Map<String, serde_json::Value> =
             replay_simple_merge_step(&spec, human, t, &vehicles)?
                 .into_iter()
@@ -37,7 +41,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn parse_vehicles(v: &serde_json::Value) -> Result<Vec<ReplicaVehicle>, &'static str> {
-    let num = |r: &[serde_json::Value], i: usize| r.get(i).and_then(|x| x.as_f64()).ok_or("number");
+    let num = |r: &[serde_json::Value], i: usize| {
+        r.get(i)
+            .and_then(|x| x.as_f64())
+            .ok_or("a vehicle row needs [id, lane, pos, speed, speed_factor, waiting_s]")
+    };
     v["veh"]
         .as_array()
         .ok_or("veh")?

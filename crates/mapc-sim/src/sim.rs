@@ -492,6 +492,13 @@ impl Simulation {
                 "the route from {from} has no lane {lane_in_route}"
             )));
         };
+        let len = self.net.lanes[lane as usize].length;
+        if !(0.0..=len).contains(&pos) || !(speed >= 0.0) || !(speed_factor > 0.0) {
+            return Err(SimError::Spec(format!(
+                "replica on lane {lane_in_route} of the route from {from}: position {pos} m (lane {len} m), \
+                 speed {speed}, speed factor {speed_factor}"
+            )));
+        }
         let id = self.create_vehicle(vtype, r, speed);
         let v = &mut self.veh[id as usize];
         v.speed_factor = speed_factor;
@@ -654,7 +661,7 @@ impl Simulation {
             .get(id as usize)
             .filter(|v| v.status == VehicleStatus::Active)?;
         let mut best: Option<Neighbor> = None;
-        self.for_each_leader(id, max_dist, false, |l, gap| {
+        self.for_each_leader(id, max_dist, |l, gap| {
             if best.is_none_or(|b| gap < b.gap_m) {
                 best = Some(Neighbor {
                     id: l,
@@ -897,28 +904,23 @@ impl Simulation {
     }
 
     /// Calls `f(leader, gap)` for every vehicle the ego must follow within `max_dist` (gap: bumper to bumper).
-    fn for_each_leader(
-        &self,
-        id: VehicleId,
-        max_dist: f64,
-        guard: bool,
-        f: impl FnMut(VehicleId, f64),
-    ) {
+    fn for_each_leader(&self, id: VehicleId, max_dist: f64, f: impl FnMut(VehicleId, f64)) {
         let v = &self.veh[id as usize];
         let idx = self.lane_veh[v.lane as usize]
             .iter()
             .position(|&o| o == id)
             .unwrap_or(0);
-        self.for_each_leader_at(id, idx, max_dist, guard, f)
+        self.for_each_leader_at(id, idx, max_dist, None, f)
     }
 
-    /// As [`Self::for_each_leader`] for the vehicle at index `idx` of its lane.
+    /// As [`Self::for_each_leader`] for the vehicle at index `idx` of its lane. `moving`: the distance the ego
+    /// travels in this step when the call guards a move (`None` for a query of the state).
     fn for_each_leader_at(
         &self,
         id: VehicleId,
         idx: usize,
         max_dist: f64,
-        guard: bool,
+        moving: Option<f64>,
         mut f: impl FnMut(VehicleId, f64),
     ) {
         let v = &self.veh[id as usize];
@@ -929,7 +931,7 @@ impl Simulation {
             f(l, lv.pos - lv.length - v.pos);
             return;
         }
-        self.leaders_beyond(id, max_dist, guard, &mut f);
+        self.leaders_beyond(id, max_dist, moving, &mut f);
     }
 
     /// Leaders beyond the ego's own lane: on the lanes ahead on its route, tails of vehicles that just entered a
@@ -938,9 +940,10 @@ impl Simulation {
         &self,
         id: VehicleId,
         max_dist: f64,
-        guard: bool,
+        moving: Option<f64>,
         f: &mut impl FnMut(VehicleId, f64),
     ) {
+        let guard = moving.is_some();
         let v = &self.veh[id as usize];
         let r = &self.routes[v.route as usize];
         let cur = &self.net.lanes[v.lane as usize];
@@ -966,7 +969,7 @@ impl Simulation {
             let l = &self.net.lanes[lane as usize];
             // a moving vehicle that stays before its stop line this step cannot meet vehicles on merging
             // connections (they meet only inside the junction)
-            let may_enter = !guard || seen < max_dist - self.max_length - 1.0;
+            let may_enter = moving.is_none_or(|travel| seen < travel);
             if let LaneKind::Via(link) = l.kind {
                 if may_enter && !self.net.links[link as usize].foes.is_empty() {
                     self.junction_foe_leaders(id, lane, seen + l.length, guard, f);
@@ -1155,7 +1158,11 @@ impl Simulation {
         };
         // SUMO's look-ahead: continue while links are near (`dist`), and at least past one exit link and 5
         // vehicle lengths of roads after it
-        let look_dist = max_next * dt + p.brake_gap(max_next, p.decel, p.tau);
+        // (the brake distance is computed only when that rule is reached; the bound above it decides far lanes)
+        let beyond_look_dist = |seen: f64| {
+            seen > max_next * dt + tc.brake_gap_above(max_next, p.tau)
+                || seen > max_next * dt + p.brake_gap(max_next, p.decel, p.tau)
+        };
         let mut had_non_internal = false;
         let mut seen_non_internal = 0.0;
         let mut k = v.route_pos as usize;
@@ -1240,7 +1247,7 @@ impl Simulation {
             }
             if had_non_internal
                 && seen_non_internal > (5.0 * v.length).max(v.length + vv)
-                && (vv <= 0.0 || seen > look_dist)
+                && (vv <= 0.0 || beyond_look_dist(seen))
             {
                 break;
             }
@@ -1455,13 +1462,12 @@ impl Simulation {
                 let mut next = self.plans[pi].v_safe;
                 pi += 1;
                 let mut cap = f64::INFINITY;
-                // a leader's back may reach up to its length behind the start of its lane (`leaders_beyond`
-                // relies on this margin: max_dist - max_length - 1 is the distance travelled)
+                // a leader's back may reach up to its length behind the start of its lane
                 self.for_each_leader_at(
                     id,
                     qi,
                     next * dt + self.max_length + 1.0,
-                    true,
+                    Some(next * dt),
                     |l, gap| {
                         // the leader's movement this step, if it already moved
                         let _ = l;

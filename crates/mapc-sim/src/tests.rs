@@ -453,3 +453,24 @@ const GOLDEN: [([u64; 9], u64); 4] = [
         0xf3adb216e31345b1,
     ),
 ];
+
+#[test]
+fn a_replica_off_its_lane_is_an_error_naming_it() {
+    let mut spec = simple_merge_spec();
+    spec.flows.clear();
+    spec.initial.clear();
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    let road: mapc_graph::RoadId = "R0".parse().unwrap();
+    let err = sim
+        .place_replica(0, road, 2, 600.0, 10.0, 1.0, 0.0)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("position 600 m (lane 500 m)"), "{err}");
+    assert!(sim.place_replica(0, road, 9, 1.0, 10.0, 1.0, 0.0).is_err());
+    // a valid one is placed and drives on
+    let id = sim
+        .place_replica(0, road, 2, 100.0, 10.0, 1.0, 0.0)
+        .unwrap();
+    sim.step().unwrap();
+    assert!(sim.vehicle(id).unwrap().pos_m > 100.0);
+}

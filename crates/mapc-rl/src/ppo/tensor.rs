@@ -397,6 +397,17 @@ impl Adam {
 mod tests {
     use super::*;
 
+    /// The paper's clip, KL and value coefficients, with the given entropy coefficient.
+    fn test_coeffs(entropy_coeff: f32) -> LossCoeffs {
+        LossCoeffs {
+            clip: 0.3,
+            kl_coeff: 0.2,
+            vf_coeff: 1.0,
+            vf_clip: 10.0,
+            entropy_coeff,
+        }
+    }
+
     fn arch() -> Architecture {
         Architecture {
             obs_dim: 3,
@@ -438,13 +449,7 @@ mod tests {
         let new_lp = -1.462_877_f32;
         // Old log-prob chosen so the ratio is e^0.5 = 1.6487 (clipped to 1.3 with clip 0.3).
         let old_lp = new_lp - 0.5;
-        let c = LossCoeffs {
-            clip: 0.3,
-            kl_coeff: 0.2,
-            vf_coeff: 1.0,
-            vf_clip: 10.0,
-            entropy_coeff: 0.01,
-        };
+        let c = test_coeffs(0.01);
         let mb = Minibatch {
             n: 1,
             obs: &[0.3, -0.2, 0.9],
@@ -505,13 +510,7 @@ mod tests {
             advantages: &[1.0, -0.5],
             value_targets: &[0.7, -0.4],
         };
-        let c = LossCoeffs {
-            clip: 0.3,
-            kl_coeff: 0.2,
-            vf_coeff: 1.0,
-            vf_clip: 10.0,
-            entropy_coeff: 0.01,
-        };
+        let c = test_coeffs(0.01);
         let dev = update_device();
         let (_, g) = loss_and_grad(&m, &mb, &c, &dev);
         for &i in &[
@@ -563,13 +562,7 @@ mod tests {
             advantages: &[1.0],
             value_targets: &[plain.value],
         };
-        let c = LossCoeffs {
-            clip: 0.3,
-            kl_coeff: 0.2,
-            vf_coeff: 1.0,
-            vf_clip: 10.0,
-            entropy_coeff: 0.0,
-        };
+        let c = test_coeffs(0.0);
         let (s, _) = loss_and_grad(&m, &mb, &c, &update_device());
         assert!(s.kl.abs() < 1e-6, "{:?}", s);
         assert!((s.policy_loss + 1.0).abs() < 1e-5, "{:?}", s);
