@@ -136,6 +136,11 @@ pub fn env_config_for(
     })
 }
 
+/// The action-noise stream of an evaluation episode (used by `--sample`), fixed by the environment seed.
+fn eval_noise_seed(seed: u64) -> u64 {
+    mix_seed(&[seed, 0xE7A1])
+}
+
 /// Runs the policy on `spec` for each seed (in parallel, results in seed order).
 pub fn run_policy(
     ck: &Checkpoint,
@@ -149,7 +154,7 @@ pub fn run_policy(
     let factory = || -> Box<dyn Env> {
         Box::new(MergeEnv::new(spec.clone(), cfg.clone()).expect("validated above"))
     };
-    let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, mix_seed(&[s, 0xE7A1]))).collect();
+    let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
     let eps = collect(&factory, &ck.state.model, &pairs, horizon, mode, false)?;
     Ok(eps.into_iter().map(|e| e.metrics).collect())
 }
@@ -167,28 +172,27 @@ pub fn trace_policy(
     let mut env = MergeEnv::new(spec.clone(), cfg.clone())?;
     let horizon = env.horizon();
     let mut scratch = crate::ppo::tensor::Scratch::default();
-    let mut rng = crate::rng::Rng::new(mix_seed(&[seed, 0xE7A1]));
-    let io = |e: std::io::Error| RlError::Io {
-        path: "trace".into(),
-        source: e,
+    let mut write_rows = |env: &MergeEnv| -> Result<(), RlError> {
+        match env.simulation() {
+            Some(sim) => sim.write_trace_rows(out).map_err(|e| RlError::Io {
+                path: "trace".into(),
+                source: e,
+            }),
+            None => Ok(()),
+        }
     };
-    let mut obs = env.reset(seed)?;
-    if let Some(sim) = env.simulation() {
-        sim.write_trace_rows(out).map_err(io)?;
-    }
-    for _ in 0..horizon {
-        let action =
-            crate::rollout::choose_action(&ck.state.model, &obs, &mut scratch, mode, &mut rng);
-        let tr = env.step(&action)?;
-        if let Some(sim) = env.simulation() {
-            sim.write_trace_rows(out).map_err(io)?;
-        }
-        obs = tr.obs;
-        if tr.terminal {
-            break;
-        }
-    }
-    Ok(env.metrics())
+    let ep = crate::rollout::run_episode_observed(
+        &mut env,
+        &ck.state.model,
+        &mut scratch,
+        seed,
+        eval_noise_seed(seed),
+        horizon,
+        mode,
+        false,
+        &mut write_rows,
+    )?;
+    Ok(ep.metrics)
 }
 
 /// The human baseline on the same seeds.

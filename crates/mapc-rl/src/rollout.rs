@@ -90,19 +90,8 @@ fn action_of(mean: &[f32], log_std: &[f32], mode: ActionMode, rng: &mut Rng) -> 
     }
 }
 
-/// The action the policy takes for `obs` (as in [`run_episode`], whose noise stream `rng` is).
-pub fn choose_action(
-    model: &Model,
-    obs: &[f32],
-    scratch: &mut Scratch,
-    mode: ActionMode,
-    rng: &mut Rng,
-) -> Vec<f32> {
-    let out = model.infer(obs, scratch);
-    action_of(&out.mean, &out.log_std, mode, rng)
-}
-
 /// Runs one episode of at most `horizon` steps. `record` keeps the per-step data needed for training.
+#[allow(clippy::too_many_arguments)]
 pub fn run_episode(
     env: &mut dyn Env,
     model: &Model,
@@ -113,14 +102,42 @@ pub fn run_episode(
     mode: ActionMode,
     record: bool,
 ) -> Result<Episode, RlError> {
+    run_episode_observed(
+        env,
+        model,
+        scratch,
+        env_seed,
+        noise_seed,
+        horizon,
+        mode,
+        record,
+        &mut |_| Ok(()),
+    )
+}
+
+/// [`run_episode`], calling `observe` with the environment after the reset and after every step (traces).
+#[allow(clippy::too_many_arguments)]
+pub fn run_episode_observed<E: Env + ?Sized>(
+    env: &mut E,
+    model: &Model,
+    scratch: &mut Scratch,
+    env_seed: u64,
+    noise_seed: u64,
+    horizon: usize,
+    mode: ActionMode,
+    record: bool,
+    observe: &mut dyn FnMut(&E) -> Result<(), RlError>,
+) -> Result<Episode, RlError> {
     let mut rng = Rng::new(noise_seed);
     let mut ep = Episode::default();
     let mut obs = env.reset(env_seed)?;
+    observe(env)?;
     let mut terminal = false;
     for _ in 0..horizon {
         let out = model.infer(&obs, scratch);
         let action = action_of(&out.mean, &out.log_std, mode, &mut rng);
         let tr = env.step(&action)?;
+        observe(env)?;
         if record {
             ep.log_probs
                 .push(gaussian_log_prob(&action, &out.mean, &out.log_std));

@@ -24,6 +24,9 @@ pub struct IdmParams {
     pub iterations: u32,
     /// Step length (s).
     pub dt: f64,
+    /// 2 sqrt(accel decel), IDM's braking term, computed once by the constructor (read-only: the fields above are
+    /// set at construction and never changed).
+    two_sqrt_ab: f64,
 }
 
 /// `x.floor()`, bit for bit, without the library call the baseline x86-64 target makes for `floor` (no SSE4.1
@@ -77,11 +80,18 @@ impl IdmParams {
             delta,
             iterations,
             dt,
+            two_sqrt_ab: 2.0 * (accel * decel).sqrt(),
         }
     }
 
+    #[inline(always)]
     fn two_sqrt_ab(&self) -> f64 {
-        2.0 * (self.accel * self.decel).sqrt()
+        debug_assert_eq!(
+            self.two_sqrt_ab.to_bits(),
+            (2.0 * (self.accel * self.decel).sqrt()).to_bits(),
+            "IdmParams changed after construction"
+        );
+        self.two_sqrt_ab
     }
 
     fn speed_ratio_pow(&self, x: f64) -> f64 {
