@@ -3,7 +3,7 @@
 //! links (right of way with impatience), then move every vehicle, front to back, never into its leader.
 
 use crate::SimError;
-use crate::idm::{IdmParams, NUMERICAL_EPS};
+use crate::idm::{FastMinMax, IdmParams, NUMERICAL_EPS};
 use crate::metrics::RunMetrics;
 use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network};
 use crate::spec::SimSpec;
@@ -410,7 +410,7 @@ impl Simulation {
             .iter()
             .map(|&l| {
                 let lane = &self.net.lanes[l as usize];
-                lane.length / (lane.speed_limit * factor).min(t.max_speed)
+                lane.length / (lane.speed_limit * factor).fmin(t.max_speed)
             })
             .sum();
         let id = self.veh.len() as VehicleId;
@@ -804,7 +804,7 @@ impl Simulation {
 
     pub fn metrics(&self) -> RunMetrics {
         let m = &self.metrics;
-        let secs = (m.steps as f64 * self.spec.step_s).max(f64::MIN_POSITIVE);
+        let secs = (m.steps as f64 * self.spec.step_s).fmax(f64::MIN_POSITIVE);
         RunMetrics {
             outflow_veh_h: 3600.0 * m.arrived as f64 / secs,
             inflow_veh_h: 3600.0 * m.departed as f64 / secs,
@@ -900,7 +900,7 @@ impl Simulation {
 
     fn desired_speed(&self, v: &Veh, lane: LaneIdx) -> f64 {
         (self.net.lanes[lane as usize].speed_limit * v.speed_factor)
-            .min(self.type_consts[v.vtype as usize].max_speed)
+            .fmin(self.type_consts[v.vtype as usize].max_speed)
     }
 
     /// Calls `f(leader, gap)` for every vehicle the ego must follow within `max_dist` (gap: bumper to bumper).
@@ -1050,14 +1050,14 @@ impl Simulation {
                 continue;
             }
             let flen = self.net.lanes[fl.via_lane as usize].length;
-            if d <= CONFLICT_POINT_SHARE * own_len.min(flen) {
+            if d <= CONFLICT_POINT_SHARE * own_len.fmin(flen) {
                 continue;
             }
             for &o in &self.lane_veh[fl.via_lane as usize] {
                 let ov = &self.veh[o as usize];
                 let df = flen - ov.pos;
                 if df >= d {
-                    vmax = vmax.min(p.follow_speed(
+                    vmax = vmax.fmin(p.follow_speed(
                         d - df - ov.length - p.min_gap,
                         v.speed,
                         ov.speed,
@@ -1080,14 +1080,14 @@ impl Simulation {
         let tc = self.type_consts[v.vtype as usize];
         let speed = v.speed;
         let des_cur = self.desired_speed(v, v.lane);
-        let max_next = (speed + p.accel * dt).min(tc.max_speed);
-        let min_comfortable = (speed - p.decel * dt).max(0.0);
-        let mut vv = max_next.min(des_cur);
+        let max_next = (speed + p.accel * dt).fmin(tc.max_speed);
+        let min_comfortable = (speed - p.decel * dt).fmax(0.0);
+        let mut vv = max_next.fmin(des_cur);
         let r = &self.routes[v.route as usize];
         let cur = &self.net.lanes[v.lane as usize];
         let mut seen = cur.length - v.pos;
         // the speed at the next link: an upper bound, lowered by every leader
-        let mut v_link_pass = IdmParams::speed_after_distance(seen, vv, p.accel).min(des_cur);
+        let mut v_link_pass = IdmParams::speed_after_distance(seen, vv, p.accel).fmin(des_cur);
         plan.n_items = 0;
         plan.stop_brake_gap = f64::NAN;
         // the request whose leave speed later constraints lower (SUMO's `lastLink`); none before the first link
@@ -1100,28 +1100,28 @@ impl Simulation {
             let lv = &self.veh[l as usize];
             let gap = lv.pos - lv.length - v.pos - p.min_gap;
             let vs = p.follow_speed(gap, speed, lv.speed, des_cur);
-            vv = vv.min(vs);
-            v_link_pass = v_link_pass.min(vs);
+            vv = vv.fmin(vs);
+            v_link_pass = v_link_pass.fmin(vs);
         }
         if let LaneKind::Via(_) = cur.kind {
             // inside a junction (behind others on the connection or not): vehicles on merging connections closer
             // to the merge point lead (SUMO checks the exit link's leaders for every vehicle on the connection)
             let mut m = f64::INFINITY;
             self.junction_foe_leaders(id, v.lane, seen, false, &mut |o, gap| {
-                m = m.min(p.follow_speed(
+                m = m.fmin(p.follow_speed(
                     gap - p.min_gap,
                     speed,
                     self.veh[o as usize].speed,
                     des_cur,
                 ));
             });
-            vv = vv.min(m);
-            v_link_pass = v_link_pass.min(m);
+            vv = vv.fmin(m);
+            v_link_pass = v_link_pass.fmin(m);
         }
         if let LaneKind::Via(link) = cur.kind {
             let y = self.yield_inside_junction(id, link, p, des_cur);
-            vv = vv.min(y);
-            v_link_pass = v_link_pass.min(y);
+            vv = vv.fmin(y);
+            v_link_pass = v_link_pass.fmin(y);
         }
         if qi == 0 && !matches!(cur.kind, LaneKind::Via(_)) {
             // tails of vehicles that entered a connection out of this road still reach back onto it: they lead
@@ -1133,8 +1133,8 @@ impl Simulation {
                     if ov.pos < ov.length {
                         let gap = seen + ov.pos - ov.length - p.min_gap;
                         let vs = p.follow_speed(gap, speed, ov.speed, des_cur);
-                        vv = vv.min(vs);
-                        v_link_pass = v_link_pass.min(vs);
+                        vv = vv.fmin(vs);
+                        v_link_pass = v_link_pass.fmin(vs);
                     }
                 }
             }
@@ -1175,22 +1175,22 @@ impl Simulation {
                     let ov = &self.veh[o as usize];
                     let gap = seen - lane_ref.length + ov.pos - ov.length - p.min_gap;
                     let vs = p.follow_speed(gap, speed, ov.speed, des_cur);
-                    vv = vv.min(vs);
-                    v_link_pass = v_link_pass.min(vs);
+                    vv = vv.fmin(vs);
+                    v_link_pass = v_link_pass.fmin(vs);
                     if let Some(i) = last_item {
                         let it = &mut plan.items[i];
-                        it.leave_speed = it.leave_speed.min(vs);
+                        it.leave_speed = it.leave_speed.fmin(vs);
                     }
                 }
             }
             if k + 1 >= r.lanes.len() {
                 // final lane: drive out at the lane's speed (SUMO's arrival handling)
                 let lane_max = self.desired_speed(v, lane);
-                let va = free_speed(seen - lane_max * dt, lane_max).max(NUMERICAL_EPS);
-                vv = vv.min(va);
+                let va = free_speed(seen - lane_max * dt, lane_max).fmax(NUMERICAL_EPS);
+                vv = vv.fmin(va);
                 if let Some(i) = last_item {
                     let it = &mut plan.items[i];
-                    it.leave_speed = it.leave_speed.min(va);
+                    it.leave_speed = it.leave_speed.fmin(va);
                 }
                 break;
             }
@@ -1202,7 +1202,7 @@ impl Simulation {
                 if k > v.route_pos as usize && !self.net.links[cur_link as usize].foes.is_empty() {
                     let mut m = f64::INFINITY;
                     self.junction_foe_leaders(id, lane, seen, false, &mut |o, gap| {
-                        m = m.min(p.follow_speed(
+                        m = m.fmin(p.follow_speed(
                             gap - p.min_gap,
                             speed,
                             self.veh[o as usize].speed,
@@ -1211,20 +1211,20 @@ impl Simulation {
                     });
                     if m.is_finite() {
                         // (the pass speed is reset on the next lane)
-                        vv = vv.min(m);
+                        vv = vv.fmin(m);
                         if let Some(i) = last_item {
                             let it = &mut plan.items[i];
-                            it.leave_speed = it.leave_speed.min(m);
+                            it.leave_speed = it.leave_speed.fmin(m);
                             // not yet inside: a driver without right of way may still drive up to the stop
                             // line (a driver with right of way gets no such floor: SUMO's FCD shows those
                             // drivers keep slowing for the lane ahead)
                             if !cur_major {
-                                let wait = it.v_link_pass.min(p.stop_speed(
+                                let wait = it.v_link_pass.fmin(p.stop_speed(
                                     it.stop_dist,
                                     speed,
                                     it.desired_speed,
                                 ));
-                                vv = vv.max(wait);
+                                vv = vv.fmax(wait);
                             }
                         }
                     }
@@ -1246,7 +1246,7 @@ impl Simulation {
                 }
             }
             if had_non_internal
-                && seen_non_internal > (5.0 * v.length).max(v.length + vv)
+                && seen_non_internal > (5.0 * v.length).fmax(v.length + vv)
                 && (vv <= 0.0 || beyond_look_dist(seen))
             {
                 break;
@@ -1254,14 +1254,14 @@ impl Simulation {
             // onto the next lane: arrive there no faster than its speed allows (IDM's free speed), but limits
             // are no emergencies
             let next_max = self.desired_speed(v, next);
-            let va = free_speed(seen, next_max).max(min_comfortable);
-            vv = vv.min(va);
+            let va = free_speed(seen, next_max).fmax(min_comfortable);
+            vv = vv.fmin(va);
             if !matches!(next_ref.kind, LaneKind::Via(_)) {
                 seen_non_internal += next_ref.length;
             }
             seen += next_ref.length;
             v_link_pass =
-                IdmParams::speed_after_distance(next_ref.length, vv, p.accel).min(next_max);
+                IdmParams::speed_after_distance(next_ref.length, vv, p.accel).fmin(next_max);
             lane = next;
             k += 1;
         }
@@ -1271,7 +1271,7 @@ impl Simulation {
             let via_len = self.net.lanes[self.net.links[it.link as usize].via_lane as usize].length;
             it.leave_time = it.arrival_time
                 + (via_len + v.length)
-                    / (0.5 * (it.arrival_speed + it.leave_speed)).max(NUMERICAL_EPS);
+                    / (0.5 * (it.arrival_speed + it.leave_speed)).fmax(NUMERICAL_EPS);
             if self.link_has_minor_foe[it.link as usize] {
                 self.approaches[it.link as usize].push(Approach {
                     veh: id,
@@ -1307,7 +1307,7 @@ impl Simulation {
         let via = lk.via_lane;
         let via_lane = &self.net.lanes[via as usize];
         let speed = v.speed;
-        let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).max(0.0);
+        let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).fmax(0.0);
         let mut arrival_speed = v_link_pass;
         if !lk.major && seen >= FOE_VISIBILITY_M && {
             if seen > tc.brake_gap_above(speed, 0.0) {
@@ -1319,20 +1319,21 @@ impl Simulation {
                 plan.stop_brake_gap < seen
             }
         } {
-            arrival_speed = arrival_speed.min(tc.max_arrival_from_visibility);
+            arrival_speed = arrival_speed.fmin(tc.max_arrival_from_visibility);
         }
         let arrival_time = self.time_s + p.minimal_arrival_time(seen, vv, arrival_speed);
         let mut arrival_speed_braking = 0.0;
         let mut arrival_time_braking = arrival_time + BRAKING_ARRIVAL_DELAY_S;
         // the bound decides the far case without the exact gap
         if seen < tc.brake_gap_above(vv, p.tau) && seen < p.brake_gap(vv, p.decel, p.tau) {
-            arrival_speed_braking = p.minimal_arrival_speed_euler(seen, vv).min(arrival_speed);
-            arrival_time_braking = arrival_time
-                .max(self.time_s + seen / ((vv + arrival_speed_braking) * 0.5).max(NUMERICAL_EPS));
+            arrival_speed_braking = p.minimal_arrival_speed_euler(seen, vv).fmin(arrival_speed);
+            arrival_time_braking = arrival_time.fmax(
+                self.time_s + seen / ((vv + arrival_speed_braking) * 0.5).fmax(NUMERICAL_EPS),
+            );
         }
         let leave_speed = self
             .desired_speed(v, via)
-            .min(IdmParams::speed_after_distance(
+            .fmin(IdmParams::speed_after_distance(
                 via_lane.length,
                 arrival_speed,
                 p.accel,
@@ -1429,26 +1430,26 @@ impl Simulation {
                         || v.speed < p.decel * dt;
                     let opened = it.will_pass && self.link_opened(id, it, can_brake);
                     if !opened && (can_brake || !it.will_pass) {
-                        let v_link_wait = it.v_link_pass.min(p.stop_speed(
+                        let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
                             it.stop_dist,
                             v.speed,
                             it.desired_speed,
                         ));
-                        v_safe = v_safe.min(v_link_wait);
+                        v_safe = v_safe.fmin(v_link_wait);
                         break;
                     }
                 }
                 // finalise: acceleration and deceleration bounds (emergency braking allowed when unsafe)
-                let v_max = v_safe.min(v.speed + p.accel * dt);
+                let v_max = v_safe.fmin(v.speed + p.accel * dt);
                 let v_min = (v.speed - p.decel * dt)
-                    .min(v_safe.max(v.speed - p.emergency_decel * dt))
-                    .max(0.0);
-                let mut next = v_max.max(v_min);
+                    .fmin(v_safe.fmax(v.speed - p.emergency_decel * dt))
+                    .fmax(0.0);
+                let mut next = v_max.fmax(v_min);
                 if v.controlled && v.accel_cmd.is_finite() && self.in_region[v.lane as usize] {
                     let a = v.accel_cmd.clamp(-p.decel, p.accel);
-                    next = (v.speed + a * dt).max(0.0).min(v_safe);
+                    next = (v.speed + a * dt).fmax(0.0).fmin(v_safe);
                 }
-                self.plans[pi].v_safe = next.max(0.0);
+                self.plans[pi].v_safe = next.fmax(0.0);
                 pi += 1;
             }
         }
@@ -1471,13 +1472,13 @@ impl Simulation {
                     |l, gap| {
                         // the leader's movement this step, if it already moved
                         let _ = l;
-                        cap = cap.min(gap);
+                        cap = cap.fmin(gap);
                     },
                 );
                 // `for_each_leader` measured gaps from positions partly updated this step: leaders that moved
                 // report their new position, the rest their old one; both are safe bounds.
                 if cap.is_finite() {
-                    next = next.min((cap / dt).max(0.0));
+                    next = next.fmin((cap / dt).fmax(0.0));
                 }
                 let v = &mut self.veh[id as usize];
                 v.accel_cmd = f64::NAN;
@@ -1556,7 +1557,7 @@ impl Simulation {
         self.metrics.arrived += 1;
         let tt = v.arrive_s - v.depart_s;
         self.metrics.travel_time_sum += tt;
-        self.metrics.delay_sum += (tt - v.free_flow_s).max(0.0);
+        self.metrics.delay_sum += (tt - v.free_flow_s).fmax(0.0);
         self.arrived_last.push(id);
     }
 
@@ -1602,7 +1603,7 @@ impl Simulation {
         let route = &self.routes[v.route as usize];
         let lane = route.lanes[0];
         let lane_len = self.net.lanes[lane as usize].length;
-        let pos = (v.length + POSITION_EPS).min(lane_len);
+        let pos = (v.length + POSITION_EPS).fmin(lane_len);
         let speed = v.depart_speed;
         let des = self.desired_speed(v, lane);
         // leader: last vehicle on the lane, or further along the route
@@ -1647,7 +1648,7 @@ impl Simulation {
                     if !self.net.links[link as usize].major
                         && seen < p.brake_gap(speed, p.decel, 0.0) + speed * self.spec.step_s
                     {
-                        let vs = p.stop_speed((seen - POSITION_EPS).max(0.0), speed, des);
+                        let vs = p.stop_speed((seen - POSITION_EPS).fmax(0.0), speed, des);
                         if vs < speed {
                             return false;
                         }
