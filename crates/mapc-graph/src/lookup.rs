@@ -46,10 +46,10 @@ impl LaneGraph {
 
     /// `J12`, `osm:61862553` or a SUMO junction id.
     pub fn find_junction(&self, query: &str) -> Result<JunctionId, LookupError> {
-        if let Ok(id) = query.parse::<JunctionId>() {
-            if self.junction(id).is_some() {
-                return Ok(id);
-            }
+        if let Ok(id) = query.parse::<JunctionId>()
+            && self.junction(id).is_some()
+        {
+            return Ok(id);
         }
         let matches: Vec<JunctionId> = if let Some(node) = query.strip_prefix("osm:") {
             let node: i64 = node
@@ -86,10 +86,10 @@ impl LaneGraph {
     /// All roads a user's text names: `R34`, `osm-way:124433709` (every piece of the way, in driving order) or a
     /// SUMO edge id.
     pub fn find_roads(&self, query: &str) -> Result<Vec<RoadId>, LookupError> {
-        if let Ok(id) = query.parse::<RoadId>() {
-            if self.road(id).is_some() {
-                return Ok(vec![id]);
-            }
+        if let Ok(id) = query.parse::<RoadId>()
+            && self.road(id).is_some()
+        {
+            return Ok(vec![id]);
         }
         let found: Vec<&Road> = if let Some(way) = query.strip_prefix("osm-way:") {
             let way: i64 = way

@@ -93,7 +93,7 @@ impl TrainRun {
         let stats = self.state.iterate(factory)?;
         self.log.rows.push(stats.clone());
         self.log.write(&log_path(&self.dir))?;
-        if self.state.iteration % self.checkpoint_every == 0 || self.done() {
+        if self.state.iteration.is_multiple_of(self.checkpoint_every) || self.done() {
             self.save()?;
         }
         Ok(stats)

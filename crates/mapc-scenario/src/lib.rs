@@ -277,13 +277,13 @@ impl ResolvedScenario {
             };
             flow_roads.push((from, to));
         }
-        if let Some(iv) = &scenario.initial_vehicles {
-            if !scenario.vehicle_types.contains_key(&iv.vehicle_type) {
-                return Err(invalid(
-                    "initial_vehicles.vehicle_type".into(),
-                    format!("no vehicle type `{}`", iv.vehicle_type),
-                ));
-            }
+        if let Some(iv) = &scenario.initial_vehicles
+            && !scenario.vehicle_types.contains_key(&iv.vehicle_type)
+        {
+            return Err(invalid(
+                "initial_vehicles.vehicle_type".into(),
+                format!("no vehicle type `{}`", iv.vehicle_type),
+            ));
         }
         let mut region_roads = Vec::new();
         if let Some(c) = &scenario.control {

@@ -42,12 +42,12 @@ pub struct MergeSummary {
 
 /// Run every step of `simplify` on a map's graph.
 pub fn simplify(raw: &LaneGraph, opts: &SimplifyOptions) -> Result<Simplified, TransformError> {
-    if let Some(l) = opts.feeder_length_m {
-        if !(l.is_finite() && l > 0.0) {
-            return Err(TransformError::NoRoute(format!(
-                "--feeder-length must be a positive length, not {l}"
-            )));
-        }
+    if let Some(l) = opts.feeder_length_m
+        && !(l.is_finite() && l > 0.0)
+    {
+        return Err(TransformError::NoRoute(format!(
+            "--feeder-length must be a positive length, not {l}"
+        )));
     }
     let mut corridor = Corridor::new(raw.clone());
     corridor.graph.source = Source {

@@ -970,10 +970,11 @@ impl Simulation {
             // a moving vehicle that stays before its stop line this step cannot meet vehicles on merging
             // connections (they meet only inside the junction)
             let may_enter = moving.is_none_or(|travel| seen < travel);
-            if let LaneKind::Via(link) = l.kind {
-                if may_enter && !self.net.links[link as usize].foes.is_empty() {
-                    self.junction_foe_leaders(id, lane, seen + l.length, guard, f);
-                }
+            if let LaneKind::Via(link) = l.kind
+                && may_enter
+                && !self.net.links[link as usize].foes.is_empty()
+            {
+                self.junction_foe_leaders(id, lane, seen + l.length, guard, f);
             }
             if let Some(&o) = self.lane_veh[lane as usize].last() {
                 let ov = &self.veh[o as usize];
@@ -1643,16 +1644,14 @@ impl Simulation {
                 let _ = link;
             }
             // a minor link ahead must be reachable with a stop
-            if k + 1 < route.lanes.len() {
-                if let LaneKind::Via(link) = self.net.lanes[route.lanes[k + 1] as usize].kind {
-                    if !self.net.links[link as usize].major
-                        && seen < p.brake_gap(speed, p.decel, 0.0) + speed * self.spec.step_s
-                    {
-                        let vs = p.stop_speed((seen - POSITION_EPS).fmax(0.0), speed, des);
-                        if vs < speed {
-                            return false;
-                        }
-                    }
+            if k + 1 < route.lanes.len()
+                && let LaneKind::Via(link) = self.net.lanes[route.lanes[k + 1] as usize].kind
+                && !self.net.links[link as usize].major
+                && seen < p.brake_gap(speed, p.decel, 0.0) + speed * self.spec.step_s
+            {
+                let vs = p.stop_speed((seen - POSITION_EPS).fmax(0.0), speed, des);
+                if vs < speed {
+                    return false;
                 }
             }
             k += 1;
@@ -1689,17 +1688,17 @@ impl Simulation {
                 }
             }
             // a road's last vehicle versus the front vehicle of each connection into it
-            if let LaneKind::Road(_) = self.net.lanes[li].kind {
-                if let Some(&last) = q.last() {
-                    let lv = &self.veh[last as usize];
-                    for l in self.net.links.iter().filter(|l| l.to_lane as usize == li) {
-                        if let Some(&f) = self.lane_veh[l.via_lane as usize].first() {
-                            let fv = &self.veh[f as usize];
-                            let gap = lv.pos - lv.length
-                                + (self.net.lanes[l.via_lane as usize].length - fv.pos);
-                            if gap < -EPS {
-                                return Err(err(last, f, gap));
-                            }
+            if let LaneKind::Road(_) = self.net.lanes[li].kind
+                && let Some(&last) = q.last()
+            {
+                let lv = &self.veh[last as usize];
+                for l in self.net.links.iter().filter(|l| l.to_lane as usize == li) {
+                    if let Some(&f) = self.lane_veh[l.via_lane as usize].first() {
+                        let fv = &self.veh[f as usize];
+                        let gap = lv.pos - lv.length
+                            + (self.net.lanes[l.via_lane as usize].length - fv.pos);
+                        if gap < -EPS {
+                            return Err(err(last, f, gap));
                         }
                     }
                 }

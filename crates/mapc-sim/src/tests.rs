@@ -126,7 +126,11 @@ fn controlled_vehicles_obey_commands_within_limits_and_never_collide() {
             let v = sim.vehicle(id).unwrap();
             if v.controlled {
                 // harsh bang-bang commands beyond the limits: clamped, then capped by the safe speed
-                let a = if (toggle / 20) % 2 == 0 { 10.0 } else { -10.0 };
+                let a = if (toggle / 20).is_multiple_of(2) {
+                    10.0
+                } else {
+                    -10.0
+                };
                 sim.set_acceleration(id, a).unwrap();
                 commanded += 1;
             } else {

@@ -208,7 +208,7 @@ fn geojson_of_a_plane_graph_says_it_is_in_metres() {
 /// A trace with a stop-and-go wave: vehicles drive 25 m/s on a 1 km corridor but crawl near a slow spot that moves
 /// upstream at 5 m/s; every fifth vehicle is an AV; a ramp vehicle has no corridor position.
 fn wave_trace() -> String {
-    let mut s = String::from(crate::timespace::TRACE_COLUMNS.join(","));
+    let mut s = crate::timespace::TRACE_COLUMNS.join(",");
     s.push('\n');
     let dt = 0.5;
     for v in 0..60 {

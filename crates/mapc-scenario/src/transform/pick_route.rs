@@ -20,22 +20,20 @@ pub enum Waypoint {
 /// Read a `--via` value: roads first (`R3`, `osm-way:N`, SUMO edge ids), then junctions (`J3`, `osm:N`, SUMO ids).
 pub fn resolve_via(g: &LaneGraph, query: &str) -> Result<Waypoint, TransformError> {
     let is_junction_syntax = query.starts_with("osm:") || query.parse::<JunctionId>().is_ok();
-    if !is_junction_syntax {
-        if let Ok(roads) = g.find_roads(query) {
-            let chains = chains_of(g, &roads);
-            if chains.len() != 1 {
-                return Err(TransformError::NoRoute(format!(
-                    "--via `{query}` names {} separate stretches of road ({}); name one with a mapc id",
-                    chains.len(),
-                    chains
-                        .iter()
-                        .map(|c| c[0].to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )));
-            }
-            return Ok(Waypoint::Roads(chains.into_iter().next().unwrap()));
+    if !is_junction_syntax && let Ok(roads) = g.find_roads(query) {
+        let chains = chains_of(g, &roads);
+        if chains.len() != 1 {
+            return Err(TransformError::NoRoute(format!(
+                "--via `{query}` names {} separate stretches of road ({}); name one with a mapc id",
+                chains.len(),
+                chains
+                    .iter()
+                    .map(|c| c[0].to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
         }
+        return Ok(Waypoint::Roads(chains.into_iter().next().unwrap()));
     }
     match g.find_junction(query) {
         Ok(j) => Ok(Waypoint::Junction(j)),
