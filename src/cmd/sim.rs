@@ -136,23 +136,24 @@ pub fn write_trace(spec: &SimSpec, seed: u64, path: &Path) -> anyhow::Result<()>
     })
 }
 
-/// Writes a trace CSV (header, then the rows `body` writes) to a temporary file and renames it into place, so an
-/// interrupted run never leaves half a trace under the final name.
+/// Writes a trace CSV (header, then the rows `body` writes) atomically (`mapc_graph::write_atomically_with`), so
+/// an interrupted or failed run leaves neither half a trace under the final name nor a temporary file.
 pub fn write_trace_file(
     path: &Path,
     body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    let tmp = path.with_extension("csv.tmp");
-    {
-        let file =
-            std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
-        let mut w = std::io::BufWriter::new(file);
+    // the writer speaks io::Error; the simulator's or the policy's own error is kept aside and returned as is
+    let mut failure = None;
+    let written = mapc_graph::write_atomically_with(path, |w| {
         writeln!(w, "{TRACE_HEADER}")?;
-        body(&mut w)?;
-        w.flush()
-            .with_context(|| format!("writing {}", tmp.display()))?;
+        body(w).map_err(|e| {
+            let io = std::io::Error::other(e.to_string());
+            failure = Some(e);
+            io
+        })
+    });
+    if let Some(e) = failure {
+        return Err(e);
     }
-    std::fs::rename(&tmp, path)
-        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
-    Ok(())
+    written.with_context(|| format!("writing the trace {}", path.display()))
 }

@@ -28,6 +28,16 @@ pub enum GraphFileError {
 
 /// Write `bytes` to `path` so that a reader never sees half a file: a temporary file beside it, then a rename.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    write_atomically_with(path, |w| w.write_all(bytes))
+}
+
+/// [`write_atomically`] for output written piece by piece (traces): `body` writes into a buffered temporary file
+/// beside `path`, which is renamed into place only when `body` and the flush succeed; on any error it is removed,
+/// so neither a half file under the final name nor a stray temporary is left.
+pub fn write_atomically_with(
+    path: &Path,
+    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -39,8 +49,9 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         .unwrap_or_default();
     let tmp = dir.join(format!(".{file_name}.{}.tmp", std::process::id()));
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
+        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        body(&mut w)?;
+        let f = w.into_inner().map_err(|e| e.into_error())?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
@@ -100,5 +111,32 @@ impl LaneGraph {
             });
         }
         serde_json::from_str(text).map_err(parse_err)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_streamed_write_leaves_nothing_and_a_good_one_replaces_the_file() {
+        let dir = std::env::temp_dir().join(format!("mapc-io-test-{}", std::process::id()));
+        let path = dir.join("trace.csv");
+        write_atomically(&path, b"old\n").unwrap();
+        let err = write_atomically_with(&path, |w| {
+            w.write_all(b"half a tr")?;
+            Err(std::io::Error::other("interrupted"))
+        })
+        .unwrap_err();
+        assert_eq!(err.to_string(), "interrupted");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "old\n");
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("trace.csv")]);
+        write_atomically_with(&path, |w| w.write_all(b"a,b\n1,2\n")).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "a,b\n1,2\n");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

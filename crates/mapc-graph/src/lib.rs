@@ -25,7 +25,7 @@ pub mod validate;
 
 pub use ids::{JunctionId, RoadId};
 pub use index::RoadIndex;
-pub use io::{GraphFileError, write_atomically};
+pub use io::{GraphFileError, write_atomically, write_atomically_with};
 pub use lookup::LookupError;
 pub use model::*;
 pub use projection::Projection;

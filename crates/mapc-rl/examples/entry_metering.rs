@@ -10,8 +10,9 @@
 //!
 //! Prints a markdown table: target speed, metering distance, outflow, inflow, average speed (mean ± 95% CI).
 use mapc_rl::Env;
-use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind};
-use mapc_rl::env::obs::ObsNorm;
+use mapc_rl::env::merge::{
+    ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM,
+};
 use mapc_rl::eval::FigureSet;
 use rayon::prelude::*;
 
@@ -60,15 +61,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rs = mapc_scenario::ResolvedScenario::load(scenario)?;
     let spec = mapc_sim::spec_from_scenario(&rs)?;
     let n_av = rs.scenario.control.as_ref().map_or(5, |c| c.n_av as usize);
+    // the same control a trained policy gets (its normalisation and action bounds)
     let cfg = MergeEnvConfig {
         reward: RewardKind::Speed,
         n_av,
-        norm: ObsNorm {
-            max_speed: 30.0,
-            length: 947.68,
-        },
-        accel_min: -4.5,
-        accel_max: 2.6,
+        norm: SIMPLE_MERGE_NORM,
+        accel_min: ACCEL_MIN,
+        accel_max: ACCEL_MAX,
     };
     let fmt = |f: mapc_rl::eval::Figure| format!("{:.1} ± {:.1}", f.mean, f.ci95);
     println!("| target m/s | metering until m | outflow veh/h | inflow veh/h | speed m/s |");

@@ -86,26 +86,10 @@ pub fn checkpoint_path(dir: &Path) -> PathBuf {
     dir.join("checkpoint.json")
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename (the workspace's one
+/// atomic writer, `mapc_graph::write_atomically`).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RlError> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).map_err(|e| RlError::Io {
-        path: dir.into(),
-        source: e,
-    })?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes).map_err(|e| RlError::Io {
-        path: tmp.clone(),
-        source: e,
-    })?;
-    std::fs::rename(&tmp, path).map_err(|e| RlError::Io {
+    mapc_graph::write_atomically(path, bytes).map_err(|e| RlError::Io {
         path: path.into(),
         source: e,
     })

@@ -181,15 +181,18 @@ pub fn trace_policy(
             None => Ok(()),
         }
     };
+    let settings = crate::rollout::EpisodeSettings {
+        env_seed: seed,
+        noise_seed: eval_noise_seed(seed),
+        horizon,
+        mode,
+        record: false,
+    };
     let ep = crate::rollout::run_episode_observed(
         &mut env,
         &ck.state.model,
         &mut scratch,
-        seed,
-        eval_noise_seed(seed),
-        horizon,
-        mode,
-        false,
+        settings,
         &mut write_rows,
     )?;
     Ok(ep.metrics)

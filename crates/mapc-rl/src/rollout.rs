@@ -90,44 +90,42 @@ fn action_of(mean: &[f32], log_std: &[f32], mode: ActionMode, rng: &mut Rng) -> 
     }
 }
 
+/// What one episode runs with: the environment's seed, the action-noise seed, the step limit, how actions are
+/// chosen, and whether the per-step training data are kept.
+#[derive(Clone, Copy, Debug)]
+pub struct EpisodeSettings {
+    pub env_seed: u64,
+    pub noise_seed: u64,
+    pub horizon: usize,
+    pub mode: ActionMode,
+    pub record: bool,
+}
+
 /// Runs one episode of at most `horizon` steps. `record` keeps the per-step data needed for training.
-#[allow(clippy::too_many_arguments)]
 pub fn run_episode(
     env: &mut dyn Env,
     model: &Model,
     scratch: &mut Scratch,
-    env_seed: u64,
-    noise_seed: u64,
-    horizon: usize,
-    mode: ActionMode,
-    record: bool,
+    settings: EpisodeSettings,
 ) -> Result<Episode, RlError> {
-    run_episode_observed(
-        env,
-        model,
-        scratch,
+    run_episode_observed(env, model, scratch, settings, &mut |_| Ok(()))
+}
+
+/// [`run_episode`], calling `observe` with the environment after the reset and after every step (traces).
+pub fn run_episode_observed<E: Env + ?Sized>(
+    env: &mut E,
+    model: &Model,
+    scratch: &mut Scratch,
+    settings: EpisodeSettings,
+    observe: &mut dyn FnMut(&E) -> Result<(), RlError>,
+) -> Result<Episode, RlError> {
+    let EpisodeSettings {
         env_seed,
         noise_seed,
         horizon,
         mode,
         record,
-        &mut |_| Ok(()),
-    )
-}
-
-/// [`run_episode`], calling `observe` with the environment after the reset and after every step (traces).
-#[allow(clippy::too_many_arguments)]
-pub fn run_episode_observed<E: Env + ?Sized>(
-    env: &mut E,
-    model: &Model,
-    scratch: &mut Scratch,
-    env_seed: u64,
-    noise_seed: u64,
-    horizon: usize,
-    mode: ActionMode,
-    record: bool,
-    observe: &mut dyn FnMut(&E) -> Result<(), RlError>,
-) -> Result<Episode, RlError> {
+    } = settings;
     let mut rng = Rng::new(noise_seed);
     let mut ep = Episode::default();
     let mut obs = env.reset(env_seed)?;
@@ -183,16 +181,14 @@ pub fn collect(
         .map_init(
             || (factory(), Scratch::default()),
             |(env, scratch), &(env_seed, noise_seed)| {
-                run_episode(
-                    env.as_mut(),
-                    model,
-                    scratch,
+                let settings = EpisodeSettings {
                     env_seed,
                     noise_seed,
                     horizon,
                     mode,
                     record,
-                )
+                };
+                run_episode(env.as_mut(), model, scratch, settings)
             },
         )
         .collect()

@@ -2,7 +2,7 @@
 //! replayed one step at a time; every vehicle's next speed must match SUMO's.
 
 use mapc_scenario::ResolvedScenario;
-use mapc_sim::replay::{ReplicaVehicle, replay_simple_merge_step};
+use mapc_sim::replay::{ReplicaVehicle, parse_state_line, replay_simple_merge_step};
 use mapc_sim::spec_from_scenario;
 use std::collections::HashMap;
 
@@ -14,23 +14,8 @@ fn states() -> Vec<(f64, Vec<ReplicaVehicle>)> {
     std::fs::read_to_string(path)
         .unwrap()
         .lines()
-        .map(|l| {
-            let v: serde_json::Value = serde_json::from_str(l).unwrap();
-            let vehicles = v["veh"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|r| ReplicaVehicle {
-                    id: r[0].as_str().unwrap().into(),
-                    lane: r[1].as_str().unwrap().into(),
-                    pos: r[2].as_f64().unwrap(),
-                    speed: r[3].as_f64().unwrap(),
-                    speed_factor: r[4].as_f64().unwrap(),
-                    waiting_s: r[5].as_f64().unwrap(),
-                })
-                .collect();
-            (v["t"].as_f64().unwrap(), vehicles)
-        })
+        .enumerate()
+        .map(|(n, l)| parse_state_line(l).unwrap_or_else(|e| panic!("{path}:{}: {e}", n + 1)))
         .collect()
 }
 
