@@ -1088,7 +1088,7 @@ impl Simulation {
         let cur = &self.net.lanes[v.lane as usize];
         let mut seen = cur.length - v.pos;
         // the speed at the next link: an upper bound, lowered by every leader
-        let mut v_link_pass = IdmParams::speed_after_distance(seen, vv, p.accel).fmin(des_cur);
+        let mut v_link_pass = LazyPassSpeed::new(seen, vv, p.accel, des_cur);
         plan.n_items = 0;
         plan.stop_brake_gap = f64::NAN;
         // the request whose leave speed later constraints lower (SUMO's `lastLink`); none before the first link
@@ -1102,7 +1102,7 @@ impl Simulation {
             let gap = lv.pos - lv.length - v.pos - p.min_gap;
             let vs = p.follow_speed(gap, speed, lv.speed, des_cur);
             vv = vv.fmin(vs);
-            v_link_pass = v_link_pass.fmin(vs);
+            v_link_pass.lower(vs);
         }
         if let LaneKind::Via(_) = cur.kind {
             // inside a junction (behind others on the connection or not): vehicles on merging connections closer
@@ -1117,12 +1117,12 @@ impl Simulation {
                 ));
             });
             vv = vv.fmin(m);
-            v_link_pass = v_link_pass.fmin(m);
+            v_link_pass.lower(m);
         }
         if let LaneKind::Via(link) = cur.kind {
             let y = self.yield_inside_junction(id, link, p, des_cur);
             vv = vv.fmin(y);
-            v_link_pass = v_link_pass.fmin(y);
+            v_link_pass.lower(y);
         }
         if qi == 0 && !matches!(cur.kind, LaneKind::Via(_)) {
             // tails of vehicles that entered a connection out of this road still reach back onto it: they lead
@@ -1135,7 +1135,7 @@ impl Simulation {
                         let gap = seen + ov.pos - ov.length - p.min_gap;
                         let vs = p.follow_speed(gap, speed, ov.speed, des_cur);
                         vv = vv.fmin(vs);
-                        v_link_pass = v_link_pass.fmin(vs);
+                        v_link_pass.lower(vs);
                     }
                 }
             }
@@ -1177,7 +1177,7 @@ impl Simulation {
                     let gap = seen - lane_ref.length + ov.pos - ov.length - p.min_gap;
                     let vs = p.follow_speed(gap, speed, ov.speed, des_cur);
                     vv = vv.fmin(vs);
-                    v_link_pass = v_link_pass.fmin(vs);
+                    v_link_pass.lower(vs);
                     if let Some(i) = last_item {
                         let it = &mut plan.items[i];
                         it.leave_speed = it.leave_speed.fmin(vs);
@@ -1239,8 +1239,17 @@ impl Simulation {
                 if (plan.n_items as usize) < MAX_LINK_ITEMS
                     && (!lk.major || self.link_has_minor_foe[link as usize])
                 {
-                    let i =
-                        self.link_request(v, p, &tc, link, seen, vv, v_link_pass, des_cur, plan);
+                    let i = self.link_request(
+                        v,
+                        p,
+                        &tc,
+                        link,
+                        seen,
+                        vv,
+                        v_link_pass.get(),
+                        des_cur,
+                        plan,
+                    );
                     last_item = Some(i);
                 } else {
                     last_item = None;
@@ -1261,8 +1270,7 @@ impl Simulation {
                 seen_non_internal += next_ref.length;
             }
             seen += next_ref.length;
-            v_link_pass =
-                IdmParams::speed_after_distance(next_ref.length, vv, p.accel).fmin(next_max);
+            v_link_pass = LazyPassSpeed::new(next_ref.length, vv, p.accel, next_max);
             lane = next;
             k += 1;
         }
@@ -1768,6 +1776,45 @@ impl Simulation {
 }
 
 /// A follower can brake behind a leader at the merge when the leader's braking distance is the longer one.
+/// The speed at the next link, `speed_after_distance(dist, speed, accel).fmin(cap)` lowered by every leader
+/// found on the way, with the square root taken only when a link request reads it (most lanes' pass speeds are
+/// never read). `fmin` (`b < a ? b : a`) keeps the first operand that attains the minimum, so folding the leaders
+/// into their own minimum and taking it with the root's last gives the same bits as the eager chain, signed zeros
+/// included.
+#[derive(Clone, Copy)]
+struct LazyPassSpeed {
+    dist: f64,
+    speed: f64,
+    accel: f64,
+    cap: f64,
+    leaders_min: f64,
+}
+
+impl LazyPassSpeed {
+    #[inline]
+    fn new(dist: f64, speed: f64, accel: f64, cap: f64) -> LazyPassSpeed {
+        LazyPassSpeed {
+            dist,
+            speed,
+            accel,
+            cap,
+            leaders_min: f64::INFINITY,
+        }
+    }
+
+    #[inline]
+    fn lower(&mut self, v: f64) {
+        self.leaders_min = self.leaders_min.fmin(v);
+    }
+
+    #[inline]
+    fn get(&self) -> f64 {
+        IdmParams::speed_after_distance(self.dist, self.speed, self.accel)
+            .fmin(self.cap)
+            .fmin(self.leaders_min)
+    }
+}
+
 fn unsafe_merge_speeds(
     leader_speed: f64,
     follower_speed: f64,
