@@ -40,25 +40,34 @@ pub struct Args {
     /// grad_slices); applied over the preset, under the flags.
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// Run seed: initial weights, episode seeds, action noise and minibatch order derive from it [preset: 0].
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Adam learning rate [5e-4].
     #[arg(long)]
     pub lr: Option<f32>,
-    /// Environment steps per iteration.
+    /// Environment steps per iteration [paper: 40000; fast: 12000].
     #[arg(long)]
     pub batch: Option<usize>,
+    /// SGD minibatch size in environment steps [paper: 128; fast: 1000].
     #[arg(long)]
     pub minibatch: Option<usize>,
+    /// SGD passes over each iteration's batch [paper: 10; fast: 8].
     #[arg(long)]
     pub epochs: Option<usize>,
+    /// Discount factor [0.99].
     #[arg(long)]
     pub gamma: Option<f32>,
+    /// GAE lambda [0.97].
     #[arg(long)]
     pub lambda: Option<f32>,
+    /// PPO's surrogate clip parameter [0.3].
     #[arg(long)]
     pub clip: Option<f32>,
+    /// Initial KL penalty coefficient, adapted every iteration [0.2].
     #[arg(long)]
     pub kl_coeff: Option<f32>,
+    /// Target KL divergence per iteration [0.01].
     #[arg(long)]
     pub kl_target: Option<f32>,
     /// Episode length in steps (default: the scenario's horizon).

@@ -68,8 +68,9 @@ impl Default for PpoConfig {
 }
 
 impl PpoConfig {
-    /// The preset used for the shipped policies: smaller batches and larger minibatches so an iteration costs
-    /// about a second on two cores (see docs/results.md).
+    /// The quick preset: smaller batches and larger minibatches (96 gradient steps per iteration instead of
+    /// 3 100), so an iteration costs about a second on two cores; enough for the outflow reward, not for the
+    /// speed-based ones (the shipped policies use the paper preset; see docs/results.md).
     pub fn fast() -> Self {
         Self {
             train_batch_size: 12_000,
