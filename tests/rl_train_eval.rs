@@ -188,3 +188,119 @@ fn a_corrupt_checkpoint_names_the_file() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+fn tiny_distributed_train(dir: &PathBuf, iters: u64) -> std::process::Output {
+    mapc()
+        .args(["train", "--distributed", "--features", "dist,merge"])
+        .args(["--preset", "fast", "--iters", &iters.to_string()])
+        .args(["--batch", "600", "--horizon", "300", "--minibatch", "256"])
+        .args(["--epochs", "2", "--checkpoint-every", "1", "--json", "-o"])
+        .arg(dir)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn tiny_distributed_training_resume_and_eval() {
+    let dir = tmp("dist");
+    let out = tiny_distributed_train(&dir, 2);
+    common::assert_success(&out);
+    // the checkpoint says what the agents see and how they are rewarded
+    let ck: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("checkpoint.json")).unwrap())
+            .unwrap();
+    let spec = &ck["spec"];
+    assert_eq!(spec["obs_dim"], 8, "{spec}");
+    assert_eq!(spec["act_dim"], 1, "{spec}");
+    assert_eq!(
+        spec["distributed"]["features"]["congestion"], false,
+        "{spec}"
+    );
+    assert_eq!(spec["distributed"]["reward"]["exit_bonus"], 20.0, "{spec}");
+    // the paper's distributed hyperparameters, learning-rate schedule included
+    assert_eq!(
+        ck["state"]["config"]["gamma"].as_f64().unwrap() as f32,
+        0.998
+    );
+    assert!(
+        ck["state"]["config"]["lr_schedule"].is_array(),
+        "{}",
+        ck["state"]["config"]
+    );
+
+    // resumed to 3 iterations = 3 iterations in one go (wall time aside)
+    let out = mapc()
+        .args(["train", "--iters", "3", "--json", "--resume"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let straight = tmp("dist-straight");
+    common::assert_success(&tiny_distributed_train(&straight, 3));
+    let row3 = |d: &PathBuf| {
+        let csv = std::fs::read_to_string(d.join("progress.csv")).unwrap();
+        let l = csv.lines().nth(3).unwrap().to_string();
+        let mut f: Vec<String> = l.split(',').map(String::from).collect();
+        f.remove(2);
+        f
+    };
+    assert_eq!(row3(&dir), row3(&straight));
+    assert!(
+        row3(&dir)[1] == "1800",
+        "simulation steps: {:?}",
+        row3(&dir)
+    );
+
+    // every AV drives with the policy in the evaluation; the trace marks them as controlled
+    let trace = dir.join("trace.csv");
+    let out = mapc()
+        .args(["eval", "--seeds", "2", "--json", "--trace"])
+        .arg(&trace)
+        .arg("--policy")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["outflow"]["mean"].as_f64().unwrap() > 0.0, "{v}");
+    assert!(v["comparison"]["outflow"]["p_value"].is_number(), "{v}");
+    let csv = std::fs::read_to_string(&trace).unwrap();
+    let controlled: std::collections::HashSet<&str> = csv
+        .lines()
+        .skip(1)
+        .filter(|l| l.ends_with(",true"))
+        .map(|l| l.split(',').nth(1).unwrap())
+        .collect();
+    assert!(
+        controlled.len() > 5,
+        "only {} controlled AVs",
+        controlled.len()
+    );
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::remove_dir_all(&straight).ok();
+}
+
+#[test]
+fn distributed_flags_are_checked() {
+    // an unknown feature names itself; --reward belongs to centralized policies
+    let out = mapc()
+        .args(["train", "--distributed", "--features", "dist,radar"])
+        .args(["--iters", "1", "-o"])
+        .arg(tmp("bad-features"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("radar"));
+    let out = mapc()
+        .args([
+            "train",
+            "--distributed",
+            "--reward",
+            "speed",
+            "--iters",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

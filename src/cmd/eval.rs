@@ -7,7 +7,10 @@ use anyhow::Context;
 use clap::Args as ClapArgs;
 use mapc_rl::Checkpoint;
 use mapc_rl::checkpoint::checkpoint_path;
-use mapc_rl::eval::{EvalReport, FigureSet, compare, env_config_for, run_human, run_policy};
+use mapc_rl::eval::{
+    EvalReport, FigureSet, compare, env_config_for, run_distributed_policy, run_human, run_policy,
+    trace_distributed_policy,
+};
 use mapc_rl::rollout::ActionMode;
 
 /// Evaluate a policy: mean and 95% CI of outflow, inflow and speed, and a Welch t-test against the humans.
@@ -64,18 +67,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = policy_file(&args.policy);
     let ck = Checkpoint::load(&file)?;
     let sc = super::train::load_scenario(&args.scenario)?;
-    let cfg = env_config_for(&ck, &file, &args.scenario, Some(sc.n_av.unwrap_or(5)))?;
     let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
     let mode = if args.sample {
         ActionMode::Sample
     } else {
         ActionMode::Mean
     };
-    let runs = run_policy(&ck, &sc.spec, &cfg, &seeds, mode)
-        .with_context(|| format!("evaluating {}", file.display()))?;
-    if let Some(path) = &args.trace {
-        write_policy_trace(&ck, &sc.spec, &cfg, seeds[0], mode, path)?;
-    }
+    let runs = if let Some(dcfg) = ck.spec.distributed_config() {
+        // a distributed policy drives every AV of the control region, whatever the scenario's N_AV
+        let runs = run_distributed_policy(&ck, &sc.spec, &dcfg, &seeds, mode)
+            .with_context(|| format!("evaluating {}", file.display()))?;
+        if let Some(path) = &args.trace {
+            super::sim::write_trace_file(path, |w| {
+                trace_distributed_policy(&ck, &sc.spec, &dcfg, seeds[0], mode, w)?;
+                Ok(())
+            })?;
+        }
+        runs
+    } else {
+        let cfg = env_config_for(&ck, &file, &args.scenario, Some(sc.n_av.unwrap_or(5)))?;
+        let runs = run_policy(&ck, &sc.spec, &cfg, &seeds, mode)
+            .with_context(|| format!("evaluating {}", file.display()))?;
+        if let Some(path) = &args.trace {
+            write_policy_trace(&ck, &sc.spec, &cfg, seeds[0], mode, path)?;
+        }
+        runs
+    };
     let figs = FigureSet::of(&runs);
     let (baseline, comparison) = if args.no_baseline {
         (None, None)

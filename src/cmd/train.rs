@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressStyle};
-use mapc_rl::checkpoint::PolicySpec;
+use mapc_rl::checkpoint::{DistributedSpec, PolicySpec};
+use mapc_rl::env::distributed::{AgentReward, DistributedEnv, Features, SIMPLE_MERGE_DIST_NORM};
 use mapc_rl::env::merge::{
     ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM,
 };
@@ -14,15 +15,34 @@ use mapc_rl::rollout::Env;
 use mapc_rl::run::{TrainRun, log_path};
 use mapc_rl::{IterationStats, PpoConfig};
 
-/// Train a centralized PPO policy (defaults: the paper's hyperparameters; `--preset fast` for minutes on CPU).
+/// Train a centralized PPO policy, or with `--distributed` one shared by every AV (defaults: the paper's
+/// hyperparameters; `--preset fast` for minutes on CPU).
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Scenario: `simple_merge` or a scenario file.
     #[arg(long, default_value = "simple_merge")]
     pub scenario: String,
-    /// Reward: outflow, flow (Flow's desired-velocity reward) or speed (average speed).
-    #[arg(long, default_value = "outflow")]
+    /// Reward of a centralized policy: outflow, flow (Flow's desired-velocity reward) or speed (average speed).
+    #[arg(long, default_value = "outflow", conflicts_with = "distributed")]
     pub reward: String,
+    /// Train a distributed policy: every AV in the control region runs the same policy on its own
+    /// observation and gets its own reward (-eta1 + eta2 * mean speed / V per step, the exit bonus when it
+    /// leaves); the presets become the paper's distributed hyperparameters.
+    #[arg(long)]
+    pub distributed: bool,
+    /// Distributed: the agents' state augmentations, `full` (default), `none`, or a list of dist, congestion,
+    /// merge.
+    #[arg(long, default_value = "full", requires = "distributed")]
+    pub features: String,
+    /// Distributed: weight of the selfish time penalty.
+    #[arg(long, default_value_t = 0.9, requires = "distributed")]
+    pub eta1: f64,
+    /// Distributed: weight of the collaborative average speed.
+    #[arg(long, default_value_t = 0.1, requires = "distributed")]
+    pub eta2: f64,
+    /// Distributed: reward in the step an agent leaves.
+    #[arg(long, default_value_t = 20.0, requires = "distributed")]
+    pub exit_bonus: f64,
     /// Training iterations (overrides the preset / config).
     #[arg(long)]
     pub iters: Option<u64>,
@@ -43,7 +63,7 @@ pub struct Args {
     /// Run seed: initial weights, episode seeds, action noise and minibatch order derive from it [preset: 0].
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Adam learning rate [5e-4].
+    /// Adam learning rate [5e-4]; replaces the distributed presets' schedule by this constant rate.
     #[arg(long)]
     pub lr: Option<f32>,
     /// Environment steps per iteration [paper: 40000; fast: 12000].
@@ -117,7 +137,10 @@ fn apply_flags(c: &mut PpoConfig, a: &Args) {
     }
     set!(iterations, a.iters);
     set!(seed, a.seed);
-    set!(lr, a.lr);
+    if let Some(lr) = a.lr {
+        c.lr = lr;
+        c.lr_schedule.clear();
+    }
     set!(train_batch_size, a.batch);
     set!(minibatch, a.minibatch);
     set!(epochs, a.epochs);
@@ -185,8 +208,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         r
     } else {
         let reward: RewardKind = args.reward.parse().map_err(anyhow::Error::msg)?;
-        let mut config = PpoConfig::preset(&args.preset)
-            .with_context(|| format!("unknown preset `{}` (paper, fast)", args.preset))?;
+        let preset = if args.distributed {
+            PpoConfig::distributed_preset(&args.preset)
+        } else {
+            PpoConfig::preset(&args.preset)
+        };
+        let mut config =
+            preset.with_context(|| format!("unknown preset `{}` (paper, fast)", args.preset))?;
         if let Some(p) = &args.config {
             config = read_config(p, config)?;
         }
@@ -197,7 +225,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         validate(&config)?;
         let n_av = args.n_av.or(sc.n_av).unwrap_or(5);
-        let spec = PolicySpec {
+        let mut spec = PolicySpec {
             scenario: args.scenario.clone(),
             reward: reward.name().into(),
             n_av,
@@ -207,16 +235,54 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             norm_length: SIMPLE_MERGE_NORM.length,
             accel_min: ACCEL_MIN,
             accel_max: ACCEL_MAX,
+            distributed: None,
         };
+        if args.distributed {
+            let features = Features::parse(&args.features).map_err(anyhow::Error::msg)?;
+            for (name, v) in [
+                ("eta1", args.eta1),
+                ("eta2", args.eta2),
+                ("exit-bonus", args.exit_bonus),
+            ] {
+                if !v.is_finite() {
+                    bail!("--{name} must be a number, got {v}");
+                }
+            }
+            spec.reward = "distributed".into();
+            spec.obs_dim = features.obs_dim();
+            spec.act_dim = 1;
+            spec.distributed = Some(DistributedSpec {
+                features,
+                reward: AgentReward {
+                    eta1: args.eta1,
+                    eta2: args.eta2,
+                    exit_bonus: args.exit_bonus,
+                },
+                dist_norm: SIMPLE_MERGE_DIST_NORM,
+            });
+        }
         let out = args
             .out
             .clone()
-            .unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, reward.name())));
+            .unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, spec.reward)));
         TrainRun::create(&out, spec, config, args.checkpoint_every)?
     };
     let sc = load_scenario(&run.spec.scenario)?;
     let mut spec = sc.spec.clone();
     spec.horizon_steps = run.state.config.horizon as u64;
+    if let Some(dcfg) = run.spec.distributed_config() {
+        if dcfg.obs_dim() != run.spec.obs_dim || run.spec.act_dim != 1 {
+            bail!(
+                "run expects {} observation values and {} action(s); its features give {} and 1",
+                run.spec.obs_dim,
+                run.spec.act_dim,
+                dcfg.obs_dim()
+            );
+        }
+        DistributedEnv::new(spec.clone(), dcfg)?;
+        let factory = move || DistributedEnv::new(spec.clone(), dcfg).expect("validated above");
+        return train_loop(&mut run, &args, &mut |r| r.step_agents(&factory));
+    }
     let env_cfg = MergeEnvConfig {
         reward: run.spec.reward.parse().map_err(anyhow::Error::msg)?,
         n_av: run.spec.n_av,
@@ -238,7 +304,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let factory = move || -> Box<dyn Env> {
         Box::new(MergeEnv::new(spec.clone(), env_cfg.clone()).expect("validated"))
     };
+    train_loop(&mut run, &args, &mut |r| r.step(&factory))
+}
 
+/// Runs the remaining iterations with a progress bar, then saves and reports.
+fn train_loop(
+    run: &mut TrainRun,
+    args: &Args,
+    step: &mut dyn FnMut(&mut TrainRun) -> Result<IterationStats, mapc_rl::RlError>,
+) -> anyhow::Result<()> {
     let total = run.state.config.iterations;
     let bar = if args.json {
         ProgressBar::hidden()
@@ -253,7 +327,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     bar.set_position(run.state.iteration);
     let mut last: Option<IterationStats> = run.log.rows.last().cloned();
     while !run.done() {
-        let s = run.step(&factory)?;
+        let s = step(run)?;
         bar.set_position(s.iteration);
         bar.set_message(format!(
             "return {:.2}  outflow {:.0} veh/h  speed {:.2} m/s  kl {:.4}",

@@ -5,6 +5,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::env::distributed::{AgentReward, DistNorm, DistributedConfig, Features};
+use crate::env::obs::ObsNorm;
 use crate::error::RlError;
 use crate::ppo::TrainerState;
 
@@ -29,6 +31,36 @@ pub struct PolicySpec {
     /// Acceleration bounds (m/s^2).
     pub accel_min: f64,
     pub accel_max: f64,
+    /// Set for a distributed policy (one shared policy per AV: `obs_dim` values in, one acceleration out; `n_av`
+    /// and `reward` then do not apply); absent for a centralized one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distributed: Option<DistributedSpec>,
+}
+
+/// What a distributed policy was trained with.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DistributedSpec {
+    pub features: Features,
+    pub reward: AgentReward,
+    pub dist_norm: DistNorm,
+}
+
+impl PolicySpec {
+    /// The distributed environment's configuration of a distributed policy.
+    pub fn distributed_config(&self) -> Option<DistributedConfig> {
+        let d = self.distributed?;
+        Some(DistributedConfig {
+            features: d.features,
+            reward: d.reward,
+            norm: ObsNorm {
+                max_speed: self.max_speed,
+                length: self.norm_length,
+            },
+            dist_norm: d.dist_norm,
+            accel_min: self.accel_min,
+            accel_max: self.accel_max,
+        })
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

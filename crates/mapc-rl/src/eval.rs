@@ -6,11 +6,12 @@ use mapc_sim::{MeanCi, RunMetrics, SimSpec, Summary};
 use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::Checkpoint;
+use crate::env::distributed::{DistributedConfig, DistributedEnv};
 use crate::env::merge::{MergeEnv, MergeEnvConfig};
 use crate::env::obs::{ObsNorm, PER_AV};
 use crate::error::RlError;
 use crate::rng::mix_seed;
-use crate::rollout::{ActionMode, Env, EpisodeMetrics, collect};
+use crate::rollout::{ActionMode, Env, EpisodeMetrics, collect, collect_agents};
 use crate::stats::{WelchTest, welch_t_test};
 
 /// Mean and 95% CI of one metric.
@@ -230,4 +231,59 @@ pub fn figures_of_summary(s: &Summary) -> FigureSet {
         speed: s.speed.into(),
         seeds: s.seeds,
     }
+}
+
+/// Runs a distributed policy on `spec` for each seed: every AV in the control region drives with it (in
+/// parallel over seeds, results in seed order).
+pub fn run_distributed_policy(
+    ck: &Checkpoint,
+    spec: &SimSpec,
+    cfg: &DistributedConfig,
+    seeds: &[u64],
+    mode: ActionMode,
+) -> Result<Vec<EpisodeMetrics>, RlError> {
+    let probe = DistributedEnv::new(spec.clone(), *cfg)?;
+    let horizon = probe.horizon();
+    let factory = || DistributedEnv::new(spec.clone(), *cfg).expect("validated above");
+    let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
+    let eps = collect_agents(&factory, &ck.state.model, &pairs, horizon, mode, false)?;
+    Ok(eps.into_iter().map(|e| e.metrics).collect())
+}
+
+/// [`trace_policy`] for a distributed policy (the same episode as [`run_distributed_policy`] gives).
+pub fn trace_distributed_policy(
+    ck: &Checkpoint,
+    spec: &SimSpec,
+    cfg: &DistributedConfig,
+    seed: u64,
+    mode: ActionMode,
+    out: &mut impl std::io::Write,
+) -> Result<EpisodeMetrics, RlError> {
+    let mut env = DistributedEnv::new(spec.clone(), *cfg)?;
+    let horizon = env.horizon();
+    let mut scratch = crate::ppo::tensor::Scratch::default();
+    let mut write_rows = |env: &DistributedEnv| -> Result<(), RlError> {
+        match env.simulation() {
+            Some(sim) => sim.write_trace_rows(out).map_err(|e| RlError::Io {
+                path: "trace".into(),
+                source: e,
+            }),
+            None => Ok(()),
+        }
+    };
+    let settings = crate::rollout::EpisodeSettings {
+        env_seed: seed,
+        noise_seed: eval_noise_seed(seed),
+        horizon,
+        mode,
+        record: false,
+    };
+    let ep = crate::rollout::run_agents_episode(
+        &mut env,
+        &ck.state.model,
+        &mut scratch,
+        settings,
+        &mut write_rows,
+    )?;
+    Ok(ep.metrics)
 }

@@ -3,6 +3,9 @@
 
 use rayon::prelude::*;
 
+use mapc_sim::VehicleId;
+
+use crate::env::distributed::DistributedEnv;
 use crate::error::RlError;
 use crate::ppo::gae::EpisodeEnd;
 use crate::ppo::tensor::{Model, Scratch, gaussian_log_prob};
@@ -189,6 +192,128 @@ pub fn collect(
                     record,
                 };
                 run_episode(env.as_mut(), model, scratch, settings)
+            },
+        )
+        .collect()
+}
+
+/// A distributed episode: one training trajectory per agent (in the order the agents first acted), the
+/// simulation's figures and the sum of every agent's rewards.
+#[derive(Clone, Debug, Default)]
+pub struct AgentsEpisode {
+    /// Per-agent trajectories (kept only when recording).
+    pub trajectories: Vec<Episode>,
+    pub metrics: EpisodeMetrics,
+    pub total_reward: f64,
+    /// Agent-steps (actions taken).
+    pub agent_steps: u64,
+}
+
+/// Runs one episode of the shared policy on every agent of a [`DistributedEnv`]: each agent acts on its own
+/// observation (one acceleration), its trajectory ends when it leaves (terminal, with its exit bonus) or at the
+/// horizon (truncated, bootstrapped from its last observation). `observe` sees the environment after the reset
+/// and after every step (traces).
+pub fn run_agents_episode(
+    env: &mut DistributedEnv,
+    model: &Model,
+    scratch: &mut Scratch,
+    settings: EpisodeSettings,
+    observe: &mut dyn FnMut(&DistributedEnv) -> Result<(), RlError>,
+) -> Result<AgentsEpisode, RlError> {
+    let EpisodeSettings {
+        env_seed,
+        noise_seed,
+        horizon,
+        mode,
+        record,
+    } = settings;
+    let mut rng = Rng::new(noise_seed);
+    let mut out = AgentsEpisode::default();
+    // trajectory index of each agent with an open (or closed) trajectory
+    let mut index: std::collections::HashMap<VehicleId, usize> = Default::default();
+    let mut obs = env.reset(env_seed)?;
+    observe(env)?;
+    let mut actions: Vec<(VehicleId, f32)> = Vec::new();
+    for _ in 0..horizon {
+        actions.clear();
+        for (id, o) in &obs {
+            let po = model.infer(o, scratch);
+            let action = action_of(&po.mean, &po.log_std, mode, &mut rng);
+            if record {
+                let k = *index.entry(*id).or_insert_with(|| {
+                    out.trajectories.push(Episode::default());
+                    out.trajectories.len() - 1
+                });
+                let e = &mut out.trajectories[k];
+                e.log_probs
+                    .push(gaussian_log_prob(&action, &po.mean, &po.log_std));
+                e.obs.extend_from_slice(o);
+                e.actions.extend_from_slice(&action);
+                e.means.extend_from_slice(&po.mean);
+                e.log_stds.extend_from_slice(&po.log_std);
+                e.values.push(po.value);
+            }
+            actions.push((*id, action.first().copied().unwrap_or(0.0)));
+        }
+        out.agent_steps += actions.len() as u64;
+        let st = env.step(&actions)?;
+        observe(env)?;
+        for &(id, r, done) in &st.rewards {
+            out.total_reward += r as f64;
+            if let Some(&k) = index.get(&id) {
+                let e = &mut out.trajectories[k];
+                e.rewards.push(r);
+                if done {
+                    e.end = Some(EpisodeEnd::Terminal);
+                }
+            }
+        }
+        obs = st.obs;
+    }
+    if record {
+        // agents still driving at the horizon: bootstrapped from their last observation
+        let last: std::collections::HashMap<VehicleId, &Vec<f32>> =
+            obs.iter().map(|(id, o)| (*id, o)).collect();
+        let mut open: Vec<(VehicleId, usize)> = index
+            .iter()
+            .filter(|&(_, &k)| out.trajectories[k].end.is_none())
+            .map(|(&id, &k)| (id, k))
+            .collect();
+        open.sort_unstable_by_key(|&(_, k)| k);
+        for (id, k) in open {
+            let bootstrap_value = last.get(&id).map_or(0.0, |o| model.value(o, scratch));
+            out.trajectories[k].end = Some(EpisodeEnd::Truncated { bootstrap_value });
+        }
+    }
+    out.metrics = env.metrics();
+    Ok(out)
+}
+
+/// Builds one distributed environment per worker.
+pub type AgentsEnvFactory<'a> = dyn Fn() -> DistributedEnv + Sync + 'a;
+
+/// Runs one distributed episode per `(env_seed, noise_seed)` pair in parallel, returned in input order.
+pub fn collect_agents(
+    factory: &AgentsEnvFactory,
+    model: &Model,
+    seeds: &[(u64, u64)],
+    horizon: usize,
+    mode: ActionMode,
+    record: bool,
+) -> Result<Vec<AgentsEpisode>, RlError> {
+    seeds
+        .par_iter()
+        .map_init(
+            || (factory(), Scratch::default()),
+            |(env, scratch), &(env_seed, noise_seed)| {
+                let settings = EpisodeSettings {
+                    env_seed,
+                    noise_seed,
+                    horizon,
+                    mode,
+                    record,
+                };
+                run_agents_episode(env, model, scratch, settings, &mut |_| Ok(()))
             },
         )
         .collect()

@@ -8,7 +8,7 @@ use crate::checkpoint::{Checkpoint, FORMAT_VERSION, PolicySpec, checkpoint_path}
 use crate::error::RlError;
 use crate::log::TrainingLog;
 use crate::ppo::{IterationStats, PpoConfig, TrainerState};
-use crate::rollout::EnvFactory;
+use crate::rollout::{AgentsEnvFactory, EnvFactory};
 
 /// The CSV log inside a run directory.
 pub fn log_path(dir: &Path) -> PathBuf {
@@ -91,6 +91,16 @@ impl TrainRun {
     /// One iteration, then the log (and every `checkpoint_every` iterations or at the end, the checkpoint).
     pub fn step(&mut self, factory: &EnvFactory) -> Result<IterationStats, RlError> {
         let stats = self.state.iterate(factory)?;
+        self.record(stats)
+    }
+
+    /// [`Self::step`] for a distributed policy.
+    pub fn step_agents(&mut self, factory: &AgentsEnvFactory) -> Result<IterationStats, RlError> {
+        let stats = self.state.iterate_agents(factory)?;
+        self.record(stats)
+    }
+
+    fn record(&mut self, stats: IterationStats) -> Result<IterationStats, RlError> {
         self.log.rows.push(stats.clone());
         self.log.write(&log_path(&self.dir))?;
         if self.state.iteration.is_multiple_of(self.checkpoint_every) || self.done() {

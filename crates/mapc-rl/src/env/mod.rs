@@ -1,2 +1,3 @@
+pub mod distributed;
 pub mod merge;
 pub mod obs;

@@ -17,7 +17,19 @@ use tensor::{
 
 use crate::error::RlError;
 use crate::rng::{Rng, mix_seed};
-use crate::rollout::{ActionMode, EnvFactory, Episode, collect};
+use crate::rollout::{
+    ActionMode, AgentsEnvFactory, EnvFactory, Episode, EpisodeMetrics, collect, collect_agents,
+};
+
+/// What one iteration's rollouts gave the trainer.
+pub struct Collected {
+    /// Training trajectories (one per episode, or one per agent in the distributed setting).
+    pub trajectories: Vec<Episode>,
+    /// Per simulated episode: its traffic figures and the sum of its rewards (over all agents).
+    pub runs: Vec<(EpisodeMetrics, f64)>,
+    /// Simulation steps taken (the schedule's and the log's `env_steps`).
+    pub sim_steps: u64,
+}
 
 /// What one training iteration did (one row of the CSV log).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -88,20 +100,63 @@ impl TrainerState {
             .collect()
     }
 
-    /// One iteration: collect a batch with the current policy, then update it.
+    /// One iteration of the centralized setting: collect a batch with the current policy, then update it.
     pub fn iterate(&mut self, factory: &EnvFactory) -> Result<IterationStats, RlError> {
+        let horizon = self.config.horizon;
+        self.iterate_with(&|model, seeds| {
+            let episodes = collect(factory, model, seeds, horizon, ActionMode::Sample, true)?;
+            let runs = episodes
+                .iter()
+                .map(|e| (e.metrics, e.total_reward()))
+                .collect();
+            let sim_steps = episodes.iter().map(|e| e.len() as u64).sum();
+            Ok(Collected {
+                trajectories: episodes,
+                runs,
+                sim_steps,
+            })
+        })
+    }
+
+    /// One iteration of the distributed setting (every agent's trajectory trains the shared policy).
+    pub fn iterate_agents(
+        &mut self,
+        factory: &AgentsEnvFactory,
+    ) -> Result<IterationStats, RlError> {
+        let horizon = self.config.horizon;
+        self.iterate_with(&|model, seeds| {
+            let episodes =
+                collect_agents(factory, model, seeds, horizon, ActionMode::Sample, true)?;
+            let runs = episodes
+                .iter()
+                .map(|e| (e.metrics, e.total_reward))
+                .collect();
+            let sim_steps = (episodes.len() * horizon) as u64;
+            let trajectories = episodes
+                .into_iter()
+                .flat_map(|e| e.trajectories)
+                .filter(|t| !t.is_empty())
+                .collect();
+            Ok(Collected {
+                trajectories,
+                runs,
+                sim_steps,
+            })
+        })
+    }
+
+    /// One iteration with the given rollout collection (`collect(model, seeds)`).
+    #[allow(clippy::type_complexity)]
+    pub fn iterate_with(
+        &mut self,
+        collect: &dyn Fn(&Model, &[(u64, u64)]) -> Result<Collected, RlError>,
+    ) -> Result<IterationStats, RlError> {
         let start = Instant::now();
         let it = self.iteration;
         let seeds = self.episode_seeds(it);
-        let episodes = collect(
-            factory,
-            &self.model,
-            &seeds,
-            self.config.horizon,
-            ActionMode::Sample,
-            true,
-        )?;
-        let batch = Batch::from_episodes(&episodes, &self.config);
+        let collected = collect(&self.model, &seeds)?;
+        let episodes = &collected.trajectories;
+        let batch = Batch::from_episodes(episodes, &self.config);
         let kl_coeff_used = self.kl_coeff;
         let sgd = self.update(&batch);
         // Adaptive KL penalty (RLlib's rule).
@@ -111,16 +166,17 @@ impl TrainerState {
             self.kl_coeff *= 0.5;
         }
         self.iteration += 1;
-        self.env_steps += batch.n as u64;
+        self.env_steps += collected.sim_steps;
         self.wall_s += start.elapsed().as_secs_f64();
-        let n = episodes.len() as f64;
+        let runs = &collected.runs;
+        let n = runs.len() as f64;
         Ok(IterationStats {
             iteration: self.iteration,
             env_steps: self.env_steps,
             wall_s: self.wall_s,
-            mean_return: episodes.iter().map(Episode::total_reward).sum::<f64>() / n,
-            mean_outflow: episodes.iter().map(|e| e.metrics.outflow).sum::<f64>() / n,
-            mean_speed: episodes.iter().map(|e| e.metrics.speed).sum::<f64>() / n,
+            mean_return: runs.iter().map(|r| r.1).sum::<f64>() / n,
+            mean_outflow: runs.iter().map(|r| r.0.outflow).sum::<f64>() / n,
+            mean_speed: runs.iter().map(|r| r.0.speed).sum::<f64>() / n,
             policy_loss: sgd.policy_loss as f64,
             value_loss: sgd.value_loss as f64,
             kl: sgd.kl as f64,
@@ -139,6 +195,7 @@ impl TrainerState {
             vf_clip: c.vf_clip,
             entropy_coeff: c.entropy_coeff,
         };
+        let lr = c.lr_at(self.env_steps);
         let mut order: Vec<usize> = (0..b.n).collect();
         let mut last = LossStats::default();
         let mb_size = c.minibatch.clamp(1, b.n.max(1));
@@ -154,7 +211,7 @@ impl TrainerState {
                     self.skipped_minibatches += 1;
                     continue;
                 }
-                self.adam.step(&mut self.model.params, &grad, c.lr);
+                self.adam.step(&mut self.model.params, &grad, lr);
                 if epoch + 1 == c.epochs {
                     let w = idx.len() as f32;
                     sum.total += stats.total * w;

@@ -1,0 +1,557 @@
+//! The distributed (decentralised) merge-control setting of the paper's section 4.3: every AV in the control
+//! region is an agent that sees only what its own sensors give (its leader and follower, optionally the distance
+//! to the next junction, the congestion ahead of it and the nearest vehicle about to merge) and runs the same
+//! shared policy; each agent gets its own reward, a mix of a selfish time penalty and the collaborative average
+//! speed, and a bonus in the step it leaves.
+
+use serde::{Deserialize, Serialize};
+
+use mapc_sim::{SimSpec, Simulation, VehicleId};
+
+use super::obs::{AvView, ObsNorm, PER_AV};
+use crate::error::RlError;
+use crate::rollout::EpisodeMetrics;
+
+/// Which of the paper's state augmentations the agents see (its Table 4 ablation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Features {
+    /// Distance to the next junction ("Dist").
+    pub dist: bool,
+    /// Mean speed of the vehicles between the agent and the next junction ("Congestion").
+    pub congestion: bool,
+    /// Distance to the junction and speed of the nearest vehicle about to merge from another road
+    /// ("MergeInfo").
+    pub merge_info: bool,
+}
+
+impl Features {
+    /// All three augmentations (the paper's best, "Full Augmentation").
+    pub const FULL: Features = Features {
+        dist: true,
+        congestion: true,
+        merge_info: true,
+    };
+
+    /// Observation values per agent.
+    pub fn obs_dim(self) -> usize {
+        PER_AV + self.dist as usize + self.congestion as usize + 2 * self.merge_info as usize
+    }
+
+    /// Parses `full`, `none` or a comma-separated list of `dist`, `congestion`, `merge`.
+    pub fn parse(s: &str) -> Result<Features, String> {
+        let mut f = Features {
+            dist: false,
+            congestion: false,
+            merge_info: false,
+        };
+        match s.trim() {
+            "full" | "all" => return Ok(Features::FULL),
+            "none" | "" => return Ok(f),
+            _ => {}
+        }
+        for part in s.split(',') {
+            match part.trim() {
+                "dist" => f.dist = true,
+                "congestion" => f.congestion = true,
+                "merge" | "merge_info" | "mergeinfo" => f.merge_info = true,
+                other => {
+                    return Err(format!(
+                        "unknown feature `{other}` (full, none, or a list of dist, congestion, merge)"
+                    ));
+                }
+            }
+        }
+        Ok(f)
+    }
+
+    pub fn name(self) -> String {
+        if self == Features::FULL {
+            return "full".into();
+        }
+        let names: Vec<&str> = [
+            (self.dist, "dist"),
+            (self.congestion, "congestion"),
+            (self.merge_info, "merge"),
+        ]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|&(_, n)| n)
+        .collect();
+        if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(",")
+        }
+    }
+}
+
+/// The distributed reward `(1 - done)(-eta1 + eta2 * mean speed / V) + done * bonus` (the paper's eq. 3).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AgentReward {
+    /// Weight of the selfish time penalty.
+    pub eta1: f64,
+    /// Weight of the collaborative average speed.
+    pub eta2: f64,
+    /// Reward in the step the agent leaves.
+    pub exit_bonus: f64,
+}
+
+impl AgentReward {
+    /// The paper's best mix: eta1 = 0.9, eta2 = 0.1, bonus 20.
+    pub const PAPER: AgentReward = AgentReward {
+        eta1: 0.9,
+        eta2: 0.1,
+        exit_bonus: 20.0,
+    };
+
+    /// One agent's reward for a step after which the network's mean speed over V is `speed_ratio`.
+    pub fn of(&self, done: bool, speed_ratio: f64) -> f64 {
+        if done {
+            self.exit_bonus
+        } else {
+            -self.eta1 + self.eta2 * speed_ratio
+        }
+    }
+}
+
+/// Lengths the distances of the augmentations are divided by (kept from training, like `ObsNorm`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DistNorm {
+    /// Distance from the network entry to the merge on the main road (m).
+    pub junction: f64,
+    /// Length of the merging road (m).
+    pub merge: f64,
+}
+
+/// Simple Merge: 600 m of main road before the merge, a 200 m ramp.
+pub const SIMPLE_MERGE_DIST_NORM: DistNorm = DistNorm {
+    junction: 600.0,
+    merge: 200.0,
+};
+
+/// What an agent's augmentations need to know.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AgentView {
+    pub av: AvView,
+    /// Distance to the next junction (m); `None` past the last one.
+    pub junction_dist: Option<f64>,
+    /// Mean speed of the vehicles between the agent and that junction (m/s); `None` when there is none.
+    pub congestion_speed: Option<f64>,
+    /// The nearest vehicle about to merge: its distance to the merge point (m) and speed (m/s).
+    pub merge_foe: Option<(f64, f64)>,
+}
+
+/// One agent's observation: the centralized observation's five values for the agent (not clipped), then the
+/// augmentations in the order dist, congestion, merge distance, merge speed. No junction ahead counts as one
+/// `DistNorm::junction` away, no vehicle ahead of it as speed V, no merging vehicle as one at the merging road's
+/// start, standing.
+pub fn agent_obs(
+    view: &AgentView,
+    features: Features,
+    norm: ObsNorm,
+    dist_norm: DistNorm,
+    out: &mut Vec<f32>,
+) {
+    out.clear();
+    let (vmax, len) = (norm.max_speed, norm.length);
+    let av = &view.av;
+    let (lead_v, lead_gap) = av.leader.unwrap_or((vmax, len));
+    let (fol_v, fol_gap) = av.follower.unwrap_or((0.0, len));
+    for x in [
+        av.speed / vmax,
+        (lead_v - av.speed) / vmax,
+        lead_gap / len,
+        (av.speed - fol_v) / vmax,
+        fol_gap / len,
+    ] {
+        out.push(x as f32);
+    }
+    if features.dist {
+        out.push((view.junction_dist.unwrap_or(dist_norm.junction) / dist_norm.junction) as f32);
+    }
+    if features.congestion {
+        out.push((view.congestion_speed.unwrap_or(vmax) / vmax) as f32);
+    }
+    if features.merge_info {
+        let (d, v) = view.merge_foe.unwrap_or((dist_norm.merge, 0.0));
+        out.push((d / dist_norm.merge) as f32);
+        out.push((v / vmax) as f32);
+    }
+}
+
+/// Everything the distributed setting is run with.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DistributedConfig {
+    pub features: Features,
+    pub reward: AgentReward,
+    pub norm: ObsNorm,
+    pub dist_norm: DistNorm,
+    pub accel_min: f64,
+    pub accel_max: f64,
+}
+
+impl DistributedConfig {
+    pub fn obs_dim(&self) -> usize {
+        self.features.obs_dim()
+    }
+}
+
+/// What one step gave every agent that acted in it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AgentsStep {
+    /// `(agent, reward, done)` for every agent that acted, in the order of the actions.
+    pub rewards: Vec<(VehicleId, f32, bool)>,
+    /// The agents present now, with their observations, in entry order.
+    pub obs: Vec<(VehicleId, Vec<f32>)>,
+}
+
+/// The multi-agent environment: every controlled AV in the control region is an agent until it leaves the
+/// region or the network (after which it is never controlled again).
+pub struct DistributedEnv {
+    spec: SimSpec,
+    cfg: DistributedConfig,
+    sim: Option<Simulation>,
+    /// Agents that have left the region (never agents again).
+    gone: std::collections::HashSet<VehicleId>,
+}
+
+impl DistributedEnv {
+    pub fn new(spec: SimSpec, cfg: DistributedConfig) -> Result<Self, RlError> {
+        spec.validate().map_err(|e| RlError::Scenario {
+            scenario: spec.graph.source.file.clone(),
+            msg: e.to_string(),
+        })?;
+        Ok(Self {
+            spec,
+            cfg,
+            sim: None,
+            gone: Default::default(),
+        })
+    }
+
+    pub fn config(&self) -> &DistributedConfig {
+        &self.cfg
+    }
+
+    pub fn horizon(&self) -> usize {
+        self.spec.horizon_steps as usize
+    }
+
+    /// The simulation of the current episode (after `reset`).
+    pub fn simulation(&self) -> Option<&Simulation> {
+        self.sim.as_ref()
+    }
+
+    fn sim_error(e: impl std::fmt::Display) -> RlError {
+        RlError::Scenario {
+            scenario: "simulation".into(),
+            msg: e.to_string(),
+        }
+    }
+
+    /// Starts an episode; returns the first observations.
+    pub fn reset(&mut self, seed: u64) -> Result<Vec<(VehicleId, Vec<f32>)>, RlError> {
+        let mut sim =
+            Simulation::from_spec(self.spec.clone(), seed).map_err(|e| RlError::Scenario {
+                scenario: self.spec.graph.source.file.clone(),
+                msg: e.to_string(),
+            })?;
+        sim.set_invariant_checks(false);
+        self.sim = Some(sim);
+        self.gone.clear();
+        Ok(self.observe())
+    }
+
+    /// The agents now: controlled AVs in the region that never left it, in entry order.
+    fn agents(&self) -> Vec<VehicleId> {
+        let sim = self.sim.as_ref().expect("reset before use");
+        let mut present: Vec<(u64, VehicleId)> = sim
+            .active_ids()
+            .filter(|id| !self.gone.contains(id))
+            .filter_map(|id| {
+                let v = sim.vehicle(id)?;
+                (v.controlled && sim.in_control_region(id)).then_some((v.entry_order, id))
+            })
+            .collect();
+        present.sort_unstable();
+        present.into_iter().map(|(_, id)| id).collect()
+    }
+
+    fn view(&self, id: VehicleId) -> AgentView {
+        let sim = self.sim.as_ref().expect("reset before use");
+        let len = self.cfg.norm.length;
+        let speed = sim.vehicle(id).map_or(0.0, |v| v.speed);
+        let junction_dist = sim.distance_to_next_junction(id).map(|(d, _)| d);
+        let congestion_speed = if self.cfg.features.congestion {
+            junction_dist.and_then(|d| congestion_ahead(sim, id, d))
+        } else {
+            None
+        };
+        let merge_foe = if self.cfg.features.merge_info {
+            sim.nearest_merge_foe(id, f64::INFINITY)
+                .map(|f| (f.dist_to_merge_m, f.speed))
+        } else {
+            None
+        };
+        AgentView {
+            av: AvView {
+                speed,
+                leader: sim.leader(id, len).map(|n| (n.speed, n.gap_m)),
+                follower: sim.follower(id, len).map(|n| (n.speed, n.gap_m)),
+            },
+            junction_dist,
+            congestion_speed,
+            merge_foe,
+        }
+    }
+
+    fn observe(&self) -> Vec<(VehicleId, Vec<f32>)> {
+        self.agents()
+            .into_iter()
+            .map(|id| {
+                let mut o = Vec::with_capacity(self.cfg.obs_dim());
+                agent_obs(
+                    &self.view(id),
+                    self.cfg.features,
+                    self.cfg.norm,
+                    self.cfg.dist_norm,
+                    &mut o,
+                );
+                (id, o)
+            })
+            .collect()
+    }
+
+    /// Applies one acceleration per agent (clipped to the bounds; a non-finite one counts as 0), steps the
+    /// simulation, and returns each acting agent's reward and whether it is done (left the region or the
+    /// network), then the observations of the agents present now.
+    pub fn step(&mut self, actions: &[(VehicleId, f32)]) -> Result<AgentsStep, RlError> {
+        let (lo, hi) = (self.cfg.accel_min, self.cfg.accel_max);
+        let sim = self.sim.as_mut().expect("reset before step");
+        for &(id, a) in actions {
+            let a = if a.is_finite() {
+                (a as f64).clamp(lo, hi)
+            } else {
+                0.0
+            };
+            sim.set_acceleration(id, a).map_err(Self::sim_error)?;
+        }
+        if !sim.is_done() {
+            sim.step().map_err(Self::sim_error)?;
+        }
+        let sim = self.sim.as_ref().expect("reset before step");
+        let speeds: Vec<f64> = sim
+            .active_ids()
+            .filter_map(|id| sim.vehicle(id).map(|v| v.speed))
+            .collect();
+        let speed_ratio = super::obs::speed_reward(&speeds, self.cfg.norm.max_speed);
+        let mut rewards = Vec::with_capacity(actions.len());
+        let mut newly_gone = Vec::new();
+        for &(id, _) in actions {
+            let done = !sim.in_control_region(id);
+            if done {
+                newly_gone.push(id);
+            }
+            rewards.push((id, self.cfg.reward.of(done, speed_ratio) as f32, done));
+        }
+        self.gone.extend(newly_gone);
+        Ok(AgentsStep {
+            rewards,
+            obs: self.observe(),
+        })
+    }
+
+    pub fn metrics(&self) -> EpisodeMetrics {
+        let m = self.sim.as_ref().expect("reset before use").metrics();
+        EpisodeMetrics {
+            outflow: m.outflow_veh_h,
+            inflow: m.inflow_veh_h,
+            speed: m.avg_speed_mps,
+        }
+    }
+}
+
+/// Mean speed of the vehicles ahead of `id` whose backs are within `dist` (the distance to the next junction),
+/// following the chain of leaders.
+fn congestion_ahead(sim: &Simulation, id: VehicleId, dist: f64) -> Option<f64> {
+    let mut covered = 0.0;
+    let mut cur = id;
+    let (mut sum, mut n) = (0.0, 0usize);
+    // a bound on the chain, for safety against a cycle in a malformed network
+    for _ in 0..1000 {
+        let Some(l) = sim.leader(cur, dist - covered) else {
+            break;
+        };
+        if covered + l.gap_m > dist {
+            break;
+        }
+        sum += l.speed;
+        n += 1;
+        covered += l.gap_m + sim.vehicle(l.id).map_or(0.0, |v| v.length);
+        cur = l.id;
+    }
+    (n > 0).then(|| sum / n as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const NORM: ObsNorm = ObsNorm {
+        max_speed: 30.0,
+        length: 947.68,
+    };
+
+    #[test]
+    fn observation_by_hand() {
+        let view = AgentView {
+            av: AvView {
+                speed: 15.0,
+                leader: Some((45.0, 2000.0)),
+                follower: None,
+            },
+            junction_dist: Some(150.0),
+            congestion_speed: Some(6.0),
+            merge_foe: Some((50.0, 9.0)),
+        };
+        let mut o = Vec::new();
+        agent_obs(&view, Features::FULL, NORM, SIMPLE_MERGE_DIST_NORM, &mut o);
+        // not clipped: the leader 2000 m ahead gives 2.11, its speed difference 1.0
+        let want = [0.5, 1.0, 2000.0 / 947.68, 0.5, 1.0, 0.25, 0.2, 0.25, 0.3];
+        assert_eq!(o.len(), Features::FULL.obs_dim());
+        for (a, b) in o.iter().zip(want) {
+            assert!((a - b as f32).abs() < 1e-6, "{o:?}");
+        }
+        // without augmentations: the five values only; defaults when nothing is ahead
+        let none = Features::parse("none").unwrap();
+        agent_obs(&view, none, NORM, SIMPLE_MERGE_DIST_NORM, &mut o);
+        assert_eq!(o.len(), 5);
+        let bare = AgentView {
+            junction_dist: None,
+            congestion_speed: None,
+            merge_foe: None,
+            ..view
+        };
+        agent_obs(&bare, Features::FULL, NORM, SIMPLE_MERGE_DIST_NORM, &mut o);
+        assert_eq!(&o[5..], &[1.0, 1.0, 1.0, 0.0]);
+    }
+
+    #[test]
+    fn features_parse_and_name() {
+        assert_eq!(Features::parse("full").unwrap(), Features::FULL);
+        let f = Features::parse("dist, merge").unwrap();
+        assert!(f.dist && f.merge_info && !f.congestion);
+        assert_eq!(f.obs_dim(), 8);
+        assert_eq!(f.name(), "dist,merge");
+        assert_eq!(Features::parse("none").unwrap().name(), "none");
+        assert!(Features::parse("speed").is_err());
+    }
+
+    #[test]
+    fn reward_by_hand() {
+        let r = AgentReward::PAPER;
+        assert!((r.of(false, 0.5) - (-0.9 + 0.05)).abs() < 1e-12);
+        assert_eq!(r.of(true, 0.5), 20.0);
+    }
+}
+
+#[cfg(test)]
+mod episode_tests {
+    use super::*;
+    use crate::ppo::tensor::{Architecture, Model, Scratch};
+    use crate::rollout::{ActionMode, EpisodeSettings, run_agents_episode};
+
+    fn simple_merge(horizon: u64) -> SimSpec {
+        let rs = mapc_scenario::ResolvedScenario::load("simple_merge").unwrap();
+        let mut spec = mapc_sim::spec_from_scenario(&rs).unwrap();
+        spec.horizon_steps = horizon;
+        spec
+    }
+
+    fn config() -> DistributedConfig {
+        DistributedConfig {
+            features: Features::FULL,
+            reward: AgentReward::PAPER,
+            norm: crate::env::merge::SIMPLE_MERGE_NORM,
+            dist_norm: SIMPLE_MERGE_DIST_NORM,
+            accel_min: crate::env::merge::ACCEL_MIN,
+            accel_max: crate::env::merge::ACCEL_MAX,
+        }
+    }
+
+    fn episode(seed: u64) -> crate::rollout::AgentsEpisode {
+        let cfg = config();
+        let mut env = DistributedEnv::new(simple_merge(400), cfg).unwrap();
+        let arch = Architecture {
+            obs_dim: cfg.obs_dim(),
+            act_dim: 1,
+            hidden: vec![16, 8],
+        };
+        let model = Model::new(arch, 7);
+        let settings = EpisodeSettings {
+            env_seed: seed,
+            noise_seed: seed + 100,
+            horizon: 400,
+            mode: ActionMode::Sample,
+            record: true,
+        };
+        run_agents_episode(
+            &mut env,
+            &model,
+            &mut Scratch::default(),
+            settings,
+            &mut |_| Ok(()),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn every_agent_gets_one_trajectory_with_one_reward_per_action() {
+        let ep = episode(3);
+        // 200 AVs/h for 200 s: a few AVs enter, the first ones leave within the 400 steps
+        assert!(ep.trajectories.len() >= 3, "{}", ep.trajectories.len());
+        let mut terminal = 0;
+        let mut steps = 0;
+        for t in &ep.trajectories {
+            assert!(!t.is_empty());
+            assert_eq!(t.obs.len(), t.len() * Features::FULL.obs_dim());
+            assert_eq!(t.actions.len(), t.len());
+            assert_eq!(t.values.len(), t.len());
+            steps += t.len() as u64;
+            match t.end {
+                Some(crate::ppo::gae::EpisodeEnd::Terminal) => {
+                    // leaving pays the bonus in the last step, and only there
+                    terminal += 1;
+                    assert_eq!(*t.rewards.last().unwrap(), 20.0);
+                    assert!(t.rewards[..t.len() - 1].iter().all(|&r| r < 0.0));
+                }
+                Some(crate::ppo::gae::EpisodeEnd::Truncated { bootstrap_value }) => {
+                    assert!(bootstrap_value.is_finite());
+                    assert!(t.rewards.iter().all(|&r| r < 0.0));
+                }
+                None => panic!("a trajectory without an end"),
+            }
+        }
+        assert!(terminal >= 1, "no agent left the network");
+        assert_eq!(steps, ep.agent_steps);
+        let sum: f64 = ep
+            .trajectories
+            .iter()
+            .flat_map(|t| &t.rewards)
+            .map(|&r| r as f64)
+            .sum();
+        assert!((sum - ep.total_reward).abs() < 1e-6 * sum.abs().max(1.0));
+    }
+
+    #[test]
+    fn the_same_seeds_give_the_same_episode() {
+        let (a, b) = (episode(5), episode(5));
+        assert_eq!(a.total_reward.to_bits(), b.total_reward.to_bits());
+        assert_eq!(a.trajectories.len(), b.trajectories.len());
+        for (x, y) in a.trajectories.iter().zip(&b.trajectories) {
+            assert_eq!(x.actions, y.actions);
+            assert_eq!(x.rewards, y.rewards);
+        }
+        assert_ne!(a.total_reward, episode(6).total_reward);
+    }
+}
