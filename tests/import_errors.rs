@@ -1,6 +1,6 @@
 //! Bad input to `mapc import`: one clear message naming the file and the place, exit code 2, never a panic.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn root() -> PathBuf {
@@ -16,7 +16,7 @@ fn scratch(name: &str, bytes: &[u8]) -> PathBuf {
 }
 
 /// Run `mapc import FILE`; expect exit 2 and a message with every one of `expected`.
-fn fails_with(file: &PathBuf, expected: &[&str]) -> String {
+fn fails_with(file: &Path, expected: &[&str]) -> String {
     let out_file = std::env::temp_dir().join(format!(
         "mapc-import-errors-{}-never.graph.json",
         std::process::id()

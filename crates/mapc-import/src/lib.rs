@@ -18,6 +18,9 @@
 //! [`load_any`] (a saved `*.graph.json` or any map). Ids are deterministic: junctions by OSM node id or SUMO file
 //! order, roads by (way id, piece, forward first) or SUMO file order.
 
+// `!(x > 0.0)` and the like reject NaN on purpose; `partial_cmp` would hide that.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 mod error;
 pub mod osm;
 mod osm_pbf;

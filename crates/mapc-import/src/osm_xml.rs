@@ -73,11 +73,8 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                     continue;
                 }
                 match element.name().as_ref() {
-                    "node" => {
-                        if seen_way {
-                            nodes_first = false;
-                        }
-                    }
+                    // a node after a way: the file is not in the usual nodes-first order
+                    "node" => nodes_first &= !seen_way,
                     "way" => {
                         seen_way = true;
                         let id = id_of(&element, at)?;

@@ -367,10 +367,8 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         let id = JunctionId(junctions.len() as u32);
         junction_of.insert(sj.id.as_str(), id);
         let mut provenance = Provenance::sumo(sj.id.clone());
-        if geographic {
-            if let Ok(n) = sj.id.parse::<i64>() {
-                provenance.osm_nodes.push(n);
-            }
+        if geographic && let Ok(n) = sj.id.parse::<i64>() {
+            provenance.osm_nodes.push(n);
         }
         junctions.push(Junction {
             id,
@@ -428,10 +426,8 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         let id = RoadId(roads.len() as u32);
         road_of.insert(e.id.as_str(), id);
         let mut provenance = Provenance::sumo(e.id.clone());
-        if geographic {
-            if let Some(w) = osm_id_in(&e.id) {
-                provenance.osm_ways.push(w);
-            }
+        if geographic && let Some(w) = osm_id_in(&e.id) {
+            provenance.osm_ways.push(w);
         }
         roads.push(Road {
             id,

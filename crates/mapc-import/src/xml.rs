@@ -124,14 +124,12 @@ impl<R: BufRead> XmlStream<R> {
                     }
                     return Ok(Item::Eof);
                 }
-                Event::Text(t) => {
-                    if self.open.is_empty() && !t.into_inner().trim().is_empty() {
-                        return Err(ParseError::new(
-                            self.start,
-                            None,
-                            "text outside the root element: not an XML file",
-                        ));
-                    }
+                Event::Text(t) if self.open.is_empty() && !t.trim_ascii().is_empty() => {
+                    return Err(ParseError::new(
+                        self.start,
+                        None,
+                        "text outside the root element: not an XML file",
+                    ));
                 }
                 _ => {}
             }

@@ -43,6 +43,9 @@
 //! Accelerations are clamped to [-decel, accel] and the resulting speed is capped by the safe speed, including
 //! waiting at a minor link when a major vehicle has the right of way (SUMO's speed mode 9).
 
+// `!(x > 0.0)` and the like reject NaN on purpose; `partial_cmp` would hide that.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod idm;
 pub mod metrics;
 pub mod network;

@@ -1505,10 +1505,7 @@ impl Simulation {
         // 3. lane changes along routes and arrivals; vehicles moved into a lane are appended behind its others
         for li in 0..self.lane_order.len() {
             let lane = self.lane_order[li];
-            loop {
-                let Some(&id) = self.lane_veh[lane as usize].first() else {
-                    break;
-                };
+            while let Some(&id) = self.lane_veh[lane as usize].first() {
                 let len = self.net.lanes[lane as usize].length;
                 let v = &self.veh[id as usize];
                 let r = &self.routes[v.route as usize];

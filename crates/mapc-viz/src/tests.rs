@@ -443,7 +443,7 @@ fn bad_training_logs_are_reported() {
     );
     std::fs::write(dir.join("progress.csv"), "iteration,mean_return\n").unwrap();
     let err = plot_training(
-        &[dir.clone()],
+        std::slice::from_ref(&dir),
         &dir.join("c.png"),
         &TrainingPlotOptions::default(),
     )

@@ -473,9 +473,12 @@ pub(crate) mod test_maps {
             .sum()
     }
 
+    /// A test road: `(from, to, class, lanes, bends)`.
+    pub type TestRoad<'a> = (u32, u32, &'a str, u8, &'a [[f64; 2]]);
+
     /// A map from junction positions and roads `(from, to, class, lanes, bends)`; roads are numbered in order,
     /// lengths are their drawn lengths, every pair of consecutive roads is connected lane 0 to lane 0.
-    pub fn build(junctions: &[[f64; 2]], roads: &[(u32, u32, &str, u8, &[[f64; 2]])]) -> LaneGraph {
+    pub fn build(junctions: &[[f64; 2]], roads: &[TestRoad]) -> LaneGraph {
         let mut g = LaneGraph::new(
             Source {
                 file: "test".into(),

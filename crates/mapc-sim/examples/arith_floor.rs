@@ -1,0 +1,69 @@
+//! The arithmetic floor under the simulator's speed: what one correctly rounded division, and one call of SUMO's
+//! IDM step (`IdmParams::next_speed`, two sub-steps, six divisions), cost on this machine when the calls are
+//! independent (the best case: the divider is the only limit) and when each call waits for the previous one.
+//! `cargo run --release -p mapc-sim --example arith_floor` (docs/perf_sim.md).
+
+use mapc_sim::IdmParams;
+use std::hint::black_box;
+use std::time::Instant;
+
+fn main() {
+    let n = 20_000_000usize;
+    let xs: Vec<f64> = (0..1024).map(|i| 1.0 + i as f64 * 0.37).collect();
+    let ys: Vec<f64> = (0..1024).map(|i| 3.0 + i as f64 * 0.11).collect();
+
+    // independent divisions, four accumulators (the sums' latency hidden)
+    let t = Instant::now();
+    let mut acc = [0.0f64; 4];
+    for _ in 0..n / 1024 {
+        for i in (0..1024).step_by(4) {
+            for k in 0..4 {
+                acc[k] += black_box(xs[i + k]) / ys[i + k];
+            }
+        }
+    }
+    black_box(acc);
+    let div_ns = t.elapsed().as_secs_f64() / n as f64 * 1e9;
+
+    // a chain of divisions, each waiting for the last
+    let t = Instant::now();
+    let mut x = 1.5f64;
+    for _ in 0..n {
+        x = black_box(1.000_001) / x + 0.5;
+    }
+    black_box(x);
+    let chain_ns = t.elapsed().as_secs_f64() / n as f64 * 1e9;
+
+    // IDM follow speeds: independent calls, then calls that take the previous result as their speed
+    let p = IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, 0.5);
+    let m = n / 10;
+    let t = Instant::now();
+    let mut s = 0.0;
+    for k in 0..m {
+        let i = k & 1023;
+        s += p.follow_speed(black_box(xs[i] * 10.0), ys[i], xs[(i + 7) & 1023], 30.0);
+    }
+    black_box(s);
+    let idm_ns = t.elapsed().as_secs_f64() / m as f64 * 1e9;
+    let t = Instant::now();
+    let mut v = 10.0;
+    for k in 0..m {
+        let i = k & 1023;
+        v = p.follow_speed(black_box(xs[i] * 10.0), v, ys[i], 30.0);
+    }
+    black_box(v);
+    let idm_chain_ns = t.elapsed().as_secs_f64() / m as f64 * 1e9;
+
+    println!(
+        "division, independent: {div_ns:.2} ns; in a chain: {chain_ns:.2} ns (with one addition)"
+    );
+    println!(
+        "IDM next speed (2 sub-steps, 6 divisions): {idm_ns:.1} ns independent, {idm_chain_ns:.1} ns in a chain"
+    );
+    println!(
+        "at 3.64 IDM calls per vehicle-step (the Simple Merge's count), IDM alone costs {:.0}-{:.0} ns of the \
+         50 ns a vehicle-step may take at 2e7 vehicle-steps/s",
+        3.64 * idm_ns,
+        3.64 * idm_chain_ns
+    );
+}
