@@ -12,33 +12,31 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-fn tiny_train(dir: &PathBuf, iters: u64) -> std::process::Output {
+/// A few iterations of 600 steps (episodes of 300) with the fast preset; `setting`: the reward or the
+/// distributed flags, and the minibatch.
+fn tiny_train_with(dir: &PathBuf, iters: u64, setting: &[&str]) -> std::process::Output {
     mapc()
-        .args([
-            "train",
-            "--scenario",
-            "simple_merge",
-            "--reward",
-            "outflow",
-            "--preset",
-            "fast",
-        ])
-        .args([
-            "--iters",
-            &iters.to_string(),
-            "--batch",
-            "600",
-            "--horizon",
-            "300",
-            "--minibatch",
-            "200",
-            "--epochs",
-            "2",
-        ])
+        .args(["train", "--scenario", "simple_merge", "--preset", "fast"])
+        .args(setting)
+        .args(["--iters", &iters.to_string(), "--batch", "600"])
+        .args(["--horizon", "300", "--epochs", "2"])
         .args(["--checkpoint-every", "1", "--json", "-o"])
         .arg(dir)
         .output()
         .unwrap()
+}
+
+fn tiny_train(dir: &PathBuf, iters: u64) -> std::process::Output {
+    tiny_train_with(dir, iters, &["--reward", "outflow", "--minibatch", "200"])
+}
+
+/// The third row of a run's log without its wall time (a resumed run must match a straight one there).
+fn row3(dir: &PathBuf) -> Vec<String> {
+    let csv = std::fs::read_to_string(dir.join("progress.csv")).unwrap();
+    let line = csv.lines().nth(3).unwrap().to_string();
+    let mut fields: Vec<String> = line.split(',').map(String::from).collect();
+    fields.remove(2); // wall_s
+    fields
 }
 
 #[test]
@@ -65,13 +63,6 @@ fn tiny_training_resume_and_eval() {
     common::assert_success(&out);
     let straight = tmp("straight");
     assert!(tiny_train(&straight, 3).status.success());
-    let row3 = |d: &PathBuf| {
-        let csv = std::fs::read_to_string(d.join("progress.csv")).unwrap();
-        let l = csv.lines().nth(3).unwrap().to_string();
-        let mut f: Vec<String> = l.split(',').map(String::from).collect();
-        f.remove(2); // wall_s
-        f
-    };
     assert_eq!(row3(&dir), row3(&straight));
 
     // Evaluate on 3 seeds: the JSON has mapc sim's shape plus the baseline and the test.
@@ -190,14 +181,14 @@ fn a_corrupt_checkpoint_names_the_file() {
 }
 
 fn tiny_distributed_train(dir: &PathBuf, iters: u64) -> std::process::Output {
-    mapc()
-        .args(["train", "--distributed", "--features", "dist,merge"])
-        .args(["--preset", "fast", "--iters", &iters.to_string()])
-        .args(["--batch", "600", "--horizon", "300", "--minibatch", "256"])
-        .args(["--epochs", "2", "--checkpoint-every", "1", "--json", "-o"])
-        .arg(dir)
-        .output()
-        .unwrap()
+    let setting = [
+        "--distributed",
+        "--features",
+        "dist,merge",
+        "--minibatch",
+        "256",
+    ];
+    tiny_train_with(dir, iters, &setting)
 }
 
 #[test]
@@ -237,13 +228,6 @@ fn tiny_distributed_training_resume_and_eval() {
     common::assert_success(&out);
     let straight = tmp("dist-straight");
     common::assert_success(&tiny_distributed_train(&straight, 3));
-    let row3 = |d: &PathBuf| {
-        let csv = std::fs::read_to_string(d.join("progress.csv")).unwrap();
-        let l = csv.lines().nth(3).unwrap().to_string();
-        let mut f: Vec<String> = l.split(',').map(String::from).collect();
-        f.remove(2);
-        f
-    };
     assert_eq!(row3(&dir), row3(&straight));
     assert!(
         row3(&dir)[1] == "1800",

@@ -171,32 +171,40 @@ pub fn trace_policy(
     out: &mut impl std::io::Write,
 ) -> Result<EpisodeMetrics, RlError> {
     let mut env = MergeEnv::new(spec.clone(), cfg.clone())?;
-    let horizon = env.horizon();
-    let mut scratch = crate::ppo::tensor::Scratch::default();
-    let mut write_rows = |env: &MergeEnv| -> Result<(), RlError> {
-        match env.simulation() {
-            Some(sim) => sim.write_trace_rows(out).map_err(|e| RlError::Io {
-                path: "trace".into(),
-                source: e,
-            }),
-            None => Ok(()),
-        }
-    };
-    let settings = crate::rollout::EpisodeSettings {
+    let settings = trace_settings(seed, env.horizon(), mode);
+    let ep = crate::rollout::run_episode_observed(
+        &mut env,
+        &ck.state.model,
+        &mut crate::ppo::tensor::Scratch::default(),
+        settings,
+        &mut |env: &MergeEnv| write_sim_rows(env.simulation(), out),
+    )?;
+    Ok(ep.metrics)
+}
+
+/// The evaluation episode of `seed`, without training data (what a trace runs).
+fn trace_settings(seed: u64, horizon: usize, mode: ActionMode) -> crate::rollout::EpisodeSettings {
+    crate::rollout::EpisodeSettings {
         env_seed: seed,
         noise_seed: eval_noise_seed(seed),
         horizon,
         mode,
         record: false,
-    };
-    let ep = crate::rollout::run_episode_observed(
-        &mut env,
-        &ck.state.model,
-        &mut scratch,
-        settings,
-        &mut write_rows,
-    )?;
-    Ok(ep.metrics)
+    }
+}
+
+/// The simulation's trace rows for the current step (nothing before the first reset).
+fn write_sim_rows(
+    sim: Option<&mapc_sim::Simulation>,
+    out: &mut impl std::io::Write,
+) -> Result<(), RlError> {
+    match sim {
+        Some(sim) => sim.write_trace_rows(out).map_err(|e| RlError::Io {
+            path: "trace".into(),
+            source: e,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// The human baseline on the same seeds.
@@ -260,30 +268,13 @@ pub fn trace_distributed_policy(
     out: &mut impl std::io::Write,
 ) -> Result<EpisodeMetrics, RlError> {
     let mut env = DistributedEnv::new(spec.clone(), *cfg)?;
-    let horizon = env.horizon();
-    let mut scratch = crate::ppo::tensor::Scratch::default();
-    let mut write_rows = |env: &DistributedEnv| -> Result<(), RlError> {
-        match env.simulation() {
-            Some(sim) => sim.write_trace_rows(out).map_err(|e| RlError::Io {
-                path: "trace".into(),
-                source: e,
-            }),
-            None => Ok(()),
-        }
-    };
-    let settings = crate::rollout::EpisodeSettings {
-        env_seed: seed,
-        noise_seed: eval_noise_seed(seed),
-        horizon,
-        mode,
-        record: false,
-    };
+    let settings = trace_settings(seed, env.horizon(), mode);
     let ep = crate::rollout::run_agents_episode(
         &mut env,
         &ck.state.model,
-        &mut scratch,
+        &mut crate::ppo::tensor::Scratch::default(),
         settings,
-        &mut write_rows,
+        &mut |env: &DistributedEnv| write_sim_rows(env.simulation(), out),
     )?;
     Ok(ep.metrics)
 }

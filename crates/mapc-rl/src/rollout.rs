@@ -179,10 +179,30 @@ pub fn collect(
     mode: ActionMode,
     record: bool,
 ) -> Result<Vec<Episode>, RlError> {
+    over_seeds(
+        factory,
+        seeds,
+        horizon,
+        mode,
+        record,
+        |env, scratch, settings| run_episode(env.as_mut(), model, scratch, settings),
+    )
+}
+
+/// `run(env, scratch, settings)` for every seed pair on the rayon pool (one environment and scratch per worker),
+/// results in input order.
+fn over_seeds<E, T: Send>(
+    make_env: &(dyn Fn() -> E + Sync),
+    seeds: &[(u64, u64)],
+    horizon: usize,
+    mode: ActionMode,
+    record: bool,
+    run: impl Fn(&mut E, &mut Scratch, EpisodeSettings) -> Result<T, RlError> + Sync,
+) -> Result<Vec<T>, RlError> {
     seeds
         .par_iter()
         .map_init(
-            || (factory(), Scratch::default()),
+            || (make_env(), Scratch::default()),
             |(env, scratch), &(env_seed, noise_seed)| {
                 let settings = EpisodeSettings {
                     env_seed,
@@ -191,7 +211,7 @@ pub fn collect(
                     mode,
                     record,
                 };
-                run_episode(env.as_mut(), model, scratch, settings)
+                run(env, scratch, settings)
             },
         )
         .collect()
@@ -301,20 +321,12 @@ pub fn collect_agents(
     mode: ActionMode,
     record: bool,
 ) -> Result<Vec<AgentsEpisode>, RlError> {
-    seeds
-        .par_iter()
-        .map_init(
-            || (factory(), Scratch::default()),
-            |(env, scratch), &(env_seed, noise_seed)| {
-                let settings = EpisodeSettings {
-                    env_seed,
-                    noise_seed,
-                    horizon,
-                    mode,
-                    record,
-                };
-                run_agents_episode(env, model, scratch, settings, &mut |_| Ok(()))
-            },
-        )
-        .collect()
+    over_seeds(
+        factory,
+        seeds,
+        horizon,
+        mode,
+        record,
+        |env, scratch, settings| run_agents_episode(env, model, scratch, settings, &mut |_| Ok(())),
+    )
 }

@@ -251,13 +251,7 @@ impl DistributedEnv {
 
     /// Starts an episode; returns the first observations.
     pub fn reset(&mut self, seed: u64) -> Result<Vec<(VehicleId, Vec<f32>)>, RlError> {
-        let mut sim =
-            Simulation::from_spec(self.spec.clone(), seed).map_err(|e| RlError::Scenario {
-                scenario: self.spec.graph.source.file.clone(),
-                msg: e.to_string(),
-            })?;
-        sim.set_invariant_checks(false);
-        self.sim = Some(sim);
+        self.sim = Some(super::episode_simulation(&self.spec, seed)?);
         self.gone.clear();
         Ok(self.observe())
     }
@@ -397,10 +391,7 @@ fn congestion_ahead(sim: &Simulation, id: VehicleId, dist: f64) -> Option<f64> {
 mod tests {
     use super::*;
 
-    const NORM: ObsNorm = ObsNorm {
-        max_speed: 30.0,
-        length: 947.68,
-    };
+    const NORM: ObsNorm = crate::env::merge::SIMPLE_MERGE_NORM;
 
     #[test]
     fn observation_by_hand() {

@@ -225,13 +225,7 @@ impl Env for MergeEnv {
         self.cfg.n_av
     }
     fn reset(&mut self, seed: u64) -> Result<Vec<f32>, RlError> {
-        let mut sim =
-            Simulation::from_spec(self.spec.clone(), seed).map_err(|e| RlError::Scenario {
-                scenario: self.spec.graph.source.file.clone(),
-                msg: e.to_string(),
-            })?;
-        sim.set_invariant_checks(false);
-        self.sim = Some(sim);
+        self.sim = Some(super::episode_simulation(&self.spec, seed)?);
         self.queue.clear();
         Ok(self.observe())
     }
