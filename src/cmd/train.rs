@@ -57,7 +57,7 @@ pub struct Args {
     pub preset: String,
     /// TOML file of hyperparameters (keys of PpoConfig: lr, gamma, lambda, hidden, clip, vf_clip, vf_coeff,
     /// entropy_coeff, kl_coeff, kl_target, train_batch_size, minibatch, epochs, iterations, horizon, seed,
-    /// grad_slices); applied over the preset, under the flags.
+    /// grad_slices, lr_schedule = [[steps, lr], ...]); applied over the preset, under the flags.
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Run seed: initial weights, episode seeds, action noise and minibatch order derive from it [preset: 0].
