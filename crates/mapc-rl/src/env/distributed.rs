@@ -535,6 +535,31 @@ mod episode_tests {
     }
 
     #[test]
+    fn distributed_training_is_the_same_for_any_thread_count() {
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut c = crate::ppo::PpoConfig::distributed_fast();
+                c.train_batch_size = 600;
+                c.horizon = 300;
+                c.minibatch = 256;
+                c.epochs = 2;
+                c.hidden = vec![16, 8];
+                let mut st = crate::ppo::TrainerState::new(c, config().obs_dim(), 1);
+                let factory = || DistributedEnv::new(simple_merge(300), config()).unwrap();
+                let returns: Vec<u64> = (0..2)
+                    .map(|_| st.iterate_agents(&factory).unwrap().mean_return.to_bits())
+                    .collect();
+                (st.model.params.clone(), returns)
+            })
+        };
+        assert_eq!(run(1), run(3));
+    }
+
+    #[test]
     fn the_same_seeds_give_the_same_episode() {
         let (a, b) = (episode(5), episode(5));
         assert_eq!(a.total_reward.to_bits(), b.total_reward.to_bits());
