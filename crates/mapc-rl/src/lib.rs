@@ -6,6 +6,10 @@
 //!   control region, whose acceleration the policy sets.
 //! - **Observation**: five values per controlled AV (own speed, leader speed difference and gap, follower speed
 //!   difference and gap), normalised by `V` (max speed) and `L` (network lane length), zero-padded to `5 N_AV`.
+//! - **Centralized / distributed policy**: one policy sets the accelerations of the `N_AV` controlled AVs from
+//!   their joint observation (`env::merge`), or one policy shared by every AV acts on each AV's own observation
+//!   (its five values plus the optional augmentations) and every AV is an **agent** with its own reward and
+//!   trajectory (`env::distributed`, the paper's section 4.3).
 //! - **Episode**: one simulation of `horizon` steps (2000 x 0.5 s); cutting it there is a *truncation*, and the
 //!   value of the last state is bootstrapped from the value network.
 //! - **Return**: sum of rewards of an episode. **Advantage**: GAE estimate of how much better an action was than
