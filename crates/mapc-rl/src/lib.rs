@@ -38,3 +38,13 @@ pub use checkpoint::{Checkpoint, PolicySpec};
 pub use error::RlError;
 pub use ppo::{IterationStats, PpoConfig, TrainerState};
 pub use rollout::{Env, EpisodeMetrics};
+
+/// Runs `f` on a rayon pool of `threads` workers (the determinism tests compare thread counts).
+#[cfg(test)]
+pub(crate) fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a rayon pool")
+        .install(f)
+}

@@ -8,7 +8,7 @@ use mapc_sim::VehicleId;
 use crate::env::distributed::DistributedEnv;
 use crate::error::RlError;
 use crate::ppo::gae::EpisodeEnd;
-use crate::ppo::tensor::{Model, Scratch, gaussian_log_prob};
+use crate::ppo::tensor::{Model, PolicyOutput, Scratch, gaussian_log_prob};
 use crate::rng::Rng;
 
 /// The result of one environment step.
@@ -69,6 +69,17 @@ impl Episode {
     }
     pub fn total_reward(&self) -> f64 {
         self.rewards.iter().map(|&r| r as f64).sum()
+    }
+
+    /// Keeps what training needs of one step: the observation, the action and the policy's output for it.
+    fn record_step(&mut self, obs: &[f32], action: &[f32], out: &PolicyOutput) {
+        self.log_probs
+            .push(gaussian_log_prob(action, &out.mean, &out.log_std));
+        self.obs.extend_from_slice(obs);
+        self.actions.extend_from_slice(action);
+        self.means.extend_from_slice(&out.mean);
+        self.log_stds.extend_from_slice(&out.log_std);
+        self.values.push(out.value);
     }
 }
 
@@ -140,13 +151,7 @@ pub fn run_episode_observed<E: Env + ?Sized>(
         let tr = env.step(&action)?;
         observe(env)?;
         if record {
-            ep.log_probs
-                .push(gaussian_log_prob(&action, &out.mean, &out.log_std));
-            ep.obs.extend_from_slice(&obs);
-            ep.actions.extend_from_slice(&action);
-            ep.means.extend_from_slice(&out.mean);
-            ep.log_stds.extend_from_slice(&out.log_std);
-            ep.values.push(out.value);
+            ep.record_step(&obs, &action, &out);
         }
         ep.rewards.push(tr.reward);
         obs = tr.obs;
@@ -264,14 +269,7 @@ pub fn run_agents_episode(
                     out.trajectories.push(Episode::default());
                     out.trajectories.len() - 1
                 });
-                let e = &mut out.trajectories[k];
-                e.log_probs
-                    .push(gaussian_log_prob(&action, &po.mean, &po.log_std));
-                e.obs.extend_from_slice(o);
-                e.actions.extend_from_slice(&action);
-                e.means.extend_from_slice(&po.mean);
-                e.log_stds.extend_from_slice(&po.log_std);
-                e.values.push(po.value);
+                out.trajectories[k].record_step(o, &action, &po);
             }
             actions.push((*id, action.first().copied().unwrap_or(0.0)));
         }

@@ -537,11 +537,7 @@ mod episode_tests {
     #[test]
     fn distributed_training_is_the_same_for_any_thread_count() {
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            crate::on_threads(threads, || {
                 let mut c = crate::ppo::PpoConfig::distributed_fast();
                 c.train_batch_size = 600;
                 c.horizon = 300;

@@ -469,11 +469,7 @@ mod tests {
     #[test]
     fn same_seed_same_run_for_any_thread_count() {
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            crate::on_threads(threads, || {
                 let mut c = tiny_config();
                 c.grad_slices = 3;
                 let mut st = TrainerState::new(c, 1, 1);
