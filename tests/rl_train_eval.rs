@@ -260,12 +260,45 @@ fn tiny_distributed_training_resume_and_eval() {
         "only {} controlled AVs",
         controlled.len()
     );
+
+    // a checkpoint whose features do not match its observation size is refused, naming the file
+    let path = dir.join("checkpoint.json");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let bad = dir.join("bad.json");
+    std::fs::write(
+        &bad,
+        text.replace("\"congestion\":false", "\"congestion\":true"),
+    )
+    .unwrap();
+    let out = mapc()
+        .args(["eval", "--seeds", "1", "--policy"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.json") && err.contains("reads 9 values"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
     std::fs::remove_dir_all(&straight).ok();
 }
 
 #[test]
 fn distributed_flags_are_checked() {
+    // a learning-rate schedule must go forward in steps
+    let cfg = tmp("schedule").with_extension("toml");
+    std::fs::write(&cfg, "lr_schedule = [[0, 5e-4], [0, 1e-4]]\n").unwrap();
+    let out = mapc()
+        .args(["train", "--distributed", "--iters", "1", "--config"])
+        .arg(&cfg)
+        .arg("-o")
+        .arg(tmp("bad-schedule"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("steps must increase"));
     // an unknown feature names itself; --reward belongs to centralized policies
     let out = mapc()
         .args(["train", "--distributed", "--features", "dist,radar"])

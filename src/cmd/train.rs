@@ -26,7 +26,7 @@ pub struct Args {
     #[arg(long, default_value = "outflow", conflicts_with = "distributed")]
     pub reward: String,
     /// Train a distributed policy: every AV in the control region runs the same policy on its own
-    /// observation and gets its own reward (-eta1 + eta2 * mean speed / V per step, the exit bonus when it
+    /// observation and gets its own reward (0.1 (-eta1 + eta2 * mean speed / V) per step, the exit bonus when it
     /// leaves); the presets become the paper's distributed hyperparameters.
     #[arg(long)]
     pub distributed: bool,
@@ -93,8 +93,8 @@ pub struct Args {
     /// Episode length in steps (default: the scenario's horizon).
     #[arg(long)]
     pub horizon: Option<usize>,
-    /// Controlled AVs (default: the scenario's N_AV, 5 on Simple Merge).
-    #[arg(long)]
+    /// Controlled AVs of a centralized policy (default: the scenario's N_AV, 5 on Simple Merge).
+    #[arg(long, conflicts_with = "distributed")]
     pub n_av: Option<usize>,
     /// Write a checkpoint every K iterations (and at the end).
     #[arg(long, default_value_t = 5)]
@@ -158,6 +158,10 @@ fn read_config(path: &Path, base: PpoConfig) -> anyhow::Result<PpoConfig> {
     // Keys absent from the file keep the preset's values.
     let mut table: toml::Table =
         toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
+    // a constant rate in the file replaces the preset's schedule (as --lr does)
+    if table.contains_key("lr") && !table.contains_key("lr_schedule") {
+        table.insert("lr_schedule".into(), toml::Value::Array(Vec::new()));
+    }
     let base_value = toml::Table::try_from(&base)?;
     for (k, v) in base_value {
         table.entry(k).or_insert(v);
@@ -180,6 +184,17 @@ fn validate(c: &PpoConfig) -> anyhow::Result<()> {
     ] {
         if !(v > 0.0 && v.is_finite()) {
             bail!("{name} must be a positive number, got {v}");
+        }
+    }
+    for (i, &(steps, lr)) in c.lr_schedule.iter().enumerate() {
+        if !(lr > 0.0 && lr.is_finite()) {
+            bail!("lr_schedule point {i}: the rate must be a positive number, got {lr}");
+        }
+        if i > 0 && steps <= c.lr_schedule[i - 1].0 {
+            bail!(
+                "lr_schedule point {i}: steps must increase, got {steps} after {}",
+                c.lr_schedule[i - 1].0
+            );
         }
     }
     if c.minibatch == 0

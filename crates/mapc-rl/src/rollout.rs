@@ -252,6 +252,12 @@ pub fn run_agents_episode(
         mode,
         record,
     } = settings;
+    if horizon > env.horizon() {
+        return Err(RlError::Config(format!(
+            "episodes of {horizon} steps on a scenario of {} steps",
+            env.horizon()
+        )));
+    }
     let mut rng = Rng::new(noise_seed);
     let mut out = AgentsEpisode::default();
     // trajectory index of each agent with an open (or closed) trajectory

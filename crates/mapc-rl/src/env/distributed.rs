@@ -2,7 +2,7 @@
 //! region is an agent that sees only what its own sensors give (its leader and follower, optionally the distance
 //! to the next junction, the congestion ahead of it and the nearest vehicle about to merge) and runs the same
 //! shared policy; each agent gets its own reward, a mix of a selfish time penalty and the collaborative average
-//! speed, and a bonus in the step it leaves.
+//! speed (0.1 (-eta1 + eta2 * mean speed / V) per step), and a bonus in the step it leaves.
 
 use serde::{Deserialize, Serialize};
 
@@ -85,7 +85,9 @@ impl Features {
     }
 }
 
-/// The distributed reward `(1 - done)(-eta1 + eta2 * mean speed / V) + done * bonus` (the paper's eq. 3).
+/// The distributed reward `(1 - done) 0.1 (-eta1 + eta2 * mean speed / V) + done * bonus`: the paper's eq. 3 with
+/// the step terms at the scale its code used (`eta1 * -0.1 + eta2 * 0.1 * mean speed / V`, REFERENCE.md sec. 5),
+/// so the exit bonus outweighs the time penalty of a normal trip (about -0.09 per step over 100-200 steps).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AgentReward {
     /// Weight of the selfish time penalty.
@@ -109,7 +111,7 @@ impl AgentReward {
         if done {
             self.exit_bonus
         } else {
-            -self.eta1 + self.eta2 * speed_ratio
+            self.eta1 * -0.1 + self.eta2 * 0.1 * speed_ratio
         }
     }
 }
@@ -441,7 +443,7 @@ mod tests {
     #[test]
     fn reward_by_hand() {
         let r = AgentReward::PAPER;
-        assert!((r.of(false, 0.5) - (-0.9 + 0.05)).abs() < 1e-12);
+        assert!((r.of(false, 0.5) - (-0.09 + 0.005)).abs() < 1e-12);
         assert_eq!(r.of(true, 0.5), 20.0);
     }
 }

@@ -159,11 +159,13 @@ impl TrainerState {
         let batch = Batch::from_episodes(episodes, &self.config);
         let kl_coeff_used = self.kl_coeff;
         let sgd = self.update(&batch);
-        // Adaptive KL penalty (RLlib's rule).
-        if sgd.kl > 2.0 * self.config.kl_target {
-            self.kl_coeff *= 1.5;
-        } else if sgd.kl < 0.5 * self.config.kl_target {
-            self.kl_coeff *= 0.5;
+        // Adaptive KL penalty (RLlib's rule); an iteration without any step (no agent entered) updated nothing
+        if batch.n > 0 {
+            if sgd.kl > 2.0 * self.config.kl_target {
+                self.kl_coeff *= 1.5;
+            } else if sgd.kl < 0.5 * self.config.kl_target {
+                self.kl_coeff *= 0.5;
+            }
         }
         self.iteration += 1;
         self.env_steps += collected.sim_steps;
