@@ -187,6 +187,7 @@ fn tiny_distributed_train(dir: &PathBuf, iters: u64) -> std::process::Output {
         "dist,merge",
         "--minibatch",
         "256",
+        "--keep-checkpoints",
     ];
     tiny_train_with(dir, iters, &setting)
 }
@@ -217,6 +218,16 @@ fn tiny_distributed_training_resume_and_eval() {
         ck["state"]["config"]["lr_schedule"].is_array(),
         "{}",
         ck["state"]["config"]
+    );
+    // --keep-checkpoints: one file per checkpoint written, the last equal to checkpoint.json
+    let kept = |it: u64| {
+        dir.join("checkpoints")
+            .join(format!("iteration-{it:05}.json"))
+    };
+    assert!(kept(1).exists() && kept(2).exists());
+    assert_eq!(
+        std::fs::read(kept(2)).unwrap(),
+        std::fs::read(dir.join("checkpoint.json")).unwrap()
     );
 
     // resumed to 3 iterations = 3 iterations in one go (wall time aside)

@@ -99,6 +99,10 @@ pub struct Args {
     /// Write a checkpoint every K iterations (and at the end).
     #[arg(long, default_value_t = 5)]
     pub checkpoint_every: u64,
+    /// Also keep every checkpoint written, as RUN/checkpoints/iteration-NNNNN.json (`mapc eval --policy` reads
+    /// them), to evaluate earlier policies of the run.
+    #[arg(long)]
+    pub keep_checkpoints: bool,
     /// Worker threads for rollouts (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -282,6 +286,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, spec.reward)));
         TrainRun::create(&out, spec, config, args.checkpoint_every)?
     };
+    run.keep_checkpoints = args.keep_checkpoints;
     let sc = load_scenario(&run.spec.scenario)?;
     let mut spec = sc.spec.clone();
     spec.horizon_steps = run.state.config.horizon as u64;

@@ -21,6 +21,14 @@ pub struct TrainRun {
     pub state: TrainerState,
     pub log: TrainingLog,
     pub checkpoint_every: u64,
+    /// Also keep every checkpoint written as `checkpoints/iteration-NNNNN.json` (to evaluate earlier policies).
+    pub keep_checkpoints: bool,
+}
+
+/// Where a kept checkpoint of iteration `it` goes inside a run directory.
+pub fn kept_checkpoint_path(dir: &Path, it: u64) -> PathBuf {
+    dir.join("checkpoints")
+        .join(format!("iteration-{it:05}.json"))
 }
 
 impl TrainRun {
@@ -49,6 +57,7 @@ impl TrainRun {
             state,
             log: TrainingLog::default(),
             checkpoint_every: checkpoint_every.max(1),
+            keep_checkpoints: false,
         })
     }
 
@@ -69,6 +78,7 @@ impl TrainRun {
             state: ck.state,
             log,
             checkpoint_every: checkpoint_every.max(1),
+            keep_checkpoints: false,
         })
     }
 
@@ -85,7 +95,19 @@ impl TrainRun {
     }
 
     pub fn save(&self) -> Result<(), RlError> {
-        self.checkpoint().save(&checkpoint_path(&self.dir))
+        let ck = self.checkpoint();
+        ck.save(&checkpoint_path(&self.dir))?;
+        if self.keep_checkpoints {
+            let path = kept_checkpoint_path(&self.dir, self.state.iteration);
+            if let Some(parent) = path.parent() {
+                std::fs::create_dir_all(parent).map_err(|e| RlError::Io {
+                    path: parent.into(),
+                    source: e,
+                })?;
+            }
+            ck.save(&path)?;
+        }
+        Ok(())
     }
 
     /// One iteration, then the log (and every `checkpoint_every` iterations or at the end, the checkpoint).
