@@ -43,6 +43,10 @@ pub struct Args {
     /// Distributed: reward in the step an agent leaves.
     #[arg(long, default_value_t = 20.0, requires = "distributed")]
     pub exit_bonus: f64,
+    /// Distributed: count the vehicles waiting to enter in the reward's mean speed, as standing (not in the
+    /// paper; closes the loophole of holding back the entry).
+    #[arg(long, requires = "distributed")]
+    pub count_waiting: bool,
     /// Training iterations (overrides the preset / config).
     #[arg(long)]
     pub iters: Option<u64>,
@@ -276,6 +280,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     eta1: args.eta1,
                     eta2: args.eta2,
                     exit_bonus: args.exit_bonus,
+                    count_waiting: args.count_waiting,
                 },
                 dist_norm: SIMPLE_MERGE_DIST_NORM,
             });

@@ -96,6 +96,10 @@ pub struct AgentReward {
     pub eta2: f64,
     /// Reward in the step the agent leaves.
     pub exit_bonus: f64,
+    /// Count the vehicles waiting to enter in the mean speed, as standing (not in the paper: without it, holding
+    /// back the entry raises the mean speed of those inside).
+    #[serde(default)]
+    pub count_waiting: bool,
 }
 
 impl AgentReward {
@@ -104,6 +108,7 @@ impl AgentReward {
         eta1: 0.9,
         eta2: 0.1,
         exit_bonus: 20.0,
+        count_waiting: false,
     };
 
     /// One agent's reward for a step after which the network's mean speed over V is `speed_ratio`.
@@ -340,7 +345,16 @@ impl DistributedEnv {
             .active_ids()
             .filter_map(|id| sim.vehicle(id).map(|v| v.speed))
             .collect();
-        let speed_ratio = super::obs::speed_reward(&speeds, self.cfg.norm.max_speed);
+        let speed_ratio = if self.cfg.reward.count_waiting {
+            let n = speeds.len() + sim.waiting_to_enter();
+            if n == 0 {
+                0.0
+            } else {
+                speeds.iter().sum::<f64>() / n as f64 / self.cfg.norm.max_speed
+            }
+        } else {
+            super::obs::speed_reward(&speeds, self.cfg.norm.max_speed)
+        };
         let mut rewards = Vec::with_capacity(actions.len());
         let mut newly_gone = Vec::new();
         for &(id, _) in actions {
@@ -473,7 +487,10 @@ mod episode_tests {
     }
 
     fn episode(seed: u64) -> crate::rollout::AgentsEpisode {
-        let cfg = config();
+        episode_with(seed, config())
+    }
+
+    fn episode_with(seed: u64, cfg: DistributedConfig) -> crate::rollout::AgentsEpisode {
         let mut env = DistributedEnv::new(simple_merge(400), cfg).unwrap();
         let arch = Architecture {
             obs_dim: cfg.obs_dim(),
@@ -555,6 +572,23 @@ mod episode_tests {
             })
         };
         assert_eq!(run(1), run(3));
+    }
+
+    #[test]
+    fn waiting_vehicles_lower_the_collaborative_reward() {
+        // the same episode (actions do not depend on rewards); counting the vehicles waiting at the entry as
+        // standing can only lower the mean speed, and does when some wait
+        let mut cfg = config();
+        let plain = episode_with(11, cfg);
+        cfg.reward.count_waiting = true;
+        let counted = episode_with(11, cfg);
+        assert_eq!(plain.agent_steps, counted.agent_steps);
+        assert!(
+            counted.total_reward < plain.total_reward,
+            "{} {}",
+            counted.total_reward,
+            plain.total_reward
+        );
     }
 
     #[test]
