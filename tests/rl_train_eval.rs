@@ -1,6 +1,6 @@
 //! End-to-end: a tiny training run of `mapc train` on the Simple Merge, resumed, then `mapc eval` of its policy.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 mod common;
 
@@ -31,7 +31,7 @@ fn tiny_train(dir: &PathBuf, iters: u64) -> std::process::Output {
 }
 
 /// The third row of a run's log without its wall time (a resumed run must match a straight one there).
-fn row3(dir: &PathBuf) -> Vec<String> {
+fn row3(dir: &Path) -> Vec<String> {
     let csv = std::fs::read_to_string(dir.join("progress.csv")).unwrap();
     let line = csv.lines().nth(3).unwrap().to_string();
     let mut fields: Vec<String> = line.split(',').map(String::from).collect();
