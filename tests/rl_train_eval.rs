@@ -30,6 +30,17 @@ fn tiny_train(dir: &PathBuf, iters: u64) -> std::process::Output {
     tiny_train_with(dir, iters, &["--reward", "outflow", "--minibatch", "200"])
 }
 
+/// `mapc eval` of a policy file that must be refused: exit 2; returns the message.
+fn refused_policy(policy: &Path) -> String {
+    let out = mapc()
+        .args(["eval", "--seeds", "1", "--policy"])
+        .arg(policy)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
 /// The third row of a run's log without its wall time (a resumed run must match a straight one there).
 fn row3(dir: &Path) -> Vec<String> {
     let csv = std::fs::read_to_string(dir.join("progress.csv")).unwrap();
@@ -166,13 +177,7 @@ fn a_corrupt_checkpoint_names_the_file() {
     std::fs::create_dir_all(&dir).unwrap();
     let f = dir.join("policy.json");
     std::fs::write(&f, "{\"format_version\": 1, \"spec\": ").unwrap();
-    let out = mapc()
-        .args(["eval", "--seeds", "2", "--policy"])
-        .arg(&f)
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = refused_policy(&f);
     assert!(
         err.contains("policy.json") && err.contains("line 1"),
         "{err}"
@@ -281,13 +286,7 @@ fn tiny_distributed_training_resume_and_eval() {
         text.replace("\"congestion\":false", "\"congestion\":true"),
     )
     .unwrap();
-    let out = mapc()
-        .args(["eval", "--seeds", "1", "--policy"])
-        .arg(&bad)
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = refused_policy(&bad);
     assert!(
         err.contains("bad.json") && err.contains("reads 9 values"),
         "{err}"
