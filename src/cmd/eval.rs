@@ -7,10 +7,7 @@ use anyhow::Context;
 use clap::Args as ClapArgs;
 use mapc_rl::Checkpoint;
 use mapc_rl::checkpoint::checkpoint_path;
-use mapc_rl::eval::{
-    EvalReport, FigureSet, compare, env_config_for, run_distributed_policy, run_human, run_policy,
-    trace_distributed_policy,
-};
+use mapc_rl::eval::{EvalReport, FigureSet, PolicyDriver, compare, run_human};
 use mapc_rl::rollout::ActionMode;
 
 /// Evaluate a policy: mean and 95% CI of outflow, inflow and speed, and a Welch t-test against the humans.
@@ -73,26 +70,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         ActionMode::Mean
     };
-    let runs = if let Some(dcfg) = ck.spec.distributed_config() {
-        // a distributed policy drives every AV of the control region, whatever the scenario's N_AV
-        let runs = run_distributed_policy(&ck, &sc.spec, &dcfg, &seeds, mode)
-            .with_context(|| format!("evaluating {}", file.display()))?;
-        if let Some(path) = &args.trace {
-            super::sim::write_trace_file(path, |w| {
-                trace_distributed_policy(&ck, &sc.spec, &dcfg, seeds[0], mode, w)?;
-                Ok(())
-            })?;
-        }
-        runs
-    } else {
-        let cfg = env_config_for(&ck, &file, &args.scenario, Some(sc.n_av.unwrap_or(5)))?;
-        let runs = run_policy(&ck, &sc.spec, &cfg, &seeds, mode)
-            .with_context(|| format!("evaluating {}", file.display()))?;
-        if let Some(path) = &args.trace {
-            write_policy_trace(&ck, &sc.spec, &cfg, seeds[0], mode, path)?;
-        }
-        runs
-    };
+    let driver =
+        PolicyDriver::for_scenario(&ck, &file, &args.scenario, Some(sc.n_av.unwrap_or(5)))?;
+    let runs = driver
+        .run(&ck, &sc.spec, &seeds, mode)
+        .with_context(|| format!("evaluating {}", file.display()))?;
+    if let Some(path) = &args.trace {
+        // one seed under the policy, every step's vehicles, written atomically
+        super::sim::write_trace_file(path, |w| {
+            driver.trace(&ck, &sc.spec, seeds[0], mode, w)?;
+            Ok(())
+        })?;
+    }
     let figs = FigureSet::of(&runs);
     let (baseline, comparison) = if args.no_baseline {
         (None, None)
@@ -165,19 +154,4 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     println!("  {:.1} s wall", report.wall_s);
     Ok(())
-}
-
-/// One seed under the policy, every step's vehicles, written atomically.
-fn write_policy_trace(
-    ck: &Checkpoint,
-    spec: &mapc_sim::SimSpec,
-    cfg: &mapc_rl::env::merge::MergeEnvConfig,
-    seed: u64,
-    mode: ActionMode,
-    path: &Path,
-) -> anyhow::Result<()> {
-    super::sim::write_trace_file(path, |w| {
-        mapc_rl::eval::trace_policy(ck, spec, cfg, seed, mode, w)?;
-        Ok(())
-    })
 }

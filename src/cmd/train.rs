@@ -296,14 +296,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut spec = sc.spec.clone();
     spec.horizon_steps = run.state.config.horizon as u64;
     if let Some(dcfg) = run.spec.distributed_config() {
-        if dcfg.obs_dim() != run.spec.obs_dim || run.spec.act_dim != 1 {
-            bail!(
-                "run expects {} observation values and {} action(s); its features give {} and 1",
-                run.spec.obs_dim,
-                run.spec.act_dim,
-                dcfg.obs_dim()
-            );
-        }
+        // (the sizes agree: `Checkpoint::load` checks a resumed run's, a new run derives them from the features)
         DistributedEnv::new(spec.clone(), dcfg)?;
         let factory = move || DistributedEnv::new(spec.clone(), dcfg).expect("validated above");
         return train_loop(&mut run, &args, &mut |r| r.step_agents(&factory));

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use mapc_sim::{MeanCi, RunMetrics, SimSpec, Summary};
+use mapc_sim::{MeanCi, SimSpec, Summary};
 use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::Checkpoint;
@@ -93,11 +93,60 @@ pub fn human_spec(spec: &SimSpec) -> SimSpec {
     s
 }
 
-fn to_episode_metrics(r: &RunMetrics) -> EpisodeMetrics {
-    EpisodeMetrics {
-        outflow: r.outflow_veh_h,
-        inflow: r.inflow_veh_h,
-        speed: r.avg_speed_mps,
+/// How a checkpoint's policy drives a scenario: the `N_AV` FIFO-controlled AVs of a centralized policy, or every
+/// AV of the control region with a distributed one.
+#[derive(Clone, Debug)]
+pub enum PolicyDriver {
+    Centralized(MergeEnvConfig),
+    Distributed(DistributedConfig),
+}
+
+impl PolicyDriver {
+    /// The driver of `ck` on `scenario` (`scenario_n_av`: its N_AV, which a centralized policy's observation
+    /// must match; see [`env_config_for`]).
+    pub fn for_scenario(
+        ck: &Checkpoint,
+        policy: &Path,
+        scenario: &str,
+        scenario_n_av: Option<usize>,
+    ) -> Result<PolicyDriver, RlError> {
+        match ck.spec.distributed_config() {
+            Some(d) => Ok(PolicyDriver::Distributed(d)),
+            None => {
+                env_config_for(ck, policy, scenario, scenario_n_av).map(PolicyDriver::Centralized)
+            }
+        }
+    }
+
+    /// The policy on `spec` for each seed (in parallel, results in seed order).
+    pub fn run(
+        &self,
+        ck: &Checkpoint,
+        spec: &SimSpec,
+        seeds: &[u64],
+        mode: ActionMode,
+    ) -> Result<Vec<EpisodeMetrics>, RlError> {
+        match self {
+            PolicyDriver::Centralized(cfg) => run_policy(ck, spec, cfg, seeds, mode),
+            PolicyDriver::Distributed(cfg) => run_distributed_policy(ck, spec, cfg, seeds, mode),
+        }
+    }
+
+    /// The episode of `seed` (the one [`Self::run`] gives), every step's vehicles written as trace rows.
+    pub fn trace(
+        &self,
+        ck: &Checkpoint,
+        spec: &SimSpec,
+        seed: u64,
+        mode: ActionMode,
+        out: &mut impl std::io::Write,
+    ) -> Result<EpisodeMetrics, RlError> {
+        match self {
+            PolicyDriver::Centralized(cfg) => trace_policy(ck, spec, cfg, seed, mode, out),
+            PolicyDriver::Distributed(cfg) => {
+                trace_distributed_policy(ck, spec, cfg, seed, mode, out)
+            }
+        }
     }
 }
 
@@ -214,7 +263,7 @@ pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<EpisodeMetrics>, R
             scenario: spec.graph.source.file.clone(),
             msg: e.to_string(),
         })?;
-    Ok(runs.iter().map(to_episode_metrics).collect())
+    Ok(runs.iter().map(EpisodeMetrics::from).collect())
 }
 
 /// Welch tests and the outflow change of `policy` against `baseline`.

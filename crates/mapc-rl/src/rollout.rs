@@ -31,6 +31,16 @@ pub struct EpisodeMetrics {
     pub speed: f64,
 }
 
+impl From<&mapc_sim::RunMetrics> for EpisodeMetrics {
+    fn from(r: &mapc_sim::RunMetrics) -> Self {
+        EpisodeMetrics {
+            outflow: r.outflow_veh_h,
+            inflow: r.inflow_veh_h,
+            speed: r.avg_speed_mps,
+        }
+    }
+}
+
 /// A reinforcement-learning environment with a fixed observation and action size.
 pub trait Env {
     fn obs_dim(&self) -> usize;

@@ -98,14 +98,8 @@ impl TrainRun {
         let ck = self.checkpoint();
         ck.save(&checkpoint_path(&self.dir))?;
         if self.keep_checkpoints {
-            let path = kept_checkpoint_path(&self.dir, self.state.iteration);
-            if let Some(parent) = path.parent() {
-                std::fs::create_dir_all(parent).map_err(|e| RlError::Io {
-                    path: parent.into(),
-                    source: e,
-                })?;
-            }
-            ck.save(&path)?;
+            // (the atomic writer creates `checkpoints/`)
+            ck.save(&kept_checkpoint_path(&self.dir, self.state.iteration))?;
         }
         Ok(())
     }

@@ -31,6 +31,8 @@ fn main() {
     // `--profile`: a short run for a profiler (3 seeds, no baseline)
     let profile = std::env::args().any(|a| a == "--profile");
     let seeds = if profile { 3u64 } else { 20 };
+    #[cfg(feature = "count-idm")]
+    mapc_sim::idm::take_idm_calls();
     let start = Instant::now();
     let mut vehicle_steps = 0u64;
     let mut steps = 0u64;
@@ -42,6 +44,12 @@ fn main() {
         steps += m.steps;
     }
     let wall = start.elapsed().as_secs_f64();
+    #[cfg(feature = "count-idm")]
+    println!(
+        "{}: {:.2} IDM steps (IdmParams::next_speed) per vehicle-step",
+        rs.origin,
+        mapc_sim::idm::take_idm_calls() as f64 / vehicle_steps as f64
+    );
     if profile {
         // a fingerprint of the results, to compare builds bit for bit
         let mut fp = 0xcbf2_9ce4_8422_2325u64;

@@ -4,6 +4,10 @@
 //! `cargo run --release -p mapc-sim --example arith_floor` (docs/perf_sim.md).
 
 use mapc_sim::IdmParams;
+
+/// IDM steps per Simple Merge vehicle-step, as counted by
+/// `cargo bench -p mapc-sim --bench sim_speed --features count-idm -- --profile`.
+const CALLS_PER_VEHICLE_STEP: f64 = 3.65;
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -61,9 +65,10 @@ fn main() {
         "IDM next speed (2 sub-steps, 6 divisions): {idm_ns:.1} ns independent, {idm_chain_ns:.1} ns in a chain"
     );
     println!(
-        "at 3.64 IDM calls per vehicle-step (the Simple Merge's count), IDM alone costs {:.0}-{:.0} ns of the \
+        "at {CALLS_PER_VEHICLE_STEP} IDM calls per vehicle-step (the Simple Merge's count), IDM alone costs \
+         {:.0}-{:.0} ns of the \
          50 ns a vehicle-step may take at 2e7 vehicle-steps/s",
-        3.64 * idm_ns,
-        3.64 * idm_chain_ns
+        CALLS_PER_VEHICLE_STEP * idm_ns,
+        CALLS_PER_VEHICLE_STEP * idm_chain_ns
     );
 }

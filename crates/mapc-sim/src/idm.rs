@@ -66,6 +66,15 @@ impl FastMinMax for f64 {
     }
 }
 
+#[cfg(feature = "count-idm")]
+static IDM_CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// Calls of [`IdmParams::next_speed`] since the last call of this function (feature `count-idm`).
+#[cfg(feature = "count-idm")]
+pub fn take_idm_calls() -> u64 {
+    IDM_CALLS.swap(0, std::sync::atomic::Ordering::Relaxed)
+}
+
 impl IdmParams {
     /// Parameters with SUMO's sub-stepping rule for the step `dt` (IDM stepping 0.25 s).
     pub fn new(
@@ -138,6 +147,8 @@ impl IdmParams {
         desired_speed: f64,
         respect_min_gap: bool,
     ) -> f64 {
+        #[cfg(feature = "count-idm")]
+        IDM_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         // The common sub-step counts get a loop the compiler unrolls, with the division by the count (a power of
         // two) done as the multiplication by its exact reciprocal: the same bits, without a division.
         match self.iterations {

@@ -1826,6 +1826,39 @@ mod bound_tests {
     use super::*;
 
     #[test]
+    fn lazy_pass_speed_is_the_eager_chain_bit_for_bit() {
+        // the eager chain: root, then cap, then every leader, each with fmin; ties and signed zeros included
+        let mut rng = StdRng::seed_from_u64(7);
+        let pick = |rng: &mut StdRng| -> f64 {
+            match rng.random_range(0..6) {
+                0 => 0.0,
+                1 => -0.0,
+                2 => 5.0,
+                3 => f64::INFINITY,
+                _ => rng.random_range(-1.0..30.0),
+            }
+        };
+        for _ in 0..20_000 {
+            let (dist, speed) = (rng.random_range(0.0..200.0), pick(&mut rng).abs());
+            let (accel, cap) = (2.6, pick(&mut rng));
+            let leaders: Vec<f64> = (0..rng.random_range(0..5))
+                .map(|_| pick(&mut rng))
+                .collect();
+            let mut eager = IdmParams::speed_after_distance(dist, speed, accel).fmin(cap);
+            let mut lazy = LazyPassSpeed::new(dist, speed, accel, cap);
+            for &v in &leaders {
+                eager = eager.fmin(v);
+                lazy.lower(v);
+            }
+            assert_eq!(
+                lazy.get().to_bits(),
+                eager.to_bits(),
+                "{dist} {speed} {cap} {leaders:?}"
+            );
+        }
+    }
+
+    #[test]
     fn brake_gap_bound_lies_above_the_exact_gap() {
         for (decel, dt) in [(4.5, 0.5), (4.5, 0.1), (1.0, 1.0), (7.5, 0.2), (3.0, 2.0)] {
             let p = IdmParams::new(2.6, decel, 9.0, 1.0, 2.5, 4.0, dt);

@@ -224,10 +224,7 @@ pub struct DistributedEnv {
 
 impl DistributedEnv {
     pub fn new(spec: SimSpec, cfg: DistributedConfig) -> Result<Self, RlError> {
-        spec.validate().map_err(|e| RlError::Scenario {
-            scenario: spec.graph.source.file.clone(),
-            msg: e.to_string(),
-        })?;
+        super::validate_spec(&spec)?;
         Ok(Self {
             spec,
             cfg,
@@ -247,13 +244,6 @@ impl DistributedEnv {
     /// The simulation of the current episode (after `reset`).
     pub fn simulation(&self) -> Option<&Simulation> {
         self.sim.as_ref()
-    }
-
-    fn sim_error(e: impl std::fmt::Display) -> RlError {
-        RlError::Scenario {
-            scenario: "simulation".into(),
-            msg: e.to_string(),
-        }
     }
 
     /// Starts an episode; returns the first observations.
@@ -282,13 +272,18 @@ impl DistributedEnv {
         let sim = self.sim.as_ref().expect("reset before use");
         let len = self.cfg.norm.length;
         let speed = sim.vehicle(id).map_or(0.0, |v| v.speed);
-        let junction_dist = sim.distance_to_next_junction(id).map(|(d, _)| d);
-        let congestion_speed = if self.cfg.features.congestion {
+        let f = self.cfg.features;
+        let junction_dist = if f.dist || f.congestion {
+            sim.distance_to_next_junction(id).map(|(d, _)| d)
+        } else {
+            None
+        };
+        let congestion_speed = if f.congestion {
             junction_dist.and_then(|d| congestion_ahead(sim, id, d))
         } else {
             None
         };
-        let merge_foe = if self.cfg.features.merge_info {
+        let merge_foe = if f.merge_info {
             sim.nearest_merge_foe(id, f64::INFINITY)
                 .map(|f| (f.dist_to_merge_m, f.speed))
         } else {
@@ -335,26 +330,21 @@ impl DistributedEnv {
             } else {
                 0.0
             };
-            sim.set_acceleration(id, a).map_err(Self::sim_error)?;
+            sim.set_acceleration(id, a).map_err(super::sim_error)?;
         }
         if !sim.is_done() {
-            sim.step().map_err(Self::sim_error)?;
+            sim.step().map_err(super::sim_error)?;
         }
         let sim = self.sim.as_ref().expect("reset before step");
-        let speeds: Vec<f64> = sim
+        let mut speeds: Vec<f64> = sim
             .active_ids()
             .filter_map(|id| sim.vehicle(id).map(|v| v.speed))
             .collect();
-        let speed_ratio = if self.cfg.reward.count_waiting {
-            let n = speeds.len() + sim.waiting_to_enter();
-            if n == 0 {
-                0.0
-            } else {
-                speeds.iter().sum::<f64>() / n as f64 / self.cfg.norm.max_speed
-            }
-        } else {
-            super::obs::speed_reward(&speeds, self.cfg.norm.max_speed)
-        };
+        if self.cfg.reward.count_waiting {
+            // vehicles waiting to enter count as standing
+            speeds.resize(speeds.len() + sim.waiting_to_enter(), 0.0);
+        }
+        let speed_ratio = super::obs::speed_reward(&speeds, self.cfg.norm.max_speed);
         let mut rewards = Vec::with_capacity(actions.len());
         let mut newly_gone = Vec::new();
         for &(id, _) in actions {
@@ -372,12 +362,7 @@ impl DistributedEnv {
     }
 
     pub fn metrics(&self) -> EpisodeMetrics {
-        let m = self.sim.as_ref().expect("reset before use").metrics();
-        EpisodeMetrics {
-            outflow: m.outflow_veh_h,
-            inflow: m.inflow_veh_h,
-            speed: m.avg_speed_mps,
-        }
+        (&self.sim.as_ref().expect("reset before use").metrics()).into()
     }
 }
 

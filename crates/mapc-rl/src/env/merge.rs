@@ -85,10 +85,7 @@ pub struct MergeEnv {
 impl MergeEnv {
     /// An environment over `spec` (the control region, if any, is the spec's).
     pub fn new(spec: SimSpec, cfg: MergeEnvConfig) -> Result<Self, RlError> {
-        spec.validate().map_err(|e| RlError::Scenario {
-            scenario: spec.graph.source.file.clone(),
-            msg: e.to_string(),
-        })?;
+        super::validate_spec(&spec)?;
         if cfg.n_av == 0 {
             return Err(RlError::Config("N_AV must be at least 1".into()));
         }
@@ -184,17 +181,11 @@ impl MergeEnv {
                 } else {
                     0.0
                 };
-                sim.set_acceleration(id, a).map_err(|e| RlError::Scenario {
-                    scenario: "simulation".into(),
-                    msg: e.to_string(),
-                })?;
+                sim.set_acceleration(id, a).map_err(super::sim_error)?;
             }
         }
         if !sim.is_done() {
-            sim.step().map_err(|e| RlError::Scenario {
-                scenario: "simulation".into(),
-                msg: e.to_string(),
-            })?;
+            sim.step().map_err(super::sim_error)?;
         }
         // The reward sees the controlled set that acted in this step.
         let reward = self.reward() as f32;
@@ -233,11 +224,6 @@ impl Env for MergeEnv {
         self.try_step(action)
     }
     fn metrics(&self) -> EpisodeMetrics {
-        let m = self.sim().metrics();
-        EpisodeMetrics {
-            outflow: m.outflow_veh_h,
-            inflow: m.inflow_veh_h,
-            speed: m.avg_speed_mps,
-        }
+        (&self.sim().metrics()).into()
     }
 }

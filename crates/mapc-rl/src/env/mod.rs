@@ -4,6 +4,22 @@ use mapc_sim::{SimSpec, Simulation};
 
 use crate::error::RlError;
 
+/// `spec` checked for the simulator, its problems reported against the scenario's file.
+pub(crate) fn validate_spec(spec: &SimSpec) -> Result<(), RlError> {
+    spec.validate().map_err(|e| RlError::Scenario {
+        scenario: spec.graph.source.file.clone(),
+        msg: e.to_string(),
+    })
+}
+
+/// An error of the running simulation (a bad command, a broken invariant).
+pub(crate) fn sim_error(e: impl std::fmt::Display) -> RlError {
+    RlError::Scenario {
+        scenario: "simulation".into(),
+        msg: e.to_string(),
+    }
+}
+
 /// A new episode's simulation of `spec` (invariant checks off: the environments step it millions of times).
 pub(crate) fn episode_simulation(spec: &SimSpec, seed: u64) -> Result<Simulation, RlError> {
     let mut sim = Simulation::from_spec(spec.clone(), seed).map_err(|e| RlError::Scenario {

@@ -98,7 +98,8 @@ impl PpoConfig {
 
     /// The paper's distributed hyperparameters (its appendix A.2): gamma 0.998, lambda 0.95, clip 0.2, entropy
     /// 1e-3, minibatch 4096, 60 000 simulation steps (30 episodes) per iteration, value loss 0.5, KL 0.01, and
-    /// the learning rate 5e-4 -> 1e-4 at 1M steps -> 1e-5 at 4M -> 1e-6 at 8M. (The paper's value network
+    /// the original code's learning rate 5e-4 -> 1e-4 at 1M steps -> 1e-5 at 4M -> 1e-6 at 8M (REFERENCE.md
+    /// sec. 5; the paper says only "piecewise linearly decreasing"). (The paper's value network
     /// shares the policy's layers; mapc's keeps its own.)
     pub fn distributed() -> Self {
         Self {
