@@ -32,7 +32,10 @@ fn main() {
     let profile = std::env::args().any(|a| a == "--profile");
     let seeds = if profile { 3u64 } else { 20 };
     #[cfg(feature = "count-idm")]
-    mapc_sim::idm::take_idm_calls();
+    {
+        mapc_sim::idm::take_idm_calls();
+        mapc_sim::idm::take_idm_batches();
+    }
     let start = Instant::now();
     let mut vehicle_steps = 0u64;
     let mut steps = 0u64;
@@ -45,11 +48,18 @@ fn main() {
     }
     let wall = start.elapsed().as_secs_f64();
     #[cfg(feature = "count-idm")]
-    println!(
-        "{}: {:.2} IDM steps (IdmParams::next_speed) per vehicle-step",
-        rs.origin,
-        mapc_sim::idm::take_idm_calls() as f64 / vehicle_steps as f64
-    );
+    {
+        let calls = mapc_sim::idm::take_idm_calls() as f64;
+        let batches = mapc_sim::idm::take_idm_batches() as f64;
+        println!(
+            "{}: {:.2} IDM steps per vehicle-step: {:.2} batches of four (next_speed_x4, unread lanes \
+             included), {:.2} single calls (next_speed)",
+            rs.origin,
+            calls / vehicle_steps as f64,
+            batches / vehicle_steps as f64,
+            (calls - 4.0 * batches) / vehicle_steps as f64
+        );
+    }
     if profile {
         // a fingerprint of the results, to compare builds bit for bit
         let mut fp = 0xcbf2_9ce4_8422_2325u64;

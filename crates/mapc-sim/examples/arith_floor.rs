@@ -58,12 +58,35 @@ fn main() {
     black_box(v);
     let idm_chain_ns = t.elapsed().as_secs_f64() / m as f64 * 1e9;
 
+    // four calls at once (two SSE2 pairs), as planning makes them
+    let t = Instant::now();
+    let mut s4 = 0.0;
+    for k in 0..m / 4 {
+        let i = (4 * k) & 1023;
+        let r = p.next_speed_x4(
+            black_box([xs[i] * 10.0, xs[i + 1] * 10.0, 1e6, xs[i + 3] * 10.0]),
+            ys[i],
+            [
+                xs[(i + 7) & 1023],
+                xs[(i + 8) & 1023],
+                30.0,
+                xs[(i + 9) & 1023],
+            ],
+            30.0,
+            [true, true, false, true],
+        );
+        s4 += r[0] + r[1] + r[2] + r[3];
+    }
+    black_box(s4);
+    let idm_x4_ns = t.elapsed().as_secs_f64() / m as f64 * 1e9;
+
     println!(
         "division, independent: {div_ns:.2} ns; in a chain: {chain_ns:.2} ns (with one addition)"
     );
     println!(
         "IDM next speed (2 sub-steps, 6 divisions): {idm_ns:.1} ns independent, {idm_chain_ns:.1} ns in a chain"
     );
+    println!("IDM next speed, four calls at once (next_speed_x4): {idm_x4_ns:.1} ns per call");
     println!(
         "at {CALLS_PER_VEHICLE_STEP} IDM calls per vehicle-step (the Simple Merge's count), IDM alone costs \
          {:.0}-{:.0} ns of the \

@@ -68,6 +68,15 @@ impl FastMinMax for f64 {
 
 #[cfg(feature = "count-idm")]
 static IDM_CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+#[cfg(feature = "count-idm")]
+static IDM_BATCHES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// Calls of [`IdmParams::next_speed_x4`] since the last call of this function (feature `count-idm`; each also
+/// counts as four IDM steps in [`take_idm_calls`], the ones whose results are not read included).
+#[cfg(feature = "count-idm")]
+pub fn take_idm_batches() -> u64 {
+    IDM_BATCHES.swap(0, std::sync::atomic::Ordering::Relaxed)
+}
 
 /// Calls of [`IdmParams::next_speed`] since the last call of this function (feature `count-idm`).
 #[cfg(feature = "count-idm")]
@@ -225,6 +234,144 @@ impl IdmParams {
             g -= per_sub_step((v - leader_speed) * self.dt).fmax(0.0);
         }
         v.fmax(0.0)
+    }
+
+    /// Four independent [`Self::next_speed`] calls of one driver at once, the same bits as four calls: on x86-64
+    /// two SSE2 pairs (part of the baseline target), whose divisions share the divider and whose chains overlap;
+    /// one call after another elsewhere or for sub-step counts and exponents the pairs do not cover. A planning
+    /// step makes most of its IDM calls (own leader, free speed, the vehicles on the next lanes) with arguments
+    /// known at its start, so it computes them together.
+    #[inline]
+    pub fn next_speed_x4(
+        &self,
+        gap: [f64; 4],
+        speed: f64,
+        leader_speed: [f64; 4],
+        desired_speed: f64,
+        respect_min_gap: [bool; 4],
+    ) -> [f64; 4] {
+        #[cfg(feature = "count-idm")]
+        IDM_BATCHES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        #[cfg(target_arch = "x86_64")]
+        if self.delta == 4.0 {
+            match self.iterations {
+                2 => {
+                    return self.next_speed_x4_sse2::<2>(
+                        gap,
+                        speed,
+                        leader_speed,
+                        desired_speed,
+                        respect_min_gap,
+                    );
+                }
+                1 => {
+                    return self.next_speed_x4_sse2::<1>(
+                        gap,
+                        speed,
+                        leader_speed,
+                        desired_speed,
+                        respect_min_gap,
+                    );
+                }
+                4 => {
+                    return self.next_speed_x4_sse2::<4>(
+                        gap,
+                        speed,
+                        leader_speed,
+                        desired_speed,
+                        respect_min_gap,
+                    );
+                }
+                _ => {}
+            }
+        }
+        std::array::from_fn(|i| {
+            self.next_speed(
+                gap[i],
+                speed,
+                leader_speed[i],
+                desired_speed,
+                respect_min_gap[i],
+            )
+        })
+    }
+
+    /// [`Self::next_speed_with`] for delta = 4 and `N` (a power of two) sub-steps, two lanes per SSE2 register:
+    /// every operation is the scalar one, in the same order (`maxpd(a, b)` is `a > b ? a : b`, which is
+    /// [`FastMinMax`]'s `b.fmax(a)`), so each lane's result has the scalar call's bits.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn next_speed_x4_sse2<const N: u32>(
+        &self,
+        gap: [f64; 4],
+        speed: f64,
+        leader_speed: [f64; 4],
+        desired_speed: f64,
+        respect_min_gap: [bool; 4],
+    ) -> [f64; 4] {
+        use std::arch::x86_64::*;
+        const { assert!(N.is_power_of_two()) };
+        #[cfg(feature = "count-idm")]
+        IDM_CALLS.fetch_add(4, std::sync::atomic::Ordering::Relaxed);
+        debug_assert_eq!(self.delta, 4.0);
+        // SAFETY: SSE2 is part of the x86-64 baseline; the intrinsics only compute on registers.
+        unsafe {
+            let inv_n = _mm_set1_pd(1.0 / N as f64);
+            let two_sqrt_ab = _mm_set1_pd(self.two_sqrt_ab());
+            let zero = _mm_setzero_pd();
+            let one = _mm_set1_pd(1.0);
+            let eps = _mm_set1_pd(NUMERICAL_EPS);
+            let tau = _mm_set1_pd(self.tau);
+            let accel = _mm_set1_pd(self.accel);
+            let dt = _mm_set1_pd(self.dt);
+            let min_gap = _mm_set1_pd(self.min_gap);
+            let des = _mm_max_pd(eps, _mm_set1_pd(desired_speed));
+            let mask =
+                |a: bool, b: bool| _mm_castsi128_pd(_mm_set_epi64x(-(b as i64), -(a as i64)));
+            let select = |m: __m128d, yes: __m128d, no: __m128d| {
+                _mm_or_pd(_mm_and_pd(m, yes), _mm_andnot_pd(m, no))
+            };
+            let mg = [
+                mask(respect_min_gap[0], respect_min_gap[1]),
+                mask(respect_min_gap[2], respect_min_gap[3]),
+            ];
+            let leader = [
+                _mm_set_pd(leader_speed[1], leader_speed[0]),
+                _mm_set_pd(leader_speed[3], leader_speed[2]),
+            ];
+            let mut v = [_mm_set1_pd(speed); 2];
+            let mut g = [0, 1].map(|h| {
+                let gp = _mm_set_pd(gap[2 * h + 1], gap[2 * h]);
+                select(mg[h], _mm_add_pd(gp, min_gap), gp)
+            });
+            for _ in 0..N {
+                for h in 0..2 {
+                    let dv = _mm_sub_pd(v[h], leader[h]);
+                    let s = _mm_add_pd(
+                        _mm_mul_pd(v[h], tau),
+                        _mm_div_pd(_mm_mul_pd(v[h], dv), two_sqrt_ab),
+                    );
+                    let s = _mm_max_pd(zero, s);
+                    let s = select(mg[h], _mm_add_pd(s, min_gap), s);
+                    g[h] = _mm_max_pd(eps, g[h]);
+                    let x = _mm_div_pd(v[h], des);
+                    let x2 = _mm_mul_pd(x, x);
+                    let pow = _mm_mul_pd(x2, x2);
+                    let inter = _mm_div_pd(_mm_mul_pd(s, s), _mm_mul_pd(g[h], g[h]));
+                    let acc = _mm_mul_pd(accel, _mm_sub_pd(_mm_sub_pd(one, pow), inter));
+                    v[h] = _mm_max_pd(
+                        zero,
+                        _mm_add_pd(v[h], _mm_mul_pd(_mm_mul_pd(acc, dt), inv_n)),
+                    );
+                    let closing = _mm_mul_pd(_mm_mul_pd(_mm_sub_pd(v[h], leader[h]), dt), inv_n);
+                    g[h] = _mm_sub_pd(g[h], _mm_max_pd(zero, closing));
+                }
+            }
+            let mut out = [0.0; 4];
+            _mm_storeu_pd(out.as_mut_ptr(), _mm_max_pd(zero, v[0]));
+            _mm_storeu_pd(out.as_mut_ptr().add(2), _mm_max_pd(zero, v[1]));
+            out
+        }
     }
 
     /// Speed behind a moving leader (`gap` already excludes the min gap).
@@ -469,6 +616,53 @@ mod tests {
                         p.next_speed(gap, v, l, des, mg).to_bits(),
                         next_speed_reference(&p, gap, v, l, des, mg).to_bits(),
                         "dt {dt} gap {gap} v {v} l {l} des {des}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn four_calls_at_once_are_four_calls_bit_for_bit() {
+        let mut state = 0x1234_5678_9abc_def1u64;
+        let mut unit = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        // 0.5 s (two sub-steps), 0.25, 1.0, an odd count (scalar path) and delta != 4 (scalar path)
+        let mut params: Vec<IdmParams> = [0.25, 0.5, 0.75, 1.0]
+            .iter()
+            .map(|&dt| IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, dt))
+            .collect();
+        params.push(IdmParams::new(1.0, 1.5, 9.0, 1.5, 2.0, 3.0, 0.5));
+        for p in params {
+            for _ in 0..20_000 {
+                let speed = unit() * 35.0;
+                let des = unit() * 40.0 - 1.0;
+                let mut gap = [0.0; 4];
+                let mut leader = [0.0; 4];
+                let mut mg = [false; 4];
+                for i in 0..4 {
+                    gap[i] = match (unit() * 4.0) as u32 {
+                        0 => 1e6,
+                        1 => -unit() * 3.0,
+                        _ => unit() * 200.0,
+                    };
+                    leader[i] = unit() * 35.0;
+                    mg[i] = unit() < 0.5;
+                }
+                let got = p.next_speed_x4(gap, speed, leader, des, mg);
+                for i in 0..4 {
+                    let want = p.next_speed(gap[i], speed, leader[i], des, mg[i]);
+                    assert_eq!(
+                        got[i].to_bits(),
+                        want.to_bits(),
+                        "lane {i}: gap {} v {speed} l {} des {des} mg {}",
+                        gap[i],
+                        leader[i],
+                        mg[i]
                     );
                 }
             }

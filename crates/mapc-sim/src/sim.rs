@@ -156,6 +156,8 @@ pub struct Simulation {
     lane_veh: Vec<Vec<VehicleId>>,
     lane_order: Vec<LaneIdx>,
     plans: Vec<Plan>,
+    /// This step's (vehicle, index in its lane) in planning order (kept to reuse its allocation).
+    plan_order: Vec<(VehicleId, u32)>,
     approaches: Vec<Vec<Approach>>,
     link_has_minor_foe: Vec<bool>,
     /// Per entry lane, the vehicles waiting to be inserted, in departure order.
@@ -260,6 +262,7 @@ impl Simulation {
             routes: Vec::new(),
             veh: Vec::new(),
             plans: Vec::new(),
+            plan_order: Vec::new(),
             rng: StdRng::seed_from_u64(seed),
             step: 0,
             time_s: spec.start_time_s,
@@ -877,15 +880,28 @@ impl Simulation {
         if plans.len() < n as usize {
             plans.resize(n as usize, Plan::default());
         }
-        let mut pi = 0;
-        for li in 0..self.lane_order.len() {
-            let lane = self.lane_order[li];
-            for qi in 0..self.lane_veh[lane as usize].len() {
-                let id = self.lane_veh[lane as usize][qi];
-                self.plan(id, qi, &mut plans[pi]);
-                pi += 1;
+        // visiting order: lane order, front to back
+        let mut order = std::mem::take(&mut self.plan_order);
+        order.clear();
+        for &lane in &self.lane_order {
+            for (qi, &id) in self.lane_veh[lane as usize].iter().enumerate() {
+                order.push((id, qi as u32));
             }
         }
+        // each vehicle's IDM batch is started one plan ahead, so that its division chains run while the vehicle
+        // before it is planned (planning changes no position or speed, so the batch's arguments stay valid)
+        let mut pre_next = order
+            .first()
+            .map_or([0.0; 4], |&(id, qi)| self.plan_idm_batch(id, qi as usize));
+        for pi in 0..order.len() {
+            let pre = pre_next;
+            if let Some(&(id, qi)) = order.get(pi + 1) {
+                pre_next = self.plan_idm_batch(id, qi as usize);
+            }
+            let (id, qi) = order[pi];
+            self.plan(id, qi as usize, pre, &mut plans[pi]);
+        }
+        self.plan_order = order;
         self.plans = plans;
         self.execute_moves();
         self.time_s += self.spec.step_s;
@@ -1070,11 +1086,45 @@ impl Simulation {
         vmax
     }
 
+    /// The four IDM steps most plans need, whose arguments are known before planning: behind the own leader, the
+    /// free speed towards the current lane's speed, and behind the last vehicles on the next two lanes of the
+    /// route (gaps summed as the look-ahead in [`Self::plan`] sums them). One `next_speed_x4` call, the same bits
+    /// as four calls; entries without a vehicle hold a result nobody reads.
+    #[inline(always)]
+    fn plan_idm_batch(&self, id: VehicleId, qi: usize) -> [f64; 4] {
+        let v = &self.veh[id as usize];
+        let p = self.types[v.vtype as usize];
+        let des_cur = self.desired_speed(v, v.lane);
+        let mut gap = [1e6; 4];
+        let mut leader = [0.0; 4];
+        if qi > 0 {
+            let lv = &self.veh[self.lane_veh[v.lane as usize][qi - 1] as usize];
+            gap[0] = lv.pos - lv.length - v.pos - p.min_gap;
+            leader[0] = lv.speed;
+        }
+        leader[1] = des_cur;
+        let r = &self.routes[v.route as usize];
+        let mut seen = self.net.lanes[v.lane as usize].length - v.pos;
+        for j in 1..=2 {
+            let Some(&lane) = r.lanes.get(v.route_pos as usize + j) else {
+                break;
+            };
+            let len = self.net.lanes[lane as usize].length;
+            seen += len;
+            if let Some(&o) = self.lane_veh[lane as usize].last() {
+                let ov = &self.veh[o as usize];
+                gap[1 + j] = seen - len + ov.pos - ov.length - p.min_gap;
+                leader[1 + j] = ov.speed;
+            }
+        }
+        p.next_speed_x4(gap, v.speed, leader, des_cur, [true, false, true, true])
+    }
+
     /// One vehicle's plan for this step, as SUMO's `MSVehicle::planMoveInternal` builds it: walk the lanes of the
     /// route ahead, adapting the safe speed to the last vehicle on every lane, to vehicles on merging connections,
     /// and to each next lane's speed (IDM's free speed); at every link where right of way is decided, record the
     /// request (arrival and leave times and speeds) that foes check.
-    fn plan(&mut self, id: VehicleId, qi: usize, plan: &mut Plan) {
+    fn plan(&mut self, id: VehicleId, qi: usize, pre: [f64; 4], plan: &mut Plan) {
         let dt = self.spec.step_s;
         let v = &self.veh[id as usize];
         let p = self.types[v.vtype as usize];
@@ -1095,12 +1145,22 @@ impl Simulation {
         // and after an exit link (those carry no request)
         let mut last_item: Option<usize> = None;
 
+        // `pre`: most of the plan's IDM steps, computed together ([`Self::plan_idm_batch`])
+        let pre_has_free = speed <= des_cur;
+
         // Leader on the own lane.
         if qi > 0 {
-            let l = self.lane_veh[v.lane as usize][qi - 1];
-            let lv = &self.veh[l as usize];
-            let gap = lv.pos - lv.length - v.pos - p.min_gap;
-            let vs = p.follow_speed(gap, speed, lv.speed, des_cur);
+            let vs = pre[0];
+            debug_assert_eq!(vs.to_bits(), {
+                let lv = &self.veh[self.lane_veh[v.lane as usize][qi - 1] as usize];
+                p.follow_speed(
+                    lv.pos - lv.length - v.pos - p.min_gap,
+                    speed,
+                    lv.speed,
+                    des_cur,
+                )
+                .to_bits()
+            });
             vv = vv.fmin(vs);
             v_link_pass.lower(vs);
         }
@@ -1143,7 +1203,11 @@ impl Simulation {
 
         // IDM's free speed towards a lane's limit: below the limit it does not depend on the distance, and
         // consecutive lanes mostly share a limit, so the IDM integration is kept for the last limit seen
-        let mut free_cache = (f64::NAN, f64::NAN);
+        let mut free_cache = if pre_has_free {
+            (des_cur, pre[1])
+        } else {
+            (f64::NAN, f64::NAN)
+        };
         let mut free_speed = |seen: f64, max_speed: f64| -> f64 {
             if speed <= max_speed {
                 if free_cache.0 != max_speed {
@@ -1175,7 +1239,16 @@ impl Simulation {
                 if let Some(&o) = self.lane_veh[lane as usize].last() {
                     let ov = &self.veh[o as usize];
                     let gap = seen - lane_ref.length + ov.pos - ov.length - p.min_gap;
-                    let vs = p.follow_speed(gap, speed, ov.speed, des_cur);
+                    let ahead = k - v.route_pos as usize;
+                    let vs = if ahead <= 2 {
+                        debug_assert_eq!(
+                            pre[1 + ahead].to_bits(),
+                            p.follow_speed(gap, speed, ov.speed, des_cur).to_bits()
+                        );
+                        pre[1 + ahead]
+                    } else {
+                        p.follow_speed(gap, speed, ov.speed, des_cur)
+                    };
                     vv = vv.fmin(vs);
                     v_link_pass.lower(vs);
                     if let Some(i) = last_item {
