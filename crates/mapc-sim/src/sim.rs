@@ -5,7 +5,7 @@
 use crate::SimError;
 use crate::idm::{FastMinMax, IdmParams, NUMERICAL_EPS};
 use crate::metrics::RunMetrics;
-use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network};
+use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network, SimLane, SimLink};
 use crate::spec::SimSpec;
 use mapc_graph::RoadId;
 use rand::rngs::StdRng;
@@ -105,9 +105,9 @@ struct Approach {
 
 #[derive(Clone, Debug)]
 struct Route {
-    lanes: Vec<LaneIdx>,
+    lanes: Table<LaneIdx>,
     /// Distance from the route's start to the start of each lane.
-    start_m: Vec<f64>,
+    start_m: Table<f64>,
 }
 
 /// A vehicle that is ahead of or behind another, with the bumper-to-bumper gap in metres (without min gap).
@@ -149,23 +149,23 @@ pub struct VehicleView<'a> {
 pub struct Simulation {
     net: Network,
     spec: SimSpec,
-    types: Vec<IdmParams>,
-    routes: Vec<Route>,
-    veh: Vec<Veh>,
+    types: Table<IdmParams>,
+    routes: Table<Route>,
+    veh: Table<Veh>,
     /// Vehicles per lane, front first (a plain vector: lanes are short and indexing is on the hot path).
-    lane_veh: Vec<Vec<VehicleId>>,
+    lane_veh: Table<Table<VehicleId>>,
     lane_order: Vec<LaneIdx>,
-    plans: Vec<Plan>,
+    plans: Table<Plan>,
     /// This step's (vehicle, index in its lane) in planning order (kept to reuse its allocation).
     plan_order: Vec<(VehicleId, u32)>,
-    approaches: Vec<Vec<Approach>>,
-    link_has_minor_foe: Vec<bool>,
+    approaches: Table<Vec<Approach>>,
+    link_has_minor_foe: Table<bool>,
     /// Per entry lane, the vehicles waiting to be inserted, in departure order.
     pending: Vec<VecDeque<VehicleId>>,
     entry_lanes: Vec<LaneIdx>,
     flow_next: Vec<u64>,
     flow_route: Vec<u32>,
-    in_region: Vec<bool>,
+    in_region: Table<bool>,
     rng: StdRng,
     step: u64,
     time_s: f64,
@@ -178,7 +178,7 @@ pub struct Simulation {
     /// Longest vehicle of any type (m).
     max_length: f64,
     /// Per vehicle type, what the hot loop reads (cached from the spec and the IDM parameters).
-    type_consts: Vec<TypeConsts>,
+    type_consts: Table<TypeConsts>,
 }
 
 /// Values of one vehicle type that do not change during a run.
@@ -190,6 +190,8 @@ struct TypeConsts {
     max_arrival_from_visibility: f64,
     /// 1 / (2 decel), for [`TypeConsts::brake_gap_above`].
     inv_two_decel: f64,
+    /// Whether `inv_two_decel` is positive and finite (the bound applies), decided once.
+    brake_bound_ok: bool,
 }
 
 impl TypeConsts {
@@ -199,11 +201,11 @@ impl TypeConsts {
     /// decide the far cases without the exact gap, which is computed only when the bound cannot decide.
     #[inline]
     fn brake_gap_above(&self, speed: f64, headway: f64) -> f64 {
-        if speed >= 0.0
-            && headway >= 0.0
-            && self.inv_two_decel > 0.0
-            && self.inv_two_decel.is_finite()
-        {
+        debug_assert_eq!(
+            self.brake_bound_ok,
+            self.inv_two_decel > 0.0 && self.inv_two_decel.is_finite()
+        );
+        if self.brake_bound_ok && speed >= 0.0 && headway >= 0.0 {
             (speed * speed * self.inv_two_decel + speed * headway) * (1.0 + 1e-9) + 1e-6
         } else {
             f64::INFINITY
@@ -246,8 +248,8 @@ impl Simulation {
             })
             .collect();
         let mut sim = Simulation {
-            lane_veh: vec![Vec::new(); net.lanes.len()],
-            approaches: vec![Vec::new(); net.links.len()],
+            lane_veh: Table(vec![Table(Vec::new()); net.lanes.len()]),
+            approaches: Table(vec![Vec::new(); net.links.len()]),
             link_has_minor_foe: net
                 .links
                 .iter()
@@ -258,10 +260,10 @@ impl Simulation {
             lane_order: Vec::new(),
             flow_next: vec![0; spec.flows.len()],
             flow_route: Vec::new(),
-            in_region: vec![true; net.lanes.len()],
-            routes: Vec::new(),
-            veh: Vec::new(),
-            plans: Vec::new(),
+            in_region: Table(vec![true; net.lanes.len()]),
+            routes: Table(Vec::new()),
+            veh: Table(Vec::new()),
+            plans: Table(Vec::new()),
             plan_order: Vec::new(),
             rng: StdRng::seed_from_u64(seed),
             step: 0,
@@ -285,6 +287,7 @@ impl Simulation {
                     max_speed: t.max_speed,
                     impatience: t.impatience,
                     inv_two_decel: 0.5 / p.decel,
+                    brake_bound_ok: (0.5 / p.decel) > 0.0 && (0.5 / p.decel).is_finite(),
                     max_arrival_from_visibility: IdmParams::speed_after_distance(
                         FOE_VISIBILITY_M,
                         p.maximum_safe_stop_speed(FOE_VISIBILITY_M, 0.0),
@@ -292,7 +295,7 @@ impl Simulation {
                     ),
                 })
                 .collect(),
-            types,
+            types: Table(types),
             net,
             spec,
         };
@@ -356,9 +359,12 @@ impl Simulation {
         let mut acc = 0.0;
         for &l in &lanes {
             start_m.push(acc);
-            acc += self.net.lanes[l as usize].length;
+            acc += self.lane_at(l as usize).length;
         }
-        self.routes.push(Route { lanes, start_m });
+        self.routes.push(Route {
+            lanes: Table(lanes),
+            start_m: Table(start_m),
+        });
         Ok(self.routes.len() as u32 - 1)
     }
 
@@ -386,7 +392,7 @@ impl Simulation {
         let mut out = Vec::with_capacity(lanes.len());
         for l in lanes {
             out.push((l, acc));
-            acc += self.net.lanes[l as usize].length;
+            acc += self.lane_at(l as usize).length;
         }
         Ok(out)
     }
@@ -412,7 +418,7 @@ impl Simulation {
         let free_flow_s: f64 = route_lanes
             .iter()
             .map(|&l| {
-                let lane = &self.net.lanes[l as usize];
+                let lane = &self.lane_at(l as usize);
                 lane.length / (lane.speed_limit * factor).fmin(t.max_speed)
             })
             .sum();
@@ -495,7 +501,7 @@ impl Simulation {
                 "the route from {from} has no lane {lane_in_route}"
             )));
         };
-        let len = self.net.lanes[lane as usize].length;
+        let len = self.lane_at(lane as usize).length;
         if !(0.0..=len).contains(&pos) || !(speed >= 0.0) || !(speed_factor > 0.0) {
             return Err(SimError::Spec(format!(
                 "replica on lane {lane_in_route} of the route from {from}: position {pos} m (lane {len} m), \
@@ -585,10 +591,10 @@ impl Simulation {
     }
 
     fn road_of_lane(&self, lane: LaneIdx) -> (RoadId, bool) {
-        match self.net.lanes[lane as usize].kind {
+        match self.lane_at(lane as usize).kind {
             LaneKind::Road(r) => (self.net.road_ids[r], false),
             LaneKind::Via(k) => {
-                let from = self.net.links[k as usize].from_lane;
+                let from = self.link_at(k as usize).from_lane;
                 (self.net.road_ids[self.net.road_of(from).unwrap()], true)
             }
         }
@@ -608,7 +614,7 @@ impl Simulation {
         let total = r.start_m.last().copied().unwrap_or(0.0)
             + r.lanes
                 .last()
-                .map_or(0.0, |&l| self.net.lanes[l as usize].length);
+                .map_or(0.0, |&l| self.lane_at(l as usize).length);
         let done = match v.status {
             VehicleStatus::Pending => 0.0,
             VehicleStatus::Arrived => total,
@@ -628,12 +634,12 @@ impl Simulation {
             .get(id as usize)
             .filter(|v| v.status == VehicleStatus::Active)?;
         let r = &self.routes[v.route as usize];
-        let mut seen = self.net.lanes[v.lane as usize].length - v.pos;
+        let mut seen = self.lane_at(v.lane as usize).length - v.pos;
         for k in (v.route_pos as usize + 1)..r.lanes.len() {
             let lane = &self.net.lanes[r.lanes[k] as usize];
             if let LaneKind::Via(link) = lane.kind {
-                let l = &self.net.links[link as usize];
-                let branches = self.net.lanes[l.from_lane as usize].out_links.len() > 1;
+                let l = &self.link_at(link as usize);
+                let branches = self.lane_at(l.from_lane as usize).out_links.len() > 1;
                 if (!l.foes.is_empty() || branches) && k > v.route_pos as usize {
                     return Some((seen, l.junction));
                 }
@@ -725,17 +731,17 @@ impl Simulation {
     }
 
     fn upstream_lanes(&self, lane: LaneIdx) -> Vec<(LaneIdx, f64)> {
-        match self.net.lanes[lane as usize].kind {
+        match self.lane_at(lane as usize).kind {
             LaneKind::Via(k) => {
-                let from = self.net.links[k as usize].from_lane;
-                vec![(from, self.net.lanes[from as usize].length)]
+                let from = self.link_at(k as usize).from_lane;
+                vec![(from, self.lane_at(from as usize).length)]
             }
             LaneKind::Road(_) => self
                 .net
                 .links
                 .iter()
                 .filter(|l| l.to_lane == lane)
-                .map(|l| (l.via_lane, self.net.lanes[l.via_lane as usize].length))
+                .map(|l| (l.via_lane, self.lane_at(l.via_lane as usize).length))
                 .collect(),
         }
     }
@@ -750,17 +756,17 @@ impl Simulation {
         let r = &self.routes[v.route as usize];
         // find the next via lane on the route with foes
         let mut k = v.route_pos as usize;
-        if !matches!(self.net.lanes[v.lane as usize].kind, LaneKind::Via(_)) {
+        if !matches!(self.lane_at(v.lane as usize).kind, LaneKind::Via(_)) {
             k += 1;
         }
         while k < r.lanes.len() {
             if let LaneKind::Via(link) = self.net.lanes[r.lanes[k] as usize].kind {
-                let foes = &self.net.links[link as usize].foes;
+                let foes = &self.link_at(link as usize).foes;
                 if !foes.is_empty() {
                     let mut best: Option<MergeFoe> = None;
                     for &f in foes {
-                        let fl = &self.net.links[f as usize];
-                        let via_len = self.net.lanes[fl.via_lane as usize].length;
+                        let fl = &self.link_at(f as usize);
+                        let via_len = self.lane_at(fl.via_lane as usize).length;
                         let mut consider = |o: VehicleId, d: f64| {
                             if o != id
                                 && d <= max_dist
@@ -776,7 +782,7 @@ impl Simulation {
                         for &o in &self.lane_veh[fl.via_lane as usize] {
                             consider(o, via_len - self.veh[o as usize].pos);
                         }
-                        let from_len = self.net.lanes[fl.from_lane as usize].length;
+                        let from_len = self.lane_at(fl.from_lane as usize).length;
                         for &o in &self.lane_veh[fl.from_lane as usize] {
                             consider(o, via_len + from_len - self.veh[o as usize].pos);
                         }
@@ -860,7 +866,7 @@ impl Simulation {
         // Metrics see the network as it is before the step (as the original rollouts did).
         let mut n = 0u64;
         let mut sum = 0.0;
-        for q in &self.lane_veh {
+        for q in self.lane_veh.iter() {
             for &id in q {
                 n += 1;
                 sum += self.veh[id as usize].speed;
@@ -914,8 +920,24 @@ impl Simulation {
         Ok(())
     }
 
+    /// The network's lane `i` (indices come from the network itself; checked in debug builds).
+    #[inline(always)]
+    fn lane_at(&self, i: usize) -> &SimLane {
+        debug_assert!(i < self.net.lanes.len());
+        // SAFETY: lane indices are created by `Network::from_graph` and never exceed its lanes
+        unsafe { self.net.lanes.get_unchecked(i) }
+    }
+
+    /// The network's link `i` (indices come from the network itself; checked in debug builds).
+    #[inline(always)]
+    fn link_at(&self, i: usize) -> &SimLink {
+        debug_assert!(i < self.net.links.len());
+        // SAFETY: link indices are created by `Network::from_graph` and never exceed its links
+        unsafe { self.net.links.get_unchecked(i) }
+    }
+
     fn desired_speed(&self, v: &Veh, lane: LaneIdx) -> f64 {
-        (self.net.lanes[lane as usize].speed_limit * v.speed_factor)
+        (self.lane_at(lane as usize).speed_limit * v.speed_factor)
             .fmin(self.type_consts[v.vtype as usize].max_speed)
     }
 
@@ -962,7 +984,7 @@ impl Simulation {
         let guard = moving.is_some();
         let v = &self.veh[id as usize];
         let r = &self.routes[v.route as usize];
-        let cur = &self.net.lanes[v.lane as usize];
+        let cur = &self.lane_at(v.lane as usize);
         let mut seen = cur.length - v.pos;
         let on_via = matches!(cur.kind, LaneKind::Via(_));
         if on_via {
@@ -970,7 +992,7 @@ impl Simulation {
         } else {
             // tails of vehicles on any connection out of this road still reach back onto it
             for &k in &cur.out_links {
-                let via = self.net.links[k as usize].via_lane;
+                let via = self.link_at(k as usize).via_lane;
                 if let Some(&o) = self.lane_veh[via as usize].last() {
                     let ov = &self.veh[o as usize];
                     if ov.pos < ov.length && r.lanes.get(v.route_pos as usize + 1) != Some(&via) {
@@ -982,13 +1004,13 @@ impl Simulation {
         let mut k = v.route_pos as usize + 1;
         while k < r.lanes.len() && seen <= max_dist {
             let lane = r.lanes[k];
-            let l = &self.net.lanes[lane as usize];
+            let l = &self.lane_at(lane as usize);
             // a moving vehicle that stays before its stop line this step cannot meet vehicles on merging
             // connections (they meet only inside the junction)
             let may_enter = moving.is_none_or(|travel| seen < travel);
             if let LaneKind::Via(link) = l.kind
                 && may_enter
-                && !self.net.links[link as usize].foes.is_empty()
+                && !self.link_at(link as usize).foes.is_empty()
             {
                 self.junction_foe_leaders(id, lane, seen + l.length, guard, f);
             }
@@ -1012,15 +1034,15 @@ impl Simulation {
         guard: bool,
         f: &mut impl FnMut(VehicleId, f64),
     ) {
-        let LaneKind::Via(link) = self.net.lanes[via as usize].kind else {
+        let LaneKind::Via(link) = self.lane_at(via as usize).kind else {
             return;
         };
         let ego_in_junction = self.veh[id as usize].lane == via;
         // only a moving check or an ego inside the junction looks at foes still before their stop line
         let check_from = guard || ego_in_junction;
-        for &foe in &self.net.links[link as usize].foes {
-            let fl = &self.net.links[foe as usize];
-            let flen = self.net.lanes[fl.via_lane as usize].length;
+        for &foe in &self.link_at(link as usize).foes {
+            let fl = &self.link_at(foe as usize);
+            let flen = self.lane_at(fl.via_lane as usize).length;
             for &o in self.lane_veh[fl.via_lane as usize].iter() {
                 let ov = &self.veh[o as usize];
                 let d = flen - ov.pos;
@@ -1033,7 +1055,7 @@ impl Simulation {
             }
             if let Some(&o) = self.lane_veh[fl.from_lane as usize].first() {
                 let ov = &self.veh[o as usize];
-                let from_len = self.net.lanes[fl.from_lane as usize].length;
+                let from_len = self.lane_at(fl.from_lane as usize).length;
                 let d = flen + from_len - ov.pos;
                 // planning: a foe at its stop line may enter this very step ahead of ego (already inside);
                 // moving: a foe that entered in this step (moved past its road's end) leads ego
@@ -1053,20 +1075,20 @@ impl Simulation {
     /// major-road vehicle inside the junction, even one behind it (SUMO's right of way among junction leaders):
     /// with a negative gap it brakes as hard as it can.
     fn yield_inside_junction(&self, id: VehicleId, link: LinkIdx, p: IdmParams, des: f64) -> f64 {
-        let lk = &self.net.links[link as usize];
+        let lk = &self.link_at(link as usize);
         let mut vmax = f64::INFINITY;
         if lk.major || lk.foes.is_empty() {
             return vmax;
         }
         let v = &self.veh[id as usize];
-        let own_len = self.net.lanes[lk.via_lane as usize].length;
+        let own_len = self.lane_at(lk.via_lane as usize).length;
         let d = own_len - v.pos;
         for &foe in &lk.foes {
-            let fl = &self.net.links[foe as usize];
+            let fl = &self.link_at(foe as usize);
             if !fl.major {
                 continue;
             }
-            let flen = self.net.lanes[fl.via_lane as usize].length;
+            let flen = self.lane_at(fl.via_lane as usize).length;
             if d <= CONFLICT_POINT_SHARE * own_len.fmin(flen) {
                 continue;
             }
@@ -1104,12 +1126,12 @@ impl Simulation {
         }
         leader[1] = des_cur;
         let r = &self.routes[v.route as usize];
-        let mut seen = self.net.lanes[v.lane as usize].length - v.pos;
+        let mut seen = self.lane_at(v.lane as usize).length - v.pos;
         for j in 1..=2 {
             let Some(&lane) = r.lanes.get(v.route_pos as usize + j) else {
                 break;
             };
-            let len = self.net.lanes[lane as usize].length;
+            let len = self.lane_at(lane as usize).length;
             seen += len;
             if let Some(&o) = self.lane_veh[lane as usize].last() {
                 let ov = &self.veh[o as usize];
@@ -1135,7 +1157,7 @@ impl Simulation {
         let min_comfortable = (speed - p.decel * dt).fmax(0.0);
         let mut vv = max_next.fmin(des_cur);
         let r = &self.routes[v.route as usize];
-        let cur = &self.net.lanes[v.lane as usize];
+        let cur = &self.lane_at(v.lane as usize);
         let mut seen = cur.length - v.pos;
         // the speed at the next link: an upper bound, lowered by every leader
         let mut v_link_pass = LazyPassSpeed::new(seen, vv, p.accel, des_cur);
@@ -1188,7 +1210,7 @@ impl Simulation {
             // tails of vehicles that entered a connection out of this road still reach back onto it: they lead
             // on this road (before any link is considered)
             for &k in &cur.out_links {
-                let via = self.net.links[k as usize].via_lane;
+                let via = self.link_at(k as usize).via_lane;
                 if let Some(&o) = self.lane_veh[via as usize].last() {
                     let ov = &self.veh[o as usize];
                     if ov.pos < ov.length {
@@ -1233,7 +1255,7 @@ impl Simulation {
         let mut k = v.route_pos as usize;
         let mut lane = v.lane;
         loop {
-            let lane_ref = &self.net.lanes[lane as usize];
+            let lane_ref = &self.lane_at(lane as usize);
             if k > v.route_pos as usize {
                 // the last vehicle on a lane ahead
                 if let Some(&o) = self.lane_veh[lane as usize].last() {
@@ -1269,11 +1291,11 @@ impl Simulation {
                 break;
             }
             let next = r.lanes[k + 1];
-            let next_ref = &self.net.lanes[next as usize];
+            let next_ref = &self.lane_at(next as usize);
             if let LaneKind::Via(cur_link) = lane_ref.kind {
                 // the exit link of a junction: vehicles on merging connections closer to the merge point lead
-                let cur_major = self.net.links[cur_link as usize].major;
-                if k > v.route_pos as usize && !self.net.links[cur_link as usize].foes.is_empty() {
+                let cur_major = self.link_at(cur_link as usize).major;
+                if k > v.route_pos as usize && !self.link_at(cur_link as usize).foes.is_empty() {
                     let mut m = f64::INFINITY;
                     self.junction_foe_leaders(id, lane, seen, false, &mut |o, gap| {
                         m = m.fmin(p.follow_speed(
@@ -1306,7 +1328,7 @@ impl Simulation {
                 had_non_internal = true;
                 last_item = None;
             } else if let LaneKind::Via(link) = next_ref.kind {
-                let lk = &self.net.links[link as usize];
+                let lk = &self.link_at(link as usize);
                 // only links where right of way is decided need a request: minor links, and major links with
                 // minor foes
                 if (plan.n_items as usize) < MAX_LINK_ITEMS
@@ -1350,7 +1372,9 @@ impl Simulation {
         plan.v_safe = vv;
         // leave times from the final leave speeds; register approaches on links that minor foes check
         for it in &mut plan.items[..plan.n_items as usize] {
-            let via_len = self.net.lanes[self.net.links[it.link as usize].via_lane as usize].length;
+            let via_len = self
+                .lane_at(self.link_at(it.link as usize).via_lane as usize)
+                .length;
             it.leave_time = it.arrival_time
                 + (via_len + v.length)
                     / (0.5 * (it.arrival_speed + it.leave_speed)).fmax(NUMERICAL_EPS);
@@ -1385,9 +1409,9 @@ impl Simulation {
         des_cur: f64,
         plan: &mut Plan,
     ) -> usize {
-        let lk = &self.net.links[link as usize];
+        let lk = &self.link_at(link as usize);
         let via = lk.via_lane;
-        let via_lane = &self.net.lanes[via as usize];
+        let via_lane = &self.lane_at(via as usize);
         let speed = v.speed;
         let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).fmax(0.0);
         let mut arrival_speed = v_link_pass;
@@ -1441,7 +1465,7 @@ impl Simulation {
 
     /// SUMO's `MSLink::opened` for a minor link at a merge: blocked by any foe approach that conflicts in time.
     fn link_opened(&self, id: VehicleId, it: &LinkItem, can_brake: bool) -> bool {
-        let lk = &self.net.links[it.link as usize];
+        let lk = &self.link_at(it.link as usize);
         if lk.major {
             return true;
         }
@@ -1497,7 +1521,7 @@ impl Simulation {
                 let p = self.types[v.vtype as usize];
                 let mut v_safe = plan.v_safe;
                 for it in &plan.items[..plan.n_items as usize] {
-                    let lk = &self.net.links[it.link as usize];
+                    let lk = &self.link_at(it.link as usize);
                     if lk.major {
                         continue;
                     }
@@ -1579,7 +1603,7 @@ impl Simulation {
         for li in 0..self.lane_order.len() {
             let lane = self.lane_order[li];
             while let Some(&id) = self.lane_veh[lane as usize].first() {
-                let len = self.net.lanes[lane as usize].length;
+                let len = self.lane_at(lane as usize).length;
                 let v = &self.veh[id as usize];
                 let r = &self.routes[v.route as usize];
                 let last = v.route_pos as usize + 1 >= r.lanes.len();
@@ -1681,7 +1705,7 @@ impl Simulation {
         let p = self.types[v.vtype as usize];
         let route = &self.routes[v.route as usize];
         let lane = route.lanes[0];
-        let lane_len = self.net.lanes[lane as usize].length;
+        let lane_len = self.lane_at(lane as usize).length;
         let pos = (v.length + POSITION_EPS).fmin(lane_len);
         let speed = v.depart_speed;
         let des = self.desired_speed(v, lane);
@@ -1706,8 +1730,8 @@ impl Simulation {
             }
             // tails of vehicles that just left this road onto a connection
             if k == 0 {
-                for &lk in &self.net.lanes[l as usize].out_links {
-                    let via = self.net.links[lk as usize].via_lane;
+                for &lk in &self.lane_at(l as usize).out_links {
+                    let via = self.link_at(lk as usize).via_lane;
                     if let Some(&o) = self.lane_veh[via as usize].last() {
                         let ov = &self.veh[o as usize];
                         let gap = seen + lane_len + ov.pos - ov.length - p.min_gap;
@@ -1717,14 +1741,14 @@ impl Simulation {
                     }
                 }
             }
-            seen += self.net.lanes[l as usize].length;
-            if let LaneKind::Via(link) = self.net.lanes[l as usize].kind {
+            seen += self.lane_at(l as usize).length;
+            if let LaneKind::Via(link) = self.lane_at(l as usize).kind {
                 let _ = link;
             }
             // a minor link ahead must be reachable with a stop
             if k + 1 < route.lanes.len()
                 && let LaneKind::Via(link) = self.net.lanes[route.lanes[k + 1] as usize].kind
-                && !self.net.links[link as usize].major
+                && !self.link_at(link as usize).major
                 && seen < p.brake_gap(speed, p.decel, 0.0) + speed * self.spec.step_s
             {
                 let vs = p.stop_speed((seen - POSITION_EPS).fmax(0.0), speed, des);
@@ -1766,7 +1790,7 @@ impl Simulation {
                 }
             }
             // a road's last vehicle versus the front vehicle of each connection into it
-            if let LaneKind::Road(_) = self.net.lanes[li].kind
+            if let LaneKind::Road(_) = self.lane_at(li).kind
                 && let Some(&last) = q.last()
             {
                 let lv = &self.veh[last as usize];
@@ -1774,7 +1798,7 @@ impl Simulation {
                     if let Some(&f) = self.lane_veh[l.via_lane as usize].first() {
                         let fv = &self.veh[f as usize];
                         let gap = lv.pos - lv.length
-                            + (self.net.lanes[l.via_lane as usize].length - fv.pos);
+                            + (self.lane_at(l.via_lane as usize).length - fv.pos);
                         if gap < -EPS {
                             return Err(err(last, f, gap));
                         }
@@ -1788,10 +1812,12 @@ impl Simulation {
                 if (foe as usize) < i {
                     continue;
                 }
-                let a_len = self.net.lanes[lk.via_lane as usize].length;
-                let b_len = self.net.lanes[self.net.links[foe as usize].via_lane as usize].length;
+                let a_len = self.lane_at(lk.via_lane as usize).length;
+                let b_len = self
+                    .lane_at(self.link_at(foe as usize).via_lane as usize)
+                    .length;
                 for &a in &self.lane_veh[lk.via_lane as usize] {
-                    for &b in &self.lane_veh[self.net.links[foe as usize].via_lane as usize] {
+                    for &b in &self.lane_veh[self.link_at(foe as usize).via_lane as usize] {
                         let (av, bv) = (&self.veh[a as usize], &self.veh[b as usize]);
                         let (da, db) = (a_len - av.pos, b_len - bv.pos);
                         let (lead, fol, gap) = if da <= db {
@@ -1845,7 +1871,6 @@ impl Simulation {
     }
 }
 
-/// A follower can brake behind a leader at the merge when the leader's braking distance is the longer one.
 /// The speed at the next link, `speed_after_distance(dist, speed, accel).fmin(cap)` lowered by every leader
 /// found on the way, with the square root taken only when a link request reads it (most lanes' pass speeds are
 /// never read). `fmin` (`b < a ? b : a`) keeps the first operand that attains the minimum, so folding the leaders
@@ -1885,6 +1910,8 @@ impl LazyPassSpeed {
     }
 }
 
+/// Whether a follower behind a leader at the merge could not brake in time: it can only when the leader's
+/// braking distance (v^2 / b) is the longer one (SUMO's `MSLink::unsafeMergeSpeeds`).
 fn unsafe_merge_speeds(
     leader_speed: f64,
     follower_speed: f64,
@@ -1940,6 +1967,7 @@ mod bound_tests {
                 impatience: 0.5,
                 max_arrival_from_visibility: 0.0,
                 inv_two_decel: 0.5 / p.decel,
+                brake_bound_ok: true,
             };
             for i in 0..200_000 {
                 let v = i as f64 * 0.000_37;
@@ -1949,5 +1977,67 @@ mod bound_tests {
                 }
             }
         }
+    }
+}
+
+/// A vector of the simulation's own records (vehicles, lanes' vehicle lists, routes, plans, per-type and per-link
+/// values) whose indexing skips the bounds check in release builds: the checks were 14 % of the hot loop's
+/// instructions. Only indices the simulation made itself reach it (vehicle ids from `create_vehicle`, lane,
+/// link and route indices from the network and `add_route`, positions within the lists they index); ids that come
+/// from callers (`vehicle`, `leader`, `set_acceleration`, ...) go through `get` first. Debug builds, and so every
+/// test, check each index.
+#[derive(Clone, Debug, Default)]
+struct Table<T>(Vec<T>);
+
+impl<T> std::ops::Deref for Table<T> {
+    type Target = Vec<T>;
+    fn deref(&self) -> &Vec<T> {
+        &self.0
+    }
+}
+impl<T> std::ops::DerefMut for Table<T> {
+    fn deref_mut(&mut self) -> &mut Vec<T> {
+        &mut self.0
+    }
+}
+impl<T> std::ops::Index<usize> for Table<T> {
+    type Output = T;
+    #[inline(always)]
+    fn index(&self, i: usize) -> &T {
+        debug_assert!(i < self.0.len(), "index {i} of {}", self.0.len());
+        // SAFETY: indices are the simulation's own (see the type's documentation), checked in debug builds
+        unsafe { self.0.get_unchecked(i) }
+    }
+}
+impl<T> std::ops::IndexMut<usize> for Table<T> {
+    #[inline(always)]
+    fn index_mut(&mut self, i: usize) -> &mut T {
+        debug_assert!(i < self.0.len(), "index {i} of {}", self.0.len());
+        // SAFETY: as for `index`
+        unsafe { self.0.get_unchecked_mut(i) }
+    }
+}
+impl<T> FromIterator<T> for Table<T> {
+    fn from_iter<I: IntoIterator<Item = T>>(it: I) -> Self {
+        Table(it.into_iter().collect())
+    }
+}
+impl<'a, T> IntoIterator for &'a Table<T> {
+    type Item = &'a T;
+    type IntoIter = std::slice::Iter<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter()
+    }
+}
+impl<'a, T> IntoIterator for &'a mut Table<T> {
+    type Item = &'a mut T;
+    type IntoIter = std::slice::IterMut<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter_mut()
+    }
+}
+impl<T: PartialEq> PartialEq<Vec<T>> for Table<T> {
+    fn eq(&self, other: &Vec<T>) -> bool {
+        self.0 == *other
     }
 }
