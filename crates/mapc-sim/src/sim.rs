@@ -1074,7 +1074,7 @@ impl Simulation {
     /// A minor-road vehicle inside the junction that has not reached the conflict point yet keeps yielding to every
     /// major-road vehicle inside the junction, even one behind it (SUMO's right of way among junction leaders):
     /// with a negative gap it brakes as hard as it can.
-    fn yield_inside_junction(&self, id: VehicleId, link: LinkIdx, p: IdmParams, des: f64) -> f64 {
+    fn yield_inside_junction(&self, id: VehicleId, link: LinkIdx, p: &IdmParams, des: f64) -> f64 {
         let lk = &self.link_at(link as usize);
         let mut vmax = f64::INFINITY;
         if lk.major || lk.foes.is_empty() {
@@ -1115,7 +1115,7 @@ impl Simulation {
     #[inline(always)]
     fn plan_idm_batch(&self, id: VehicleId, qi: usize) -> [f64; 4] {
         let v = &self.veh[id as usize];
-        let p = self.types[v.vtype as usize];
+        let p = &self.types[v.vtype as usize];
         let des_cur = self.desired_speed(v, v.lane);
         let mut gap = [1e6; 4];
         let mut leader = [0.0; 4];
@@ -1149,7 +1149,7 @@ impl Simulation {
     fn plan(&mut self, id: VehicleId, qi: usize, pre: [f64; 4], plan: &mut Plan) {
         let dt = self.spec.step_s;
         let v = &self.veh[id as usize];
-        let p = self.types[v.vtype as usize];
+        let p = &self.types[v.vtype as usize];
         let tc = self.type_consts[v.vtype as usize];
         let speed = v.speed;
         let des_cur = self.desired_speed(v, v.lane);
@@ -1400,7 +1400,7 @@ impl Simulation {
     fn link_request(
         &self,
         v: &Veh,
-        p: IdmParams,
+        p: &IdmParams,
         tc: &TypeConsts,
         link: LinkIdx,
         seen: f64,
@@ -1518,7 +1518,7 @@ impl Simulation {
                 let id = self.lane_veh[lane as usize][qi];
                 let plan = &self.plans[pi];
                 let v = &self.veh[id as usize];
-                let p = self.types[v.vtype as usize];
+                let p = &self.types[v.vtype as usize];
                 let mut v_safe = plan.v_safe;
                 for it in &plan.items[..plan.n_items as usize] {
                     let lk = &self.link_at(it.link as usize);
@@ -1702,7 +1702,7 @@ impl Simulation {
     /// safe behind the leader and able to stop before a minor link within reach.
     fn try_insert(&mut self, id: VehicleId) -> bool {
         let v = &self.veh[id as usize];
-        let p = self.types[v.vtype as usize];
+        let p = &self.types[v.vtype as usize];
         let route = &self.routes[v.route as usize];
         let lane = route.lanes[0];
         let lane_len = self.lane_at(lane as usize).length;
