@@ -296,6 +296,62 @@ fn tiny_distributed_training_resume_and_eval() {
 }
 
 #[test]
+fn the_value_net_is_shared_or_separate() {
+    // the distributed presets share the policy's layers (the paper's setting)
+    let dir = tmp("dist-shared");
+    common::assert_success(&tiny_distributed_train(&dir, 1));
+    let ck: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("checkpoint.json")).unwrap())
+            .unwrap();
+    let model = &ck["state"]["model"];
+    assert_eq!(model["arch"]["shared_value"], true, "{}", model["arch"]);
+    assert_eq!(ck["state"]["config"]["shared_value"], true);
+    // the policy net alone, with one output more (mean, log-std, value): 8 -> 100 -> 50 -> 25 -> 3
+    let trunk = 8 * 100 + 100 + 100 * 50 + 50 + 50 * 25 + 25;
+    let params = model["params"].as_array().unwrap().len();
+    assert_eq!(params, trunk + 25 * 3 + 3);
+    // `--value-net separate` gives the value a net of its own, and its checkpoint does not mention the option
+    // (as the centralized checkpoints, whose bytes it keeps)
+    let separate = tmp("dist-separate");
+    let setting = [
+        "--distributed",
+        "--features",
+        "dist,merge",
+        "--minibatch",
+        "256",
+        "--value-net",
+        "separate",
+    ];
+    common::assert_success(&tiny_train_with(&separate, 1, &setting));
+    let text = std::fs::read_to_string(separate.join("checkpoint.json")).unwrap();
+    assert!(!text.contains("shared_value"));
+    let ck: serde_json::Value = serde_json::from_str(&text).unwrap();
+    // policy 8 -> 100 -> 50 -> 25 -> 2 and value 8 -> 100 -> 50 -> 25 -> 1
+    assert_eq!(
+        ck["state"]["model"]["params"].as_array().unwrap().len(),
+        2 * trunk + 25 * 2 + 2 + 25 + 1
+    );
+    // both evaluate
+    for d in [&dir, &separate] {
+        let out = mapc()
+            .args([
+                "eval",
+                "--seeds",
+                "1",
+                "--json",
+                "--no-baseline",
+                "--policy",
+            ])
+            .arg(d)
+            .output()
+            .unwrap();
+        common::assert_success(&out);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::remove_dir_all(&separate).ok();
+}
+
+#[test]
 fn distributed_flags_are_checked() {
     // a learning-rate schedule must go forward in steps
     let cfg = tmp("schedule").with_extension("toml");
@@ -334,8 +390,8 @@ fn distributed_flags_are_checked() {
 
 #[test]
 fn the_shipped_distributed_policy_beats_the_humans() {
-    // policies/simple_merge_distributed.json (docs/results.md): +7.8 % over 100 seeds; on seeds 0-4 it gives
-    // 1638.72 against the humans' 1555.92 veh/h (mean actions: the same numbers every run)
+    // policies/simple_merge_distributed.json (docs/results.md): +13.2 % over 100 seeds; on seeds 0-4 it gives
+    // 1751.76 veh/h, +12.6 % over the humans (mean actions: the same numbers every run)
     let out = mapc()
         .args(["eval", "--seeds", "5", "--json", "--policy"])
         .arg(common::root().join("policies/simple_merge_distributed.json"))
@@ -344,6 +400,6 @@ fn the_shipped_distributed_policy_beats_the_humans() {
     common::assert_success(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let change = v["comparison"]["outflow_change_pct"].as_f64().unwrap();
-    assert!(change > 3.0, "{v}");
-    assert!(v["speed"]["mean"].as_f64().unwrap() > 12.0, "{v}");
+    assert!(change > 8.0, "{v}");
+    assert!(v["speed"]["mean"].as_f64().unwrap() > 14.0, "{v}");
 }

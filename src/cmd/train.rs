@@ -47,6 +47,11 @@ pub struct Args {
     /// paper; closes the loophole of holding back the entry).
     #[arg(long, requires = "distributed")]
     pub count_waiting: bool,
+    /// The value function: `shared` (one more output of the policy net, so both train the same hidden layers:
+    /// RLlib's `vf_share_layers`, which the paper's distributed runs used) or `separate` (a net of its own, as
+    /// in the paper's centralized runs) [preset: distributed shared, centralized separate].
+    #[arg(long, value_parser = ["shared", "separate"], conflicts_with = "resume")]
+    pub value_net: Option<String>,
     /// Training iterations (overrides the preset / config).
     #[arg(long)]
     pub iters: Option<u64>,
@@ -61,7 +66,7 @@ pub struct Args {
     pub preset: String,
     /// TOML file of hyperparameters (keys of PpoConfig: lr, gamma, lambda, hidden, clip, vf_clip, vf_coeff,
     /// entropy_coeff, kl_coeff, kl_target, train_batch_size, minibatch, epochs, iterations, horizon, seed,
-    /// grad_slices, lr_schedule = [[steps, lr], ...]); applied over the preset, under the flags.
+    /// grad_slices, lr_schedule = [[steps, lr], ...], shared_value); applied over the preset, under the flags.
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Run seed: initial weights, episode seeds, action noise and minibatch order derive from it [preset: 0].
@@ -158,6 +163,9 @@ fn apply_flags(c: &mut PpoConfig, a: &Args) {
     set!(kl_coeff, a.kl_coeff);
     set!(kl_target, a.kl_target);
     set!(horizon, a.horizon);
+    if let Some(v) = &a.value_net {
+        c.shared_value = v == "shared";
+    }
 }
 
 fn read_config(path: &Path, base: PpoConfig) -> anyhow::Result<PpoConfig> {

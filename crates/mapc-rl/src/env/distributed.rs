@@ -481,6 +481,7 @@ mod episode_tests {
             obs_dim: cfg.obs_dim(),
             act_dim: 1,
             hidden: vec![16, 8],
+            shared_value: false,
         };
         let model = Model::new(arch, 7);
         let settings = EpisodeSettings {

@@ -45,6 +45,10 @@ pub struct PpoConfig {
     /// empty: the constant `lr`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub lr_schedule: Vec<(u64, f32)>,
+    /// The value is one more output of the policy net instead of a net of its own (RLlib's `vf_share_layers`,
+    /// which the paper's distributed runs used).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub shared_value: bool,
 }
 
 impl Default for PpoConfig {
@@ -68,6 +72,7 @@ impl Default for PpoConfig {
             seed: 0,
             grad_slices: 1,
             lr_schedule: Vec::new(),
+            shared_value: false,
         }
     }
 }
@@ -99,8 +104,8 @@ impl PpoConfig {
     /// The paper's distributed hyperparameters (its appendix A.2): gamma 0.998, lambda 0.95, clip 0.2, entropy
     /// 1e-3, minibatch 4096, 60 000 simulation steps (30 episodes) per iteration, value loss 0.5, KL 0.01, and
     /// the original code's learning rate 5e-4 -> 1e-4 at 1M steps -> 1e-5 at 4M -> 1e-6 at 8M (REFERENCE.md
-    /// sec. 5; the paper says only "piecewise linearly decreasing"). (The paper's value network
-    /// shares the policy's layers; mapc's keeps its own.)
+    /// sec. 5; the paper says only "piecewise linearly decreasing"), and the value as one more output of the
+    /// policy net (its shared value layers).
     pub fn distributed() -> Self {
         Self {
             gamma: 0.998,
@@ -121,6 +126,7 @@ impl PpoConfig {
                 (4_000_000, 1e-5),
                 (8_000_000, 1e-6),
             ],
+            shared_value: true,
             ..Self::default()
         }
     }
@@ -189,6 +195,11 @@ mod tests {
         assert_eq!(d.lr_at(8_000_000), 1e-6);
         assert!(PpoConfig::default().lr_schedule.is_empty());
         assert!(PpoConfig::fast().lr_schedule.is_empty());
+        // the value net: shared in the distributed presets (as the paper's), separate in the centralized ones
+        assert!(
+            PpoConfig::distributed().shared_value && PpoConfig::distributed_fast().shared_value
+        );
+        assert!(!PpoConfig::default().shared_value && !PpoConfig::fast().shared_value);
     }
 
     #[test]

@@ -72,6 +72,7 @@ impl TrainerState {
             obs_dim,
             act_dim,
             hidden: config.hidden.clone(),
+            shared_value: config.shared_value,
         };
         let model = Model::new(arch, mix_seed(&[config.seed, 0xA11CE]));
         let adam = Adam::new(model.params.len());

@@ -28,29 +28,40 @@ pub const LOG_STD_MAX: f32 = 2.0;
 
 const LN_2PI: f32 = 1.837_877_1;
 
-/// Sizes of the two networks. The policy net ends in `2 * act_dim` outputs (means then log-stds: the log-std is
-/// state-dependent), the value net in one output.
+/// Sizes of the networks. The policy net ends in `2 * act_dim` outputs (means then log-stds: the log-std is
+/// state-dependent), the value net in one output. With `shared_value` there is no value net: the value is one more
+/// output of the policy net's last layer (RLlib's `vf_share_layers`: the value branch reads the last hidden layer),
+/// so the value loss also trains the hidden layers the policy uses.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Architecture {
     pub obs_dim: usize,
     pub act_dim: usize,
     pub hidden: Vec<usize>,
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub shared_value: bool,
 }
 
 impl Architecture {
     fn policy_sizes(&self) -> Vec<usize> {
         let mut s = vec![self.obs_dim];
         s.extend(&self.hidden);
-        s.push(2 * self.act_dim);
+        s.push(2 * self.act_dim + usize::from(self.shared_value));
         s
     }
+    /// The separate value net's sizes (none with `shared_value`).
     fn value_sizes(&self) -> Vec<usize> {
+        if self.shared_value {
+            return Vec::new();
+        }
         let mut s = vec![self.obs_dim];
         s.extend(&self.hidden);
         s.push(1);
         s
     }
     fn count(sizes: &[usize]) -> usize {
+        if sizes.len() < 2 {
+            return 0;
+        }
         sizes.windows(2).map(|w| w[0] * w[1] + w[1]).sum()
     }
     pub fn policy_len(&self) -> usize {
@@ -143,7 +154,9 @@ impl Model {
         let mut rng = Rng::new(seed);
         let mut params = Vec::with_capacity(arch.param_len());
         normc_init(&arch.policy_sizes(), &mut rng, &mut params);
-        normc_init(&arch.value_sizes(), &mut rng, &mut params);
+        if !arch.shared_value {
+            normc_init(&arch.value_sizes(), &mut rng, &mut params);
+        }
         Self { arch, params }
     }
 
@@ -158,6 +171,13 @@ impl Model {
             .iter()
             .map(|x| x.clamp(LOG_STD_MIN, LOG_STD_MAX))
             .collect();
+        if self.arch.shared_value {
+            return PolicyOutput {
+                mean,
+                log_std,
+                value: out[2 * a],
+            };
+        }
         mlp_forward(
             vp,
             &self.arch.value_sizes(),
@@ -174,8 +194,13 @@ impl Model {
 
     /// Value estimate alone.
     pub fn value(&self, obs: &[f32], scratch: &mut Scratch) -> f32 {
-        let vp = &self.params[self.arch.policy_len()..];
         let mut out = Vec::new();
+        if self.arch.shared_value {
+            let pp = &self.params[..self.arch.policy_len()];
+            mlp_forward(pp, &self.arch.policy_sizes(), obs, &mut scratch.a, &mut out);
+            return out[2 * self.arch.act_dim];
+        }
+        let vp = &self.params[self.arch.policy_len()..];
         mlp_forward(vp, &self.arch.value_sizes(), obs, &mut scratch.a, &mut out);
         out[0]
     }
@@ -292,6 +317,7 @@ pub fn loss_and_grad(
     let obs = leaf(mb.obs.to_vec(), [n, arch.obs_dim], device);
     let out = burn_mlp(obs.clone(), &leaves[..n_policy_layers]);
     let mean = out.clone().narrow(1, 0, a);
+    let shared_value = arch.shared_value.then(|| out.clone().narrow(1, 2 * a, 1));
     let log_std = out.narrow(1, a, a).clamp(LOG_STD_MIN, LOG_STD_MAX);
     let actions = leaf(mb.actions.to_vec(), [n, a], device);
     let old_mean = leaf(mb.old_mean.to_vec(), [n, a], device);
@@ -320,7 +346,10 @@ pub fn loss_and_grad(
     let entropy = log_std
         .sum_dim(1)
         .add_scalar(0.5 * (LN_2PI + 1.0) * a as f32);
-    let value = burn_mlp(obs, &leaves[n_policy_layers..]);
+    let value = match shared_value {
+        Some(v) => v,
+        None => burn_mlp(obs, &leaves[n_policy_layers..]),
+    };
     let vf1 = (value.clone() - targets.clone()).square();
     let vf_clipped = old_value.clone() + (value - old_value).clamp(-c.vf_clip, c.vf_clip);
     let vf2 = (vf_clipped - targets).square();
@@ -413,6 +442,14 @@ mod tests {
             obs_dim: 3,
             act_dim: 2,
             hidden: vec![4, 3],
+            shared_value: false,
+        }
+    }
+
+    fn shared_arch() -> Architecture {
+        Architecture {
+            shared_value: true,
+            ..arch()
         }
     }
 
@@ -480,8 +517,65 @@ mod tests {
     }
 
     #[test]
+    fn a_shared_value_is_the_policy_nets_last_output() {
+        let arch = shared_arch();
+        // one layer fewer than two nets: only the value output column is added to the policy net
+        assert_eq!(arch.param_len(), arch.policy_len());
+        assert_eq!(arch.policy_len(), arch_policy_len_plus_value_column());
+        let mut m = Model::new(arch.clone(), 1);
+        m.params.iter_mut().for_each(|p| *p = 0.0);
+        let pl = arch.policy_len();
+        m.params[pl - 5..pl].copy_from_slice(&[0.5, -1.0, 0.0, -0.5, 2.0]);
+        let mut sc = Scratch::default();
+        let out = m.infer(&[0.3, -0.2, 0.9], &mut sc);
+        assert_eq!(out.mean, vec![0.5, -1.0]);
+        assert_eq!(out.log_std, vec![0.0, -0.5]);
+        assert_eq!(out.value, 2.0);
+        assert_eq!(m.value(&[0.3, -0.2, 0.9], &mut sc), 2.0);
+        // the value loss reaches the hidden layers the policy uses
+        let mut m = Model::new(arch, 3);
+        let o = m.infer(&[0.3, -0.2, 0.9], &mut sc);
+        let lp = gaussian_log_prob(&[0.0, 0.0], &o.mean, &o.log_std);
+        let mb = Minibatch {
+            n: 1,
+            obs: &[0.3, -0.2, 0.9],
+            actions: &[0.0, 0.0],
+            old_log_prob: &[lp],
+            old_mean: &o.mean,
+            old_log_std: &o.log_std,
+            old_value: &[o.value],
+            advantages: &[0.0],
+            value_targets: &[o.value + 1.0],
+        };
+        let c = LossCoeffs {
+            clip: 0.3,
+            kl_coeff: 0.0,
+            vf_coeff: 1.0,
+            vf_clip: 10.0,
+            entropy_coeff: 0.0,
+        };
+        let (_, g) = loss_and_grad(&m, &mb, &c, &update_device());
+        assert!(
+            g[..3 * 4].iter().any(|x| x.abs() > 1e-6),
+            "first layer: {:?}",
+            &g[..12]
+        );
+        m.params[0] += 1.0;
+        assert_ne!(m.infer(&[0.3, -0.2, 0.9], &mut sc).value, o.value);
+    }
+
+    /// The separate-value architecture's policy block plus one output column (3 weights and a bias).
+    fn arch_policy_len_plus_value_column() -> usize {
+        arch().policy_len() + 3 + 1
+    }
+
+    #[test]
     fn gradient_matches_finite_differences() {
-        let arch = arch();
+        gradient_matches_finite_differences_for(arch());
+        gradient_matches_finite_differences_for(shared_arch());
+    }
+
+    fn gradient_matches_finite_differences_for(arch: Architecture) {
         let m = Model::new(arch, 5);
         let obs = [0.3, -0.2, 0.9, -0.7, 0.1, 0.4];
         let actions = [0.1, -0.3, 0.05, 0.2];
@@ -513,14 +607,18 @@ mod tests {
         let c = test_coeffs(0.01);
         let dev = update_device();
         let (_, g) = loss_and_grad(&m, &mb, &c, &dev);
-        for &i in &[
+        // (with a shared value, `policy_len() + 3` lies past the parameters: skipped)
+        for i in [
             0usize,
             7,
             20,
             m.arch.policy_len() - 1,
             m.arch.policy_len() + 3,
             m.params.len() - 1,
-        ] {
+        ]
+        .into_iter()
+        .filter(|&i| i < m.params.len())
+        {
             let h = 1e-2;
             let mut p = m.clone();
             p.params[i] += h;
@@ -543,6 +641,7 @@ mod tests {
                 obs_dim: 4,
                 act_dim: 2,
                 hidden: vec![100, 50, 25],
+                shared_value: false,
             },
             9,
         );
