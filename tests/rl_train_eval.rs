@@ -186,14 +186,18 @@ fn a_corrupt_checkpoint_names_the_file() {
 }
 
 fn tiny_distributed_train(dir: &PathBuf, iters: u64) -> std::process::Output {
-    let setting = [
+    tiny_distributed_train_with(dir, iters, &["--keep-checkpoints"])
+}
+
+fn tiny_distributed_train_with(dir: &PathBuf, iters: u64, extra: &[&str]) -> std::process::Output {
+    let mut setting = vec![
         "--distributed",
         "--features",
         "dist,merge",
         "--minibatch",
         "256",
-        "--keep-checkpoints",
     ];
+    setting.extend_from_slice(extra);
     tiny_train_with(dir, iters, &setting)
 }
 
@@ -313,16 +317,11 @@ fn the_value_net_is_shared_or_separate() {
     // `--value-net separate` gives the value a net of its own, and its checkpoint does not mention the option
     // (as the centralized checkpoints, whose bytes it keeps)
     let separate = tmp("dist-separate");
-    let setting = [
-        "--distributed",
-        "--features",
-        "dist,merge",
-        "--minibatch",
-        "256",
-        "--value-net",
-        "separate",
-    ];
-    common::assert_success(&tiny_train_with(&separate, 1, &setting));
+    common::assert_success(&tiny_distributed_train_with(
+        &separate,
+        1,
+        &["--value-net", "separate"],
+    ));
     let text = std::fs::read_to_string(separate.join("checkpoint.json")).unwrap();
     assert!(!text.contains("shared_value"));
     let ck: serde_json::Value = serde_json::from_str(&text).unwrap();

@@ -84,6 +84,17 @@ pub fn take_idm_calls() -> u64 {
     IDM_CALLS.swap(0, std::sync::atomic::Ordering::Relaxed)
 }
 
+/// The arguments of [`IdmParams::next_speed_x4`], for its SSE2 path.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Steps4 {
+    gap: [f64; 4],
+    speed: f64,
+    leader_speed: [f64; 4],
+    desired_speed: f64,
+    respect_min_gap: [bool; 4],
+}
+
 impl IdmParams {
     /// Parameters with SUMO's sub-stepping rule for the step `dt` (IDM stepping 0.25 s).
     pub fn new(
@@ -254,34 +265,17 @@ impl IdmParams {
         IDM_BATCHES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         #[cfg(target_arch = "x86_64")]
         if self.delta == 4.0 {
+            let args = Steps4 {
+                gap,
+                speed,
+                leader_speed,
+                desired_speed,
+                respect_min_gap,
+            };
             match self.iterations {
-                2 => {
-                    return self.next_speed_x4_sse2::<2>(
-                        gap,
-                        speed,
-                        leader_speed,
-                        desired_speed,
-                        respect_min_gap,
-                    );
-                }
-                1 => {
-                    return self.next_speed_x4_sse2::<1>(
-                        gap,
-                        speed,
-                        leader_speed,
-                        desired_speed,
-                        respect_min_gap,
-                    );
-                }
-                4 => {
-                    return self.next_speed_x4_sse2::<4>(
-                        gap,
-                        speed,
-                        leader_speed,
-                        desired_speed,
-                        respect_min_gap,
-                    );
-                }
+                1 => return self.next_speed_x4_sse2::<1>(&args),
+                2 => return self.next_speed_x4_sse2::<2>(&args),
+                4 => return self.next_speed_x4_sse2::<4>(&args),
                 _ => {}
             }
         }
@@ -301,15 +295,15 @@ impl IdmParams {
     /// [`FastMinMax`]'s `b.fmax(a)`), so each lane's result has the scalar call's bits.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn next_speed_x4_sse2<const N: u32>(
-        &self,
-        gap: [f64; 4],
-        speed: f64,
-        leader_speed: [f64; 4],
-        desired_speed: f64,
-        respect_min_gap: [bool; 4],
-    ) -> [f64; 4] {
+    fn next_speed_x4_sse2<const N: u32>(&self, args: &Steps4) -> [f64; 4] {
         use std::arch::x86_64::*;
+        let Steps4 {
+            gap,
+            speed,
+            leader_speed,
+            desired_speed,
+            respect_min_gap,
+        } = *args;
         const { assert!(N.is_power_of_two()) };
         #[cfg(feature = "count-idm")]
         IDM_CALLS.fetch_add(4, std::sync::atomic::Ordering::Relaxed);
@@ -593,15 +587,19 @@ mod tests {
         v.max(0.0)
     }
 
-    #[test]
-    fn next_speed_is_bit_identical_to_the_reference() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut unit = || {
+    /// A deterministic stream of uniform numbers in [0, 1) (xorshift), for the bit-for-bit comparisons.
+    fn uniform_stream(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        }
+    }
+
+    #[test]
+    fn next_speed_is_bit_identical_to_the_reference() {
+        let mut unit = uniform_stream(0x2545_f491_4f6c_dd1d);
         for dt in [0.1, 0.5, 0.75, 1.0, 1.5, 2.0] {
             let p = IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, dt);
             for _ in 0..20_000 {
@@ -624,13 +622,7 @@ mod tests {
 
     #[test]
     fn four_calls_at_once_are_four_calls_bit_for_bit() {
-        let mut state = 0x1234_5678_9abc_def1u64;
-        let mut unit = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut unit = uniform_stream(0x1234_5678_9abc_def1);
         // 0.5 s (two sub-steps), 0.25, 1.0, an odd count (scalar path) and delta != 4 (scalar path)
         let mut params: Vec<IdmParams> = [0.25, 0.5, 0.75, 1.0]
             .iter()
