@@ -78,7 +78,9 @@ pub fn take_idm_batches() -> u64 {
     IDM_BATCHES.swap(0, std::sync::atomic::Ordering::Relaxed)
 }
 
-/// Calls of [`IdmParams::next_speed`] since the last call of this function (feature `count-idm`).
+/// IDM steps computed since the last call of this function (feature `count-idm`): calls of
+/// [`IdmParams::next_speed`] and four per [`IdmParams::next_speed_x4`] (debug builds, whose assertions repeat
+/// batched steps as single calls, count more).
 #[cfg(feature = "count-idm")]
 pub fn take_idm_calls() -> u64 {
     IDM_CALLS.swap(0, std::sync::atomic::Ordering::Relaxed)

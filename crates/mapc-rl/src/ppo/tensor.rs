@@ -1,8 +1,9 @@
-//! All tensor code of the trainer: the two MLPs (policy and value), their plain-`f32` forward pass used at
-//! rollout time, the PPO loss and its gradient on burn (flex CPU backend, autodiff), and Adam.
+//! All tensor code of the trainer: the MLPs (policy, and value unless it is an output of the policy net), their
+//! plain-`f32` forward pass used at rollout time, the PPO loss and its gradient on burn (flex CPU backend,
+//! autodiff), and Adam.
 //!
-//! Parameters live in one flat `Vec<f32>` (policy layers then value layers; per layer the weight matrix row-major
-//! `[inputs][outputs]`, then the bias). Burn builds leaf tensors from that vector for each minibatch and returns the
+//! Parameters live in one flat `Vec<f32>` (policy layers then value layers, if any; per layer the weight matrix
+//! row-major `[inputs][outputs]`, then the bias). Burn builds leaf tensors from that vector for each minibatch and returns the
 //! gradient as a vector of the same layout, so checkpoints are plain numbers and Adam is a loop over slices.
 
 use burn::tensor::{Device, Tensor, TensorData};
@@ -636,12 +637,19 @@ mod tests {
 
     #[test]
     fn burn_forward_matches_plain_inference() {
+        // (the value loss below is zero only if burn reads the same value output as `infer`)
+        for shared_value in [false, true] {
+            burn_forward_matches_plain_inference_for(shared_value);
+        }
+    }
+
+    fn burn_forward_matches_plain_inference_for(shared_value: bool) {
         let m = Model::new(
             Architecture {
                 obs_dim: 4,
                 act_dim: 2,
                 hidden: vec![100, 50, 25],
-                shared_value: false,
+                shared_value,
             },
             9,
         );
