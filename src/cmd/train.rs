@@ -50,8 +50,8 @@ pub struct Args {
     /// The value function: `shared` (one more output of the policy net, so both train the same hidden layers:
     /// RLlib's `vf_share_layers`, which the paper's distributed runs used) or `separate` (a net of its own, as
     /// in the paper's centralized runs) [preset: distributed shared, centralized separate].
-    #[arg(long, value_parser = ["shared", "separate"], conflicts_with = "resume")]
-    pub value_net: Option<String>,
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub value_net: Option<ValueNet>,
     /// Training iterations (overrides the preset / config).
     #[arg(long)]
     pub iters: Option<u64>,
@@ -120,6 +120,15 @@ pub struct Args {
     pub json: bool,
 }
 
+/// Where the value function lives (`--value-net`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ValueNet {
+    /// One more output of the policy net.
+    Shared,
+    /// A net of its own.
+    Separate,
+}
+
 /// A scenario resolved for the simulator: its spec, display name and N_AV (if the scenario sets one).
 pub struct LoadedScenario {
     pub spec: mapc_sim::SimSpec,
@@ -163,8 +172,8 @@ fn apply_flags(c: &mut PpoConfig, a: &Args) {
     set!(kl_coeff, a.kl_coeff);
     set!(kl_target, a.kl_target);
     set!(horizon, a.horizon);
-    if let Some(v) = &a.value_net {
-        c.shared_value = v == "shared";
+    if let Some(v) = a.value_net {
+        c.shared_value = v == ValueNet::Shared;
     }
 }
 

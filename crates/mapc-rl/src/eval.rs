@@ -258,11 +258,8 @@ fn write_sim_rows(
 
 /// The human baseline on the same seeds.
 pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<EpisodeMetrics>, RlError> {
-    let runs =
-        mapc_sim::run_baseline_spec(&human_spec(spec), seeds).map_err(|e| RlError::Scenario {
-            scenario: spec.graph.source.file.clone(),
-            msg: e.to_string(),
-        })?;
+    let runs = mapc_sim::run_baseline_spec(&human_spec(spec), seeds)
+        .map_err(|e| crate::env::scenario_error(spec, e))?;
     Ok(runs.iter().map(EpisodeMetrics::from).collect())
 }
 

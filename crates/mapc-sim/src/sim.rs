@@ -188,10 +188,9 @@ struct TypeConsts {
     impatience: f64,
     /// Highest arrival speed at a minor link from the foe visibility point (a function of the type only).
     max_arrival_from_visibility: f64,
-    /// 1 / (2 decel), for [`TypeConsts::brake_gap_above`].
-    inv_two_decel: f64,
-    /// Whether `inv_two_decel` is positive and finite (the bound applies), decided once.
-    brake_bound_ok: bool,
+    /// 1 / (2 decel), for [`TypeConsts::brake_gap_above`]; `None` where it is not positive and finite (the
+    /// bound does not apply).
+    inv_two_decel: Option<f64>,
 }
 
 impl TypeConsts {
@@ -201,14 +200,11 @@ impl TypeConsts {
     /// decide the far cases without the exact gap, which is computed only when the bound cannot decide.
     #[inline]
     fn brake_gap_above(&self, speed: f64, headway: f64) -> f64 {
-        debug_assert_eq!(
-            self.brake_bound_ok,
-            self.inv_two_decel > 0.0 && self.inv_two_decel.is_finite()
-        );
-        if self.brake_bound_ok && speed >= 0.0 && headway >= 0.0 {
-            (speed * speed * self.inv_two_decel + speed * headway) * (1.0 + 1e-9) + 1e-6
-        } else {
-            f64::INFINITY
+        match self.inv_two_decel {
+            Some(inv) if speed >= 0.0 && headway >= 0.0 => {
+                (speed * speed * inv + speed * headway) * (1.0 + 1e-9) + 1e-6
+            }
+            _ => f64::INFINITY,
         }
     }
 }
@@ -286,8 +282,7 @@ impl Simulation {
                 .map(|(t, p)| TypeConsts {
                     max_speed: t.max_speed,
                     impatience: t.impatience,
-                    inv_two_decel: 0.5 / p.decel,
-                    brake_bound_ok: (0.5 / p.decel) > 0.0 && (0.5 / p.decel).is_finite(),
+                    inv_two_decel: Some(0.5 / p.decel).filter(|x| *x > 0.0 && x.is_finite()),
                     max_arrival_from_visibility: IdmParams::speed_after_distance(
                         FOE_VISIBILITY_M,
                         p.maximum_safe_stop_speed(FOE_VISIBILITY_M, 0.0),
@@ -418,7 +413,7 @@ impl Simulation {
         let free_flow_s: f64 = route_lanes
             .iter()
             .map(|&l| {
-                let lane = &self.lane_at(l as usize);
+                let lane = self.lane_at(l as usize);
                 lane.length / (lane.speed_limit * factor).fmin(t.max_speed)
             })
             .sum();
@@ -636,9 +631,9 @@ impl Simulation {
         let r = &self.routes[v.route as usize];
         let mut seen = self.lane_at(v.lane as usize).length - v.pos;
         for k in (v.route_pos as usize + 1)..r.lanes.len() {
-            let lane = &self.net.lanes[r.lanes[k] as usize];
+            let lane = self.lane_at(r.lanes[k] as usize);
             if let LaneKind::Via(link) = lane.kind {
-                let l = &self.link_at(link as usize);
+                let l = self.link_at(link as usize);
                 let branches = self.lane_at(l.from_lane as usize).out_links.len() > 1;
                 if (!l.foes.is_empty() || branches) && k > v.route_pos as usize {
                     return Some((seen, l.junction));
@@ -760,12 +755,12 @@ impl Simulation {
             k += 1;
         }
         while k < r.lanes.len() {
-            if let LaneKind::Via(link) = self.net.lanes[r.lanes[k] as usize].kind {
+            if let LaneKind::Via(link) = self.lane_at(r.lanes[k] as usize).kind {
                 let foes = &self.link_at(link as usize).foes;
                 if !foes.is_empty() {
                     let mut best: Option<MergeFoe> = None;
                     for &f in foes {
-                        let fl = &self.link_at(f as usize);
+                        let fl = self.link_at(f as usize);
                         let via_len = self.lane_at(fl.via_lane as usize).length;
                         let mut consider = |o: VehicleId, d: f64| {
                             if o != id
@@ -984,7 +979,7 @@ impl Simulation {
         let guard = moving.is_some();
         let v = &self.veh[id as usize];
         let r = &self.routes[v.route as usize];
-        let cur = &self.lane_at(v.lane as usize);
+        let cur = self.lane_at(v.lane as usize);
         let mut seen = cur.length - v.pos;
         let on_via = matches!(cur.kind, LaneKind::Via(_));
         if on_via {
@@ -1004,7 +999,7 @@ impl Simulation {
         let mut k = v.route_pos as usize + 1;
         while k < r.lanes.len() && seen <= max_dist {
             let lane = r.lanes[k];
-            let l = &self.lane_at(lane as usize);
+            let l = self.lane_at(lane as usize);
             // a moving vehicle that stays before its stop line this step cannot meet vehicles on merging
             // connections (they meet only inside the junction)
             let may_enter = moving.is_none_or(|travel| seen < travel);
@@ -1041,7 +1036,7 @@ impl Simulation {
         // only a moving check or an ego inside the junction looks at foes still before their stop line
         let check_from = guard || ego_in_junction;
         for &foe in &self.link_at(link as usize).foes {
-            let fl = &self.link_at(foe as usize);
+            let fl = self.link_at(foe as usize);
             let flen = self.lane_at(fl.via_lane as usize).length;
             for &o in self.lane_veh[fl.via_lane as usize].iter() {
                 let ov = &self.veh[o as usize];
@@ -1075,7 +1070,7 @@ impl Simulation {
     /// major-road vehicle inside the junction, even one behind it (SUMO's right of way among junction leaders):
     /// with a negative gap it brakes as hard as it can.
     fn yield_inside_junction(&self, id: VehicleId, link: LinkIdx, p: &IdmParams, des: f64) -> f64 {
-        let lk = &self.link_at(link as usize);
+        let lk = self.link_at(link as usize);
         let mut vmax = f64::INFINITY;
         if lk.major || lk.foes.is_empty() {
             return vmax;
@@ -1084,7 +1079,7 @@ impl Simulation {
         let own_len = self.lane_at(lk.via_lane as usize).length;
         let d = own_len - v.pos;
         for &foe in &lk.foes {
-            let fl = &self.link_at(foe as usize);
+            let fl = self.link_at(foe as usize);
             if !fl.major {
                 continue;
             }
@@ -1157,7 +1152,7 @@ impl Simulation {
         let min_comfortable = (speed - p.decel * dt).fmax(0.0);
         let mut vv = max_next.fmin(des_cur);
         let r = &self.routes[v.route as usize];
-        let cur = &self.lane_at(v.lane as usize);
+        let cur = self.lane_at(v.lane as usize);
         let mut seen = cur.length - v.pos;
         // the speed at the next link: an upper bound, lowered by every leader
         let mut v_link_pass = LazyPassSpeed::new(seen, vv, p.accel, des_cur);
@@ -1255,7 +1250,7 @@ impl Simulation {
         let mut k = v.route_pos as usize;
         let mut lane = v.lane;
         loop {
-            let lane_ref = &self.lane_at(lane as usize);
+            let lane_ref = self.lane_at(lane as usize);
             if k > v.route_pos as usize {
                 // the last vehicle on a lane ahead
                 if let Some(&o) = self.lane_veh[lane as usize].last() {
@@ -1291,7 +1286,7 @@ impl Simulation {
                 break;
             }
             let next = r.lanes[k + 1];
-            let next_ref = &self.lane_at(next as usize);
+            let next_ref = self.lane_at(next as usize);
             if let LaneKind::Via(cur_link) = lane_ref.kind {
                 // the exit link of a junction: vehicles on merging connections closer to the merge point lead
                 let cur_major = self.link_at(cur_link as usize).major;
@@ -1328,7 +1323,7 @@ impl Simulation {
                 had_non_internal = true;
                 last_item = None;
             } else if let LaneKind::Via(link) = next_ref.kind {
-                let lk = &self.link_at(link as usize);
+                let lk = self.link_at(link as usize);
                 // only links where right of way is decided need a request: minor links, and major links with
                 // minor foes
                 if (plan.n_items as usize) < MAX_LINK_ITEMS
@@ -1409,9 +1404,9 @@ impl Simulation {
         des_cur: f64,
         plan: &mut Plan,
     ) -> usize {
-        let lk = &self.link_at(link as usize);
+        let lk = self.link_at(link as usize);
         let via = lk.via_lane;
-        let via_lane = &self.lane_at(via as usize);
+        let via_lane = self.lane_at(via as usize);
         let speed = v.speed;
         let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).fmax(0.0);
         let mut arrival_speed = v_link_pass;
@@ -1465,7 +1460,7 @@ impl Simulation {
 
     /// SUMO's `MSLink::opened` for a minor link at a merge: blocked by any foe approach that conflicts in time.
     fn link_opened(&self, id: VehicleId, it: &LinkItem, can_brake: bool) -> bool {
-        let lk = &self.link_at(it.link as usize);
+        let lk = self.link_at(it.link as usize);
         if lk.major {
             return true;
         }
@@ -1521,7 +1516,7 @@ impl Simulation {
                 let p = &self.types[v.vtype as usize];
                 let mut v_safe = plan.v_safe;
                 for it in &plan.items[..plan.n_items as usize] {
-                    let lk = &self.link_at(it.link as usize);
+                    let lk = self.link_at(it.link as usize);
                     if lk.major {
                         continue;
                     }
@@ -1623,11 +1618,11 @@ impl Simulation {
                 let mut rp = v.route_pos as usize;
                 // a fast vehicle may cross a short connection in one step
                 let mut arrived = false;
-                while v_pos > self.net.lanes[r.lanes[rp] as usize].length {
-                    v_pos -= self.net.lanes[r.lanes[rp] as usize].length;
+                while v_pos > self.lane_at(r.lanes[rp] as usize).length {
+                    v_pos -= self.lane_at(r.lanes[rp] as usize).length;
                     rp += 1;
                     if rp + 1 >= r.lanes.len()
-                        && v_pos > self.net.lanes[r.lanes[rp] as usize].length - POSITION_EPS
+                        && v_pos > self.lane_at(r.lanes[rp] as usize).length - POSITION_EPS
                     {
                         arrived = true;
                         break;
@@ -1742,12 +1737,9 @@ impl Simulation {
                 }
             }
             seen += self.lane_at(l as usize).length;
-            if let LaneKind::Via(link) = self.lane_at(l as usize).kind {
-                let _ = link;
-            }
             // a minor link ahead must be reachable with a stop
             if k + 1 < route.lanes.len()
-                && let LaneKind::Via(link) = self.net.lanes[route.lanes[k + 1] as usize].kind
+                && let LaneKind::Via(link) = self.lane_at(route.lanes[k + 1] as usize).kind
                 && !self.link_at(link as usize).major
                 && seen < p.brake_gap(speed, p.decel, 0.0) + speed * self.spec.step_s
             {
@@ -1966,8 +1958,7 @@ mod bound_tests {
                 max_speed: 30.0,
                 impatience: 0.5,
                 max_arrival_from_visibility: 0.0,
-                inv_two_decel: 0.5 / p.decel,
-                brake_bound_ok: true,
+                inv_two_decel: Some(0.5 / p.decel),
             };
             for i in 0..200_000 {
                 let v = i as f64 * 0.000_37;

@@ -1,15 +1,22 @@
 pub mod distributed;
+pub mod merge;
+pub mod obs;
 
 use mapc_sim::{SimSpec, Simulation};
 
 use crate::error::RlError;
 
-/// `spec` checked for the simulator, its problems reported against the scenario's file.
-pub(crate) fn validate_spec(spec: &SimSpec) -> Result<(), RlError> {
-    spec.validate().map_err(|e| RlError::Scenario {
+/// A problem of `spec` (or of building a simulation from it), reported against the scenario's file.
+pub(crate) fn scenario_error(spec: &SimSpec, e: impl std::fmt::Display) -> RlError {
+    RlError::Scenario {
         scenario: spec.graph.source.file.clone(),
         msg: e.to_string(),
-    })
+    }
+}
+
+/// `spec` checked for the simulator, its problems reported against the scenario's file.
+pub(crate) fn validate_spec(spec: &SimSpec) -> Result<(), RlError> {
+    spec.validate().map_err(|e| scenario_error(spec, e))
 }
 
 /// An error of the running simulation (a bad command, a broken invariant).
@@ -22,12 +29,7 @@ pub(crate) fn sim_error(e: impl std::fmt::Display) -> RlError {
 
 /// A new episode's simulation of `spec` (invariant checks off: the environments step it millions of times).
 pub(crate) fn episode_simulation(spec: &SimSpec, seed: u64) -> Result<Simulation, RlError> {
-    let mut sim = Simulation::from_spec(spec.clone(), seed).map_err(|e| RlError::Scenario {
-        scenario: spec.graph.source.file.clone(),
-        msg: e.to_string(),
-    })?;
+    let mut sim = Simulation::from_spec(spec.clone(), seed).map_err(|e| scenario_error(spec, e))?;
     sim.set_invariant_checks(false);
     Ok(sim)
 }
-pub mod merge;
-pub mod obs;

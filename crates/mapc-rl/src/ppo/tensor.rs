@@ -519,10 +519,11 @@ mod tests {
 
     #[test]
     fn a_shared_value_is_the_policy_nets_last_output() {
+        let separate = arch();
         let arch = shared_arch();
-        // one layer fewer than two nets: only the value output column is added to the policy net
+        // no value net: the policy net with one more output column (3 weights and a bias)
         assert_eq!(arch.param_len(), arch.policy_len());
-        assert_eq!(arch.policy_len(), arch_policy_len_plus_value_column());
+        assert_eq!(arch.policy_len(), separate.policy_len() + 3 + 1);
         let mut m = Model::new(arch.clone(), 1);
         m.params.iter_mut().for_each(|p| *p = 0.0);
         let pl = arch.policy_len();
@@ -563,11 +564,6 @@ mod tests {
         );
         m.params[0] += 1.0;
         assert_ne!(m.infer(&[0.3, -0.2, 0.9], &mut sc).value, o.value);
-    }
-
-    /// The separate-value architecture's policy block plus one output column (3 weights and a bias).
-    fn arch_policy_len_plus_value_column() -> usize {
-        arch().policy_len() + 3 + 1
     }
 
     #[test]
