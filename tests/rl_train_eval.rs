@@ -50,6 +50,45 @@ fn row3(dir: &Path) -> Vec<String> {
     fields
 }
 
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// `best.json` must hold the policy whose training rollouts the log's best row by outflow describes (the first of
+/// equal rows): the policy the row's iteration started from, which is the kept checkpoint of the iteration before
+/// where one was kept. Returns it.
+fn check_best(dir: &Path) -> serde_json::Value {
+    let csv = std::fs::read_to_string(dir.join("progress.csv")).unwrap();
+    let mut best_row: Option<(u64, f64)> = None;
+    for line in csv.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let (it, outflow): (u64, f64) = (f[0].parse().unwrap(), f[4].parse().unwrap());
+        if best_row.is_none_or(|(_, o)| outflow > o) {
+            best_row = Some((it, outflow));
+        }
+    }
+    let (it, outflow) = best_row.expect("rows");
+    let best = read_json(&dir.join("best.json"));
+    let sel = &best["selected"];
+    assert_eq!(sel["by"], "outflow", "{sel}");
+    assert_eq!(sel["row_iteration"], it, "{sel}\n{csv}");
+    assert_eq!(sel["score"].as_f64().unwrap(), outflow, "{sel}\n{csv}");
+    assert_eq!(best["state"]["iteration"], it - 1);
+    let kept = dir
+        .join("checkpoints")
+        .join(format!("iteration-{:05}.json", it - 1));
+    if kept.exists() {
+        assert_eq!(best["state"]["model"], read_json(&kept)["state"]["model"]);
+    }
+    // no other checkpoint says it was selected
+    assert!(
+        read_json(&dir.join("checkpoint.json"))
+            .get("selected")
+            .is_none()
+    );
+    best
+}
+
 #[test]
 fn tiny_training_resume_and_eval() {
     let dir = tmp("run");
@@ -75,6 +114,39 @@ fn tiny_training_resume_and_eval() {
     let straight = tmp("straight");
     assert!(tiny_train(&straight, 3).status.success());
     assert_eq!(row3(&dir), row3(&straight));
+    // the best policy too, and the report names it
+    let (best, best_straight) = (check_best(&dir), check_best(&straight));
+    assert_eq!(best["selected"], best_straight["selected"]);
+    assert_eq!(best["state"]["model"], best_straight["state"]["model"]);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["best"]["by"], "outflow", "{report}");
+    assert_eq!(
+        report["best"]["row_iteration"],
+        best["selected"]["row_iteration"]
+    );
+    // a resumed run keeps the criterion it started with
+    let out = mapc()
+        .args(["train", "--iters", "4", "--best-by", "speed", "--resume"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let msg = String::from_utf8_lossy(&out.stderr);
+    assert!(msg.contains("--best-by outflow"), "{msg}");
+    // the best policy is a checkpoint `mapc eval` reads
+    let out = mapc()
+        .args([
+            "eval",
+            "--seeds",
+            "1",
+            "--no-baseline",
+            "--json",
+            "--policy",
+        ])
+        .arg(dir.join("best.json"))
+        .output()
+        .unwrap();
+    common::assert_success(&out);
 
     // Evaluate on 3 seeds: the JSON has mapc sim's shape plus the baseline and the test.
     let out = mapc()
@@ -249,6 +321,9 @@ fn tiny_distributed_training_resume_and_eval() {
     let straight = tmp("dist-straight");
     common::assert_success(&tiny_distributed_train(&straight, 3));
     assert_eq!(row3(&dir), row3(&straight));
+    let (best, best_straight) = (check_best(&dir), check_best(&straight));
+    assert_eq!(best["selected"], best_straight["selected"]);
+    assert_eq!(best["state"]["model"], best_straight["state"]["model"]);
     assert!(
         row3(&dir)[1] == "1800",
         "simulation steps: {:?}",
@@ -389,8 +464,8 @@ fn distributed_flags_are_checked() {
 
 #[test]
 fn the_shipped_distributed_policy_beats_the_humans() {
-    // policies/simple_merge_distributed.json (docs/results.md): +13.2 % over 100 seeds; on seeds 0-4 it gives
-    // 1751.76 veh/h, +12.6 % over the humans (mean actions: the same numbers every run)
+    // policies/simple_merge_distributed.json (docs/results.md): +13.3 % over 100 seeds; on seeds 0-4 it gives
+    // 1769.76 veh/h, +13.7 % over the humans (mean actions: the same numbers every run)
     let out = mapc()
         .args(["eval", "--seeds", "5", "--json", "--policy"])
         .arg(common::root().join("policies/simple_merge_distributed.json"))

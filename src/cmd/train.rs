@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressStyle};
-use mapc_rl::checkpoint::{DistributedSpec, PolicySpec};
+use mapc_rl::checkpoint::{BestBy, DistributedSpec, PolicySpec};
 use mapc_rl::env::distributed::{AgentReward, DistributedEnv, Features, SIMPLE_MERGE_DIST_NORM};
 use mapc_rl::env::merge::{
     ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM,
@@ -112,12 +112,37 @@ pub struct Args {
     /// them), to evaluate earlier policies of the run.
     #[arg(long)]
     pub keep_checkpoints: bool,
+    /// What picks RUN/best.json, the policy whose training rollouts (sampled actions) scored highest: outflow,
+    /// return or speed (RLlib Tune's `checkpoint_score_attr`). A resumed run keeps its own.
+    #[arg(long, value_enum)]
+    pub best_by: Option<BestByArg>,
     /// Worker threads for rollouts (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Print the final iteration's figures as JSON (no progress bar).
     #[arg(long)]
     pub json: bool,
+}
+
+/// `--best-by`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BestByArg {
+    /// Mean outflow (veh/h), whatever the reward [default].
+    Outflow,
+    /// Mean episode return.
+    Return,
+    /// Mean speed (m/s).
+    Speed,
+}
+
+impl From<BestByArg> for BestBy {
+    fn from(a: BestByArg) -> BestBy {
+        match a {
+            BestByArg::Outflow => BestBy::Outflow,
+            BestByArg::Return => BestBy::Return,
+            BestByArg::Speed => BestBy::Speed,
+        }
+    }
 }
 
 /// Where the value function lives (`--value-net`).
@@ -309,6 +334,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         TrainRun::create(&out, spec, config, args.checkpoint_every)?
     };
     run.keep_checkpoints = args.keep_checkpoints;
+    if let Some(by) = args.best_by {
+        run.set_best_by(by.into())?;
+    }
     let sc = load_scenario(&run.spec.scenario)?;
     let mut spec = sc.spec.clone();
     spec.horizon_steps = run.state.config.horizon as u64;
@@ -373,12 +401,21 @@ fn train_loop(
     run.save()?;
     bar.finish();
     let ck = mapc_rl::checkpoint::checkpoint_path(&run.dir);
+    let best_file = mapc_rl::checkpoint::best_path(&run.dir);
+    let best = run.best();
     if args.json {
         let v = serde_json::json!({
             "run_dir": run.dir,
             "checkpoint": ck,
             "log": log_path(&run.dir),
             "last": last,
+            "best": best.map(|b| serde_json::json!({
+                "file": best_file,
+                "by": b.by.name(),
+                "score": b.score,
+                "policy_iteration": b.row_iteration - 1,
+                "row_iteration": b.row_iteration,
+            })),
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
@@ -393,6 +430,17 @@ fn train_loop(
             ck.display(),
             log_path(&run.dir).display()
         );
+        if let Some(b) = best {
+            println!(
+                "best: {} (the policy after {} iterations; its training rollouts, row {} of the log, reached \
+                 {} {:.2})",
+                best_file.display(),
+                b.row_iteration - 1,
+                b.row_iteration,
+                b.by.name(),
+                b.score
+            );
+        }
     }
     Ok(())
 }

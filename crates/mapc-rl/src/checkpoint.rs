@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::env::distributed::{AgentReward, DistNorm, DistributedConfig, Features};
 use crate::env::obs::ObsNorm;
 use crate::error::RlError;
-use crate::ppo::TrainerState;
+use crate::ppo::{IterationStats, TrainerState};
 
 /// Current checkpoint format.
 pub const FORMAT_VERSION: u32 = 1;
@@ -68,6 +68,53 @@ pub struct Checkpoint {
     pub format_version: u32,
     pub spec: PolicySpec,
     pub state: TrainerState,
+    /// Set on a run's `best.json`: why this policy was chosen (absent on every other checkpoint).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub selected: Option<Selection>,
+}
+
+/// Why a run's best policy was chosen: its training rollouts scored highest by `by`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Selection {
+    pub by: BestBy,
+    /// The figure its training rollouts reached.
+    pub score: f64,
+    /// The log row that holds those rollouts (the policy's own iteration + 1: an iteration's row describes the
+    /// rollouts collected before its update).
+    pub row_iteration: u64,
+}
+
+/// What picks a run's best policy (`mapc train --best-by`), a figure of each iteration's training rollouts
+/// (sampled actions): RLlib Tune's `checkpoint_score_attr`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BestBy {
+    /// Mean outflow (veh/h): the congestion objective, whatever the reward.
+    #[default]
+    Outflow,
+    /// Mean episode return: the objective the policy is trained for.
+    Return,
+    /// Mean speed (m/s).
+    Speed,
+}
+
+impl BestBy {
+    pub fn name(self) -> &'static str {
+        match self {
+            BestBy::Outflow => "outflow",
+            BestBy::Return => "return",
+            BestBy::Speed => "speed",
+        }
+    }
+
+    /// The row's figure this criterion maximises.
+    pub fn score(self, row: &IterationStats) -> f64 {
+        match self {
+            BestBy::Outflow => row.mean_outflow,
+            BestBy::Return => row.mean_return,
+            BestBy::Speed => row.mean_speed,
+        }
+    }
 }
 
 impl Checkpoint {
@@ -131,6 +178,11 @@ impl Checkpoint {
 /// The checkpoint file inside a run directory.
 pub fn checkpoint_path(dir: &Path) -> PathBuf {
     dir.join("checkpoint.json")
+}
+
+/// The best policy of a run so far (see [`BestBy`]), a checkpoint like the others.
+pub fn best_path(dir: &Path) -> PathBuf {
+    dir.join("best.json")
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename (the workspace's one

@@ -1,10 +1,14 @@
 //! A training run on disk: `checkpoint.json` (written atomically every `checkpoint_every` iterations and at the
-//! end) and `progress.csv` (rewritten atomically after every iteration). `--resume` reloads both and continues
-//! exactly: the next iteration's episodes, noise and minibatch order are those the uninterrupted run would use.
+//! end), `progress.csv` (rewritten atomically after every iteration) and `best.json`, the policy whose training
+//! rollouts scored highest so far (rewritten atomically whenever an iteration beats it). `--resume` reloads them
+//! and continues exactly: the next iteration's episodes, noise and minibatch order are those the uninterrupted run
+//! would use, and `best.json` ends as the uninterrupted run's.
 
 use std::path::{Path, PathBuf};
 
-use crate::checkpoint::{Checkpoint, FORMAT_VERSION, PolicySpec, checkpoint_path};
+use crate::checkpoint::{
+    BestBy, Checkpoint, FORMAT_VERSION, PolicySpec, Selection, best_path, checkpoint_path,
+};
 use crate::error::RlError;
 use crate::log::TrainingLog;
 use crate::ppo::{IterationStats, PpoConfig, TrainerState};
@@ -23,6 +27,9 @@ pub struct TrainRun {
     pub checkpoint_every: u64,
     /// Also keep every checkpoint written as `checkpoints/iteration-NNNNN.json` (to evaluate earlier policies).
     pub keep_checkpoints: bool,
+    /// What picks `best.json`, and the best row so far by it.
+    best_by: BestBy,
+    best: Option<Selection>,
 }
 
 /// Where a kept checkpoint of iteration `it` goes inside a run directory.
@@ -58,6 +65,8 @@ impl TrainRun {
             log: TrainingLog::default(),
             checkpoint_every: checkpoint_every.max(1),
             keep_checkpoints: false,
+            best_by: BestBy::default(),
+            best: None,
         })
     }
 
@@ -72,14 +81,67 @@ impl TrainRun {
             TrainingLog::default()
         };
         log.rows.retain(|r| r.iteration <= ck.state.iteration);
-        Ok(Self {
+        let mut run = Self {
             dir: dir.into(),
             spec: ck.spec,
             state: ck.state,
             log,
             checkpoint_every: checkpoint_every.max(1),
             keep_checkpoints: false,
-        })
+            best_by: BestBy::default(),
+            best: None,
+        };
+        // the criterion the run started with (runs from before `best.json` take the default)
+        let bp = best_path(dir);
+        if bp.exists()
+            && let Some(sel) = Checkpoint::load(&bp)?.selected
+        {
+            run.best_by = sel.by;
+        }
+        run.best = run.best_of_log();
+        Ok(run)
+    }
+
+    /// What picks `best.json`. A new run takes any; a resumed run keeps the one it started with.
+    pub fn set_best_by(&mut self, by: BestBy) -> Result<(), RlError> {
+        if by != self.best_by && !self.log.rows.is_empty() {
+            return Err(RlError::Config(format!(
+                "{} chose its best policy by {}; resume it with --best-by {}",
+                self.dir.display(),
+                self.best_by.name(),
+                self.best_by.name()
+            )));
+        }
+        self.best_by = by;
+        self.best = self.best_of_log();
+        Ok(())
+    }
+
+    pub fn best_by(&self) -> BestBy {
+        self.best_by
+    }
+
+    /// The best row so far (`best.json` holds its policy).
+    pub fn best(&self) -> Option<Selection> {
+        self.best
+    }
+
+    /// The first row with the highest score in the log. On a resumed run `best.json` may still hold the policy of
+    /// a better row that was logged after the checkpoint; the run produces that row again, bit for bit, and
+    /// rewrites the same file.
+    fn best_of_log(&self) -> Option<Selection> {
+        let mut best: Option<Selection> = None;
+        for row in &self.log.rows {
+            let score = self.best_by.score(row);
+            if beats(score, best) {
+                best = Some(Selection {
+                    by: self.best_by,
+                    score,
+                    row_iteration: row.iteration,
+                });
+            }
+        }
+        best
     }
 
     pub fn done(&self) -> bool {
@@ -91,6 +153,7 @@ impl TrainRun {
             format_version: FORMAT_VERSION,
             spec: self.spec.clone(),
             state: self.state.clone(),
+            selected: None,
         }
     }
 
@@ -104,24 +167,72 @@ impl TrainRun {
         Ok(())
     }
 
-    /// One iteration, then the log (and every `checkpoint_every` iterations or at the end, the checkpoint).
+    /// One iteration, then the log, `best.json` when the iteration's rollouts beat the best so far, and every
+    /// `checkpoint_every` iterations or at the end, the checkpoint.
     pub fn step(&mut self, factory: &EnvFactory) -> Result<IterationStats, RlError> {
+        let before = self.state.clone();
         let stats = self.state.iterate(factory)?;
-        self.record(stats)
+        self.record(stats, before)
     }
 
     /// [`Self::step`] for a distributed policy.
     pub fn step_agents(&mut self, factory: &AgentsEnvFactory) -> Result<IterationStats, RlError> {
+        let before = self.state.clone();
         let stats = self.state.iterate_agents(factory)?;
-        self.record(stats)
+        self.record(stats, before)
     }
 
-    fn record(&mut self, stats: IterationStats) -> Result<IterationStats, RlError> {
+    /// `before`: the state the iteration started from, whose policy collected the row's rollouts.
+    fn record(
+        &mut self,
+        stats: IterationStats,
+        before: TrainerState,
+    ) -> Result<IterationStats, RlError> {
         self.log.rows.push(stats.clone());
         self.log.write(&log_path(&self.dir))?;
+        let score = self.best_by.score(&stats);
+        if beats(score, self.best) {
+            let sel = Selection {
+                by: self.best_by,
+                score,
+                row_iteration: stats.iteration,
+            };
+            Checkpoint {
+                format_version: FORMAT_VERSION,
+                spec: self.spec.clone(),
+                state: before,
+                selected: Some(sel),
+            }
+            .save(&best_path(&self.dir))?;
+            self.best = Some(sel);
+        }
         if self.state.iteration.is_multiple_of(self.checkpoint_every) || self.done() {
             self.save()?;
         }
         Ok(stats)
+    }
+}
+
+/// Whether a row's score replaces the best so far (strictly higher: the first of equal rows stays; never NaN).
+fn beats(score: f64, best: Option<Selection>) -> bool {
+    !score.is_nan() && best.is_none_or(|b| score > b.score)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_a_strictly_higher_number_beats_the_best() {
+        let best = Some(Selection {
+            by: BestBy::Outflow,
+            score: 1500.0,
+            row_iteration: 3,
+        });
+        assert!(beats(1500.5, best));
+        assert!(!beats(1500.0, best), "the first of equal rows stays");
+        assert!(!beats(f64::NAN, best));
+        assert!(beats(-1.0, None));
+        assert!(!beats(f64::NAN, None), "no best from a NaN row");
     }
 }
