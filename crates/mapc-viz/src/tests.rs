@@ -388,6 +388,29 @@ fn training_curves_overlay_runs_and_tolerate_missing_columns() {
         baseline_outflow: Some(1550.0),
         ..TrainingPlotOptions::default()
     };
+    // run_a's best.json was chosen by its row 30 (only `selected` is read; the weights are left out here)
+    std::fs::write(
+        dir.join("run_a/best.json"),
+        r#"{"format_version":1,"selected":{"by":"outflow","score":1720.0,"row_iteration":30}}"#,
+    )
+    .unwrap();
+    let plain = plot_training(&[dir.join("run_a")], &dir.join("plain.png"), &opts).unwrap();
+    std::fs::remove_file(dir.join("run_a/best.json")).unwrap();
+    let unmarked = plot_training(&[dir.join("run_a")], &dir.join("unmarked.png"), &opts).unwrap();
+    assert_eq!(plain.runs[0].best_iteration, Some(30));
+    assert_eq!(unmarked.runs[0].best_iteration, None);
+    let near_black = |path: &std::path::Path| count_near(&read_png(path).unwrap().1, [0, 0, 0], 40);
+    assert!(
+        near_black(&dir.join("plain.png")) > near_black(&dir.join("unmarked.png")) + 8 * 20,
+        "no best-row marker drawn on the eight panels"
+    );
+    // a best.json that is not the trainer's is named
+    std::fs::write(dir.join("run_a/best.json"), "{\"selected\": 3}").unwrap();
+    let err = plot_training(&[dir.join("run_a")], &dir.join("x.png"), &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("best.json") && err.contains("line 1"), "{err}");
+    std::fs::remove_file(dir.join("run_a/best.json")).unwrap();
     let s = plot_training(&[dir.join("run_a"), dir.join("run_b")], &out, &opts).unwrap();
     assert_eq!(s.runs.len(), 2);
     assert_eq!(s.runs[0].rows, 60);

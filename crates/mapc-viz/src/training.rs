@@ -1,5 +1,6 @@
 //! Training curves from run directories' `progress.csv` (one row per PPO iteration): return, outflow, speed, entropy,
-//! losses and KL, several runs overlaid. Columns are found by name; a missing one leaves its panel empty.
+//! losses and KL, several runs overlaid. Columns are found by name; a missing one leaves its panel empty. A run
+//! whose directory holds the trainer's `best.json` gets a marker on the log row that chose it.
 
 use crate::VizError;
 use crate::canvas::{DrawErr, Figure, draw_to_file};
@@ -34,6 +35,9 @@ pub struct TrainingLog {
     pub label: String,
     pub columns: BTreeMap<String, Vec<Option<f64>>>,
     pub rows: usize,
+    /// The `iteration` of the row whose rollouts chose the run's `best.json` (`selected.row_iteration`), if the
+    /// run directory has one.
+    pub best_iteration: Option<u64>,
 }
 
 impl TrainingLog {
@@ -107,12 +111,64 @@ pub fn read_log(run: &Path) -> Result<TrainingLog, VizError> {
         rows += 1;
         Ok(())
     })?;
+    let best_iteration = if run.is_dir() {
+        read_best_iteration(&run.join("best.json"))?
+    } else {
+        None
+    };
     Ok(TrainingLog {
         path,
         label,
         columns,
         rows,
+        best_iteration,
     })
+}
+
+/// `selected.row_iteration` of a trainer's `best.json` (only that field is read); `None` without the file.
+fn read_best_iteration(path: &Path) -> Result<Option<u64>, VizError> {
+    #[derive(serde::Deserialize)]
+    struct Best {
+        selected: Selected,
+    }
+    #[derive(serde::Deserialize)]
+    struct Selected {
+        row_iteration: u64,
+    }
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => {
+            return Err(VizError::Input {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            });
+        }
+    };
+    let best: Best = serde_json::from_str(&text).map_err(|e| VizError::Input {
+        path: path.to_path_buf(),
+        message: format!(
+            "line {} column {}: {e} (expected the trainer's best.json, with `selected.row_iteration`)",
+            e.line(),
+            e.column()
+        ),
+    })?;
+    Ok(Some(best.selected.row_iteration))
+}
+
+impl TrainingLog {
+    /// The best row's point in `(x, y)`, when the run has a `best.json` and the row has both values.
+    fn best_point(&self, x: &str, y: &str) -> Option<(f64, f64)> {
+        let it = self.best_iteration? as f64;
+        let row = self
+            .columns
+            .get("iteration")?
+            .iter()
+            .position(|v| *v == Some(it))?;
+        let xv = self.x_values(x)?.get(row).copied().flatten()?;
+        let yv = self.columns.get(y)?.get(row).copied().flatten()?;
+        (xv.is_finite() && yv.is_finite()).then_some((xv, yv))
+    }
 }
 
 /// What goes across the panels.
@@ -194,6 +250,8 @@ pub struct RunSummary {
     pub missing_columns: Vec<String>,
     /// Last finite value of each plotted column.
     pub last: BTreeMap<String, f64>,
+    /// The row marked as the one that chose `best.json`, if any.
+    pub best_iteration: Option<u64>,
 }
 
 /// The panels: column and title with units.
@@ -267,6 +325,7 @@ pub fn plot_training(
                         .map(|(_, y)| (c.to_string(), *y))
                 })
                 .collect(),
+            best_iteration: l.best_iteration,
         })
         .collect();
     Ok(TrainingPlotSummary {
@@ -392,6 +451,28 @@ impl Figure for TrainingFigure<'_> {
                     chart
                         .draw_series(s.iter().map(|p| Circle::new(*p, 4, color.filled())))
                         .d()?;
+                }
+            }
+            // the rows that chose each run's best.json: a ring in the run's colour around a black dot (named once
+            // in the legend)
+            let mut named = false;
+            for (i, _) in &series {
+                if let Some(p) = self.logs[*i].best_point(xcol, col) {
+                    let color = run_color(*i);
+                    let drawn = chart
+                        .draw_series([
+                            Circle::new(p, 7, color.stroke_width(3)),
+                            Circle::new(p, 3, BLACK.filled()),
+                        ])
+                        .d()?;
+                    if !named {
+                        named = true;
+                        drawn.label("row that chose best.json").legend(|(x, y)| {
+                            EmptyElement::at((x + 10, y))
+                                + Circle::new((0, 0), 6, BLACK.stroke_width(2))
+                                + Circle::new((0, 0), 2, BLACK.filled())
+                        });
+                    }
                 }
             }
             if let Some(b) = baseline {
