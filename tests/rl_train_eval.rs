@@ -183,6 +183,13 @@ fn tiny_training_resume_and_eval() {
         .output()
         .unwrap();
     common::assert_success(&out);
+    // a run directory is evaluated at its last checkpoint; the report points at the best policy beside it
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains("after 3 iterations; its best by training outflow")
+            && said.contains("best.json"),
+        "{said}"
+    );
     let csv = std::fs::read_to_string(&trace).unwrap();
     let mut lines = csv.lines();
     assert_eq!(

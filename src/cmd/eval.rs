@@ -153,5 +153,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     println!("  {:.1} s wall", report.wall_s);
+    // a run directory means its last checkpoint; its best policy is a file beside it
+    let best = mapc_rl::checkpoint::best_path(&args.policy);
+    if args.policy.is_dir()
+        && let Ok(Checkpoint {
+            selected: Some(sel),
+            state,
+            ..
+        }) = Checkpoint::load(&best)
+    {
+        println!(
+            "  (this is the run's last policy, after {} iterations; its best by training {}, after {}, is {})",
+            ck.state.iteration,
+            sel.by.name(),
+            state.iteration,
+            best.display()
+        );
+    }
     Ok(())
 }
