@@ -203,6 +203,20 @@ fn tiny_training_resume_and_eval() {
     );
     let last_t: f64 = rows.last().unwrap()[0].parse().unwrap();
     assert!(last_t > 999.0, "trace ends at {last_t} s");
+
+    // a run without best.json (as runs from before it were) may pick a criterion when resumed; its best.json
+    // starts with the rows to come
+    std::fs::remove_file(dir.join("best.json")).unwrap();
+    let out = mapc()
+        .args(["train", "--iters", "4", "--best-by", "speed", "--resume"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let best = read_json(&dir.join("best.json"));
+    assert_eq!(best["selected"]["by"], "speed");
+    assert_eq!(best["selected"]["row_iteration"], 4);
+    assert_eq!(best["state"]["iteration"], 3);
     std::fs::remove_dir_all(&dir).ok();
     std::fs::remove_dir_all(&straight).ok();
 }

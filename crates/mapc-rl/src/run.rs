@@ -30,6 +30,8 @@ pub struct TrainRun {
     /// What picks `best.json`, and the best row so far by it.
     best_by: BestBy,
     best: Option<Selection>,
+    /// The run's `best.json` already says what picks it (a resumed run keeps that).
+    best_by_fixed: bool,
 }
 
 /// Where a kept checkpoint of iteration `it` goes inside a run directory.
@@ -67,6 +69,7 @@ impl TrainRun {
             keep_checkpoints: false,
             best_by: BestBy::default(),
             best: None,
+            best_by_fixed: false,
         })
     }
 
@@ -90,21 +93,27 @@ impl TrainRun {
             keep_checkpoints: false,
             best_by: BestBy::default(),
             best: None,
+            best_by_fixed: false,
         };
-        // the criterion the run started with (runs from before `best.json` take the default)
+        // the criterion the run started with, and the best row so far by it; a run from before `best.json`
+        // existed has no policy of its earlier rows to keep, so its `best.json` starts with the rows to come
         let bp = best_path(dir);
         if bp.exists()
             && let Some(sel) = Checkpoint::load(&bp)?.selected
         {
             run.best_by = sel.by;
+            run.best_by_fixed = true;
+            run.best = run.best_of_log();
         }
-        run.best = run.best_of_log();
         Ok(run)
     }
 
-    /// What picks `best.json`. A new run takes any; a resumed run keeps the one it started with.
+    /// What picks `best.json`. A new run takes any; a resumed run keeps the one its `best.json` names.
     pub fn set_best_by(&mut self, by: BestBy) -> Result<(), RlError> {
-        if by != self.best_by && !self.log.rows.is_empty() {
+        if by == self.best_by {
+            return Ok(());
+        }
+        if self.best_by_fixed {
             return Err(RlError::Config(format!(
                 "{} chose its best policy by {}; resume it with --best-by {}",
                 self.dir.display(),
@@ -113,12 +122,7 @@ impl TrainRun {
             )));
         }
         self.best_by = by;
-        self.best = self.best_of_log();
         Ok(())
-    }
-
-    pub fn best_by(&self) -> BestBy {
-        self.best_by
     }
 
     /// The best row so far (`best.json` holds its policy).
