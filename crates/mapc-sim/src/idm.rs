@@ -254,7 +254,7 @@ impl IdmParams {
     /// one call after another elsewhere or for sub-step counts and exponents the pairs do not cover. A planning
     /// step makes most of its IDM calls (own leader, free speed, the vehicles on the next lanes) with arguments
     /// known at its start, so it computes them together.
-    #[inline]
+    #[inline(always)]
     pub fn next_speed_x4(
         &self,
         gap: [f64; 4],
