@@ -6,6 +6,14 @@ mod common;
 
 use common::mapc_command as mapc;
 
+/// `mapc ARGS PATH`: the arguments, then one path (a run directory or a file), run to the end.
+fn mapc_with<const N: usize>(
+    args: [&str; N],
+    path: impl AsRef<std::ffi::OsStr>,
+) -> std::process::Output {
+    mapc().args(args).arg(path).output().unwrap()
+}
+
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("mapc-rl-e2e-{}-{name}", std::process::id()));
     std::fs::remove_dir_all(&d).ok();
@@ -32,11 +40,7 @@ fn tiny_train(dir: &PathBuf, iters: u64) -> std::process::Output {
 
 /// `mapc eval` of a policy file that must be refused: exit 2; returns the message.
 fn refused_policy(policy: &Path) -> String {
-    let out = mapc()
-        .args(["eval", "--seeds", "1", "--policy"])
-        .arg(policy)
-        .output()
-        .unwrap();
+    let out = mapc_with(["eval", "--seeds", "1", "--policy"], policy);
     assert_eq!(out.status.code(), Some(2));
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
@@ -105,11 +109,7 @@ fn tiny_training_resume_and_eval() {
 
     // Continue to 3 iterations; the same run done in one go must give the same third row (bit for bit, wall
     // time aside).
-    let out = mapc()
-        .args(["train", "--iters", "3", "--json", "--resume"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = mapc_with(["train", "--iters", "3", "--json", "--resume"], &dir);
     common::assert_success(&out);
     let straight = tmp("straight");
     assert!(tiny_train(&straight, 3).status.success());
@@ -125,32 +125,30 @@ fn tiny_training_resume_and_eval() {
         best["selected"]["row_iteration"]
     );
     // a resumed run keeps the criterion it started with
-    let out = mapc()
-        .args(["train", "--iters", "4", "--best-by", "speed", "--resume"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = mapc_with(
+        ["train", "--iters", "4", "--best-by", "speed", "--resume"],
+        &dir,
+    );
     assert_eq!(out.status.code(), Some(2));
     let msg = String::from_utf8_lossy(&out.stderr);
     assert!(msg.contains("--best-by outflow"), "{msg}");
     // the best policy is a checkpoint `mapc eval` reads
-    let out = mapc()
-        .args([
+    let out = mapc_with(
+        [
             "eval",
             "--seeds",
             "1",
             "--no-baseline",
             "--json",
             "--policy",
-        ])
-        .arg(dir.join("best.json"))
-        .output()
-        .unwrap();
+        ],
+        dir.join("best.json"),
+    );
     common::assert_success(&out);
 
     // Evaluate on 3 seeds: the JSON has mapc sim's shape plus the baseline and the test.
-    let out = mapc()
-        .args([
+    let out = mapc_with(
+        [
             "eval",
             "--scenario",
             "simple_merge",
@@ -158,10 +156,9 @@ fn tiny_training_resume_and_eval() {
             "3",
             "--json",
             "--policy",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
+        ],
+        &dir,
+    );
     common::assert_success(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     for k in ["outflow", "inflow", "speed"] {
@@ -204,14 +201,23 @@ fn tiny_training_resume_and_eval() {
     let last_t: f64 = rows.last().unwrap()[0].parse().unwrap();
     assert!(last_t > 999.0, "trace ends at {last_t} s");
 
+    // a best.json that cannot be read does not stop the evaluation of the run; the hint names the file
+    std::fs::write(dir.join("best.json"), "{ not json").unwrap();
+    let out = mapc_with(["eval", "--seeds", "1", "--no-baseline", "--policy"], &dir);
+    common::assert_success(&out);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains("could not be read") && said.contains("best.json") && said.contains("line 1"),
+        "{said}"
+    );
+
     // a run without best.json (as runs from before it were) may pick a criterion when resumed; its best.json
     // starts with the rows to come
     std::fs::remove_file(dir.join("best.json")).unwrap();
-    let out = mapc()
-        .args(["train", "--iters", "4", "--best-by", "speed", "--resume"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = mapc_with(
+        ["train", "--iters", "4", "--best-by", "speed", "--resume"],
+        &dir,
+    );
     common::assert_success(&out);
     let best = read_json(&dir.join("best.json"));
     assert_eq!(best["selected"]["by"], "speed");
@@ -243,18 +249,17 @@ fn policy_with_another_observation_size_is_a_clear_error() {
         .output()
         .unwrap();
     common::assert_success(&out);
-    let out = mapc()
-        .args([
+    let out = mapc_with(
+        [
             "eval",
             "--seeds",
             "2",
             "--scenario",
             "simple_merge",
             "--policy",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
+        ],
+        &dir,
+    );
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -333,11 +338,7 @@ fn tiny_distributed_training_resume_and_eval() {
     );
 
     // resumed to 3 iterations = 3 iterations in one go (wall time aside)
-    let out = mapc()
-        .args(["train", "--iters", "3", "--json", "--resume"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = mapc_with(["train", "--iters", "3", "--json", "--resume"], &dir);
     common::assert_success(&out);
     let straight = tmp("dist-straight");
     common::assert_success(&tiny_distributed_train(&straight, 3));
@@ -428,18 +429,17 @@ fn the_value_net_is_shared_or_separate() {
     );
     // both evaluate
     for d in [&dir, &separate] {
-        let out = mapc()
-            .args([
+        let out = mapc_with(
+            [
                 "eval",
                 "--seeds",
                 "1",
                 "--json",
                 "--no-baseline",
                 "--policy",
-            ])
-            .arg(d)
-            .output()
-            .unwrap();
+            ],
+            d,
+        );
         common::assert_success(&out);
     }
     std::fs::remove_dir_all(&dir).ok();

@@ -153,22 +153,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     println!("  {:.1} s wall", report.wall_s);
-    // a run directory means its last checkpoint; its best policy is a file beside it
+    // a run directory means its last checkpoint; its best policy is a file beside it (a hint: a best.json that
+    // cannot be read is named, and the evaluation above stands)
     let best = mapc_rl::checkpoint::best_path(&args.policy);
-    if args.policy.is_dir()
-        && let Ok(Checkpoint {
-            selected: Some(sel),
-            state,
-            ..
-        }) = Checkpoint::load(&best)
-    {
-        println!(
-            "  (this is the run's last policy, after {} iterations; its best by training {}, after {}, is {})",
-            ck.state.iteration,
-            sel.by.name(),
-            state.iteration,
-            best.display()
-        );
+    if args.policy.is_dir() && best.exists() {
+        match Checkpoint::load(&best) {
+            Ok(Checkpoint {
+                selected: Some(sel),
+                state,
+                ..
+            }) => println!(
+                "  (this is the run's last policy, after {} iterations; its best by training {}, after {}, is {})",
+                ck.state.iteration,
+                sel.by.name(),
+                state.iteration,
+                best.display()
+            ),
+            Ok(_) => println!("  ({} holds no `selected` field)", best.display()),
+            Err(e) => println!("  (the run's best policy could not be read: {e})"),
+        }
     }
     Ok(())
 }

@@ -134,16 +134,9 @@ impl TrainRun {
     /// a better row that was logged after the checkpoint; the run produces that row again, bit for bit, and
     /// rewrites the same file.
     fn best_of_log(&self) -> Option<Selection> {
-        let mut best: Option<Selection> = None;
+        let mut best = None;
         for row in &self.log.rows {
-            let score = self.best_by.score(row);
-            if beats(score, best) {
-                best = Some(Selection {
-                    by: self.best_by,
-                    score,
-                    row_iteration: row.iteration,
-                });
-            }
+            offer(&mut best, self.best_by, row);
         }
         best
     }
@@ -194,21 +187,14 @@ impl TrainRun {
     ) -> Result<IterationStats, RlError> {
         self.log.rows.push(stats.clone());
         self.log.write(&log_path(&self.dir))?;
-        let score = self.best_by.score(&stats);
-        if beats(score, self.best) {
-            let sel = Selection {
-                by: self.best_by,
-                score,
-                row_iteration: stats.iteration,
-            };
+        if offer(&mut self.best, self.best_by, &stats) {
             Checkpoint {
                 format_version: FORMAT_VERSION,
                 spec: self.spec.clone(),
                 state: before,
-                selected: Some(sel),
+                selected: self.best,
             }
             .save(&best_path(&self.dir))?;
-            self.best = Some(sel);
         }
         if self.state.iteration.is_multiple_of(self.checkpoint_every) || self.done() {
             self.save()?;
@@ -217,26 +203,58 @@ impl TrainRun {
     }
 }
 
-/// Whether a row's score replaces the best so far (strictly higher: the first of equal rows stays; never NaN).
-fn beats(score: f64, best: Option<Selection>) -> bool {
-    !score.is_nan() && best.is_none_or(|b| score > b.score)
+/// Makes `row` the best so far when its score by `by` is strictly higher (the first of equal rows stays; a NaN
+/// score never counts); returns whether it did.
+fn offer(best: &mut Option<Selection>, by: BestBy, row: &IterationStats) -> bool {
+    let score = by.score(row);
+    if score.is_nan() || best.is_some_and(|b| score <= b.score) {
+        return false;
+    }
+    *best = Some(Selection {
+        by,
+        score,
+        row_iteration: row.iteration,
+    });
+    true
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn row(iteration: u64, mean_outflow: f64) -> IterationStats {
+        IterationStats {
+            iteration,
+            mean_outflow,
+            ..Default::default()
+        }
+    }
+
     #[test]
     fn only_a_strictly_higher_number_beats_the_best() {
-        let best = Some(Selection {
-            by: BestBy::Outflow,
-            score: 1500.0,
-            row_iteration: 3,
-        });
-        assert!(beats(1500.5, best));
-        assert!(!beats(1500.0, best), "the first of equal rows stays");
-        assert!(!beats(f64::NAN, best));
-        assert!(beats(-1.0, None));
-        assert!(!beats(f64::NAN, None), "no best from a NaN row");
+        let mut best = None;
+        assert!(
+            !offer(&mut best, BestBy::Outflow, &row(1, f64::NAN)),
+            "no best from a NaN row"
+        );
+        assert!(offer(&mut best, BestBy::Outflow, &row(2, -1.0)));
+        assert!(offer(&mut best, BestBy::Outflow, &row(3, 1500.0)));
+        assert!(
+            !offer(&mut best, BestBy::Outflow, &row(4, 1500.0)),
+            "the first of equal rows stays"
+        );
+        assert!(!offer(&mut best, BestBy::Outflow, &row(5, f64::NAN)));
+        assert!(!offer(&mut best, BestBy::Outflow, &row(6, 1499.0)));
+        assert_eq!(best.map(|b| (b.row_iteration, b.score)), Some((3, 1500.0)));
+        // the criterion picks the column
+        assert!(!offer(
+            &mut best,
+            BestBy::Outflow,
+            &IterationStats {
+                iteration: 7,
+                mean_return: 9e9,
+                ..row(7, 0.0)
+            }
+        ));
     }
 }

@@ -1505,6 +1505,7 @@ impl Simulation {
 
     fn execute_moves(&mut self) {
         let dt = self.spec.step_s;
+        let inv_dt = exact_reciprocal(dt);
         // 1. decide each vehicle's next speed from its plan and the links (plans are in this visiting order)
         let mut pi = 0;
         for li in 0..self.lane_order.len() {
@@ -1579,7 +1580,8 @@ impl Simulation {
                 // `for_each_leader` measured gaps from positions partly updated this step: leaders that moved
                 // report their new position, the rest their old one; both are safe bounds.
                 if cap.is_finite() {
-                    next = next.fmin(div_by_step(cap, dt).fmax(0.0));
+                    let cap_speed = inv_dt.map_or(cap / dt, |r| cap * r);
+                    next = next.fmin(cap_speed.fmax(0.0));
                 }
                 let v = &mut self.veh[id as usize];
                 v.accel_cmd = f64::NAN;
@@ -1902,17 +1904,12 @@ impl LazyPassSpeed {
     }
 }
 
-/// `x / dt`, as a multiplication where that gives the same bits: when `dt` is a power of two (0.5 s, 0.25 s, 1 s),
-/// `1 / dt` is exact and both operations round the same real number. The move's cap is on the chain from each
-/// moved leader to its follower, and a division is several times a multiplication's latency.
-#[inline(always)]
-fn div_by_step(x: f64, dt: f64) -> f64 {
+/// `1 / d` where multiplying by it gives the bits of dividing by `d`: when `d` is a power of two (0.5 s, 0.25 s,
+/// 1 s), `1 / d` is exact and both operations round the same real number; `None` otherwise. The move's cap is on the
+/// chain from each moved leader to its follower, and a division is several times a multiplication's latency.
+fn exact_reciprocal(d: f64) -> Option<f64> {
     const MANTISSA: u64 = (1 << 52) - 1;
-    if dt.is_normal() && dt.to_bits() & MANTISSA == 0 {
-        x * (1.0 / dt)
-    } else {
-        x / dt
-    }
+    (d.is_normal() && d.to_bits() & MANTISSA == 0).then(|| 1.0 / d)
 }
 
 /// Whether a follower behind a leader at the merge could not brake in time: it can only when the leader's
@@ -1952,6 +1949,17 @@ mod bound_tests {
             f64::MIN_POSITIVE,
             5e-324,
         ];
+        // the shortcut applies to the steps people use, not to the others
+        assert!(
+            [0.5, 0.25, 1.0, 2.0]
+                .iter()
+                .all(|&d| exact_reciprocal(d).is_some())
+        );
+        assert!(
+            [0.1, 0.3, 0.75, 5e-324]
+                .iter()
+                .all(|&d| exact_reciprocal(d).is_none())
+        );
         for &dt in &steps {
             for _ in 0..20_000 {
                 // any finite f64, subnormals and huge values included, and ordinary gaps
@@ -1960,7 +1968,7 @@ mod bound_tests {
                 let gap = (next() >> 11) as f64 / (1u64 << 53) as f64 * 400.0 - 5.0;
                 for v in [x, gap, 0.0, -0.0] {
                     assert_eq!(
-                        div_by_step(v, dt).to_bits(),
+                        exact_reciprocal(dt).map_or(v / dt, |r| v * r).to_bits(),
                         (v / dt).to_bits(),
                         "{v} / {dt}"
                     );
