@@ -71,6 +71,7 @@ pub(crate) fn run_command_line(words: &[String]) -> anyhow::Result<()> {
 
 fn main() -> ExitCode {
     restore_default_sigpipe();
+    keep_freed_memory();
     let cli = Cli::parse();
     match dispatch(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
@@ -79,6 +80,20 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(2)
         }
+    }
+}
+
+/// Training frees and reallocates the same megabyte-sized tensors thousands of times per iteration. glibc's
+/// malloc serves such blocks with `mmap` and returns freed heap tops to the system, so each reuse paid page faults
+/// and zeroed pages: about 10 % of a distributed training iteration's wall time went to the kernel. Keeping freed
+/// memory in the process (peak memory grows by a few MB) removes that; no result changes.
+fn keep_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: called first thing in main, before any allocation of note and before other threads exist;
+    // mallopt only changes allocator parameters.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 256 << 20);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 1 << 30);
     }
 }
 

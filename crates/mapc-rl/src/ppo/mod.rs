@@ -366,10 +366,15 @@ impl Batch {
 
     fn gather(&self, idx: &[usize]) -> OwnedMinibatch {
         let (d, a) = (self.obs_dim, self.act_dim);
+        // rows are a few floats wide: copied element by element (a `memcpy` call per row cost more than the
+        // copy; gathering was 4 % of a distributed iteration)
         let rows = |src: &[f32], w: usize| -> Vec<f32> {
+            if w == 1 {
+                return idx.iter().map(|&i| src[i]).collect();
+            }
             let mut v = Vec::with_capacity(idx.len() * w);
             for &i in idx {
-                v.extend_from_slice(&src[i * w..(i + 1) * w]);
+                v.extend(src[i * w..(i + 1) * w].iter().copied());
             }
             v
         };

@@ -257,7 +257,15 @@ fn leaf(values: Vec<f32>, shape: [usize; 2], device: &Device) -> Tensor<2> {
     Tensor::<2>::from_data(TensorData::new(values, shape), device)
 }
 
+/// [`fast_tanh`] on a tensor of the loss graph: one fused autodiff operation ([`fused_tanh`]) on the flex
+/// autodiff backend, whose value and gradient have the bits of [`tanh_chain`]; the chain elsewhere.
 fn burn_tanh(x: Tensor<2>) -> Tensor<2> {
+    fused_tanh::apply(&x).unwrap_or_else(|| tanh_chain(x))
+}
+
+/// The tanh as seven elementary tensor operations, each one node of the autodiff graph (burn's clamp is two
+/// masked fills): the definition [`fused_tanh`] reproduces bit for bit.
+fn tanh_chain(x: Tensor<2>) -> Tensor<2> {
     x.clamp(-TANH_INPUT_BOUND, TANH_INPUT_BOUND)
         .mul_scalar(2.0)
         .exp()
@@ -265,6 +273,117 @@ fn burn_tanh(x: Tensor<2>) -> Tensor<2> {
         .recip()
         .mul_scalar(-2.0)
         .add_scalar(1.0)
+}
+
+/// The hidden layers' tanh as one autodiff operation. As [`tanh_chain`] it cost seven tensor passes forward and
+/// eight backward (exp computed again), each with its graph node and a fresh tensor: about a third of a
+/// distributed training iteration. Here the forward pass is one loop that keeps exp(2x), and the backward pass one
+/// loop that applies, element by element, the very operations burn's backward steps of the chain apply (the same
+/// f32 operations on the same values, so the same bits): the add-scalars pass the gradient on, `mul_scalar(-2)`
+/// multiplies it by -2, `recip` by -(1 / (u u)) with u = exp(2x) + 1 (flex's `powi_scalar(-2)` is the reciprocal of
+/// the square), `exp` by exp(2x), `mul_scalar(2)` by 2, and the clamp's two masked fills zero it where x lay
+/// beyond a bound. A test compares both, value and gradient, on random and edge inputs.
+mod fused_tanh {
+    use super::TANH_INPUT_BOUND;
+    use burn::tensor::{Tensor, TensorData};
+    use burn_autodiff::Autodiff;
+    use burn_autodiff::checkpoint::base::Checkpointer;
+    use burn_autodiff::checkpoint::strategy::NoCheckpointing;
+    use burn_autodiff::grads::Gradients;
+    use burn_autodiff::ops::{Backward, Ops, OpsKind, unary};
+    use burn_backend::TensorMetadata;
+    use burn_flex::{Flex, FlexTensor};
+
+    type AutodiffFlex = Autodiff<Flex>;
+
+    #[derive(Debug)]
+    struct FusedTanh;
+
+    impl Backward<Flex, 1> for FusedTanh {
+        /// The input and exp(2 clamp(x)).
+        type State = (FlexTensor, FlexTensor);
+
+        fn backward(self, ops: Ops<Self::State, 1>, grads: &mut Gradients, _: &mut Checkpointer) {
+            let (x, e) = ops.state;
+            unary::<Flex, _>(ops.parents, ops.node, grads, |grad| {
+                let shape = grad.shape();
+                let (g, x, e) = (values(&grad), values(&x), values(&e));
+                let n = g.len();
+                let (x, e) = (&x[..n], &e[..n]);
+                let mut out = vec![0.0f32; n];
+                // branch-free over equal-length slices, so that the loop runs on vector registers (the same
+                // operations in every lane)
+                for i in 0..n {
+                    let (x, e) = (x[i], e[i]);
+                    let clamped_max = if x > TANH_INPUT_BOUND {
+                        TANH_INPUT_BOUND
+                    } else {
+                        x
+                    };
+                    let masked = (x > TANH_INPUT_BOUND) | (clamped_max < -TANH_INPUT_BOUND);
+                    let u = e + 1.0;
+                    let recip_grad = -(1.0 / (u * u));
+                    let grad = ((g[i] * -2.0) * recip_grad) * e * 2.0;
+                    out[i] = if masked { 0.0 } else { grad };
+                }
+                FlexTensor::from_data(TensorData::new(out, shape))
+            });
+        }
+    }
+
+    /// The tensor's elements in row-major order (no copy when it is stored that way).
+    fn values(t: &FlexTensor) -> std::borrow::Cow<'_, [f32]> {
+        match t.as_slice::<f32>() {
+            Some(s) => std::borrow::Cow::Borrowed(s),
+            None => std::borrow::Cow::Owned(t.to_contiguous().as_slice::<f32>().unwrap().to_vec()),
+        }
+    }
+
+    /// The fused tanh of `x` when it lives on the flex autodiff backend in f32; `None` otherwise.
+    pub(super) fn apply(x: &Tensor<2>) -> Option<Tensor<2>> {
+        if x.dtype() != burn::tensor::DType::F32 {
+            return None;
+        }
+        let shape = x.shape();
+        // (a clone shares the data and the graph node; the conversion consumes it)
+        let ad = x.clone().try_into_primitive::<AutodiffFlex>().ok()?;
+        let input = ad.primitive().clone();
+        let (y, e) = {
+            let xs = values(&input);
+            // exp is a library call per element; the rest runs on vector registers in a second loop
+            let es: Vec<f32> = xs
+                .iter()
+                .map(|&x| {
+                    // burn's clamp: clamp_min(clamp_max(x))
+                    let c = if x > TANH_INPUT_BOUND {
+                        TANH_INPUT_BOUND
+                    } else {
+                        x
+                    };
+                    let c = if c < -TANH_INPUT_BOUND {
+                        -TANH_INPUT_BOUND
+                    } else {
+                        c
+                    };
+                    (c * 2.0).exp()
+                })
+                .collect();
+            let ys: Vec<f32> = es.iter().map(|&e| (1.0 / (e + 1.0)) * -2.0 + 1.0).collect();
+            (
+                FlexTensor::from_data(TensorData::new(ys, shape.clone())),
+                FlexTensor::from_data(TensorData::new(es, shape)),
+            )
+        };
+        let out = match FusedTanh
+            .prepare::<NoCheckpointing>([ad.node()])
+            .compute_bound()
+            .stateful()
+        {
+            OpsKind::Tracked(prep) => prep.finish((input, e), y),
+            OpsKind::UnTracked(prep) => prep.finish(y),
+        };
+        Some(Tensor::from_primitive::<AutodiffFlex>(out))
+    }
 }
 
 fn burn_mlp(x: Tensor<2>, layers: &[(Tensor<2>, Tensor<2>)]) -> Tensor<2> {
@@ -681,6 +800,64 @@ mod tests {
             (p[0] - 0.9).abs() < 1e-6 && (p[1] + 1.9).abs() < 1e-6,
             "{p:?}"
         );
+    }
+
+    /// Value and gradient of `tanh` at `x` under the upstream gradient `w` (the gradient of sum(w * tanh(x))).
+    fn tanh_value_and_grad(
+        tanh: fn(Tensor<2>) -> Tensor<2>,
+        x: &[f32],
+        w: &[f32],
+    ) -> (Vec<f32>, Vec<f32>) {
+        let device = update_device();
+        let shape = [x.len() / 4, 4];
+        let xt = leaf(x.to_vec(), shape, &device).require_grad();
+        let wt = leaf(w.to_vec(), shape, &device);
+        let y = tanh(xt.clone());
+        let grads = (y.clone() * wt).sum().backward();
+        let values = |t: Tensor<2>| t.into_data().try_to_vec::<f32>().unwrap();
+        (values(y), values(xt.grad(&grads).unwrap()))
+    }
+
+    #[test]
+    fn fused_tanh_has_the_chains_bits_in_value_and_gradient() {
+        let mut rng = Rng::new(11);
+        let mut x: Vec<f32> = (0..40_000)
+            .map(|i| {
+                let scale = [0.01, 1.0, 5.0, 20.0][i % 4];
+                (rng.normal() * scale) as f32
+            })
+            .collect();
+        let edges = [
+            0.0f32,
+            -0.0,
+            15.0,
+            -15.0,
+            15.000001,
+            -15.000001,
+            14.999999,
+            -14.999999,
+            44.0,
+            -44.0,
+            100.0,
+            -100.0,
+            1e-30,
+            -1e-30,
+            f32::MIN_POSITIVE,
+            0.5,
+        ];
+        x[..edges.len()].copy_from_slice(&edges);
+        let w: Vec<f32> = (0..x.len()).map(|_| (rng.normal() * 3.0) as f32).collect();
+        // the loss graph's tensors take the fused path (not the chain as a fallback)
+        let on_update_device = leaf(x[..4].to_vec(), [1, 4], &update_device()).require_grad();
+        assert!(fused_tanh::apply(&on_update_device).is_some());
+        let (y_chain, g_chain) = tanh_value_and_grad(tanh_chain, &x, &w);
+        let (y_fused, g_fused) = tanh_value_and_grad(burn_tanh, &x, &w);
+        let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&y_fused), bits(&y_chain), "values");
+        assert_eq!(bits(&g_fused), bits(&g_chain), "gradients");
+        for (&x, &y) in x.iter().zip(&y_fused) {
+            assert_eq!(y.to_bits(), fast_tanh(x).to_bits(), "x = {x}");
+        }
     }
 
     #[test]
