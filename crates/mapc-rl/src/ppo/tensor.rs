@@ -315,12 +315,8 @@ mod fused_tanh {
                 // operations in every lane)
                 for i in 0..n {
                     let (x, e) = (x[i], e[i]);
-                    let clamped_max = if x > TANH_INPUT_BOUND {
-                        TANH_INPUT_BOUND
-                    } else {
-                        x
-                    };
-                    let masked = (x > TANH_INPUT_BOUND) | (clamped_max < -TANH_INPUT_BOUND);
+                    // the masked fills' backward: zero where either mask of the forward pass was set
+                    let masked = (x > TANH_INPUT_BOUND) | (clamp_max(x) < -TANH_INPUT_BOUND);
                     let u = e + 1.0;
                     let recip_grad = -(1.0 / (u * u));
                     let grad = ((g[i] * -2.0) * recip_grad) * e * 2.0;
@@ -328,6 +324,24 @@ mod fused_tanh {
                 }
                 FlexTensor::from_data(TensorData::new(out, shape))
             });
+        }
+    }
+
+    /// burn's clamp is `clamp_min(clamp_max(x))`, each a masked fill: `x > max` becomes max, then `< min` min
+    /// (NaN stays NaN).
+    fn clamp_max(x: f32) -> f32 {
+        if x > TANH_INPUT_BOUND {
+            TANH_INPUT_BOUND
+        } else {
+            x
+        }
+    }
+
+    fn clamp_min(x: f32) -> f32 {
+        if x < -TANH_INPUT_BOUND {
+            -TANH_INPUT_BOUND
+        } else {
+            x
         }
     }
 
@@ -353,20 +367,7 @@ mod fused_tanh {
             // exp is a library call per element; the rest runs on vector registers in a second loop
             let es: Vec<f32> = xs
                 .iter()
-                .map(|&x| {
-                    // burn's clamp: clamp_min(clamp_max(x))
-                    let c = if x > TANH_INPUT_BOUND {
-                        TANH_INPUT_BOUND
-                    } else {
-                        x
-                    };
-                    let c = if c < -TANH_INPUT_BOUND {
-                        -TANH_INPUT_BOUND
-                    } else {
-                        c
-                    };
-                    (c * 2.0).exp()
-                })
+                .map(|&x| (clamp_min(clamp_max(x)) * 2.0).exp())
                 .collect();
             let ys: Vec<f32> = es.iter().map(|&e| (1.0 / (e + 1.0)) * -2.0 + 1.0).collect();
             (
@@ -803,16 +804,24 @@ mod tests {
     }
 
     /// Value and gradient of `tanh` at `x` under the upstream gradient `w` (the gradient of sum(w * tanh(x))).
+    /// With `transposed`, `x` is stored as its transpose and `tanh` sees a non-contiguous view of it.
     fn tanh_value_and_grad(
         tanh: fn(Tensor<2>) -> Tensor<2>,
         x: &[f32],
         w: &[f32],
+        transposed: bool,
     ) -> (Vec<f32>, Vec<f32>) {
         let device = update_device();
         let shape = [x.len() / 4, 4];
-        let xt = leaf(x.to_vec(), shape, &device).require_grad();
+        let (xt, input) = if transposed {
+            let xt = leaf(x.to_vec(), [4, x.len() / 4], &device).require_grad();
+            (xt.clone(), xt.transpose())
+        } else {
+            let xt = leaf(x.to_vec(), shape, &device).require_grad();
+            (xt.clone(), xt)
+        };
         let wt = leaf(w.to_vec(), shape, &device);
-        let y = tanh(xt.clone());
+        let y = tanh(input);
         let grads = (y.clone() * wt).sum().backward();
         let values = |t: Tensor<2>| t.into_data().try_to_vec::<f32>().unwrap();
         (values(y), values(xt.grad(&grads).unwrap()))
@@ -850,11 +859,22 @@ mod tests {
         // the loss graph's tensors take the fused path (not the chain as a fallback)
         let on_update_device = leaf(x[..4].to_vec(), [1, 4], &update_device()).require_grad();
         assert!(fused_tanh::apply(&on_update_device).is_some());
-        let (y_chain, g_chain) = tanh_value_and_grad(tanh_chain, &x, &w);
-        let (y_fused, g_fused) = tanh_value_and_grad(burn_tanh, &x, &w);
         let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&y_fused), bits(&y_chain), "values");
-        assert_eq!(bits(&g_fused), bits(&g_chain), "gradients");
+        for transposed in [false, true] {
+            let (y_chain, g_chain) = tanh_value_and_grad(tanh_chain, &x, &w, transposed);
+            let (y_fused, g_fused) = tanh_value_and_grad(burn_tanh, &x, &w, transposed);
+            assert_eq!(
+                bits(&y_fused),
+                bits(&y_chain),
+                "values, transposed {transposed}"
+            );
+            assert_eq!(
+                bits(&g_fused),
+                bits(&g_chain),
+                "gradients, transposed {transposed}"
+            );
+        }
+        let (y_fused, _) = tanh_value_and_grad(burn_tanh, &x, &w, false);
         for (&x, &y) in x.iter().zip(&y_fused) {
             assert_eq!(y.to_bits(), fast_tanh(x).to_bits(), "x = {x}");
         }
