@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use mapc_sim::{MeanCi, SimSpec, Summary};
+use mapc_sim::{MeanCi, SimSpec, Summary, VehicleId};
 use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::Checkpoint;
@@ -10,8 +10,12 @@ use crate::env::distributed::{DistributedConfig, DistributedEnv};
 use crate::env::merge::{MergeEnv, MergeEnvConfig};
 use crate::env::obs::{ObsNorm, PER_AV};
 use crate::error::RlError;
+use crate::ppo::gae::EpisodeEnd;
+use crate::ppo::tensor::Model;
 use crate::rng::mix_seed;
-use crate::rollout::{ActionMode, Env, EpisodeMetrics, collect, collect_agents};
+use crate::rollout::{
+    ActionMode, Env, EpisodeMetrics, collect, collect_agents, collect_agents_with,
+};
 use crate::stats::{WelchTest, welch_t_test};
 
 /// Mean and 95% CI of one metric.
@@ -317,10 +321,70 @@ pub fn trace_distributed_policy(
     let settings = trace_settings(seed, env.horizon(), mode);
     let ep = crate::rollout::run_agents_episode(
         &mut env,
-        &ck.state.model,
+        &|_| &ck.state.model,
         &mut crate::ppo::tensor::Scratch::default(),
         settings,
         &mut |env: &DistributedEnv| write_sim_rows(env.simulation(), out),
     )?;
     Ok(ep.metrics)
+}
+
+/// One agent's own result in a distributed episode.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct AgentOutcome {
+    pub id: VehicleId,
+    /// It drove with the deviant policy.
+    pub deviant: bool,
+    /// The sum of its rewards (undiscounted).
+    pub ret: f64,
+    /// It left the control region before the horizon (its last reward was the exit bonus).
+    pub left: bool,
+    /// Steps it acted.
+    pub steps: usize,
+}
+
+/// A mixed-population episode: the traffic figures and every agent's outcome (in the order they first acted).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MixedEpisode {
+    pub metrics: EpisodeMetrics,
+    pub agents: Vec<AgentOutcome>,
+}
+
+/// Runs two distributed policies side by side: the agents for which `deviates(agent)` holds drive with
+/// `deviant`, the others with `base` (actions: the Gaussian's mean as in `mapc eval`, or sampled as in
+/// training, the noise fixed by the seed; each seed in parallel, results in seed order). Vehicle ids follow the departure schedule, so the same agent can be compared across
+/// populations on one seed: whether a policy change pays the agent that makes it, and what it costs the others.
+pub fn run_mixed_population(
+    base: &Model,
+    deviant: &Model,
+    deviates: &(dyn Fn(VehicleId) -> bool + Sync),
+    spec: &SimSpec,
+    cfg: &DistributedConfig,
+    seeds: &[u64],
+    mode: ActionMode,
+) -> Result<Vec<MixedEpisode>, RlError> {
+    let probe = DistributedEnv::new(spec.clone(), *cfg)?;
+    let horizon = probe.horizon();
+    let factory = || DistributedEnv::new(spec.clone(), *cfg).expect("validated above");
+    let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
+    let policy_of = |id: VehicleId| if deviates(id) { deviant } else { base };
+    let eps = collect_agents_with(&factory, &policy_of, &pairs, horizon, mode, true)?;
+    Ok(eps
+        .into_iter()
+        .map(|e| MixedEpisode {
+            metrics: e.metrics,
+            agents: e
+                .agents
+                .iter()
+                .zip(&e.trajectories)
+                .map(|(&id, t)| AgentOutcome {
+                    id,
+                    deviant: deviates(id),
+                    ret: t.total_reward(),
+                    left: matches!(t.end, Some(EpisodeEnd::Terminal)),
+                    steps: t.len(),
+                })
+                .collect(),
+        })
+        .collect())
 }

@@ -238,19 +238,22 @@ fn over_seeds<E, T: Send>(
 pub struct AgentsEpisode {
     /// Per-agent trajectories (kept only when recording).
     pub trajectories: Vec<Episode>,
+    /// The agent of each trajectory.
+    pub agents: Vec<VehicleId>,
     pub metrics: EpisodeMetrics,
     pub total_reward: f64,
     /// Agent-steps (actions taken).
     pub agent_steps: u64,
 }
 
-/// Runs one episode of the shared policy on every agent of a [`DistributedEnv`]: each agent acts on its own
+/// Runs one episode of a shared policy on every agent of a [`DistributedEnv`] (`policy_of(agent)`: one model for
+/// all, or two in a mixed population): each agent acts on its own
 /// observation (one acceleration), its trajectory ends when it leaves (terminal, with its exit bonus) or at the
 /// horizon (truncated, bootstrapped from its last observation). `observe` sees the environment after the reset
 /// and after every step (traces).
-pub fn run_agents_episode(
+pub fn run_agents_episode<'m>(
     env: &mut DistributedEnv,
-    model: &Model,
+    policy_of: &dyn Fn(VehicleId) -> &'m Model,
     scratch: &mut Scratch,
     settings: EpisodeSettings,
     observe: &mut dyn FnMut(&DistributedEnv) -> Result<(), RlError>,
@@ -278,11 +281,12 @@ pub fn run_agents_episode(
     for _ in 0..horizon {
         actions.clear();
         for (id, o) in &obs {
-            let po = model.infer(o, scratch);
+            let po = policy_of(*id).infer(o, scratch);
             let action = action_of(&po.mean, &po.log_std, mode, &mut rng);
             if record {
                 let k = *index.entry(*id).or_insert_with(|| {
                     out.trajectories.push(Episode::default());
+                    out.agents.push(*id);
                     out.trajectories.len() - 1
                 });
                 out.trajectories[k].record_step(o, &action, &po);
@@ -315,7 +319,9 @@ pub fn run_agents_episode(
             .collect();
         open.sort_unstable_by_key(|&(_, k)| k);
         for (id, k) in open {
-            let bootstrap_value = last.get(&id).map_or(0.0, |o| model.value(o, scratch));
+            let bootstrap_value = last
+                .get(&id)
+                .map_or(0.0, |o| policy_of(id).value(o, scratch));
             out.trajectories[k].end = Some(EpisodeEnd::Truncated { bootstrap_value });
         }
     }
@@ -335,12 +341,26 @@ pub fn collect_agents(
     mode: ActionMode,
     record: bool,
 ) -> Result<Vec<AgentsEpisode>, RlError> {
+    collect_agents_with(factory, &|_| model, seeds, horizon, mode, record)
+}
+
+/// [`collect_agents`] with each agent's model chosen by `policy_of(agent)`.
+pub fn collect_agents_with<'m>(
+    factory: &AgentsEnvFactory,
+    policy_of: &(dyn Fn(VehicleId) -> &'m Model + Sync),
+    seeds: &[(u64, u64)],
+    horizon: usize,
+    mode: ActionMode,
+    record: bool,
+) -> Result<Vec<AgentsEpisode>, RlError> {
     over_seeds(
         factory,
         seeds,
         horizon,
         mode,
         record,
-        |env, scratch, settings| run_agents_episode(env, model, scratch, settings, &mut |_| Ok(())),
+        |env, scratch, settings| {
+            run_agents_episode(env, policy_of, scratch, settings, &mut |_| Ok(()))
+        },
     )
 }

@@ -493,7 +493,7 @@ mod episode_tests {
         };
         run_agents_episode(
             &mut env,
-            &model,
+            &|_| &model,
             &mut Scratch::default(),
             settings,
             &mut |_| Ok(()),
@@ -587,5 +587,75 @@ mod episode_tests {
             assert_eq!(x.rewards, y.rewards);
         }
         assert_ne!(a.total_reward, episode(6).total_reward);
+    }
+
+    #[test]
+    fn a_mixed_population_drives_each_agent_with_its_own_policy() {
+        let cfg = config();
+        let spec = simple_merge(400);
+        let arch = Architecture {
+            obs_dim: cfg.obs_dim(),
+            act_dim: 1,
+            hidden: vec![16, 8],
+            shared_value: false,
+        };
+        let (a, b) = (Model::new(arch.clone(), 7), Model::new(arch, 8));
+        let seeds = [3, 4];
+        let odd = |id: VehicleId| id % 2 == 1;
+        let run = |base: &Model, deviant: &Model, deviates: &(dyn Fn(VehicleId) -> bool + Sync)| {
+            crate::eval::run_mixed_population(
+                base,
+                deviant,
+                deviates,
+                &spec,
+                &cfg,
+                &seeds,
+                ActionMode::Sample,
+            )
+            .unwrap()
+        };
+        let all_a = run(&a, &b, &|_| false);
+        let outcomes = |eps: &[crate::eval::MixedEpisode]| -> Vec<_> {
+            eps.iter()
+                .map(|e| {
+                    let agents: Vec<_> = e
+                        .agents
+                        .iter()
+                        .map(|x| (x.id, x.ret, x.left, x.steps))
+                        .collect();
+                    (e.metrics, agents)
+                })
+                .collect()
+        };
+        // the deviant policy is the base one: nothing changes but the labels
+        assert_eq!(outcomes(&run(&a, &a, &odd)), outcomes(&all_a));
+        // the odd agents on `b` among `a` is the even agents on `a` among `b`, agent for agent
+        let mixed = run(&a, &b, &odd);
+        let swapped = run(&b, &a, &|id| !odd(id));
+        for (m, s) in mixed.iter().zip(&swapped) {
+            assert_eq!(m.metrics, s.metrics);
+            assert_eq!(m.agents.len(), s.agents.len());
+            for (x, y) in m.agents.iter().zip(&s.agents) {
+                assert_eq!(
+                    (x.id, x.ret, x.left, x.steps),
+                    (y.id, y.ret, y.left, y.steps)
+                );
+                assert_eq!(x.deviant, odd(x.id));
+                assert_eq!(y.deviant, !odd(y.id));
+            }
+        }
+        assert_ne!(outcomes(&mixed), outcomes(&all_a));
+        for e in &mixed {
+            assert!(e.agents.iter().any(|x| x.deviant) && e.agents.iter().any(|x| !x.deviant));
+            for x in &e.agents {
+                // a step's reward lies in [-0.09, -0.08]; the exit bonus only in the step an agent leaves
+                let steps_part = x.ret - if x.left { 20.0 } else { 0.0 };
+                let n = (x.steps - x.left as usize) as f64;
+                assert!(
+                    steps_part >= -0.0901 * n - 1e-3 && steps_part <= -0.0799 * n + 1e-3,
+                    "{x:?}"
+                );
+            }
+        }
     }
 }
