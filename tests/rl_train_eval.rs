@@ -316,6 +316,11 @@ fn tiny_distributed_training_resume_and_eval() {
         "{spec}"
     );
     assert_eq!(spec["distributed"]["reward"]["exit_bonus"], 20.0, "{spec}");
+    // no reward share (the paper's setting) leaves the checkpoint as it was before the option existed
+    assert!(
+        spec["distributed"]["reward"].get("share").is_none(),
+        "{spec}"
+    );
     // the paper's distributed hyperparameters, learning-rate schedule included
     assert_eq!(
         ck["state"]["config"]["gamma"].as_f64().unwrap() as f32,
@@ -469,6 +474,15 @@ fn distributed_flags_are_checked() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("radar"));
+    // a reward share is a fraction
+    let out = mapc()
+        .args(["train", "--distributed", "--reward-share", "1.5"])
+        .args(["--iters", "1", "-o"])
+        .arg(tmp("bad-share"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--reward-share must lie in [0, 1]"));
     let out = mapc()
         .args([
             "train",

@@ -47,6 +47,11 @@ pub struct Args {
     /// paper; closes the loophole of holding back the entry).
     #[arg(long, requires = "distributed")]
     pub count_waiting: bool,
+    /// Distributed: share of each step's mean agent reward that every agent gets in place of as much of its own,
+    /// from 0 (its own reward: the paper) to 1 (all agents get the mean). Credits agents for what happens to
+    /// the others (not in the paper).
+    #[arg(long, default_value_t = 0.0, requires = "distributed")]
+    pub reward_share: f64,
     /// The value function: `shared` (one more output of the policy net, so both train the same hidden layers:
     /// RLlib's `vf_share_layers`, which the paper's distributed runs used) or `separate` (a net of its own, as
     /// in the paper's centralized runs) [preset: distributed shared, centralized separate].
@@ -313,6 +318,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     bail!("--{name} must be a number, got {v}");
                 }
             }
+            if !(0.0..=1.0).contains(&args.reward_share) {
+                bail!(
+                    "--reward-share must lie in [0, 1], got {}",
+                    args.reward_share
+                );
+            }
             spec.reward = "distributed".into();
             spec.obs_dim = features.obs_dim();
             spec.act_dim = 1;
@@ -323,6 +334,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     eta2: args.eta2,
                     exit_bonus: args.exit_bonus,
                     count_waiting: args.count_waiting,
+                    share: args.reward_share,
                 },
                 dist_norm: SIMPLE_MERGE_DIST_NORM,
             });

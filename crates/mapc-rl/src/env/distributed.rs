@@ -100,6 +100,15 @@ pub struct AgentReward {
     /// back the entry raises the mean speed of those inside).
     #[serde(default)]
     pub count_waiting: bool,
+    /// Share of the step's mean agent reward that each agent gets in place of as much of its own: `(1 - share)
+    /// own + share * mean over the agents that acted` (not in the paper, which has 0). Agents are then credited
+    /// for what happens to the others.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub share: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl AgentReward {
@@ -109,6 +118,7 @@ impl AgentReward {
         eta2: 0.1,
         exit_bonus: 20.0,
         count_waiting: false,
+        share: 0.0,
     };
 
     /// One agent's reward for a step after which the network's mean speed over V is `speed_ratio`.
@@ -345,15 +355,26 @@ impl DistributedEnv {
             speeds.resize(speeds.len() + sim.waiting_to_enter(), 0.0);
         }
         let speed_ratio = super::obs::speed_reward(&speeds, self.cfg.norm.max_speed);
-        let mut rewards = Vec::with_capacity(actions.len());
+        let mut own = Vec::with_capacity(actions.len());
         let mut newly_gone = Vec::new();
         for &(id, _) in actions {
             let done = !sim.in_control_region(id);
             if done {
                 newly_gone.push(id);
             }
-            rewards.push((id, self.cfg.reward.of(done, speed_ratio) as f32, done));
+            own.push((id, self.cfg.reward.of(done, speed_ratio), done));
         }
+        let share = self.cfg.reward.share;
+        if share != 0.0 && !own.is_empty() {
+            let mean = own.iter().map(|&(_, r, _)| r).sum::<f64>() / own.len() as f64;
+            for (_, r, _) in &mut own {
+                *r = (1.0 - share) * *r + share * mean;
+            }
+        }
+        let rewards = own
+            .into_iter()
+            .map(|(id, r, done)| (id, r as f32, done))
+            .collect();
         self.gone.extend(newly_gone);
         Ok(AgentsStep {
             rewards,
@@ -558,6 +579,65 @@ mod episode_tests {
             })
         };
         assert_eq!(run(1), run(3));
+    }
+
+    #[test]
+    fn a_reward_share_moves_reward_between_agents_and_keeps_the_sum() {
+        // two environments in lockstep with the same actions (rewards do not move vehicles)
+        let mut shared_cfg = config();
+        shared_cfg.reward.share = 1.0;
+        let mut half_cfg = config();
+        half_cfg.reward.share = 0.5;
+        let envs = [config(), shared_cfg, half_cfg]
+            .map(|c| DistributedEnv::new(simple_merge(600), c).unwrap());
+        let [mut own, mut shared, mut half] = envs;
+        let mut obs = own.reset(2).unwrap();
+        assert_eq!(shared.reset(2).unwrap(), obs);
+        assert_eq!(half.reset(2).unwrap(), obs);
+        let (mut multi_agent_steps, mut unequal_steps) = (0, 0);
+        for t in 0..600 {
+            // brake and accelerate in turns, so agents' rewards differ (some leave, with the bonus)
+            let a = if (t / 40) % 2 == 0 { -1.0 } else { 1.0 };
+            let actions: Vec<(VehicleId, f32)> = obs.iter().map(|(id, _)| (*id, a)).collect();
+            let (o, s, h) = (
+                own.step(&actions).unwrap(),
+                shared.step(&actions).unwrap(),
+                half.step(&actions).unwrap(),
+            );
+            assert_eq!(o.obs, s.obs);
+            let n = o.rewards.len();
+            if n > 1 {
+                multi_agent_steps += 1;
+            }
+            if n == 0 {
+                obs = o.obs;
+                continue;
+            }
+            let mean = o.rewards.iter().map(|&(_, r, _)| r as f64).sum::<f64>() / n as f64;
+            let spread = |rs: &[(VehicleId, f32, bool)]| {
+                let max = rs.iter().map(|r| r.1).fold(f32::MIN, f32::max);
+                let min = rs.iter().map(|r| r.1).fold(f32::MAX, f32::min);
+                (max - min) as f64
+            };
+            if spread(&o.rewards) > 1.0 {
+                unequal_steps += 1;
+            }
+            for ((x, y), z) in o.rewards.iter().zip(&s.rewards).zip(&h.rewards) {
+                // same agents, same done flags; all get the mean, or halfway to it
+                assert_eq!((x.0, x.2), (y.0, y.2));
+                assert_eq!((x.0, x.2), (z.0, z.2));
+                assert!((y.1 as f64 - mean).abs() < 1e-5, "{y:?} {mean}");
+                let halfway = 0.5 * x.1 as f64 + 0.5 * mean;
+                assert!((z.1 as f64 - halfway).abs() < 1e-5, "{z:?} {halfway}");
+            }
+            assert!(spread(&s.rewards) < 1e-6);
+            obs = o.obs;
+        }
+        // the check saw steps with several agents whose own rewards differ (an exit bonus among time penalties)
+        assert!(
+            multi_agent_steps > 100 && unequal_steps > 0,
+            "{multi_agent_steps} {unequal_steps}"
+        );
     }
 
     #[test]
