@@ -452,6 +452,41 @@ fn the_value_net_is_shared_or_separate() {
 }
 
 #[test]
+fn a_reward_share_is_kept_in_the_checkpoint() {
+    let dir = tmp("dist-share");
+    common::assert_success(&tiny_distributed_train_with(
+        &dir,
+        1,
+        &["--reward-share", "0.5"],
+    ));
+    let ck = read_json(&dir.join("checkpoint.json"));
+    assert_eq!(
+        ck["spec"]["distributed"]["reward"]["share"], 0.5,
+        "{}",
+        ck["spec"]
+    );
+    // a resumed run trains with the share it was started with: the flag cannot change it
+    let out = mapc()
+        .args([
+            "train",
+            "--distributed",
+            "--reward-share",
+            "0.2",
+            "--resume",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--reward-share") && err.contains("--resume"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn distributed_flags_are_checked() {
     // a learning-rate schedule must go forward in steps
     let cfg = tmp("schedule").with_extension("toml");
@@ -475,14 +510,20 @@ fn distributed_flags_are_checked() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("radar"));
     // a reward share is a fraction
-    let out = mapc()
-        .args(["train", "--distributed", "--reward-share", "1.5"])
-        .args(["--iters", "1", "-o"])
-        .arg(tmp("bad-share"))
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--reward-share must lie in [0, 1]"));
+    for bad in ["1.5", "nan", "-1"] {
+        let out = mapc()
+            .args(["train", "--distributed", &format!("--reward-share={bad}")])
+            .args(["--iters", "1", "-o"])
+            .arg(tmp("bad-share"))
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{bad}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("--reward-share must lie in [0, 1]"),
+            "{bad}: {err}"
+        );
+    }
     let out = mapc()
         .args([
             "train",

@@ -50,7 +50,12 @@ pub struct Args {
     /// Distributed: share of each step's mean agent reward that every agent gets in place of as much of its own,
     /// from 0 (its own reward: the paper) to 1 (all agents get the mean). Credits agents for what happens to
     /// the others (not in the paper).
-    #[arg(long, default_value_t = 0.0, requires = "distributed")]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        requires = "distributed",
+        conflicts_with = "resume"
+    )]
     pub reward_share: f64,
     /// The value function: `shared` (one more output of the policy net, so both train the same hidden layers:
     /// RLlib's `vf_share_layers`, which the paper's distributed runs used) or `separate` (a net of its own, as

@@ -12,7 +12,8 @@
 //!
 //! SEEDS: evaluation seeds 0.. (default 100); ONE_IN: one agent in this many deviates (default 8, by a hash of
 //! its id, so the deviants are spread over the flow); `--sample`: sampled actions, the policy training
-//! optimises (default: the Gaussian's mean, as `mapc eval`).
+//! optimises (default: the Gaussian's mean, as `mapc eval`). Returns are each agent's own (undiscounted, no
+//! reward share); a row's seeds are those where it found an agent to compare.
 
 use std::path::Path;
 
@@ -44,13 +45,15 @@ fn main() -> anyhow::Result<()> {
     }
     let base = Checkpoint::load(Path::new(base_path))?;
     let deviant = Checkpoint::load(Path::new(deviant_path))?;
-    let cfg = base
+    let mut cfg = base
         .spec
         .distributed_config()
         .context("BASE is not a distributed policy")?;
     if deviant.spec.distributed_config() != Some(cfg) {
         bail!("the two policies were trained with different observations or rewards");
     }
+    // each agent's own return, also for a run trained with a shared reward (rewards move no vehicle)
+    cfg.reward.share = 0.0;
     let resolved = mapc_scenario::ResolvedScenario::load("simple_merge")?;
     let spec = mapc_sim::spec_from_scenario(&resolved)?;
     let seeds: Vec<u64> = (0..n_seeds).collect();
@@ -83,31 +86,38 @@ fn main() -> anyhow::Result<()> {
         );
     }
     println!("\nchange in an agent's return, same seeds and agents (mean over seeds +- 95 % CI):");
-    let rows: [(&str, &[MixedEpisode], &[MixedEpisode], bool); 4] = [
+    // which agents a row compares: the focal ones (Some(true)), the others (Some(false)), or all (None)
+    let rows = [
         (
             "1. focal agents switch to DEVIANT",
             &focal_deviate,
             &all_base,
-            true,
+            Some(true),
         ),
         (
             "2. ... the others (kept BASE)",
             &focal_deviate,
             &all_base,
-            false,
+            Some(false),
         ),
-        ("3. everyone switches", &all_deviant, &all_base, true),
+        ("3. everyone switches", &all_deviant, &all_base, None),
         (
             "4. focal agents keep BASE among DEVIANT",
             &focal_keep_base,
             &all_deviant,
-            true,
+            Some(true),
         ),
     ];
-    for (name, after, before, want_focal) in rows {
-        let select = |id: VehicleId| name.starts_with("3.") || focal(id) == want_focal;
-        let change = MeanCi::of(&paired_change(after, before, select));
-        println!("{name:<42} {:>+7.3} +- {:.3}", change.mean, change.ci95);
+    for (name, after, before, which) in rows {
+        let select = |id: VehicleId| which.is_none_or(|f| focal(id) == f);
+        let per_seed = paired_change(after, before, select);
+        let change = MeanCi::of(&per_seed);
+        println!(
+            "{name:<42} {:>+7.3} +- {:.3}   ({} seeds)",
+            change.mean,
+            change.ci95,
+            per_seed.len()
+        );
     }
     Ok(())
 }

@@ -13,9 +13,7 @@ use crate::error::RlError;
 use crate::ppo::gae::EpisodeEnd;
 use crate::ppo::tensor::Model;
 use crate::rng::mix_seed;
-use crate::rollout::{
-    ActionMode, Env, EpisodeMetrics, collect, collect_agents, collect_agents_with,
-};
+use crate::rollout::{ActionMode, Env, EpisodeMetrics, collect, collect_agents_with};
 use crate::stats::{WelchTest, welch_t_test};
 
 /// Mean and 95% CI of one metric.
@@ -300,12 +298,25 @@ pub fn run_distributed_policy(
     seeds: &[u64],
     mode: ActionMode,
 ) -> Result<Vec<EpisodeMetrics>, RlError> {
+    let eps = agent_episodes(spec, cfg, seeds, &|_| &ck.state.model, mode, false)?;
+    Ok(eps.into_iter().map(|e| e.metrics).collect())
+}
+
+/// The evaluation episodes of a distributed setting, one per seed (its noise stream fixed by the seed), each
+/// agent driving with `policy_of(agent)`.
+fn agent_episodes<'m>(
+    spec: &SimSpec,
+    cfg: &DistributedConfig,
+    seeds: &[u64],
+    policy_of: &(dyn Fn(VehicleId) -> &'m Model + Sync),
+    mode: ActionMode,
+    record: bool,
+) -> Result<Vec<crate::rollout::AgentsEpisode>, RlError> {
     let probe = DistributedEnv::new(spec.clone(), *cfg)?;
     let horizon = probe.horizon();
     let factory = || DistributedEnv::new(spec.clone(), *cfg).expect("validated above");
     let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
-    let eps = collect_agents(&factory, &ck.state.model, &pairs, horizon, mode, false)?;
-    Ok(eps.into_iter().map(|e| e.metrics).collect())
+    collect_agents_with(&factory, policy_of, &pairs, horizon, mode, record)
 }
 
 /// [`trace_policy`] for a distributed policy (the same episode as [`run_distributed_policy`] gives).
@@ -337,7 +348,7 @@ pub struct AgentOutcome {
     pub deviant: bool,
     /// The sum of its rewards (undiscounted).
     pub ret: f64,
-    /// It left the control region before the horizon (its last reward was the exit bonus).
+    /// It left the control region before the horizon (its last step carried the exit bonus).
     pub left: bool,
     /// Steps it acted.
     pub steps: usize,
@@ -352,8 +363,9 @@ pub struct MixedEpisode {
 
 /// Runs two distributed policies side by side: the agents for which `deviates(agent)` holds drive with
 /// `deviant`, the others with `base` (actions: the Gaussian's mean as in `mapc eval`, or sampled as in
-/// training, the noise fixed by the seed; each seed in parallel, results in seed order). Vehicle ids follow the departure schedule, so the same agent can be compared across
-/// populations on one seed: whether a policy change pays the agent that makes it, and what it costs the others.
+/// training, the noise fixed by the seed; each seed in parallel, results in seed order). Vehicle ids follow the
+/// departure schedule, so the same agent can be compared across populations on one seed: whether a policy
+/// change pays the agent that makes it, and what it costs the others. Returns are those of `cfg`'s reward.
 pub fn run_mixed_population(
     base: &Model,
     deviant: &Model,
@@ -363,12 +375,9 @@ pub fn run_mixed_population(
     seeds: &[u64],
     mode: ActionMode,
 ) -> Result<Vec<MixedEpisode>, RlError> {
-    let probe = DistributedEnv::new(spec.clone(), *cfg)?;
-    let horizon = probe.horizon();
-    let factory = || DistributedEnv::new(spec.clone(), *cfg).expect("validated above");
-    let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
     let policy_of = |id: VehicleId| if deviates(id) { deviant } else { base };
-    let eps = collect_agents_with(&factory, &policy_of, &pairs, horizon, mode, true)?;
+    // recorded: the per-agent trajectories carry the returns
+    let eps = agent_episodes(spec, cfg, seeds, &policy_of, mode, true)?;
     Ok(eps
         .into_iter()
         .map(|e| MixedEpisode {

@@ -238,7 +238,7 @@ fn over_seeds<E, T: Send>(
 pub struct AgentsEpisode {
     /// Per-agent trajectories (kept only when recording).
     pub trajectories: Vec<Episode>,
-    /// The agent of each trajectory.
+    /// The agent of each trajectory (kept only when recording).
     pub agents: Vec<VehicleId>,
     pub metrics: EpisodeMetrics,
     pub total_reward: f64,
