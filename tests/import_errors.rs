@@ -8,7 +8,9 @@ fn root() -> PathBuf {
 }
 
 fn scratch(name: &str, bytes: &[u8]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mapc-import-errors-{}", std::process::id()));
+    // under target/ (Cargo's folder for integration tests' files), not the system's temporary folder
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mapc-import-errors-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let p = dir.join(name);
     std::fs::write(&p, bytes).unwrap();

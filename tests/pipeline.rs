@@ -50,12 +50,16 @@ fn pipeline_runs_every_stage_on_the_real_map() {
 
 #[test]
 fn pipeline_names_a_missing_map() {
+    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("mapc-pipeline-missing");
+    std::fs::remove_dir_all(&out).ok();
     let run = Command::new(env!("CARGO_BIN_EXE_mapc"))
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .args(["pipeline", "maps/nonesuch.osm", "-o"])
-        .arg(std::env::temp_dir().join("mapc-pipeline-missing"))
+        .arg(&out)
         .output()
         .unwrap();
     assert_eq!(run.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&run.stderr).contains("nonesuch.osm"));
+    // it fails before writing anything, its output folder included
+    assert!(!out.exists());
 }

@@ -500,6 +500,7 @@ fn distributed_flags_are_checked() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("steps must increase"));
+    std::fs::remove_file(&cfg).ok();
     // an unknown feature names itself; --reward belongs to centralized policies
     let out = mapc()
         .args(["train", "--distributed", "--features", "dist,radar"])

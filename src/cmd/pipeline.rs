@@ -37,6 +37,8 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let out = &args.output;
+    // a map that cannot be read fails before anything is written
+    std::fs::metadata(&args.map).map_err(|e| anyhow::anyhow!("{}: {e}", args.map.display()))?;
     std::fs::create_dir_all(out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
     let stem = super::simplify::map_stem(&args.map);
     let file = |name: String| path_text(&out.join(name));

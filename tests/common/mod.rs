@@ -26,9 +26,11 @@ pub fn run_mapc(args: &[&str]) -> Output {
         .expect("the mapc binary runs")
 }
 
-/// A fresh folder of this test process under the system's temporary folder.
+/// A fresh folder of this test process under Cargo's folder for integration tests' files (in target/, so
+/// test runs leave nothing in the system's temporary folder).
 pub fn scratch_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mapc-test-{name}-{}", std::process::id()));
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mapc-test-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
