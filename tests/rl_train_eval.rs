@@ -38,11 +38,21 @@ fn tiny_train(dir: &PathBuf, iters: u64) -> std::process::Output {
     tiny_train_with(dir, iters, &["--reward", "outflow", "--minibatch", "200"])
 }
 
+/// Runs a `mapc` command that must be refused: exit 2; returns the message.
+fn refused(cmd: &mut std::process::Command) -> String {
+    let out = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    err
+}
+
 /// `mapc eval` of a policy file that must be refused: exit 2; returns the message.
 fn refused_policy(policy: &Path) -> String {
-    let out = mapc_with(["eval", "--seeds", "1", "--policy"], policy);
-    assert_eq!(out.status.code(), Some(2));
-    String::from_utf8_lossy(&out.stderr).into_owned()
+    refused(
+        mapc()
+            .args(["eval", "--seeds", "1", "--policy"])
+            .arg(policy),
+    )
 }
 
 /// The third row of a run's log without its wall time (a resumed run must match a straight one there).
@@ -125,12 +135,11 @@ fn tiny_training_resume_and_eval() {
         best["selected"]["row_iteration"]
     );
     // a resumed run keeps the criterion it started with
-    let out = mapc_with(
-        ["train", "--iters", "4", "--best-by", "speed", "--resume"],
-        &dir,
+    let msg = refused(
+        mapc()
+            .args(["train", "--iters", "4", "--best-by", "speed", "--resume"])
+            .arg(&dir),
     );
-    assert_eq!(out.status.code(), Some(2));
-    let msg = String::from_utf8_lossy(&out.stderr);
     assert!(msg.contains("--best-by outflow"), "{msg}");
     // the best policy is a checkpoint `mapc eval` reads
     let out = mapc_with(
@@ -249,19 +258,18 @@ fn policy_with_another_observation_size_is_a_clear_error() {
         .output()
         .unwrap();
     common::assert_success(&out);
-    let out = mapc_with(
-        [
-            "eval",
-            "--seeds",
-            "2",
-            "--scenario",
-            "simple_merge",
-            "--policy",
-        ],
-        &dir,
+    let err = refused(
+        mapc()
+            .args([
+                "eval",
+                "--seeds",
+                "2",
+                "--scenario",
+                "simple_merge",
+                "--policy",
+            ])
+            .arg(&dir),
     );
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("expects 15 observation values") && err.contains("gives 25"),
         "{err}"
@@ -466,19 +474,17 @@ fn a_reward_share_is_kept_in_the_checkpoint() {
         ck["spec"]
     );
     // a resumed run trains with the share it was started with: the flag cannot change it
-    let out = mapc()
-        .args([
-            "train",
-            "--distributed",
-            "--reward-share",
-            "0.2",
-            "--resume",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = refused(
+        mapc()
+            .args([
+                "train",
+                "--distributed",
+                "--reward-share",
+                "0.2",
+                "--resume",
+            ])
+            .arg(&dir),
+    );
     assert!(
         err.contains("--reward-share") && err.contains("--resume"),
         "{err}"
@@ -491,52 +497,48 @@ fn distributed_flags_are_checked() {
     // a learning-rate schedule must go forward in steps
     let cfg = tmp("schedule").with_extension("toml");
     std::fs::write(&cfg, "lr_schedule = [[0, 5e-4], [0, 1e-4]]\n").unwrap();
-    let out = mapc()
-        .args(["train", "--distributed", "--iters", "1", "--config"])
-        .arg(&cfg)
-        .arg("-o")
-        .arg(tmp("bad-schedule"))
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("steps must increase"));
+    let err = refused(
+        mapc()
+            .args(["train", "--distributed", "--iters", "1", "--config"])
+            .arg(&cfg)
+            .arg("-o")
+            .arg(tmp("bad-schedule")),
+    );
+    assert!(err.contains("steps must increase"), "{err}");
     std::fs::remove_file(&cfg).ok();
     // an unknown feature names itself; --reward belongs to centralized policies
-    let out = mapc()
-        .args(["train", "--distributed", "--features", "dist,radar"])
-        .args(["--iters", "1", "-o"])
-        .arg(tmp("bad-features"))
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("radar"));
+    let err = refused(
+        mapc()
+            .args(["train", "--distributed", "--features", "dist,radar"])
+            .args(["--iters", "1", "-o"])
+            .arg(tmp("bad-features")),
+    );
+    assert!(err.contains("radar"), "{err}");
     // a reward share is a fraction
     for bad in ["1.5", "nan", "-1"] {
-        let out = mapc()
-            .args(["train", "--distributed", &format!("--reward-share={bad}")])
-            .args(["--iters", "1", "-o"])
-            .arg(tmp("bad-share"))
-            .output()
-            .unwrap();
-        assert_eq!(out.status.code(), Some(2), "{bad}");
-        let err = String::from_utf8_lossy(&out.stderr);
+        let err = refused(
+            mapc()
+                .args(["train", "--distributed", &format!("--reward-share={bad}")])
+                .args(["--iters", "1", "-o"])
+                .arg(tmp("bad-share")),
+        );
         assert!(
             err.contains("--reward-share must lie in [0, 1]"),
             "{bad}: {err}"
         );
     }
-    let out = mapc()
-        .args([
-            "train",
-            "--distributed",
-            "--reward",
-            "speed",
-            "--iters",
-            "1",
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
+    let err = refused(mapc().args([
+        "train",
+        "--distributed",
+        "--reward",
+        "speed",
+        "--iters",
+        "1",
+    ]));
+    assert!(
+        err.contains("--reward") && err.contains("--distributed"),
+        "{err}"
+    );
 }
 
 #[test]

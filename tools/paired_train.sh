@@ -3,8 +3,9 @@
 # wrote the same log rows (all columns but the wall time). The figures of docs/perf.md "Training speed".
 # usage: tools/paired_train.sh MAPC_A MAPC_B [N] [-- TRAIN ARGS]   (default: --distributed --preset paper --seed 7)
 set -euo pipefail
-a=${1:?mapc binary A}; b=${2:?mapc binary B}; n=${3:-3}
-shift $(( $# < 3 ? $# : 3 )); [ "${1:-}" = "--" ] && shift
+a=${1:?mapc binary A}; b=${2:?mapc binary B}; shift 2
+n=3; [ $# -gt 0 ] && [ "$1" != "--" ] && { n=$1; shift; }
+[ "${1:-}" = "--" ] && shift
 args=("$@"); [ ${#args[@]} -gt 0 ] || args=(--distributed --preset paper --seed 7)
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 for _ in $(seq "$n"); do

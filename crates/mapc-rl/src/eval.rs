@@ -344,8 +344,6 @@ pub fn trace_distributed_policy(
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct AgentOutcome {
     pub id: VehicleId,
-    /// It drove with the deviant policy.
-    pub deviant: bool,
     /// The sum of its rewards (undiscounted).
     pub ret: f64,
     /// It left the control region before the horizon (its last step carried the exit bonus).
@@ -388,7 +386,6 @@ pub fn run_mixed_population(
                 .zip(&e.trajectories)
                 .map(|(&id, t)| AgentOutcome {
                     id,
-                    deviant: deviates(id),
                     ret: t.total_reward(),
                     left: matches!(t.end, Some(EpisodeEnd::Terminal)),
                     steps: t.len(),
