@@ -40,6 +40,8 @@ enum Command {
     /// Draw time-space diagrams and training curves.
     #[command(subcommand)]
     Plot(cmd::plot::Command),
+    /// Watch a scenario, a policy or a map in the browser: one self-contained HTML page.
+    View(cmd::view::Args),
     /// Run the whole job on a map: import, render, simplify, window, baseline, zero-shot evaluation.
     Pipeline(cmd::pipeline::Args),
 }
@@ -59,6 +61,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Eval(a) => cmd::eval::run(a),
         Command::Plot(c) => cmd::plot::run(c),
         Command::Pipeline(a) => cmd::pipeline::run(a),
+        Command::View(a) => cmd::view::run(a),
     }
 }
 

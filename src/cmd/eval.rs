@@ -42,7 +42,8 @@ pub struct Args {
     pub trace: Option<PathBuf>,
 }
 
-fn policy_file(p: &Path) -> PathBuf {
+/// A checkpoint file, or a run directory's last checkpoint.
+pub fn policy_file(p: &Path) -> PathBuf {
     if p.is_dir() {
         checkpoint_path(p)
     } else {

@@ -12,4 +12,5 @@ pub mod scenario;
 pub mod sim;
 pub mod simplify;
 pub mod train;
+pub mod view;
 pub mod window;

@@ -125,13 +125,8 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
 
 /// Run one seed and write every step's vehicles, atomically.
 pub fn write_trace(spec: &SimSpec, seed: u64, path: &Path) -> anyhow::Result<()> {
-    let mut sim = Simulation::from_spec(spec.clone(), seed)?;
     write_trace_file(path, |w| {
-        sim.write_trace_rows(w)?;
-        while !sim.is_done() {
-            sim.step()?;
-            sim.write_trace_rows(w)?;
-        }
+        mapc_sim::trace_run(spec, seed, w)?;
         Ok(())
     })
 }

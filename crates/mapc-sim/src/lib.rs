@@ -53,6 +53,7 @@ pub mod replay;
 pub mod scenario;
 pub mod sim;
 pub mod spec;
+pub mod trace;
 
 pub use idm::IdmParams;
 pub use metrics::{MeanCi, RunMetrics, Summary, run_baseline_spec, t_quantile_975};
@@ -60,6 +61,7 @@ pub use network::Network;
 pub use scenario::{run_baseline, spec_from_scenario};
 pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleView};
 pub use spec::{FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
+pub use trace::trace_run;
 
 /// Header of trace CSV files.
 pub const TRACE_HEADER: &str =

@@ -64,21 +64,23 @@ pub fn class_colors(classes: &[String]) -> Vec<(String, RGBColor)> {
         .collect()
 }
 
+/// The speed scale's stops (fraction of the top speed, RGB); `mapc view`'s page interpolates the same.
+pub const SPEED_STOPS: [(f64, [f64; 3]); 5] = [
+    (0.0, [165.0, 0.0, 38.0]),
+    (0.25, [244.0, 109.0, 67.0]),
+    (0.5, [254.0, 224.0, 139.0]),
+    (0.75, [166.0, 217.0, 106.0]),
+    (1.0, [0.0, 104.0, 55.0]),
+];
+
 /// Red (slow) through yellow to green (fast), as in the paper's time-space figures. `t` is clamped to [0, 1].
 pub fn speed_color(t: f64) -> RGBColor {
-    const STOPS: [(f64, [f64; 3]); 5] = [
-        (0.0, [165.0, 0.0, 38.0]),
-        (0.25, [244.0, 109.0, 67.0]),
-        (0.5, [254.0, 224.0, 139.0]),
-        (0.75, [166.0, 217.0, 106.0]),
-        (1.0, [0.0, 104.0, 55.0]),
-    ];
     let t = if t.is_finite() {
         t.clamp(0.0, 1.0)
     } else {
         0.0
     };
-    for w in STOPS.windows(2) {
+    for w in SPEED_STOPS.windows(2) {
         let ((t0, c0), (t1, c1)) = (w[0], w[1]);
         if t <= t1 {
             let f = (t - t0) / (t1 - t0);

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 pub struct CsvInput {
     pub path: PathBuf,
     pub headers: Vec<String>,
-    reader: csv::Reader<std::fs::File>,
+    reader: csv::Reader<Box<dyn std::io::Read>>,
 }
 
 impl CsvInput {
@@ -16,10 +16,15 @@ impl CsvInput {
             path: path.to_path_buf(),
             source,
         })?;
+        CsvInput::from_reader(path, Box::new(file))
+    }
+
+    /// CSV text from any reader (a trace made in memory); `path` names it in errors.
+    pub fn from_reader(path: &Path, input: Box<dyn std::io::Read>) -> Result<CsvInput, VizError> {
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(true)
             .flexible(false)
-            .from_reader(file);
+            .from_reader(input);
         let headers: Vec<String> = reader
             .headers()
             .map_err(|e| csv_error(path, e))?

@@ -10,6 +10,8 @@
 //!   (`time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled`).
 //! - **time-space diagram**: vehicle trajectories with time across and corridor position up, coloured by speed;
 //!   stop-and-go waves show as red bands running upstream ([`timespace`]).
+//! - **replay page**: `mapc view`'s self-contained HTML file that plays traces on the map in a browser
+//!   ([`view`]).
 //! - **training log**: a run directory's `progress.csv`, one row per PPO iteration; drawn as curves ([`training`]).
 //!
 //! The output kind follows the file name: `.png` is drawn on a bitmap, `.svg` as vector graphics. Every file is
@@ -23,6 +25,7 @@ pub mod map;
 pub mod pngstats;
 pub mod timespace;
 pub mod training;
+pub mod view;
 
 pub use map::{Highlight, MapRenderSummary, RenderOptions, render_map, render_map_with};
 

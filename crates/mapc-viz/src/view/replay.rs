@@ -1,0 +1,317 @@
+//! A simulator trace as the page plays it: one track per vehicle (its rows are consecutive frames), the rows
+//! packed into typed arrays, and the metrics so far at every frame, computed as the simulator computes them.
+
+use crate::VizError;
+use crate::csvin::CsvInput;
+use crate::timespace::TRACE_COLUMNS;
+use std::collections::{BTreeSet, HashMap};
+use std::path::Path;
+
+/// The run's clock: the simulator's time of frame 0 (the state before the first step), the step, and how many
+/// frames the run has (warm-up and horizon steps, plus frame 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clock {
+    pub start_s: f64,
+    pub step_s: f64,
+    pub warmup_steps: u64,
+    pub horizon_steps: u64,
+}
+
+impl Clock {
+    pub fn frames(&self) -> usize {
+        (self.warmup_steps + self.horizon_steps + 1) as usize
+    }
+}
+
+/// One vehicle's rows: frames `first .. first + count`, stored from `offset` in the row arrays.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Track {
+    pub id: String,
+    /// Index into [`Replay::types`].
+    pub vtype: u16,
+    pub first: u32,
+    pub count: u32,
+    pub offset: u32,
+}
+
+/// A trace, packed. Rows are stored vehicle after vehicle, each vehicle's frames in order.
+#[derive(Clone, Debug)]
+pub struct Replay {
+    pub label: String,
+    pub clock: Clock,
+    /// Trace road labels (`R3`, `R1>R2` for a connection), in order of first appearance.
+    pub lanes: Vec<String>,
+    /// Corridor position of each lane's start (`corridor_x_m - pos_on_road_m`), for lanes on the main line.
+    pub lane_corridor_start: Vec<Option<f64>>,
+    pub types: Vec<String>,
+    pub tracks: Vec<Track>,
+    pub row_lane: Vec<u16>,
+    pub row_pos: Vec<f32>,
+    /// Centimetres per second.
+    pub row_speed: Vec<u16>,
+    /// Metrics after each frame's state, from the end of warm-up (0 before): vehicles that left per hour, vehicles
+    /// that entered per hour, and the mean over frames of the mean speed.
+    pub outflow_vph: Vec<f32>,
+    pub inflow_vph: Vec<f32>,
+    pub avg_speed_mps: Vec<f32>,
+    /// Vehicles on the road at each frame.
+    pub on_road: Vec<u32>,
+    /// Every `decimation`-th frame is kept (1: all).
+    pub decimation: usize,
+}
+
+/// The largest lane index the packing holds.
+const MAX_LANES: usize = u16::MAX as usize;
+
+struct RawRow {
+    frame: u32,
+    lane: u16,
+    pos: f32,
+    speed: u16,
+}
+
+impl Replay {
+    /// Read a trace CSV (`mapc sim --trace`, `mapc eval --trace`); `path` names it in errors. `clock` is the
+    /// scenario's; a row whose time is not on the clock's steps, or a vehicle that leaves and comes back, is an
+    /// error naming the line.
+    pub fn read(
+        path: &Path,
+        input: Box<dyn std::io::Read>,
+        clock: Clock,
+        label: &str,
+    ) -> Result<Replay, VizError> {
+        let mut csv = CsvInput::from_reader(path, input)?;
+        let idx = csv.require(&TRACE_COLUMNS)?;
+        let [i_time, i_vid, i_type, i_road, i_pos, i_x, i_speed, _] = idx[..] else {
+            unreachable!("require returns one index per name")
+        };
+        let fields = csv.fields();
+        let frames = clock.frames();
+        let mut lanes: Vec<String> = Vec::new();
+        let mut lane_index: HashMap<String, u16> = HashMap::new();
+        let mut lane_start: Vec<Option<f64>> = Vec::new();
+        let mut types: Vec<String> = Vec::new();
+        let mut vehicles: Vec<(String, u16, Vec<RawRow>)> = Vec::new();
+        let mut vehicle_index: HashMap<String, usize> = HashMap::new();
+        csv.for_each_row(|rec, line| {
+            let t = fields.required(rec, i_time, "time_s", line)?;
+            let f = (t - clock.start_s) / clock.step_s;
+            let frame = f.round();
+            if (f - frame).abs() > 1e-3 || frame < 0.0 || frame >= frames as f64 {
+                return Err(fields.error(
+                    line,
+                    "time_s",
+                    format!(
+                        "{t} s is not a step of this run ({} s from {} s, {frames} frames)",
+                        clock.step_s, clock.start_s
+                    ),
+                ));
+            }
+            let frame = frame as u32;
+            let road = rec.get(i_road).unwrap_or("").trim();
+            let lane = match lane_index.get(road) {
+                Some(l) => *l,
+                None => {
+                    if road.is_empty() || lanes.len() >= MAX_LANES {
+                        return Err(fields.error(line, "road", format!("`{road}`: not a road")));
+                    }
+                    lanes.push(road.to_string());
+                    lane_start.push(None);
+                    lane_index.insert(road.to_string(), (lanes.len() - 1) as u16);
+                    (lanes.len() - 1) as u16
+                }
+            };
+            let pos = fields.required(rec, i_pos, "pos_on_road_m", line)?;
+            if let Some(x) = fields.number(rec, i_x, "corridor_x_m", line)? {
+                lane_start[lane as usize].get_or_insert(x - pos);
+            }
+            let speed = fields.required(rec, i_speed, "speed_mps", line)?;
+            if !(0.0..=600.0).contains(&speed) {
+                return Err(fields.error(line, "speed_mps", format!("{speed} m/s")));
+            }
+            let vid = rec.get(i_vid).unwrap_or("").trim();
+            let vtype_name = rec.get(i_type).unwrap_or("").trim();
+            let vtype = match types.iter().position(|t| t == vtype_name) {
+                Some(k) => k as u16,
+                None => {
+                    types.push(vtype_name.to_string());
+                    (types.len() - 1) as u16
+                }
+            };
+            let v = match vehicle_index.get(vid) {
+                Some(v) => *v,
+                None => {
+                    if vid.is_empty() {
+                        return Err(fields.error(line, "vehicle_id", "empty field".into()));
+                    }
+                    vehicle_index.insert(vid.to_string(), vehicles.len());
+                    vehicles.push((vid.to_string(), vtype, Vec::new()));
+                    vehicles.len() - 1
+                }
+            };
+            let rows = &mut vehicles[v].2;
+            if let Some(last) = rows.last()
+                && last.frame + 1 != frame
+            {
+                return Err(fields.error(
+                    line,
+                    "time_s",
+                    format!(
+                        "vehicle {vid} was last seen at frame {} and is here at frame {frame}: a vehicle's rows \
+                         must be consecutive steps",
+                        last.frame
+                    ),
+                ));
+            }
+            rows.push(RawRow {
+                frame,
+                lane,
+                pos: pos as f32,
+                speed: (speed * 100.0).round() as u16,
+            });
+            Ok(())
+        })?;
+        Ok(Replay::pack(
+            label, clock, lanes, lane_start, types, vehicles,
+        ))
+    }
+
+    fn pack(
+        label: &str,
+        clock: Clock,
+        lanes: Vec<String>,
+        lane_corridor_start: Vec<Option<f64>>,
+        types: Vec<String>,
+        mut vehicles: Vec<(String, u16, Vec<RawRow>)>,
+    ) -> Replay {
+        // entry order, so the page can stop scanning at the first vehicle that has not entered yet
+        vehicles.sort_by_key(|(_, _, rows)| rows.first().map_or(0, |r| r.frame));
+        let frames = clock.frames();
+        let mut r = Replay {
+            label: label.to_string(),
+            clock,
+            lanes,
+            lane_corridor_start,
+            types,
+            tracks: Vec::with_capacity(vehicles.len()),
+            row_lane: Vec::new(),
+            row_pos: Vec::new(),
+            row_speed: Vec::new(),
+            outflow_vph: Vec::new(),
+            inflow_vph: Vec::new(),
+            avg_speed_mps: Vec::new(),
+            on_road: vec![0; frames],
+            decimation: 1,
+        };
+        let mut speed_sum = vec![0.0f64; frames];
+        let mut exits = vec![0u32; frames + 1];
+        let mut entries = vec![0u32; frames + 1];
+        for (id, vtype, rows) in vehicles {
+            let (Some(first), Some(last)) = (rows.first(), rows.last()) else {
+                continue;
+            };
+            // Leaving before the last frame is leaving the network in the next step; appearing after frame 0
+            // is entering in the step before.
+            if (last.frame as usize) + 1 < frames {
+                exits[last.frame as usize + 1] += 1;
+            }
+            if first.frame > 0 {
+                entries[first.frame as usize] += 1;
+            }
+            r.tracks.push(Track {
+                id,
+                vtype,
+                first: first.frame,
+                count: rows.len() as u32,
+                offset: r.row_lane.len() as u32,
+            });
+            for row in rows {
+                r.on_road[row.frame as usize] += 1;
+                speed_sum[row.frame as usize] += f64::from(row.speed) / 100.0;
+                r.row_lane.push(row.lane);
+                r.row_pos.push(row.pos);
+                r.row_speed.push(row.speed);
+            }
+        }
+        r.fill_metrics(&speed_sum, &exits, &entries);
+        r
+    }
+
+    /// The simulator's definitions (`mapc_sim::RunMetrics`): arrivals and departures in the steps after warm-up
+    /// per hour of those steps, and the mean over those steps of the mean speed of the state before each (steps
+    /// with no vehicle, or all stopped, skipped). The value at frame f covers steps warm-up .. f.
+    fn fill_metrics(&mut self, speed_sum: &[f64], exits: &[u32], entries: &[u32]) {
+        let warmup = self.clock.warmup_steps as usize;
+        let (mut arrived, mut departed, mut speeds, mut speed_steps) = (0u64, 0u64, 0.0f64, 0u64);
+        for f in 0..self.on_road.len() {
+            if f > warmup {
+                arrived += u64::from(exits[f]);
+                departed += u64::from(entries[f]);
+                let n = self.on_road[f - 1];
+                if n > 0 && speed_sum[f - 1] / f64::from(n) > 0.0 {
+                    speeds += speed_sum[f - 1] / f64::from(n);
+                    speed_steps += 1;
+                }
+            }
+            let secs = (f.saturating_sub(warmup)) as f64 * self.clock.step_s;
+            let per_hour = |n: u64| {
+                if secs > 0.0 {
+                    3600.0 * n as f64 / secs
+                } else {
+                    0.0
+                }
+            };
+            self.outflow_vph.push(per_hour(arrived) as f32);
+            self.inflow_vph.push(per_hour(departed) as f32);
+            self.avg_speed_mps.push(if speed_steps > 0 {
+                (speeds / speed_steps as f64) as f32
+            } else {
+                0.0
+            });
+        }
+    }
+
+    pub fn rows(&self) -> usize {
+        self.row_lane.len()
+    }
+
+    /// Keep every `k`-th frame (k >= 2), so a long run fits the page; vehicles stay consecutive in the kept
+    /// frames.
+    pub fn decimate(&mut self, k: usize) {
+        if k < 2 {
+            return;
+        }
+        let keep = |f: u32| (f as usize).is_multiple_of(k);
+        let (mut lane, mut pos, mut speed) = (Vec::new(), Vec::new(), Vec::new());
+        let mut tracks = Vec::new();
+        for t in &self.tracks {
+            let kept: Vec<u32> = (t.first..t.first + t.count).filter(|f| keep(*f)).collect();
+            let Some(&first) = kept.first() else { continue };
+            let offset = lane.len() as u32;
+            for f in &kept {
+                let i = (t.offset + f - t.first) as usize;
+                lane.push(self.row_lane[i]);
+                pos.push(self.row_pos[i]);
+                speed.push(self.row_speed[i]);
+            }
+            tracks.push(Track {
+                first: first / k as u32,
+                count: kept.len() as u32,
+                offset,
+                ..t.clone()
+            });
+        }
+        let every = |v: &Vec<f32>| v.iter().step_by(k).copied().collect::<Vec<f32>>();
+        self.outflow_vph = every(&self.outflow_vph);
+        self.inflow_vph = every(&self.inflow_vph);
+        self.avg_speed_mps = every(&self.avg_speed_mps);
+        self.on_road = self.on_road.iter().step_by(k).copied().collect();
+        (self.row_lane, self.row_pos, self.row_speed, self.tracks) = (lane, pos, speed, tracks);
+        self.decimation *= k;
+    }
+
+    /// Types whose vehicles are AVs, for colouring: those named in `av_types`.
+    pub fn av_type_flags(&self, av_types: &BTreeSet<String>) -> Vec<bool> {
+        self.types.iter().map(|t| av_types.contains(t)).collect()
+    }
+}
