@@ -215,8 +215,8 @@ fn replay_json(
     av_types: &BTreeSet<String>,
 ) -> Result<Value, VizError> {
     let unknown = |name: &str| VizError::Input {
-        path: format!("trace `{}`", r.label).into(),
-        message: format!("road `{name}` is not in the network drawn"),
+        path: r.source.clone(),
+        message: format!("road `{name}` is not in the network of {}", network.source),
     };
     let lanes = r
         .lanes

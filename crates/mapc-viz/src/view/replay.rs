@@ -5,7 +5,7 @@ use crate::VizError;
 use crate::csvin::CsvInput;
 use crate::timespace::TRACE_COLUMNS;
 use std::collections::{BTreeSet, HashMap};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The run's clock: the simulator's time of frame 0 (the state before the first step), the step, and how many
 /// frames the run has (warm-up and horizon steps, plus frame 0).
@@ -38,6 +38,8 @@ pub struct Track {
 #[derive(Clone, Debug)]
 pub struct Replay {
     pub label: String,
+    /// The trace file, or a name for a trace made in memory (errors name it).
+    pub source: PathBuf,
     pub clock: Clock,
     /// Trace road labels (`R3`, `R1>R2` for a connection), in order of first appearance.
     pub lanes: Vec<String>,
@@ -172,11 +174,12 @@ impl Replay {
             Ok(())
         })?;
         Ok(Replay::pack(
-            label, clock, lanes, lane_start, types, vehicles,
+            path, label, clock, lanes, lane_start, types, vehicles,
         ))
     }
 
     fn pack(
+        source: &Path,
         label: &str,
         clock: Clock,
         lanes: Vec<String>,
@@ -189,6 +192,7 @@ impl Replay {
         let frames = clock.frames();
         let mut r = Replay {
             label: label.to_string(),
+            source: source.to_path_buf(),
             clock,
             lanes,
             lane_corridor_start,
