@@ -108,6 +108,25 @@ fn a_simple_merge_replay_is_self_contained_small_and_shows_the_simulators_figure
         replayed["panes"][0]["vehicle_steps"],
         summary["panes"][0]["vehicle_steps"]
     );
+
+    // a run larger than the page holds keeps every k-th step, and says so; its last frame is the run's
+    let steps = summary["panes"][0]["vehicle_steps"].as_u64().unwrap();
+    let small = json_of(&mapc(&[
+        "view",
+        "simple_merge",
+        "--seed",
+        "3",
+        "--max-rows",
+        &(steps / 4).to_string(),
+        "-o",
+        s(&dir.join("small.html")),
+        "--json",
+    ]));
+    assert_eq!(small["panes"][0]["decimation"], 5);
+    assert_eq!(small["panes"][0]["frames"], 401);
+    let kept = small["panes"][0]["vehicle_steps"].as_u64().unwrap();
+    assert!(kept <= steps / 4 && kept > steps / 6, "{kept} of {steps}");
+    assert_eq!(pane(&small, 0), pane(&summary, 0));
 }
 
 #[test]

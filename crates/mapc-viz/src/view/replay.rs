@@ -319,3 +319,82 @@ impl Replay {
         self.types.iter().map(|t| av_types.contains(t)).collect()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEADER: &str =
+        "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled";
+
+    fn clock() -> Clock {
+        Clock {
+            start_s: 1.0,
+            step_s: 0.5,
+            warmup_steps: 0,
+            horizon_steps: 8,
+        }
+    }
+
+    fn read(text: String) -> Result<Replay, VizError> {
+        Replay::read(
+            Path::new("t.csv"),
+            Box::new(std::io::Cursor::new(text.into_bytes())),
+            clock(),
+            "t",
+        )
+    }
+
+    /// Vehicle `v` on R0 from frame `first` for `n` frames at 10 m/s.
+    fn rows(v: u32, first: u32, n: u32) -> String {
+        (first..first + n)
+            .map(|f| {
+                let x = 5.0 * (f - first) as f64;
+                format!("{},{v},human,R0,{x},{x},10.0,false\n", 1.0 + 0.5 * f as f64)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn departures_and_arrivals_are_counted_in_the_steps_they_happen() {
+        // vehicle 0 is there from the start and leaves after frame 3; vehicle 1 enters at frame 2 and stays
+        let r = read(format!("{HEADER}\n{}{}", rows(0, 0, 4), rows(1, 2, 7))).unwrap();
+        assert_eq!(r.tracks.len(), 2);
+        assert_eq!(r.on_road, [1, 1, 2, 2, 1, 1, 1, 1, 1]);
+        // 1 arrival and 1 departure over 8 steps of 0.5 s
+        assert_eq!(*r.outflow_vph.last().unwrap(), 900.0);
+        assert_eq!(*r.inflow_vph.last().unwrap(), 900.0);
+        assert_eq!(r.outflow_vph[3], 0.0);
+        assert_eq!(r.outflow_vph[4], 3600.0 / 2.0);
+        assert_eq!(*r.avg_speed_mps.last().unwrap(), 10.0);
+        assert_eq!(r.lane_corridor_start, [Some(0.0)]);
+    }
+
+    #[test]
+    fn decimation_keeps_every_kth_frame_and_consecutive_tracks() {
+        let mut r = read(format!("{HEADER}\n{}{}", rows(0, 0, 4), rows(1, 2, 7))).unwrap();
+        let full = r.clone();
+        r.decimate(2);
+        assert_eq!(r.decimation, 2);
+        assert_eq!(r.on_road, [1, 2, 1, 1, 1]);
+        assert_eq!(r.rows(), 6); // frames 0, 2 of vehicle 0; 2, 4, 6, 8 of vehicle 1
+        assert_eq!((r.tracks[0].first, r.tracks[0].count), (0, 2));
+        assert_eq!((r.tracks[1].first, r.tracks[1].count), (1, 4));
+        assert_eq!(r.outflow_vph.last(), full.outflow_vph.last());
+    }
+
+    #[test]
+    fn rows_off_the_clock_or_with_a_gap_are_named_by_line() {
+        let off = read(format!("{HEADER}\n1.25,0,human,R0,0,0,1,false\n")).unwrap_err();
+        assert!(off.to_string().contains("line 2"), "{off}");
+        let late = read(format!("{HEADER}\n99.0,0,human,R0,0,0,1,false\n")).unwrap_err();
+        assert!(
+            late.to_string().contains("not a step of this run"),
+            "{late}"
+        );
+        let gap = read(format!("{HEADER}\n{}{}", rows(0, 0, 2), rows(0, 3, 1))).unwrap_err();
+        assert!(gap.to_string().contains("line 4"), "{gap}");
+        let speed = read(format!("{HEADER}\n1.0,0,human,R0,0,0,-3,false\n")).unwrap_err();
+        assert!(speed.to_string().contains("speed_mps"), "{speed}");
+    }
+}

@@ -306,7 +306,8 @@ function render() {
   if (DATA.replays.length) {
     const r = DATA.replays[0];
     $("slider").value = player.frame;
-    $("clock").textContent = `t = ${fmt(r.start_s + player.frame * r.step_s, 1)} s / ${fmt(r.start_s + (r.frames - 1) * r.step_s, 0)} s`;
+    const kept = r.decimation > 1 ? ` (every ${r.decimation}th step kept)` : "";
+    $("clock").textContent = `t = ${fmt(r.start_s + player.frame * r.step_s, 1)} s / ${fmt(r.start_s + (r.frames - 1) * r.step_s, 0)} s${kept}`;
   }
   status.dataset.framesDrawn = stats.framesDrawn;
   status.dataset.vehiclesDrawn = stats.vehiclesDrawn;
