@@ -109,6 +109,26 @@ fn the_page_plays_in_chromium_and_draws_vehicles_moving() {
     let outflow = summary["panes"][0]["outflow_veh_h"].as_f64().unwrap();
     assert_eq!(status_attr(&dom, "outflow"), format!("{outflow:.3}"));
 
+    // hovering (as #hover=ID points at it) names a vehicle, a road and a junction with their provenance
+    let hover = |at: &str, profile: &str| {
+        let dom = browse(
+            &browser,
+            &dir.join(profile),
+            &format!("{url}#{at}"),
+            &["--dump-dom"],
+        );
+        status_attr(&dom, "hover")
+    };
+    let vehicle = hover("t=0&hover=0", "profile-hover-vehicle");
+    assert!(vehicle.starts_with("vehicle 0 · human"), "{vehicle}");
+    let road = hover("hover=R0", "profile-hover-road");
+    assert!(
+        road.starts_with("road R0 · inflow_highway") && road.contains("sumo:inflow_highway"),
+        "{road}"
+    );
+    let junction = hover("hover=J2", "profile-hover-junction");
+    assert!(junction.starts_with("junction J2 · merge"), "{junction}");
+
     // two moments of the same page look different: the vehicles moved
     let shot = |t: &str| {
         let png = dir.join(format!("t{t}.png"));

@@ -353,9 +353,10 @@ function seek(frame) {
 
 // ---- hovering ----
 
-function describe(pane, sx, sy) {
+// What lies under the screen point: a vehicle, else a junction, else a road (`only` restricts the kind).
+function describe(pane, sx, sy, only) {
   const net = DATA.network;
-  if (pane.drawn) {
+  if (pane.drawn && (!only || only === "vehicle")) {
     let best = null, bd = 8;
     for (const d of pane.drawn) { const dd = Math.hypot(d[0] - sx, d[1] - sy); if (dd < bd) { bd = dd; best = d; } }
     if (best) {
@@ -364,7 +365,7 @@ function describe(pane, sx, sy) {
         `${fmt(rep.rows.speed[k] / 100, 2)} m/s · ${rep.lanes[rep.rows.lane[k]].name} at ${fmt(rep.rows.pos[k], 1)} m`;
     }
   }
-  for (const j of net.junctions) {
+  for (const j of only && only !== "junction" ? [] : net.junctions) {
     const [jx, jy] = toScreen(pane.map, j.x, j.y);
     if (Math.hypot(jx - sx, jy - sy) < 7) {
       return `junction ${j.id} · ${j.kind}\n${j.provenance || "no provenance"}\nin: ${j.roads_in.join(", ") || "none"} · out: ${j.roads_out.join(", ") || "none"}`;
@@ -394,9 +395,7 @@ function attachInteraction(pane) {
       view.cx -= (e.clientX - drag[0]) / view.scale; view.cy += (e.clientY - drag[1]) / view.scale;
       drag = [e.clientX, e.clientY]; tip.hidden = true; render(); return;
     }
-    const text = describe(pane, sx, sy);
-    tip.hidden = !text;
-    if (text) { tip.textContent = text; tip.style.left = `${e.clientX + 14}px`; tip.style.top = `${e.clientY + 12}px`; }
+    showTip(pane, sx, sy, describe(pane, sx, sy));
   });
   c.addEventListener("mouseleave", () => { tip.hidden = true; });
   c.addEventListener("wheel", (e) => {
@@ -476,7 +475,34 @@ function start(data) {
   if (hash.has("rate")) player.rate = Number(hash.get("rate")) || player.rate;
   if (hash.has("t") && DATA.replays.length) seek(Math.round((Number(hash.get("t")) - DATA.replays[0].start_s) / stepS()));
   render();
+  if (hash.has("hover")) pointAt(panes[0], hash.get("hover"));
   if (hash.has("play") && DATA.replays.length) setPlaying(true);
+}
+
+// #hover=ID shows the tooltip of a junction, road or vehicle (at the start frame) as if the mouse were on it.
+function pointAt(pane, id) {
+  const net = DATA.network;
+  let at = null;
+  const j = net.junctions.find((x) => x.id === id);
+  if (j) at = [j.x, j.y];
+  const r = net.byId.get(id);
+  if (r) at = along(r.pl, 0.5);
+  let text = null;
+  if (at) {
+    const [sx, sy] = toScreen(pane.map, at[0], at[1]);
+    text = describe(pane, sx, sy, j ? "junction" : "road");
+    showTip(pane, sx, sy, text);
+  } else if (pane.drawn) {
+    const d = pane.drawn.find((x) => pane.replay.vehicles.ids[x[2]] === id);
+    if (d) { text = describe(pane, d[0], d[1], "vehicle"); showTip(pane, d[0], d[1], text); }
+  }
+  status.dataset.hover = text || `nothing called ${id} here`;
+}
+
+function showTip(pane, sx, sy, text) {
+  const tip = $("tip"), rect = pane.map.getBoundingClientRect();
+  tip.hidden = !text;
+  if (text) { tip.textContent = text; tip.style.left = `${rect.left + sx + 14}px`; tip.style.top = `${rect.top + sy + 12}px`; }
 }
 
 function attachMapOnly(pane) {
