@@ -41,17 +41,21 @@ pub struct Args {
     pub json: bool,
 }
 
+/// Whether a map argument names a scenario (a `.toml` file or a built-in scenario name) rather than a map file.
+pub fn names_scenario(arg: &str) -> bool {
+    let path = Path::new(arg);
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+        || (!path.exists() && mapc_scenario::Scenario::builtin(arg).is_some())
+}
+
 /// Any map argument as a lane graph: a file mapc reads, a scenario file, or a built-in scenario name.
 pub fn load_map(arg: &str) -> anyhow::Result<LaneGraph> {
-    let path = Path::new(arg);
-    let is_toml = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    if is_toml || (!path.exists() && mapc_scenario::Scenario::builtin(arg).is_some()) {
+    if names_scenario(arg) {
         let resolved = mapc_scenario::ResolvedScenario::load(arg)?;
         return Ok(resolved.graph);
     }
-    Ok(mapc_import::load_any(path)?)
+    Ok(mapc_import::load_any(Path::new(arg))?)
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {

@@ -9,7 +9,7 @@ use mapc_scenario::ResolvedScenario;
 use mapc_sim::{SimSpec, TRACE_HEADER, spec_from_scenario};
 use mapc_viz::view::{self, Clock, Replay, ViewPage, WindowMark};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -51,7 +51,7 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.max_rows != Some(0), "--max-rows must be at least 1");
-    let mut page = if is_scenario(&args.target) {
+    let mut page = if super::render::names_scenario(&args.target) {
         scenario_page(&args)?
     } else {
         let graph = super::render::load_map(&args.target)?;
@@ -105,14 +105,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
-}
-
-/// A `.toml` file or a built-in scenario name (as `mapc render` and `mapc export` decide).
-fn is_scenario(target: &str) -> bool {
-    let path = Path::new(target);
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
-        || (!path.exists() && mapc_scenario::Scenario::builtin(target).is_some())
 }
 
 fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {

@@ -114,8 +114,15 @@ impl Replay {
             let lane = match lane_index.get(road) {
                 Some(l) => *l,
                 None => {
-                    if road.is_empty() || lanes.len() >= MAX_LANES {
-                        return Err(fields.error(line, "road", format!("`{road}`: not a road")));
+                    if road.is_empty() {
+                        return Err(fields.error(line, "road", "empty field".into()));
+                    }
+                    if lanes.len() >= MAX_LANES {
+                        return Err(fields.error(
+                            line,
+                            "road",
+                            format!("`{road}`: more than {MAX_LANES} roads in one trace"),
+                        ));
                     }
                     lanes.push(road.to_string());
                     lane_start.push(None);
