@@ -25,6 +25,7 @@ fn pipeline_runs_every_stage_on_the_real_map() {
         "i696_window.png",
         "i696_window_human_trace.csv",
         "i696_window_timespace.png",
+        "i696_window_replay.html",
     ] {
         let meta = std::fs::metadata(out.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert!(meta.len() > 100, "{file} is nearly empty");

@@ -1,5 +1,6 @@
 //! `mapc pipeline`: the whole job on a real map, as the sequence of `mapc` commands a user would type. Each
-//! command is printed before it runs, so the output doubles as a tutorial.
+//! command is printed before it runs, so the output doubles as a tutorial. The evaluation comes last, so its
+//! table ends the output.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -91,6 +92,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &trace,
         "-o",
         &file(format!("{stem}_window_timespace.png")),
+    ]));
+    steps.push(cmd(&[
+        "view",
+        &window,
+        "--policy",
+        &path_text(&args.policy),
+        "--compare",
+        "-o",
+        &file(format!("{stem}_window_replay.html")),
     ]));
     steps.push(cmd(&[
         "eval",
