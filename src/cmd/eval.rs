@@ -1,13 +1,12 @@
 //! `mapc eval`: a trained policy on a scenario over fixed seeds, against the human baseline.
 
-use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args as ClapArgs;
 use mapc_rl::Checkpoint;
-use mapc_rl::checkpoint::checkpoint_path;
-use mapc_rl::eval::{EvalReport, FigureSet, PolicyDriver, compare, run_human};
+use mapc_rl::checkpoint::policy_file;
+use mapc_rl::eval::{FigureSet, evaluate};
 use mapc_rl::rollout::ActionMode;
 
 /// Evaluate a policy: mean and 95% CI of outflow, inflow and speed, and a Welch t-test against the humans.
@@ -42,15 +41,6 @@ pub struct Args {
     pub trace: Option<PathBuf>,
 }
 
-/// A checkpoint file, or a run directory's last checkpoint.
-pub fn policy_file(p: &Path) -> PathBuf {
-    if p.is_dir() {
-        checkpoint_path(p)
-    } else {
-        p.to_path_buf()
-    }
-}
-
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(t) = args.threads {
         rayon::ThreadPoolBuilder::new()
@@ -61,7 +51,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.seeds == 0 {
         anyhow::bail!("--seeds must be at least 1");
     }
-    let start = Instant::now();
     let file = policy_file(&args.policy);
     let ck = Checkpoint::load(&file)?;
     let sc = super::train::load_scenario(&args.scenario)?;
@@ -71,11 +60,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         ActionMode::Mean
     };
-    let driver =
-        PolicyDriver::for_scenario(&ck, &file, &args.scenario, Some(sc.n_av.unwrap_or(5)))?;
-    let runs = driver
-        .run(&ck, &sc.spec, &seeds, mode)
-        .with_context(|| format!("evaluating {}", file.display()))?;
+    let (report, driver) = evaluate(
+        &ck,
+        &file,
+        &args.scenario,
+        &sc.spec,
+        sc.n_av,
+        &seeds,
+        mode,
+        !args.no_baseline,
+    )
+    .with_context(|| format!("evaluating {}", file.display()))?;
     if let Some(path) = &args.trace {
         // one seed under the policy, every step's vehicles, written atomically
         super::sim::write_trace_file(path, |w| {
@@ -83,24 +78,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Ok(())
         })?;
     }
-    let figs = FigureSet::of(&runs);
-    let (baseline, comparison) = if args.no_baseline {
-        (None, None)
-    } else {
-        let human = run_human(&sc.spec, &seeds)?;
-        (Some(FigureSet::of(&human)), Some(compare(&runs, &human)))
-    };
-    let report = EvalReport {
-        outflow: figs.outflow,
-        inflow: figs.inflow,
-        speed: figs.speed,
-        seeds: figs.seeds,
-        policy: file.display().to_string(),
-        scenario: args.scenario.clone(),
-        actions: if args.sample { "sample" } else { "mean" }.into(),
-        baseline,
-        comparison,
-        wall_s: start.elapsed().as_secs_f64(),
+    let figs = FigureSet {
+        outflow: report.outflow,
+        inflow: report.inflow,
+        speed: report.speed,
+        seeds: report.seeds,
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);

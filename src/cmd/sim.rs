@@ -5,7 +5,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use mapc_scenario::ResolvedScenario;
 use mapc_sim::{
-    MeanCi, RunMetrics, SimSpec, Simulation, Summary, TRACE_HEADER, spec_from_scenario,
+    BaselineReport, MeanCi, RunMetrics, SimSpec, Simulation, TRACE_HEADER, spec_from_scenario,
 };
 use rayon::prelude::*;
 use std::io::Write;
@@ -73,21 +73,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(path) = &args.trace {
         write_trace(&spec, seeds[0], path)?;
     }
-    let s = Summary::of(&runs);
+    let s = BaselineReport::of(&rs.origin, args.first_seed, runs, wall_s);
     if args.json {
-        let out = serde_json::json!({
-            "scenario": rs.origin,
-            "seeds": s.seeds,
-            "first_seed": args.first_seed,
-            "outflow": s.outflow,
-            "inflow": s.inflow,
-            "speed": s.speed,
-            "travel_time": s.travel_time,
-            "delay": s.delay,
-            "wall_s": wall_s,
-            "runs": runs,
-        });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        println!("{}", serde_json::to_string_pretty(&s)?);
     } else {
         println!(
             "{} — all-human baseline, {} seeds ({:.2} s)",

@@ -165,7 +165,7 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
             );
         }
         Some(policy) => {
-            let file = super::eval::policy_file(policy);
+            let file = mapc_rl::checkpoint::policy_file(policy);
             let ck = Checkpoint::load(&file)?;
             let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
             let driver =

@@ -175,6 +175,15 @@ impl Checkpoint {
     }
 }
 
+/// A policy argument as a file: a checkpoint file as it is, a run directory's last checkpoint.
+pub fn policy_file(p: &Path) -> PathBuf {
+    if p.is_dir() {
+        checkpoint_path(p)
+    } else {
+        p.to_path_buf()
+    }
+}
+
 /// The checkpoint file inside a run directory.
 pub fn checkpoint_path(dir: &Path) -> PathBuf {
     dir.join("checkpoint.json")

@@ -86,6 +86,50 @@ pub struct EvalReport {
     pub wall_s: f64,
 }
 
+/// A policy evaluated on a scenario over `seeds` (in parallel, results in seed order), with the human baseline on
+/// the same seeds unless `baseline` is false: what `mapc eval` and the Python package's `evaluate` report. Also
+/// returns how the policy drove, for a trace of the same episodes.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate(
+    ck: &Checkpoint,
+    policy_file: &Path,
+    scenario: &str,
+    spec: &SimSpec,
+    scenario_n_av: Option<usize>,
+    seeds: &[u64],
+    mode: ActionMode,
+    baseline: bool,
+) -> Result<(EvalReport, PolicyDriver), RlError> {
+    let start = std::time::Instant::now();
+    let driver =
+        PolicyDriver::for_scenario(ck, policy_file, scenario, Some(scenario_n_av.unwrap_or(5)))?;
+    let runs = driver.run(ck, spec, seeds, mode)?;
+    let figs = FigureSet::of(&runs);
+    let (baseline, comparison) = if baseline {
+        let human = run_human(spec, seeds)?;
+        (Some(FigureSet::of(&human)), Some(compare(&runs, &human)))
+    } else {
+        (None, None)
+    };
+    let report = EvalReport {
+        outflow: figs.outflow,
+        inflow: figs.inflow,
+        speed: figs.speed,
+        seeds: figs.seeds,
+        policy: policy_file.display().to_string(),
+        scenario: scenario.to_string(),
+        actions: match mode {
+            ActionMode::Sample => "sample",
+            ActionMode::Mean => "mean",
+        }
+        .into(),
+        baseline,
+        comparison,
+        wall_s: start.elapsed().as_secs_f64(),
+    };
+    Ok((report, driver))
+}
+
 /// The all-human version of a spec: every AV type drives like the humans (its `controlled` flag off).
 pub fn human_spec(spec: &SimSpec) -> SimSpec {
     let mut s = spec.clone();

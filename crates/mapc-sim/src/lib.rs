@@ -56,7 +56,7 @@ pub mod spec;
 pub mod trace;
 
 pub use idm::IdmParams;
-pub use metrics::{MeanCi, RunMetrics, Summary, run_baseline_spec, t_quantile_975};
+pub use metrics::{BaselineReport, MeanCi, RunMetrics, Summary, run_baseline_spec, t_quantile_975};
 pub use network::Network;
 pub use scenario::{run_baseline, spec_from_scenario};
 pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleView};

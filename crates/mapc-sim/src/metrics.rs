@@ -103,6 +103,45 @@ impl Summary {
     }
 }
 
+/// A baseline over seeds as `mapc sim --json` prints it (and the Python package's `simulate` returns it).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BaselineReport {
+    /// Where the scenario came from: a file path, or `builtin:NAME`.
+    pub scenario: String,
+    pub seeds: usize,
+    pub first_seed: u64,
+    pub outflow: MeanCi,
+    pub inflow: MeanCi,
+    pub speed: MeanCi,
+    pub travel_time: MeanCi,
+    pub delay: MeanCi,
+    pub wall_s: f64,
+    pub runs: Vec<RunMetrics>,
+}
+
+impl BaselineReport {
+    pub fn of(
+        scenario: &str,
+        first_seed: u64,
+        runs: Vec<RunMetrics>,
+        wall_s: f64,
+    ) -> BaselineReport {
+        let s = Summary::of(&runs);
+        BaselineReport {
+            scenario: scenario.to_string(),
+            seeds: s.seeds,
+            first_seed,
+            outflow: s.outflow,
+            inflow: s.inflow,
+            speed: s.speed,
+            travel_time: s.travel_time,
+            delay: s.delay,
+            wall_s,
+            runs,
+        }
+    }
+}
+
 /// Run every seed to the horizon in parallel (rayon's current pool); results in seed order.
 pub fn run_baseline_spec(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, SimError> {
     seeds

@@ -68,6 +68,18 @@ pub struct MergeEnvConfig {
 }
 
 impl MergeEnvConfig {
+    /// The paper's environment for `n_av` controlled AVs: the Simple Merge's normalisation and the human
+    /// driver's acceleration bounds (what a new centralized training run uses).
+    pub fn paper(reward: RewardKind, n_av: usize) -> MergeEnvConfig {
+        MergeEnvConfig {
+            reward,
+            n_av,
+            norm: SIMPLE_MERGE_NORM,
+            accel_min: ACCEL_MIN,
+            accel_max: ACCEL_MAX,
+        }
+    }
+
     pub fn obs_dim(&self) -> usize {
         PER_AV * self.n_av
     }

@@ -1,0 +1,312 @@
+//! The environments and the policy as Python classes. Arrays cross as little-endian `float32` bytes.
+
+use crate::{load_scenario, mapc_error};
+use mapc_rl::Checkpoint;
+use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind};
+use mapc_rl::ppo::tensor::Scratch;
+use mapc_rl::rollout::Env as _;
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+use rayon::prelude::*;
+use std::path::PathBuf;
+
+fn to_bytes<'py>(py: Python<'py>, xs: &[f32]) -> Bound<'py, PyBytes> {
+    let mut out = Vec::with_capacity(std::mem::size_of_val(xs));
+    for x in xs {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    PyBytes::new(py, &out)
+}
+
+fn from_bytes(bytes: &[u8], want: usize, what: &str) -> PyResult<Vec<f32>> {
+    if bytes.len() != 4 * want {
+        return Err(mapc_error(format!(
+            "{what}: {} bytes where {want} float32 values ({} bytes) were expected",
+            bytes.len(),
+            4 * want
+        )));
+    }
+    Ok(bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect())
+}
+
+/// One episode's state in an environment: the mapc environment and its step count.
+struct Episode {
+    env: MergeEnv,
+    steps: usize,
+    started: bool,
+}
+
+impl Episode {
+    fn new(scenario: &str, reward: &str, n_av: Option<usize>) -> PyResult<(Episode, String)> {
+        let (resolved, spec) = load_scenario(scenario)?;
+        let reward: RewardKind = reward.parse().map_err(mapc_error)?;
+        let n_av = n_av
+            .or(resolved.scenario.control.as_ref().map(|c| c.n_av as usize))
+            .unwrap_or(5);
+        let env = MergeEnv::new(spec, MergeEnvConfig::paper(reward, n_av)).map_err(mapc_error)?;
+        Ok((
+            Episode {
+                env,
+                steps: 0,
+                started: false,
+            },
+            resolved.origin,
+        ))
+    }
+
+    fn reset(&mut self, seed: u64) -> PyResult<Vec<f32>> {
+        let obs = self.env.reset(seed).map_err(mapc_error)?;
+        self.steps = 0;
+        self.started = true;
+        Ok(obs)
+    }
+
+    /// One step; `truncated` once the scenario's horizon is reached (the episode has no other end).
+    fn step(&mut self, action: &[f32]) -> PyResult<(Vec<f32>, f32, bool)> {
+        if !self.started {
+            return Err(mapc_error("step before reset: call reset(seed) first"));
+        }
+        if self.steps >= self.env.horizon() {
+            return Err(mapc_error(
+                "step after the episode's end: call reset(seed) for a new episode",
+            ));
+        }
+        let tr = self.env.try_step(action).map_err(mapc_error)?;
+        self.steps += 1;
+        Ok((tr.obs, tr.reward, self.steps >= self.env.horizon()))
+    }
+
+    fn metrics(&self) -> (f64, f64, f64) {
+        if !self.started {
+            return (0.0, 0.0, 0.0);
+        }
+        let m = self.env.metrics();
+        (m.outflow, m.inflow, m.speed)
+    }
+}
+
+/// The centralized merge-control environment (REFERENCE.md sec. 5) on one scenario.
+#[pyclass(module = "mapc._mapc")]
+pub struct Env {
+    episode: Episode,
+    #[pyo3(get)]
+    scenario: String,
+}
+
+#[pymethods]
+impl Env {
+    #[new]
+    #[pyo3(signature = (scenario = "simple_merge", reward = "outflow", n_av = None))]
+    fn new(scenario: &str, reward: &str, n_av: Option<usize>) -> PyResult<Self> {
+        let (episode, origin) = Episode::new(scenario, reward, n_av)?;
+        Ok(Env {
+            episode,
+            scenario: origin,
+        })
+    }
+    #[getter]
+    fn obs_dim(&self) -> usize {
+        self.episode.env.obs_dim()
+    }
+    #[getter]
+    fn act_dim(&self) -> usize {
+        self.episode.env.act_dim()
+    }
+    #[getter]
+    fn horizon(&self) -> usize {
+        self.episode.env.horizon()
+    }
+    /// (lowest, highest) acceleration, m/s²: actions are clipped to them.
+    #[getter]
+    fn action_bounds(&self) -> (f64, f64) {
+        let c = self.episode.env.config();
+        (c.accel_min, c.accel_max)
+    }
+    /// Start the episode of `seed`; returns the observation.
+    fn reset<'py>(&mut self, py: Python<'py>, seed: u64) -> PyResult<Bound<'py, PyBytes>> {
+        let obs = self.episode.reset(seed)?;
+        Ok(to_bytes(py, &obs))
+    }
+    /// Apply one acceleration per controlled AV; returns (observation, reward, truncated).
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        action: &[u8],
+    ) -> PyResult<(Bound<'py, PyBytes>, f32, bool)> {
+        let action = from_bytes(action, self.episode.env.act_dim(), "action")?;
+        let (obs, reward, truncated) = self.episode.step(&action)?;
+        Ok((to_bytes(py, &obs), reward, truncated))
+    }
+    /// (outflow veh/h, inflow veh/h, mean speed m/s) of the episode so far, as `mapc sim` defines them.
+    fn metrics(&self) -> (f64, f64, f64) {
+        self.episode.metrics()
+    }
+}
+
+/// K centralized environments stepped together in Rust threads; each resets in the step after its episode
+/// ended (the action given to it then is ignored, its reward is 0).
+#[pyclass(module = "mapc._mapc")]
+pub struct VecEnv {
+    episodes: Vec<Episode>,
+    /// Seed of each sub-environment's current episode; the next one is this plus the number of environments.
+    seeds: Vec<u64>,
+    needs_reset: Vec<bool>,
+    #[pyo3(get)]
+    scenario: String,
+}
+
+#[pymethods]
+impl VecEnv {
+    #[new]
+    #[pyo3(signature = (scenario = "simple_merge", num_envs = 4, reward = "outflow", n_av = None))]
+    fn new(scenario: &str, num_envs: usize, reward: &str, n_av: Option<usize>) -> PyResult<Self> {
+        if num_envs == 0 {
+            return Err(mapc_error("num_envs must be at least 1"));
+        }
+        let (first, origin) = Episode::new(scenario, reward, n_av)?;
+        let mut episodes = vec![first];
+        for _ in 1..num_envs {
+            episodes.push(Episode::new(scenario, reward, n_av)?.0);
+        }
+        Ok(VecEnv {
+            episodes,
+            seeds: vec![0; num_envs],
+            needs_reset: vec![false; num_envs],
+            scenario: origin,
+        })
+    }
+    #[getter]
+    fn num_envs(&self) -> usize {
+        self.episodes.len()
+    }
+    #[getter]
+    fn obs_dim(&self) -> usize {
+        self.episodes[0].env.obs_dim()
+    }
+    #[getter]
+    fn act_dim(&self) -> usize {
+        self.episodes[0].env.act_dim()
+    }
+    #[getter]
+    fn horizon(&self) -> usize {
+        self.episodes[0].env.horizon()
+    }
+    /// Reset every sub-environment: the k-th runs the episode of `seed + k`. Returns the K observations.
+    fn reset<'py>(&mut self, py: Python<'py>, seed: u64) -> PyResult<Bound<'py, PyBytes>> {
+        let n = self.episodes.len() as u64;
+        self.seeds = (seed..seed + n).collect();
+        self.needs_reset.iter_mut().for_each(|r| *r = false);
+        let obs: Vec<Vec<f32>> = py
+            .detach(|| {
+                self.episodes
+                    .par_iter_mut()
+                    .zip(&self.seeds)
+                    .map(|(e, &s)| e.reset(s).map_err(|e| e.to_string()))
+                    .collect::<Result<_, String>>()
+            })
+            .map_err(mapc_error)?;
+        Ok(to_bytes(py, &obs.concat()))
+    }
+    /// One step of every sub-environment (K x act_dim actions). Returns (observations, rewards, truncated,
+    /// finished) where `finished` lists (index, seed, outflow, inflow, speed) of the episodes that ended now.
+    #[allow(clippy::type_complexity)]
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: &[u8],
+    ) -> PyResult<(
+        Bound<'py, PyBytes>,
+        Bound<'py, PyBytes>,
+        Vec<bool>,
+        Vec<(usize, u64, f64, f64, f64)>,
+    )> {
+        let k = self.episodes.len();
+        let act_dim = self.act_dim();
+        let actions = from_bytes(actions, k * act_dim, "actions")?;
+        if self.episodes.iter().any(|e| !e.started) {
+            return Err(mapc_error("step before reset: call reset(seed) first"));
+        }
+        let n = k as u64;
+        let results: Vec<(Vec<f32>, f32, bool)> = py.detach(|| {
+            self.episodes
+                .par_iter_mut()
+                .zip(self.seeds.par_iter_mut())
+                .zip(self.needs_reset.par_iter())
+                .enumerate()
+                .map(|(i, ((e, seed), &reset))| {
+                    if reset {
+                        *seed += n;
+                        return e.reset(*seed).map(|obs| (obs, 0.0, false));
+                    }
+                    e.step(&actions[i * act_dim..(i + 1) * act_dim])
+                })
+                .collect::<PyResult<Vec<_>>>()
+        })?;
+        let mut obs = Vec::with_capacity(k * self.obs_dim());
+        let mut rewards = Vec::with_capacity(k);
+        let mut truncated = Vec::with_capacity(k);
+        let mut finished = Vec::new();
+        for (i, (o, r, t)) in results.into_iter().enumerate() {
+            obs.extend_from_slice(&o);
+            rewards.push(r);
+            truncated.push(t);
+            self.needs_reset[i] = t;
+            if t {
+                let (outflow, inflow, speed) = self.episodes[i].metrics();
+                finished.push((i, self.seeds[i], outflow, inflow, speed));
+            }
+        }
+        Ok((
+            to_bytes(py, &obs),
+            to_bytes(py, &rewards),
+            truncated,
+            finished,
+        ))
+    }
+}
+
+/// A trained centralized policy (a checkpoint file or run directory): its mean action for an observation.
+#[pyclass(module = "mapc._mapc")]
+pub struct Policy {
+    ck: Checkpoint,
+    scratch: Scratch,
+    #[pyo3(get)]
+    path: String,
+}
+
+#[pymethods]
+impl Policy {
+    #[new]
+    fn new(path: PathBuf) -> PyResult<Self> {
+        let file = mapc_rl::checkpoint::policy_file(&path);
+        let ck = Checkpoint::load(&file).map_err(mapc_error)?;
+        if ck.spec.distributed.is_some() {
+            return Err(mapc_error(format!(
+                "{}: a distributed policy (one acceleration per agent); Policy takes a centralized one",
+                file.display()
+            )));
+        }
+        Ok(Policy {
+            ck,
+            scratch: Scratch::default(),
+            path: file.display().to_string(),
+        })
+    }
+    #[getter]
+    fn obs_dim(&self) -> usize {
+        self.ck.spec.obs_dim
+    }
+    #[getter]
+    fn act_dim(&self) -> usize {
+        self.ck.spec.act_dim
+    }
+    /// The policy's mean action (what `mapc eval` applies) for one observation.
+    fn act<'py>(&mut self, py: Python<'py>, obs: &[u8]) -> PyResult<Bound<'py, PyBytes>> {
+        let obs = from_bytes(obs, self.ck.spec.obs_dim, "observation")?;
+        let out = self.ck.state.model.infer(&obs, &mut self.scratch);
+        Ok(to_bytes(py, &out.mean))
+    }
+}

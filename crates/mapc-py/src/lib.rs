@@ -1,0 +1,113 @@
+//! # mapc-py: the native part of mapc's Python package (`mapc._mapc`)
+//!
+//! Glossary:
+//! - **env**: one centralized merge-control episode at a time ([`Env`]): the observation of the first `N_AV` AVs
+//!   in the control region, their accelerations as the action, one of the paper's rewards (`mapc_rl`'s
+//!   `MergeEnv`, the environment `mapc train` uses).
+//! - **vector env**: K such episodes stepped together in Rust threads in one call ([`VecEnv`]), each
+//!   sub-environment reset in the step after its episode ended (Gymnasium 1.x's next-step autoreset).
+//! - **buffer**: observations, actions and rewards cross into Python as little-endian `float32` bytes, which
+//!   `numpy.frombuffer` reads without a copy per value.
+//! - **report**: `simulate` and `evaluate` return the JSON that `mapc sim --json` and `mapc eval --json` print
+//!   (the same library structs), which the Python side parses into dicts.
+//!
+//! Every error of mapc becomes `mapc.MapcError` with mapc's message (file and place); nothing here panics on
+//! bad input.
+
+mod envs;
+
+use mapc_rl::Checkpoint;
+use mapc_rl::eval::evaluate as evaluate_policy;
+use mapc_rl::rollout::ActionMode;
+use mapc_scenario::ResolvedScenario;
+use mapc_sim::{BaselineReport, SimSpec, run_baseline_spec, spec_from_scenario};
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+create_exception!(
+    _mapc,
+    MapcError,
+    PyException,
+    "An error of mapc: bad input, named with its file and place."
+);
+
+/// A mapc error as the Python exception, with the whole chain of causes in its message.
+pub(crate) fn mapc_error(e: impl std::fmt::Display) -> PyErr {
+    MapcError::new_err(e.to_string())
+}
+
+/// A scenario file or built-in name, resolved and made into the simulator's spec.
+pub(crate) fn load_scenario(scenario: &str) -> PyResult<(ResolvedScenario, SimSpec)> {
+    let resolved = ResolvedScenario::load(scenario).map_err(mapc_error)?;
+    let spec = spec_from_scenario(&resolved)
+        .map_err(|e| mapc_error(format!("scenario `{}`: {e}", resolved.origin)))?;
+    Ok((resolved, spec))
+}
+
+fn seed_list(seeds: u64, first_seed: u64) -> PyResult<Vec<u64>> {
+    if seeds == 0 {
+        return Err(mapc_error("seeds must be at least 1"));
+    }
+    Ok((first_seed..first_seed + seeds).collect())
+}
+
+/// The all-human baseline of `scenario` over `seeds` seeds from `first_seed`, as JSON (`mapc sim --json`).
+#[pyfunction]
+#[pyo3(signature = (scenario, seeds = 100, first_seed = 0))]
+fn simulate(py: Python<'_>, scenario: &str, seeds: u64, first_seed: u64) -> PyResult<String> {
+    let (resolved, spec) = load_scenario(scenario)?;
+    let list = seed_list(seeds, first_seed)?;
+    let start = std::time::Instant::now();
+    let runs = py
+        .detach(|| run_baseline_spec(&spec, &list))
+        .map_err(|e| mapc_error(format!("scenario `{}`: {e}", resolved.origin)))?;
+    let report = BaselineReport::of(
+        &resolved.origin,
+        first_seed,
+        runs,
+        start.elapsed().as_secs_f64(),
+    );
+    serde_json::to_string(&report).map_err(mapc_error)
+}
+
+/// A policy (checkpoint file or run directory) against the humans on `scenario`, as JSON (`mapc eval --json`).
+#[pyfunction]
+#[pyo3(signature = (policy, scenario = "simple_merge", seeds = 100, first_seed = 0, sample = false, baseline = true))]
+fn evaluate(
+    py: Python<'_>,
+    policy: PathBuf,
+    scenario: &str,
+    seeds: u64,
+    first_seed: u64,
+    sample: bool,
+    baseline: bool,
+) -> PyResult<String> {
+    let file = mapc_rl::checkpoint::policy_file(&policy);
+    let ck = Checkpoint::load(&file).map_err(mapc_error)?;
+    let (resolved, spec) = load_scenario(scenario)?;
+    let list = seed_list(seeds, first_seed)?;
+    let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
+    let mode = if sample {
+        ActionMode::Sample
+    } else {
+        ActionMode::Mean
+    };
+    let (report, _) = py
+        .detach(|| evaluate_policy(&ck, &file, scenario, &spec, n_av, &list, mode, baseline))
+        .map_err(|e| mapc_error(format!("evaluating {}: {e}", file.display())))?;
+    serde_json::to_string(&report).map_err(mapc_error)
+}
+
+#[pymodule]
+fn _mapc(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("MapcError", m.py().get_type::<MapcError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_class::<envs::Env>()?;
+    m.add_class::<envs::VecEnv>()?;
+    m.add_class::<envs::Policy>()?;
+    Ok(())
+}

@@ -1,0 +1,51 @@
+"""Type stubs of mapc's native module (crates/mapc-py). Arrays cross as little-endian float32 bytes."""
+
+from typing import List, Optional, Tuple
+
+__version__: str
+
+class MapcError(Exception):
+    """An error of mapc: bad input, named with its file and place."""
+
+def simulate(scenario: str, seeds: int = 100, first_seed: int = 0) -> str:
+    """The all-human baseline as the JSON `mapc sim --json` prints."""
+
+def evaluate(
+    policy: str,
+    scenario: str = "simple_merge",
+    seeds: int = 100,
+    first_seed: int = 0,
+    sample: bool = False,
+    baseline: bool = True,
+) -> str:
+    """A policy against the humans as the JSON `mapc eval --json` prints."""
+
+class Env:
+    scenario: str
+    obs_dim: int
+    act_dim: int
+    horizon: int
+    action_bounds: Tuple[float, float]
+    def __init__(self, scenario: str = "simple_merge", reward: str = "outflow", n_av: Optional[int] = None) -> None: ...
+    def reset(self, seed: int) -> bytes: ...
+    def step(self, action: bytes) -> Tuple[bytes, float, bool]: ...
+    def metrics(self) -> Tuple[float, float, float]: ...
+
+class VecEnv:
+    scenario: str
+    num_envs: int
+    obs_dim: int
+    act_dim: int
+    horizon: int
+    def __init__(
+        self, scenario: str = "simple_merge", num_envs: int = 4, reward: str = "outflow", n_av: Optional[int] = None
+    ) -> None: ...
+    def reset(self, seed: int) -> bytes: ...
+    def step(self, actions: bytes) -> Tuple[bytes, bytes, List[bool], List[Tuple[int, int, float, float, float]]]: ...
+
+class Policy:
+    path: str
+    obs_dim: int
+    act_dim: int
+    def __init__(self, path: str) -> None: ...
+    def act(self, obs: bytes) -> bytes: ...

@@ -1,0 +1,134 @@
+"""The Python package against the binary: Gymnasium's checks, the same figures bit for bit as `mapc sim` and
+`mapc eval` on the same seeds, the vector env's autoreset, and mapc's errors as Python exceptions."""
+
+import json
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import mapc
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+POLICY = str(ROOT / "policies" / "simple_merge_outflow.json")
+WINDOW = str(ROOT / "scenarios" / "i696_window.toml")
+
+
+def mapc_binary():
+    """The binary the Rust tests built (MAPC_BIN, else target/debug or target/release)."""
+    candidates = [os.environ.get("MAPC_BIN")] + [str(ROOT / "target" / p / "mapc") for p in ("debug", "release")]
+    for c in candidates:
+        if c and os.path.isfile(c):
+            return c
+    pytest.fail("no mapc binary: build it with `cargo build` or set MAPC_BIN")
+
+
+def binary_json(*args):
+    out = subprocess.run([mapc_binary(), *args, "--json"], cwd=ROOT, capture_output=True, text=True, check=True)
+    return json.loads(out.stdout)
+
+
+def test_the_env_passes_gymnasiums_checks():
+    env = mapc.make_env("simple_merge")
+    check_env(env, skip_render_check=True)
+    assert env.observation_space.shape == (25,)
+    assert env.action_space.shape == (5,)
+    assert (env.action_space.low[0], env.action_space.high[0]) == (np.float32(-4.5), np.float32(2.6))
+
+
+def test_a_window_scenario_is_an_env_too():
+    env = mapc.make_env(WINDOW)
+    obs, info = env.reset(seed=4)
+    assert obs.shape == (25,) and info["seed"] == 4
+    obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+    assert env.observation_space.contains(obs) and not terminated and not truncated
+
+
+def test_simulate_gives_mapc_sims_figures_bit_for_bit():
+    ours = mapc.simulate("simple_merge", seeds=3, first_seed=5)
+    theirs = binary_json("sim", "--scenario", "simple_merge", "--seeds", "3", "--first-seed", "5")
+    for key in ("outflow", "inflow", "speed", "travel_time", "delay", "runs", "seeds", "first_seed", "scenario"):
+        assert ours[key] == theirs[key], key
+
+
+def test_an_episode_driven_from_python_is_mapc_evals_episode():
+    # the shipped policy's mean action, applied step by step through the Gymnasium API
+    env, policy = mapc.make_env("simple_merge"), mapc.Policy(POLICY)
+    obs, _ = env.reset(seed=2)
+    truncated, steps = False, 0
+    while not truncated:
+        obs, _, terminated, truncated, info = env.step(policy.act(obs))
+        assert not terminated
+        steps += 1
+    assert steps == env.horizon == 2000
+    theirs = binary_json("eval", "--policy", POLICY, "--seeds", "1", "--first-seed", "2", "--no-baseline")
+    assert info["outflow"] == theirs["outflow"]["mean"]
+    assert info["inflow"] == theirs["inflow"]["mean"]
+    assert info["speed"] == theirs["speed"]["mean"]
+    # and evaluate() is mapc eval
+    ours = mapc.evaluate(POLICY, "simple_merge", seeds=2, first_seed=2)
+    theirs = binary_json("eval", "--policy", POLICY, "--seeds", "2", "--first-seed", "2")
+    for key in ("outflow", "inflow", "speed", "baseline", "comparison", "seeds"):
+        assert ours[key] == theirs[key], key
+
+
+def test_the_same_seed_and_actions_give_the_same_episode():
+    def run():
+        env, rng = mapc.make_env("simple_merge", reward="flow"), np.random.default_rng(7)
+        obs, _ = env.reset(seed=11)
+        trace = [obs]
+        for _ in range(300):
+            obs, reward, *_ = env.step(rng.uniform(-4.5, 2.6, size=5))
+            trace += [obs, np.float32(reward)]
+        return np.concatenate([np.ravel(t) for t in trace]), env.metrics()
+
+    (a, ma), (b, mb) = run(), run()
+    assert np.array_equal(a, b) and ma == mb
+
+
+def test_the_vector_env_steps_every_episode_and_resets_in_the_next_step():
+    num = 3
+    venv = mapc.make_vec_env("simple_merge", num_envs=num, seed=20)
+    obs, info = venv.reset()
+    assert obs.shape == (num, 25) and list(info["seed"]) == [20, 21, 22]
+    # each sub-environment is the single env of its seed
+    single = mapc.make_env("simple_merge")
+    assert np.array_equal(obs[1], single.reset(seed=21)[0])
+    actions = np.zeros((num, 5), np.float32)
+    for step in range(venv.horizon):
+        obs, rewards, terminated, truncated, infos = venv.step(actions)
+        single_obs, single_reward, _, single_trunc, single_info = single.step(actions[1])
+        assert np.array_equal(obs[1], single_obs) and rewards[1] == np.float32(single_reward)
+        assert not terminated.any()
+        assert truncated.all() == (step == venv.horizon - 1)
+    assert infos["_outflow"].all() and infos["outflow"][1] == single_info["outflow"]
+    assert list(infos["seed"]) == [20, 21, 22]
+    # the next step starts each sub-environment's next episode (seed + num_envs), ignoring its action
+    obs, rewards, terminated, truncated, infos = venv.step(np.full((num, 5), 2.6, np.float32))
+    assert not truncated.any() and not rewards.any() and not infos
+    assert np.array_equal(obs[0], mapc.make_env("simple_merge").reset(seed=20 + num)[0])
+
+
+def test_mapcs_errors_are_python_exceptions_with_mapcs_message(tmp_path):
+    with pytest.raises(mapc.MapcError, match="no_such.toml"):
+        mapc.make_env("no_such.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text('version = 1\nname = "x"\nhorizon_steps = 10\nflows = []\n[network]\ngraph = "gone.graph.json"\n'
+                   "[vehicle_types.human]\n")
+    with pytest.raises(mapc.MapcError, match="gone.graph.json"):
+        mapc.simulate(str(bad), seeds=1)
+    with pytest.raises(mapc.MapcError, match="unknown reward"):
+        mapc.make_env("simple_merge", reward="happiness")
+    env = mapc.make_env("simple_merge")
+    with pytest.raises(mapc.MapcError, match="before reset"):
+        env.step(np.zeros(5))
+    env.reset(seed=0)
+    with pytest.raises(mapc.MapcError, match="5 were expected"):
+        env.step(np.zeros(3))
+    with pytest.raises(mapc.MapcError, match="seeds must be at least 1"):
+        mapc.simulate("simple_merge", seeds=0)
+    with pytest.raises(mapc.MapcError, match="nope.json"):
+        mapc.Policy(str(tmp_path / "nope.json"))
