@@ -2,9 +2,11 @@
 
 - ``make_env(scenario, reward, seed)``: a ``gymnasium.Env`` (the centralized setting of the paper).
 - ``make_vec_env(scenario, num_envs)``: a ``gymnasium.vector.VectorEnv`` stepping every episode in Rust threads.
+- ``parallel_env(scenario, features)``: a PettingZoo ``ParallelEnv`` for the distributed setting (needs
+  ``pettingzoo``).
 - ``simulate(scenario, seeds)`` and ``evaluate(policy, scenario, seeds)``: the dicts that ``mapc sim --json`` and
   ``mapc eval --json`` print, computed by the same library code.
-- ``Policy(path)``: a trained centralized policy's mean action.
+- ``Policy(path)``: a trained policy's mean action.
 
 Every error of mapc is raised as ``MapcError`` with mapc's message (the file and the place).
 """
@@ -29,6 +31,7 @@ __all__ = [
     "evaluate",
     "make_env",
     "make_vec_env",
+    "parallel_env",
     "simulate",
     "__version__",
 ]
@@ -61,6 +64,27 @@ def make_vec_env(
     return MergeVecEnv(os.fspath(scenario), num_envs=num_envs, reward=reward, seed=seed, n_av=n_av)
 
 
+def parallel_env(
+    scenario: PathLike = "simple_merge",
+    features: str = "full",
+    seed: int = 0,
+    eta1: float = 0.9,
+    eta2: float = 0.1,
+    exit_bonus: float = 20.0,
+    count_waiting: bool = False,
+    reward_share: float = 0.0,
+):
+    """The distributed setting as a PettingZoo ``ParallelEnv``: one agent per AV in the control region.
+
+    ``features`` is ``full``, ``none`` or a list of ``dist``, ``congestion``, ``merge`` (the paper's Table 4);
+    the reward is ``0.1 (-eta1 + eta2 * mean speed / V)`` per step and ``exit_bonus`` when the agent leaves.
+    """
+    from .parallel import MergeParallelEnv
+
+    return MergeParallelEnv(os.fspath(scenario), features=features, seed=seed, eta1=eta1, eta2=eta2,
+                            exit_bonus=exit_bonus, count_waiting=count_waiting, reward_share=reward_share)
+
+
 def simulate(scenario: PathLike = "simple_merge", seeds: int = 100, first_seed: int = 0) -> Dict[str, Any]:
     """The all-human baseline over ``seeds`` seeds: what ``mapc sim --json`` prints."""
     return json.loads(_simulate(os.fspath(scenario), seeds, first_seed))
@@ -81,13 +105,15 @@ def evaluate(
 
 
 class Policy:
-    """A trained centralized policy (a checkpoint file or a ``mapc train`` run directory)."""
+    """A trained policy (a checkpoint file or a ``mapc train`` run directory): centralized (one acceleration per
+    controlled AV) or distributed (``features`` set: one acceleration for the agent whose observation it is)."""
 
     def __init__(self, path: PathLike) -> None:
         self._native = _NativePolicy(os.fspath(path))
         self.path: str = self._native.path
         self.obs_dim: int = self._native.obs_dim
         self.act_dim: int = self._native.act_dim
+        self.features: Optional[str] = self._native.features
 
     def act(self, obs: Any) -> Any:
         """The mean action (what ``mapc eval`` applies) for one observation."""

@@ -43,9 +43,32 @@ class VecEnv:
     def reset(self, seed: int) -> bytes: ...
     def step(self, actions: bytes) -> Tuple[bytes, bytes, List[bool], List[Tuple[int, int, float, float, float]]]: ...
 
+class DistEnv:
+    scenario: str
+    obs_dim: int
+    horizon: int
+    max_agents: int
+    action_bounds: Tuple[float, float]
+    def __init__(
+        self,
+        scenario: str = "simple_merge",
+        features: str = "full",
+        eta1: float = 0.9,
+        eta2: float = 0.1,
+        exit_bonus: float = 20.0,
+        count_waiting: bool = False,
+        reward_share: float = 0.0,
+    ) -> None: ...
+    def reset(self, seed: int) -> List[Tuple[int, bytes]]: ...
+    def step(
+        self, actions: List[Tuple[int, float]]
+    ) -> Tuple[List[Tuple[int, float, bool]], List[Tuple[int, bytes]], bool]: ...
+    def metrics(self) -> Tuple[float, float, float]: ...
+
 class Policy:
     path: str
     obs_dim: int
     act_dim: int
+    features: Optional[str]
     def __init__(self, path: str) -> None: ...
     def act(self, obs: bytes) -> bytes: ...

@@ -132,3 +132,28 @@ def test_mapcs_errors_are_python_exceptions_with_mapcs_message(tmp_path):
         mapc.simulate("simple_merge", seeds=0)
     with pytest.raises(mapc.MapcError, match="nope.json"):
         mapc.Policy(str(tmp_path / "nope.json"))
+
+
+def test_the_parallel_env_passes_pettingzoos_test_and_plays_mapc_evals_distributed_episode():
+    from pettingzoo.test import parallel_api_test
+
+    parallel_api_test(mapc.parallel_env("simple_merge"), num_cycles=2500)
+    policy = mapc.Policy(ROOT / "policies" / "simple_merge_distributed.json")
+    assert policy.features is not None and policy.act_dim == 1
+    env = mapc.parallel_env("simple_merge", features=policy.features)
+    obs, infos = env.reset(seed=3)
+    assert env.agents == ["av_0"] and set(infos) == {"av_0"}
+    seen, info = set(), {}
+    while env.agents:
+        actions = {a: policy.act(obs[a]) for a in env.agents}
+        obs, rewards, terminations, truncations, infos = env.step(actions)
+        assert set(obs) == set(rewards) == set(terminations) == set(truncations) == set(infos)
+        seen |= set(obs)
+        info = next(iter(infos.values()), info)
+    assert len(seen) > 20
+    theirs = binary_json("eval", "--policy", str(ROOT / "policies" / "simple_merge_distributed.json"),
+                         "--seeds", "1", "--first-seed", "3", "--no-baseline")
+    assert (info["outflow"], info["inflow"], info["speed"]) == (
+        theirs["outflow"]["mean"], theirs["inflow"]["mean"], theirs["speed"]["mean"])
+    with pytest.raises(mapc.MapcError, match="unknown feature"):
+        mapc.parallel_env("simple_merge", features="telepathy")

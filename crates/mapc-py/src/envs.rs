@@ -2,6 +2,7 @@
 
 use crate::{load_scenario, mapc_error};
 use mapc_rl::Checkpoint;
+use mapc_rl::env::distributed::{AgentReward, DistributedConfig, DistributedEnv, Features};
 use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind};
 use mapc_rl::ppo::tensor::Scratch;
 use mapc_rl::rollout::Env as _;
@@ -268,7 +269,7 @@ impl VecEnv {
     }
 }
 
-/// A trained centralized policy (a checkpoint file or run directory): its mean action for an observation.
+/// A trained policy (a checkpoint file or run directory): its mean action for an observation.
 #[pyclass(module = "mapc._mapc")]
 pub struct Policy {
     ck: Checkpoint,
@@ -283,12 +284,6 @@ impl Policy {
     fn new(path: PathBuf) -> PyResult<Self> {
         let file = mapc_rl::checkpoint::policy_file(&path);
         let ck = Checkpoint::load(&file).map_err(mapc_error)?;
-        if ck.spec.distributed.is_some() {
-            return Err(mapc_error(format!(
-                "{}: a distributed policy (one acceleration per agent); Policy takes a centralized one",
-                file.display()
-            )));
-        }
         Ok(Policy {
             ck,
             scratch: Scratch::default(),
@@ -303,10 +298,143 @@ impl Policy {
     fn act_dim(&self) -> usize {
         self.ck.spec.act_dim
     }
-    /// The policy's mean action (what `mapc eval` applies) for one observation.
+    /// For a distributed policy, the features its agents see (`full`, `dist,congestion`, ...); None for a
+    /// centralized one.
+    #[getter]
+    fn features(&self) -> Option<String> {
+        self.ck.spec.distributed.map(|d| d.features.name())
+    }
+    /// The policy's mean action (what `mapc eval` applies) for one observation: one acceleration per controlled
+    /// AV (centralized) or the agent's own (distributed).
     fn act<'py>(&mut self, py: Python<'py>, obs: &[u8]) -> PyResult<Bound<'py, PyBytes>> {
         let obs = from_bytes(obs, self.ck.spec.obs_dim, "observation")?;
         let out = self.ck.state.model.infer(&obs, &mut self.scratch);
         Ok(to_bytes(py, &out.mean))
+    }
+}
+
+/// The distributed setting (the paper's section 4.3): every AV in the control region is an agent with its own
+/// observation and one acceleration; agents appear as their AVs enter the region and are done when they leave.
+#[pyclass(module = "mapc._mapc")]
+pub struct DistEnv {
+    env: DistributedEnv,
+    steps: usize,
+    started: bool,
+    #[pyo3(get)]
+    scenario: String,
+    /// The most AVs an episode can hold: the initial AVs and every departure of the AV flows over the horizon.
+    #[pyo3(get)]
+    max_agents: usize,
+}
+
+fn agent_list<'py>(py: Python<'py>, obs: &[(u32, Vec<f32>)]) -> Vec<(u32, Bound<'py, PyBytes>)> {
+    obs.iter().map(|(id, o)| (*id, to_bytes(py, o))).collect()
+}
+
+#[pymethods]
+impl DistEnv {
+    #[new]
+    #[pyo3(signature = (scenario = "simple_merge", features = "full", eta1 = 0.9, eta2 = 0.1, exit_bonus = 20.0,
+                        count_waiting = false, reward_share = 0.0))]
+    fn new(
+        scenario: &str,
+        features: &str,
+        eta1: f64,
+        eta2: f64,
+        exit_bonus: f64,
+        count_waiting: bool,
+        reward_share: f64,
+    ) -> PyResult<Self> {
+        let (resolved, spec) = load_scenario(scenario)?;
+        let features = Features::parse(features).map_err(mapc_error)?;
+        for (name, v) in [("eta1", eta1), ("eta2", eta2), ("exit_bonus", exit_bonus)] {
+            if !v.is_finite() {
+                return Err(mapc_error(format!("{name} must be a number, got {v}")));
+            }
+        }
+        let reward = AgentReward {
+            eta1,
+            eta2,
+            exit_bonus,
+            count_waiting,
+            share: reward_share,
+        };
+        let horizon_s = (spec.warmup_steps + spec.horizon_steps) as f64 * spec.step_s;
+        let is_av = |t: usize| spec.vehicle_types[t].controlled;
+        let max_agents = spec
+            .initial
+            .iter()
+            .filter(|v| is_av(v.vehicle_type))
+            .count()
+            + spec
+                .flows
+                .iter()
+                .filter(|f| is_av(f.vehicle_type))
+                .map(|f| (f.vehs_per_hour * horizon_s / 3600.0).ceil() as usize + 1)
+                .sum::<usize>();
+        let env = DistributedEnv::new(spec, DistributedConfig::paper(features, reward))
+            .map_err(mapc_error)?;
+        Ok(DistEnv {
+            env,
+            steps: 0,
+            started: false,
+            scenario: resolved.origin,
+            max_agents,
+        })
+    }
+    #[getter]
+    fn obs_dim(&self) -> usize {
+        self.env.config().obs_dim()
+    }
+    #[getter]
+    fn horizon(&self) -> usize {
+        self.env.horizon()
+    }
+    #[getter]
+    fn action_bounds(&self) -> (f64, f64) {
+        (self.env.config().accel_min, self.env.config().accel_max)
+    }
+    /// Start the episode of `seed`; returns (vehicle id, observation) of the agents present, in entry order.
+    fn reset<'py>(
+        &mut self,
+        py: Python<'py>,
+        seed: u64,
+    ) -> PyResult<Vec<(u32, Bound<'py, PyBytes>)>> {
+        let obs = self.env.reset(seed).map_err(mapc_error)?;
+        self.steps = 0;
+        self.started = true;
+        Ok(agent_list(py, &obs))
+    }
+    /// One step with (vehicle id, acceleration) per agent. Returns the acting agents' (vehicle id, reward,
+    /// done), the agents present now with their observations, and whether the horizon is reached.
+    #[allow(clippy::type_complexity)]
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: Vec<(u32, f32)>,
+    ) -> PyResult<(Vec<(u32, f32, bool)>, Vec<(u32, Bound<'py, PyBytes>)>, bool)> {
+        if !self.started {
+            return Err(mapc_error("step before reset: call reset(seed) first"));
+        }
+        if self.steps >= self.env.horizon() {
+            return Err(mapc_error(
+                "step after the episode's end: call reset(seed) for a new episode",
+            ));
+        }
+        let out = self.env.step(&actions).map_err(mapc_error)?;
+        self.steps += 1;
+        Ok((
+            out.rewards,
+            agent_list(py, &out.obs),
+            self.steps >= self.env.horizon(),
+        ))
+    }
+    /// (outflow veh/h, inflow veh/h, mean speed m/s) of the episode so far.
+    fn metrics(&self) -> (f64, f64, f64) {
+        if !self.started {
+            return (0.0, 0.0, 0.0);
+        }
+        let m = self.env.metrics();
+        (m.outflow, m.inflow, m.speed)
     }
 }

@@ -6,6 +6,8 @@
 //!   `MergeEnv`, the environment `mapc train` uses).
 //! - **vector env**: K such episodes stepped together in Rust threads in one call ([`VecEnv`]), each
 //!   sub-environment reset in the step after its episode ended (Gymnasium 1.x's next-step autoreset).
+//! - **agent**: in the distributed setting ([`DistEnv`](envs::DistEnv)), an AV in the control region, named by
+//!   its vehicle id here and by its order of appearance (`av_0`, `av_1`, ...) in Python's PettingZoo wrapper.
 //! - **buffer**: observations, actions and rewards cross into Python as little-endian `float32` bytes, which
 //!   `numpy.frombuffer` reads without a copy per value.
 //! - **report**: `simulate` and `evaluate` return the JSON that `mapc sim --json` and `mapc eval --json` print
@@ -108,6 +110,7 @@ fn _mapc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
     m.add_class::<envs::Env>()?;
     m.add_class::<envs::VecEnv>()?;
+    m.add_class::<envs::DistEnv>()?;
     m.add_class::<envs::Policy>()?;
     Ok(())
 }

@@ -209,6 +209,19 @@ pub struct DistributedConfig {
 }
 
 impl DistributedConfig {
+    /// The paper's distributed setting with `features` and `reward`: the Simple Merge's normalisations and the
+    /// human driver's acceleration bounds (what a new `mapc train --distributed` run uses).
+    pub fn paper(features: Features, reward: AgentReward) -> DistributedConfig {
+        DistributedConfig {
+            features,
+            reward,
+            norm: super::merge::SIMPLE_MERGE_NORM,
+            dist_norm: SIMPLE_MERGE_DIST_NORM,
+            accel_min: super::merge::ACCEL_MIN,
+            accel_max: super::merge::ACCEL_MAX,
+        }
+    }
+
     pub fn obs_dim(&self) -> usize {
         self.features.obs_dim()
     }
