@@ -59,9 +59,13 @@ def make_vec_env(
     reward: str = "outflow",
     seed: int = 0,
     n_av: Optional[int] = None,
+    autoreset_mode: Any = "NextStep",
 ) -> MergeVecEnv:
-    """``num_envs`` centralized environments stepped together in Rust threads, autoreset in the next step."""
-    return MergeVecEnv(os.fspath(scenario), num_envs=num_envs, reward=reward, seed=seed, n_av=n_av)
+    """``num_envs`` centralized environments stepped together in Rust threads; a finished episode's
+    sub-environment resets in the next step (Gymnasium's default), or in the same step with
+    ``autoreset_mode=gymnasium.vector.AutoresetMode.SAME_STEP``."""
+    return MergeVecEnv(os.fspath(scenario), num_envs=num_envs, reward=reward, seed=seed, n_av=n_av,
+                       autoreset_mode=autoreset_mode)
 
 
 def parallel_env(

@@ -38,10 +38,17 @@ class VecEnv:
     act_dim: int
     horizon: int
     def __init__(
-        self, scenario: str = "simple_merge", num_envs: int = 4, reward: str = "outflow", n_av: Optional[int] = None
+        self,
+        scenario: str = "simple_merge",
+        num_envs: int = 4,
+        reward: str = "outflow",
+        n_av: Optional[int] = None,
+        same_step: bool = False,
     ) -> None: ...
     def reset(self, seed: int) -> bytes: ...
-    def step(self, actions: bytes) -> Tuple[bytes, bytes, List[bool], List[Tuple[int, int, float, float, float]]]: ...
+    def step(
+        self, actions: bytes
+    ) -> Tuple[bytes, bytes, List[bool], List[Tuple[int, int, float, float, float, bytes]]]: ...
 
 class DistEnv:
     scenario: str

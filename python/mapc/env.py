@@ -77,15 +77,22 @@ class MergeEnv(gymnasium.Env):
 class MergeVecEnv(VectorEnv):
     """``num_envs`` MergeEnv episodes stepped in Rust threads in one call. Sub-environment k's first episode has
     seed ``seed + k``, its next ``seed + k + num_envs``, and so on. Autoreset as Gymnasium 1.x's default
-    (next step): the step after an episode's end resets that sub-environment, ignores its action and returns
-    reward 0. The step that ends an episode puts its ``outflow``, ``inflow``, ``speed`` and ``seed`` in the infos
-    (with the ``_outflow``... masks)."""
+    (``AutoresetMode.NEXT_STEP``): the step after an episode's end resets that sub-environment, ignores its action
+    and returns reward 0; or with ``autoreset_mode=AutoresetMode.SAME_STEP`` in the step that ended it, whose
+    observation is then the new episode's first and ``infos["final_obs"]`` the last. The step that ends an episode
+    puts its ``outflow``, ``inflow``, ``speed`` and ``seed`` in the infos (with the ``_outflow``... masks)."""
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(self, scenario: str = "simple_merge", num_envs: int = 4, reward: str = "outflow",
-                 seed: int = 0, n_av: Optional[int] = None) -> None:
-        self._native = _mapc.VecEnv(scenario, num_envs, reward, n_av)
+                 seed: int = 0, n_av: Optional[int] = None,
+                 autoreset_mode: Any = AutoresetMode.NEXT_STEP) -> None:
+        autoreset_mode = AutoresetMode(autoreset_mode)
+        if autoreset_mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
+            raise _mapc.MapcError(f"autoreset mode {autoreset_mode.value}: NextStep or SameStep")
+        self.metadata = {**self.metadata, "autoreset_mode": autoreset_mode}
+        same_step = autoreset_mode == AutoresetMode.SAME_STEP
+        self._native = _mapc.VecEnv(scenario, num_envs, reward, n_av, same_step)
         self.scenario: str = self._native.scenario
         self.num_envs = self._native.num_envs
         single = _mapc.Env(scenario, reward, n_av)
@@ -115,11 +122,15 @@ class MergeVecEnv(VectorEnv):
             mask = np.zeros(self.num_envs, bool)
             cols = {k: np.zeros(self.num_envs) for k in ("outflow", "inflow", "speed")}
             seeds = np.zeros(self.num_envs, np.int64)
-            for i, s, outflow, inflow, speed in finished:
+            final_obs = np.full(self.num_envs, None, dtype=object)
+            for i, s, outflow, inflow, speed, last in finished:
                 mask[i] = True
                 seeds[i] = s
                 cols["outflow"][i], cols["inflow"][i], cols["speed"][i] = outflow, inflow, speed
-            for k, v in list(cols.items()) + [("seed", seeds)]:
+                final_obs[i] = _array(last, (self._native.obs_dim,))
+            same_step = self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+            extra = [("final_obs", final_obs)] if same_step else []
+            for k, v in list(cols.items()) + [("seed", seeds)] + extra:
                 infos[k] = v
                 infos["_" + k] = mask.copy()
         return obs, rewards, np.zeros(self.num_envs, bool), np.asarray(truncated, bool), infos

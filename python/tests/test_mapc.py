@@ -157,3 +157,20 @@ def test_the_parallel_env_passes_pettingzoos_test_and_plays_mapc_evals_distribut
         theirs["outflow"]["mean"], theirs["inflow"]["mean"], theirs["speed"]["mean"])
     with pytest.raises(mapc.MapcError, match="unknown feature"):
         mapc.parallel_env("simple_merge", features="telepathy")
+
+
+def test_same_step_autoreset_returns_the_new_episode_and_the_last_observation():
+    from gymnasium.vector import AutoresetMode
+
+    venv = mapc.make_vec_env("simple_merge", num_envs=2, seed=5, autoreset_mode=AutoresetMode.SAME_STEP)
+    single = mapc.make_env("simple_merge")
+    venv.reset()
+    single.reset(seed=6)
+    actions = np.ones((2, 5), np.float32)
+    for _ in range(venv.horizon):
+        obs, rewards, _, truncated, infos = venv.step(actions)
+        last, reward, *_ = single.step(actions[1])
+        assert rewards[1] == np.float32(reward)
+    assert truncated.all() and infos["_final_obs"].all()
+    assert np.array_equal(infos["final_obs"][1], last)
+    assert np.array_equal(obs[1], mapc.make_env("simple_merge").reset(seed=8)[0])

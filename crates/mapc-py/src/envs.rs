@@ -33,6 +33,15 @@ fn from_bytes(bytes: &[u8], want: usize, what: &str) -> PyResult<Vec<f32>> {
         .collect())
 }
 
+/// A sub-environment's step: observation, reward, truncated, and for an episode that ended its seed, metrics
+/// and last observation.
+type Stepped = (
+    Vec<f32>,
+    f32,
+    bool,
+    Option<(u64, (f64, f64, f64), Vec<f32>)>,
+);
+
 /// One episode's state in an environment: the mapc environment and its step count.
 struct Episode {
     env: MergeEnv,
@@ -147,14 +156,16 @@ impl Env {
     }
 }
 
-/// K centralized environments stepped together in Rust threads; each resets in the step after its episode
-/// ended (the action given to it then is ignored, its reward is 0).
+/// K centralized environments stepped together in Rust threads. A sub-environment whose episode ended resets in
+/// the next step (the action given to it then is ignored, its reward is 0), or with `same_step` in the step that
+/// ended it (its observation is then the new episode's first, the last one is returned beside it).
 #[pyclass(module = "mapc._mapc")]
 pub struct VecEnv {
     episodes: Vec<Episode>,
     /// Seed of each sub-environment's current episode; the next one is this plus the number of environments.
     seeds: Vec<u64>,
     needs_reset: Vec<bool>,
+    same_step: bool,
     #[pyo3(get)]
     scenario: String,
 }
@@ -162,8 +173,14 @@ pub struct VecEnv {
 #[pymethods]
 impl VecEnv {
     #[new]
-    #[pyo3(signature = (scenario = "simple_merge", num_envs = 4, reward = "outflow", n_av = None))]
-    fn new(scenario: &str, num_envs: usize, reward: &str, n_av: Option<usize>) -> PyResult<Self> {
+    #[pyo3(signature = (scenario = "simple_merge", num_envs = 4, reward = "outflow", n_av = None, same_step = false))]
+    fn new(
+        scenario: &str,
+        num_envs: usize,
+        reward: &str,
+        n_av: Option<usize>,
+        same_step: bool,
+    ) -> PyResult<Self> {
         if num_envs == 0 {
             return Err(mapc_error("num_envs must be at least 1"));
         }
@@ -176,6 +193,7 @@ impl VecEnv {
             episodes,
             seeds: vec![0; num_envs],
             needs_reset: vec![false; num_envs],
+            same_step,
             scenario: origin,
         })
     }
@@ -212,7 +230,8 @@ impl VecEnv {
         Ok(to_bytes(py, &obs.concat()))
     }
     /// One step of every sub-environment (K x act_dim actions). Returns (observations, rewards, truncated,
-    /// finished) where `finished` lists (index, seed, outflow, inflow, speed) of the episodes that ended now.
+    /// finished) where `finished` lists (index, seed, outflow, inflow, speed, last observation) of the episodes
+    /// that ended now.
     #[allow(clippy::type_complexity)]
     fn step<'py>(
         &mut self,
@@ -222,7 +241,7 @@ impl VecEnv {
         Bound<'py, PyBytes>,
         Bound<'py, PyBytes>,
         Vec<bool>,
-        Vec<(usize, u64, f64, f64, f64)>,
+        Vec<(usize, u64, f64, f64, f64, Bound<'py, PyBytes>)>,
     )> {
         let k = self.episodes.len();
         let act_dim = self.act_dim();
@@ -231,7 +250,8 @@ impl VecEnv {
             return Err(mapc_error("step before reset: call reset(seed) first"));
         }
         let n = k as u64;
-        let results: Vec<(Vec<f32>, f32, bool)> = py.detach(|| {
+        let same_step = self.same_step;
+        let results: Vec<Stepped> = py.detach(|| {
             self.episodes
                 .par_iter_mut()
                 .zip(self.seeds.par_iter_mut())
@@ -240,9 +260,20 @@ impl VecEnv {
                 .map(|(i, ((e, seed), &reset))| {
                     if reset {
                         *seed += n;
-                        return e.reset(*seed).map(|obs| (obs, 0.0, false));
+                        return e.reset(*seed).map(|obs| (obs, 0.0, false, None));
                     }
-                    e.step(&actions[i * act_dim..(i + 1) * act_dim])
+                    let (obs, reward, truncated) =
+                        e.step(&actions[i * act_dim..(i + 1) * act_dim])?;
+                    if !truncated {
+                        return Ok((obs, reward, false, None));
+                    }
+                    let ended = (*seed, e.metrics());
+                    if !same_step {
+                        return Ok((obs.clone(), reward, true, Some((ended.0, ended.1, obs))));
+                    }
+                    *seed += n;
+                    let first = e.reset(*seed)?;
+                    Ok((first, reward, true, Some((ended.0, ended.1, obs))))
                 })
                 .collect::<PyResult<Vec<_>>>()
         })?;
@@ -250,14 +281,13 @@ impl VecEnv {
         let mut rewards = Vec::with_capacity(k);
         let mut truncated = Vec::with_capacity(k);
         let mut finished = Vec::new();
-        for (i, (o, r, t)) in results.into_iter().enumerate() {
+        for (i, (o, r, t, ended)) in results.into_iter().enumerate() {
             obs.extend_from_slice(&o);
             rewards.push(r);
             truncated.push(t);
-            self.needs_reset[i] = t;
-            if t {
-                let (outflow, inflow, speed) = self.episodes[i].metrics();
-                finished.push((i, self.seeds[i], outflow, inflow, speed));
+            self.needs_reset[i] = t && !same_step;
+            if let Some((seed, (outflow, inflow, speed), last)) = ended {
+                finished.push((i, seed, outflow, inflow, speed, to_bytes(py, &last)));
             }
         }
         Ok((
