@@ -20,6 +20,16 @@ def evaluate(
 ) -> str:
     """A policy against the humans as the JSON `mapc eval --json` prints."""
 
+def save_policy(
+    path: str,
+    params: bytes,
+    scenario: str = "simple_merge",
+    reward: str = "outflow",
+    n_av: int = 5,
+    hidden: List[int] = [100, 50, 25],
+) -> None:
+    """Write float32 parameters in mapc's layout as a mapc policy file (see mapc.export)."""
+
 class Env:
     scenario: str
     obs_dim: int

@@ -174,3 +174,37 @@ def test_same_step_autoreset_returns_the_new_episode_and_the_last_observation():
     assert truncated.all() and infos["_final_obs"].all()
     assert np.array_equal(infos["final_obs"][1], last)
     assert np.array_equal(obs[1], mapc.make_env("simple_merge").reset(seed=8)[0])
+
+
+def _torch_layers(params, sizes):
+    """A mapc MLP's layers as torch lays them out: (weight [out, in], bias [out])."""
+    layers, at = [], 0
+    for n_in, n_out in zip(sizes, sizes[1:]):
+        w = np.asarray(params[at:at + n_in * n_out], np.float32).reshape(n_in, n_out).T
+        b = np.asarray(params[at + n_in * n_out:at + n_in * n_out + n_out], np.float32)
+        layers.append((w, b))
+        at += n_in * n_out + n_out
+    return layers, at
+
+
+def test_a_policy_written_from_torch_layers_is_the_same_policy_to_mapc_eval(tmp_path):
+    from mapc.export import mapc_params
+
+    ck = json.loads((ROOT / "policies" / "simple_merge_outflow.json").read_text())
+    arch, params = ck["state"]["model"]["arch"], ck["state"]["model"]["params"]
+    sizes = [arch["obs_dim"], *arch["hidden"], 2 * arch["act_dim"]]
+    policy_layers, used = _torch_layers(params, sizes)
+    value_layers, _ = _torch_layers(params[used:], [arch["obs_dim"], *arch["hidden"], 1])
+    act = arch["act_dim"]
+    w, b = policy_layers[-1]
+    # a state-independent log-std, as torch libraries have: the means, and so mean actions, are unchanged
+    raw = mapc_params(policy_layers[:-1], (w[:act], b[:act]), np.full(act, -0.5), value_layers[:-1],
+                      value_layers[-1])
+    out = tmp_path / "from_torch.json"
+    mapc._mapc.save_policy(str(out), raw, "simple_merge", "outflow", act, arch["hidden"])
+    ours = mapc.evaluate(out, "simple_merge", seeds=3, baseline=False)
+    shipped = mapc.evaluate(POLICY, "simple_merge", seeds=3, baseline=False)
+    assert ours["outflow"] == shipped["outflow"] and ours["speed"] == shipped["speed"]
+    with pytest.raises(mapc.MapcError, match="parameter bytes"):
+        mapc._mapc.save_policy(str(tmp_path / "short.json"), raw[:-4], "simple_merge", "outflow", act, arch["hidden"])
+    assert not (tmp_path / "short.json").exists()

@@ -7,10 +7,7 @@ use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressStyle};
 use mapc_rl::checkpoint::{BestBy, DistributedSpec, PolicySpec};
 use mapc_rl::env::distributed::{AgentReward, DistributedEnv, Features, SIMPLE_MERGE_DIST_NORM};
-use mapc_rl::env::merge::{
-    ACCEL_MAX, ACCEL_MIN, MergeEnv, MergeEnvConfig, RewardKind, SIMPLE_MERGE_NORM,
-};
-use mapc_rl::env::obs::PER_AV;
+use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind};
 use mapc_rl::rollout::Env;
 use mapc_rl::run::{TrainRun, log_path};
 use mapc_rl::{IterationStats, PpoConfig};
@@ -300,18 +297,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         validate(&config)?;
         let n_av = args.n_av.or(sc.n_av).unwrap_or(5);
-        let mut spec = PolicySpec {
-            scenario: args.scenario.clone(),
-            reward: reward.name().into(),
-            n_av,
-            obs_dim: PER_AV * n_av,
-            act_dim: n_av,
-            max_speed: SIMPLE_MERGE_NORM.max_speed,
-            norm_length: SIMPLE_MERGE_NORM.length,
-            accel_min: ACCEL_MIN,
-            accel_max: ACCEL_MAX,
-            distributed: None,
-        };
+        let mut spec = PolicySpec::centralized(&args.scenario, reward.name(), n_av);
         if args.distributed {
             let features = Features::parse(&args.features).map_err(anyhow::Error::msg)?;
             for (name, v) in [

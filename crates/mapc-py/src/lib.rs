@@ -102,12 +102,65 @@ fn evaluate(
     serde_json::to_string(&report).map_err(mapc_error)
 }
 
+/// Write a centralized policy trained elsewhere (RLlib, Stable-Baselines3) as a mapc policy file that `mapc eval`
+/// reads: `params` are float32 bytes in mapc's layout (`mapc.export` builds them from torch layers): the policy
+/// MLP obs -> hidden... -> means then log-stds (tanh hidden layers), then the value MLP obs -> hidden... -> 1;
+/// each layer's weights input-major (`w[i * n_out + j]`), then its biases. Written atomically.
+#[pyfunction]
+#[pyo3(signature = (path, params, scenario = "simple_merge", reward = "outflow", n_av = 5, hidden = vec![100, 50, 25]))]
+fn save_policy(
+    path: PathBuf,
+    params: &[u8],
+    scenario: &str,
+    reward: &str,
+    n_av: usize,
+    hidden: Vec<usize>,
+) -> PyResult<()> {
+    use mapc_rl::env::merge::RewardKind;
+    let reward: RewardKind = reward.parse().map_err(mapc_error)?;
+    if n_av == 0 || hidden.contains(&0) {
+        return Err(mapc_error("n_av and every hidden size must be at least 1"));
+    }
+    let spec = mapc_rl::PolicySpec::centralized(scenario, reward.name(), n_av);
+    let config = mapc_rl::PpoConfig {
+        hidden,
+        ..mapc_rl::PpoConfig::default()
+    };
+    let mut state = mapc_rl::TrainerState::new(config, spec.obs_dim, spec.act_dim);
+    if params.len() != 4 * state.model.params.len() {
+        return Err(mapc_error(format!(
+            "{} parameter bytes where this architecture ({} inputs, hidden {:?}, {} actions) has {} float32 values",
+            params.len(),
+            spec.obs_dim,
+            state.model.arch.hidden,
+            spec.act_dim,
+            state.model.params.len()
+        )));
+    }
+    state.model.params = params
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    if let Some(i) = state.model.params.iter().position(|x| !x.is_finite()) {
+        return Err(mapc_error(format!("parameter {i} is not a finite number")));
+    }
+    Checkpoint {
+        format_version: mapc_rl::checkpoint::FORMAT_VERSION,
+        spec,
+        state,
+        selected: None,
+    }
+    .save(&path)
+    .map_err(mapc_error)
+}
+
 #[pymodule]
 fn _mapc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MapcError", m.py().get_type::<MapcError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(save_policy, m)?)?;
     m.add_class::<envs::Env>()?;
     m.add_class::<envs::VecEnv>()?;
     m.add_class::<envs::DistEnv>()?;

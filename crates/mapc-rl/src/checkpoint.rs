@@ -46,6 +46,24 @@ pub struct DistributedSpec {
 }
 
 impl PolicySpec {
+    /// A centralized policy for `n_av` controlled AVs trained on `scenario` with `reward`, in the paper's
+    /// normalisation and acceleration bounds (what `mapc train` writes for a new run).
+    pub fn centralized(scenario: &str, reward: &str, n_av: usize) -> PolicySpec {
+        use crate::env::merge::{ACCEL_MAX, ACCEL_MIN, SIMPLE_MERGE_NORM};
+        PolicySpec {
+            scenario: scenario.to_string(),
+            reward: reward.to_string(),
+            n_av,
+            obs_dim: crate::env::obs::PER_AV * n_av,
+            act_dim: n_av,
+            max_speed: SIMPLE_MERGE_NORM.max_speed,
+            norm_length: SIMPLE_MERGE_NORM.length,
+            accel_min: ACCEL_MIN,
+            accel_max: ACCEL_MAX,
+            distributed: None,
+        }
+    }
+
     /// The distributed environment's configuration of a distributed policy.
     pub fn distributed_config(&self) -> Option<DistributedConfig> {
         let d = self.distributed?;
