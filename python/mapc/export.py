@@ -28,12 +28,16 @@ def linear_layers(modules: Iterable) -> List[Layer]:
     return [(_numpy(m.weight), _numpy(m.bias)) for m in modules if type(m).__name__ == "Linear"]
 
 
-def mapc_params(hidden: Sequence[Layer], mean: Layer, log_std: np.ndarray, value_hidden: Sequence[Layer],
-                value_out: Layer) -> bytes:
-    """The float32 bytes of a policy in mapc's layout (each layer's weights input-major, then its biases)."""
-    w_mean, b_mean = (np.asarray(x, np.float32) for x in mean)
+def gaussian_head(mean: Layer, log_std: np.ndarray) -> Layer:
+    """A last layer giving means then log-stds from a mean layer and a state-independent log-std."""
+    w, b = (np.asarray(x, np.float32) for x in mean)
     log_std = np.asarray(log_std, np.float32).reshape(-1)
-    last = (np.concatenate([w_mean, np.zeros_like(w_mean)]), np.concatenate([b_mean, log_std]))
+    return np.concatenate([w, np.zeros_like(w)]), np.concatenate([b.reshape(-1), log_std])
+
+
+def mapc_params(hidden: Sequence[Layer], last: Layer, value_hidden: Sequence[Layer], value_out: Layer) -> bytes:
+    """The float32 bytes of a policy in mapc's layout (each layer's weights input-major, then its biases).
+    ``last`` gives the means then the log-stds of the actions (``gaussian_head`` makes one)."""
     out: List[np.ndarray] = []
     for w, b in list(hidden) + [last] + list(value_hidden) + [value_out]:
         w, b = np.asarray(w, np.float32), np.asarray(b, np.float32).reshape(-1)
@@ -43,12 +47,36 @@ def mapc_params(hidden: Sequence[Layer], mean: Layer, log_std: np.ndarray, value
     return np.concatenate(out).astype("<f4").tobytes()
 
 
+def save_policy(path: os.PathLike, hidden: Sequence[Layer], last: Layer, value_hidden: Sequence[Layer],
+                value_out: Layer, scenario: str = "simple_merge", reward: str = "outflow") -> None:
+    """Write the layers as a mapc policy file (atomically)."""
+    params = mapc_params(hidden, last, value_hidden, value_out)
+    n_av = np.asarray(last[0]).shape[0] // 2
+    _mapc.save_policy(os.fspath(path), params, scenario, reward, n_av, [np.asarray(w).shape[0] for w, _ in hidden])
+
+
 def save_sb3_policy(model, path: os.PathLike, scenario: str = "simple_merge", reward: str = "outflow") -> None:
     """A Stable-Baselines3 PPO ``MlpPolicy`` (separate policy and value nets, tanh) as a mapc policy file."""
     p = model.policy
-    hidden = linear_layers(p.mlp_extractor.policy_net)
-    value_hidden = linear_layers(p.mlp_extractor.value_net)
-    params = mapc_params(hidden, linear_layers([p.action_net])[0], _numpy(p.log_std), value_hidden,
-                         linear_layers([p.value_net])[0])
-    n_av = linear_layers([p.action_net])[0][0].shape[0]
-    _mapc.save_policy(os.fspath(path), params, scenario, reward, n_av, [w.shape[0] for w, _ in hidden])
+    last = gaussian_head(linear_layers([p.action_net])[0], _numpy(p.log_std))
+    save_policy(path, linear_layers(p.mlp_extractor.policy_net), last, linear_layers(p.mlp_extractor.value_net),
+                linear_layers([p.value_net])[0], scenario, reward)
+
+
+def save_rllib_policy(module, path: os.PathLike, scenario: str = "simple_merge", reward: str = "outflow") -> None:
+    """An RLlib PPO torch RLModule (new API stack; tanh encoders, ``vf_share_layers=False``, no head hidden
+    layers) as a mapc policy file. Its policy head gives means then log-stds, as mapc's last layer does. An
+    env runner's module is inference-only (no critic): its value net is then written as zeros, which no
+    evaluation reads."""
+    enc = module.encoder
+    actor, pi = linear_layers(enc.actor_encoder.modules()), linear_layers(module.pi.modules())
+    if len(pi) != 1:
+        raise _mapc.MapcError("the policy head must be a single layer (head_fcnet_hiddens=[])")
+    critic = getattr(enc, "critic_encoder", None)
+    vf = getattr(module, "vf", None)
+    if critic is not None and vf is not None:
+        value_hidden, value_out = linear_layers(critic.modules()), linear_layers(vf.modules())[0]
+    else:
+        value_hidden = [(np.zeros_like(w), np.zeros_like(b)) for w, b in actor]
+        value_out = (np.zeros((1, actor[-1][0].shape[0]), np.float32), np.zeros(1, np.float32))
+    save_policy(path, actor, pi[0], value_hidden, value_out, scenario, reward)

@@ -188,7 +188,7 @@ def _torch_layers(params, sizes):
 
 
 def test_a_policy_written_from_torch_layers_is_the_same_policy_to_mapc_eval(tmp_path):
-    from mapc.export import mapc_params
+    from mapc.export import gaussian_head, mapc_params
 
     ck = json.loads((ROOT / "policies" / "simple_merge_outflow.json").read_text())
     arch, params = ck["state"]["model"]["arch"], ck["state"]["model"]["params"]
@@ -198,8 +198,8 @@ def test_a_policy_written_from_torch_layers_is_the_same_policy_to_mapc_eval(tmp_
     act = arch["act_dim"]
     w, b = policy_layers[-1]
     # a state-independent log-std, as torch libraries have: the means, and so mean actions, are unchanged
-    raw = mapc_params(policy_layers[:-1], (w[:act], b[:act]), np.full(act, -0.5), value_layers[:-1],
-                      value_layers[-1])
+    raw = mapc_params(policy_layers[:-1], gaussian_head((w[:act], b[:act]), np.full(act, -0.5)),
+                      value_layers[:-1], value_layers[-1])
     out = tmp_path / "from_torch.json"
     mapc._mapc.save_policy(str(out), raw, "simple_merge", "outflow", act, arch["hidden"])
     ours = mapc.evaluate(out, "simple_merge", seeds=3, baseline=False)
