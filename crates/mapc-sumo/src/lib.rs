@@ -82,6 +82,9 @@ pub struct Manifest {
     pub n_av: usize,
     /// SUMO edge ids of the controlled region; empty: the whole network.
     pub control_edges: Vec<String>,
+    /// SUMO internal edges of the controlled region (connections with both roads in it, as mapc-sim counts
+    /// them).
+    pub control_internal_edges: Vec<String>,
     /// Vehicle types whose vehicles a policy may drive.
     pub av_types: Vec<String>,
     /// mapc road id -> SUMO edge id.
@@ -144,6 +147,7 @@ pub fn export_network(
         setup_steps: 0,
         n_av: 0,
         control_edges: vec![],
+        control_internal_edges: vec![],
         av_types: vec![],
         edges: edge_map(graph, &names),
     };
@@ -196,6 +200,11 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
             .region_roads
             .iter()
             .map(|r| edges[&r.to_string()].clone())
+            .collect(),
+        control_internal_edges: net::internal_edges(graph, &names)
+            .into_iter()
+            .filter(|(_, from, to)| rs.region_roads.contains(from) && rs.region_roads.contains(to))
+            .map(|(id, _, _)| id)
             .collect(),
         av_types: spec
             .vehicle_types

@@ -38,7 +38,7 @@ pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
     );
     location(&mut out, graph);
     let links = links_by_junction(graph, names);
-    internal_edges(&mut out, graph, &links);
+    write_internal_edges(&mut out, graph, &links);
     for (i, road) in graph.roads.iter().enumerate() {
         edge(&mut out, graph, names, i, road);
     }
@@ -95,6 +95,24 @@ pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
     }
     out.push_str("</net>\n");
     out
+}
+
+/// Every internal edge: its id and the roads it joins.
+pub fn internal_edges(
+    graph: &LaneGraph,
+    names: &SumoNames,
+) -> Vec<(String, mapc_graph::RoadId, mapc_graph::RoadId)> {
+    links_by_junction(graph, names)
+        .into_values()
+        .flatten()
+        .map(|l| {
+            (
+                l.internal_edge,
+                l.connection.from_road,
+                l.connection.to_road,
+            )
+        })
+        .collect()
 }
 
 fn road_index(graph: &LaneGraph, id: mapc_graph::RoadId) -> usize {
@@ -207,7 +225,7 @@ fn location(out: &mut String, graph: &LaneGraph) {
     );
 }
 
-fn internal_edges(out: &mut String, graph: &LaneGraph, links: &BTreeMap<usize, Vec<Link>>) {
+fn write_internal_edges(out: &mut String, graph: &LaneGraph, links: &BTreeMap<usize, Vec<Link>>) {
     for list in links.values() {
         for l in list {
             let c = l.connection;
