@@ -47,6 +47,11 @@ fn exports_the_i696_window_and_replaces_an_old_export_whole() {
         serde_json::from_str(&std::fs::read_to_string(out.join("i696_window.mapc.json")).unwrap())
             .unwrap();
     assert_eq!(manifest["control_edges"].as_array().unwrap().len(), 3);
+    // The merge's two connections join roads of the window: their internal edges are in the region too.
+    assert_eq!(
+        manifest["control_internal_edges"].as_array().unwrap().len(),
+        2
+    );
     assert!(leftovers(&dir).is_empty());
     std::fs::remove_dir_all(&dir).unwrap();
 }

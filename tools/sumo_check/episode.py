@@ -16,8 +16,11 @@ def sumo_command(manifest, export_dir, seed):
 
 
 def run_episode(traci, manifest, export_dir, seed, policy=None, label="sumo_check"):
+    import subprocess
+
     import traci.constants as tc
-    traci.start(sumo_command(manifest, export_dir, seed), label=label)
+    # SUMO's own progress lines would interleave with the table; its warnings (stderr) stay visible.
+    traci.start(sumo_command(manifest, export_dir, seed), label=label, stdout=subprocess.DEVNULL)
     conn = traci.getConnection(label)
     try:
         return _episode(conn, tc, manifest, policy)

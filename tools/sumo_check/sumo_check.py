@@ -9,6 +9,7 @@ SCENARIO is what `mapc export` takes (a scenario file or a built-in name); the s
 `mapc export SCENARIO --sumo WORK/export` first. Figures: mean ± 95 % CI (Student t) over the seeds, Welch t.
 """
 import argparse
+import contextlib
 import json
 import multiprocessing
 import os
@@ -55,7 +56,9 @@ def _one(job):
     from policy import Policy
     policy = Policy(policy_path) if policy_path else None
     label = "s%d_%d_%s" % (os.getpid(), seed, "p" if policy_path else "h")
-    r = run_episode(traci, manifest, export_dir, seed, policy, label=label)
+    # traci prints its connection retries on stdout, where the table goes.
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):
+        r = run_episode(traci, manifest, export_dir, seed, policy, label=label)
     r["seed"] = seed
     return r
 
