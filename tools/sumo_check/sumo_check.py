@@ -91,7 +91,8 @@ def fmt(s):
 
 def welch_line(a, b):
     t, p = stats.welch(a["mean"], a["std"], a["n"], b["mean"], b["std"], b["n"])
-    return "%+.2f %% (t %.1f, p %.2g)" % (100.0 * (a["mean"] / b["mean"] - 1.0), t, p)
+    p_text = "p < 1e-15" if p < 1e-15 else "p %.2g" % p
+    return "%+.2f %% (t %.1f, %s)" % (100.0 * (a["mean"] / b["mean"] - 1.0), t, p_text)
 
 
 def print_table(columns, comparisons):
@@ -142,7 +143,8 @@ def main():
         print("policy %s" % a.policy)
         print_table([("mapc humans", mapc_h), ("mapc policy", mapc_p), ("SUMO humans", sumo_h),
                      ("SUMO policy", sumo_p)],
-                    [("policy vs humans, mapc", mapc_p, mapc_h), ("policy vs humans, SUMO", sumo_p, sumo_h)])
+                    [("policy vs humans, mapc", mapc_p, mapc_h), ("policy vs humans, SUMO", sumo_p, sumo_h),
+                     ("mapc vs SUMO, humans", mapc_h, sumo_h), ("mapc vs SUMO, policy", mapc_p, sumo_p)])
     if a.json_out:
         with open(a.json_out, "w") as f:
             json.dump(result, f, indent=1)
