@@ -221,3 +221,19 @@ fn routes_follow_mapc_sims_routes_and_flows() {
     assert_eq!(manifest["av_types"], serde_json::json!(["av"]));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_stepping_sumo_18_cannot_express_is_refused_before_anything_is_written() {
+    let mut scenario = mapc_scenario::Scenario::simple_merge();
+    scenario.vehicle_types.get_mut("av").unwrap().idm_stepping_s = 0.1;
+    let rs = ResolvedScenario::resolve(scenario, Path::new("."), "odd.toml").unwrap();
+    let dir = scratch("stepping");
+    let err = mapc_sumo::export_scenario(&rs, &dir)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("odd.toml: ") && err.contains("`av`") && err.contains("0.1"),
+        "{err}"
+    );
+    assert!(!dir.exists());
+}
