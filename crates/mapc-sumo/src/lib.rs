@@ -17,6 +17,7 @@
 //! the routes and initial positions are mapc-sim's ([`mapc_sim::spec_from_scenario`]).
 
 pub mod demand;
+mod junctions;
 pub mod names;
 pub mod net;
 mod output;
