@@ -13,6 +13,7 @@ import contextlib
 import json
 import multiprocessing
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -36,14 +37,25 @@ def parse_seeds(text):
     return seeds
 
 
+def run_mapc(mapc, args):
+    """mapc's stdout; mapc's own one-line error and exit code 2 when it refuses (a missing scenario, say)."""
+    try:
+        out = subprocess.run(mapc + args, capture_output=True, text=True)
+    except FileNotFoundError:
+        sys.exit("sumo_check: no mapc binary at %s (cargo build --release, or --mapc BIN)" % mapc[0])
+    if out.returncode != 0:
+        sys.stderr.write(out.stderr)
+        sys.exit(2)
+    return out.stdout
+
+
 def mapc_json(mapc, args):
-    out = subprocess.run(mapc + args + ["--json"], check=True, capture_output=True, text=True)
-    return json.loads(out.stdout)
+    return json.loads(run_mapc(mapc, args + ["--json"]))
 
 
 def export(mapc, scenario, work):
     out_dir = os.path.join(work, "export")
-    subprocess.run(mapc + ["export", scenario, "--sumo", out_dir], check=True, capture_output=True, text=True)
+    run_mapc(mapc, ["export", scenario, "--sumo", out_dir])
     manifests = [f for f in os.listdir(out_dir) if f.endswith(".mapc.json")]
     with open(os.path.join(out_dir, manifests[0])) as f:
         return out_dir, json.load(f)
@@ -122,6 +134,14 @@ def main():
     mapc = [a.mapc or os.path.join(root, "target", "release", "mapc")]
     seeds = parse_seeds(a.seeds)
     work = a.work or tempfile.mkdtemp(prefix="sumo_check_")
+    try:
+        compare(a, mapc, seeds, work)
+    finally:
+        if not a.work:
+            shutil.rmtree(work, ignore_errors=True)
+
+
+def compare(a, mapc, seeds, work):
     export_dir, manifest = export(mapc, a.scenario, work)
     n = len(seeds)
     mapc_h = mapc_json(mapc, ["sim", "--scenario", a.scenario, "--seeds", str(n)])
