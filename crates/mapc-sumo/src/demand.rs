@@ -1,0 +1,205 @@
+//! The demand as SUMO routes (`.rou.xml`): one vehicle type per mapc type (IDM with mapc's parameters), one route
+//! and one flow per mapc flow, and the initial vehicles; plus the `.sumocfg` with the options of the paper's runs.
+//! Routes, departures and initial positions come from mapc-sim's own description of the scenario
+//! ([`mapc_sim::SimSpec`]), so SUMO drives exactly the routes mapc drives.
+
+use crate::names::SumoNames;
+use crate::xml::{element, num, start};
+use mapc_graph::{LaneGraph, RoadId};
+use mapc_sim::{Network, SimError, SimSpec};
+
+/// IDM's integration sub-step in SUMO 1.8 (not settable there as a duration).
+const SUMO_IDM_STEPPING_S: f64 = 0.25;
+
+/// When the initial vehicles enter: after the first step, as the original rollouts added them (TraCI `add` after
+/// `start_simulation`), so they are inserted in the second step, the one before the horizon's first.
+pub fn initial_depart_s(step_s: f64) -> f64 {
+    step_s
+}
+
+/// The roads a vehicle entering on `from` drives, as mapc-sim routes it.
+pub fn route_roads(
+    net: &Network,
+    graph: &LaneGraph,
+    from: RoadId,
+    to: Option<RoadId>,
+) -> Result<Vec<RoadId>, SimError> {
+    Ok(net
+        .route(graph, from, to)?
+        .into_iter()
+        .filter_map(|l| net.road_of(l))
+        .map(|r| net.road_ids[r])
+        .collect())
+}
+
+fn edge_list(graph: &LaneGraph, names: &SumoNames, roads: &[RoadId]) -> String {
+    roads
+        .iter()
+        .map(|r| {
+            let i = graph
+                .roads
+                .binary_search_by_key(r, |x| x.id)
+                .expect("a route's roads are the graph's");
+            names.edges[i].clone()
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The `.rou.xml` text; `flow_ids` names each of the spec's flows.
+pub fn routes_xml(
+    spec: &SimSpec,
+    names: &SumoNames,
+    flow_ids: &[String],
+) -> Result<String, SimError> {
+    let graph = &spec.graph;
+    let net = Network::from_graph(graph)?;
+    let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\n");
+    out.push_str("<!-- written by `mapc export` for SUMO 1.8 -->\n");
+    start(&mut out, 0, "routes", &[]);
+    for t in &spec.vehicle_types {
+        // SUMO 1.8 reads IDM's `stepping` as a whole number and computes its sub-steps from its own default of
+        // 0.25 s, which is what mapc's default mirrors; any other value has no SUMO 1.8 equivalent.
+        if t.idm_stepping_s != SUMO_IDM_STEPPING_S {
+            return Err(SimError::Spec(format!(
+                "vehicle type `{}`: idm_stepping_s = {} s, but SUMO 1.8's IDM only steps at {SUMO_IDM_STEPPING_S} s",
+                t.name, t.idm_stepping_s
+            )));
+        }
+        element(
+            &mut out,
+            4,
+            "vType",
+            &[
+                ("id", t.name.clone()),
+                ("carFollowModel", "IDM".into()),
+                ("accel", num(t.accel, 4)),
+                ("decel", num(t.decel, 4)),
+                ("emergencyDecel", num(t.emergency_decel, 4)),
+                ("tau", num(t.tau, 4)),
+                ("minGap", num(t.min_gap, 4)),
+                ("maxSpeed", num(t.max_speed, 4)),
+                ("length", num(t.length, 4)),
+                ("delta", num(t.delta, 4)),
+                ("speedFactor", num(t.speed_factor, 4)),
+                ("speedDev", num(t.speed_dev, 4)),
+                ("impatience", num(t.impatience, 4)),
+                ("color", if t.controlled { "red" } else { "yellow" }.into()),
+            ],
+        );
+    }
+    // Initial vehicles first: SUMO wants a route file sorted by departure.
+    let depart = initial_depart_s(spec.step_s);
+    for (i, v) in spec.initial.iter().enumerate() {
+        let roads = route_roads(&net, graph, v.road, None)?;
+        start(
+            &mut out,
+            4,
+            "vehicle",
+            &[
+                ("id", format!("initial_{i}")),
+                ("type", spec.vehicle_types[v.vehicle_type].name.clone()),
+                ("depart", num(depart, 2)),
+                ("departLane", "0".into()),
+                ("departPos", num(v.pos_m, 4)),
+                ("departSpeed", num(v.speed, 4)),
+            ],
+        );
+        element(
+            &mut out,
+            8,
+            "route",
+            &[("edges", edge_list(graph, names, &roads))],
+        );
+        out.push_str("    </vehicle>\n");
+    }
+    let mut order: Vec<usize> = (0..spec.flows.len()).collect();
+    order.sort_by(|&a, &b| spec.flows[a].begin_s.total_cmp(&spec.flows[b].begin_s));
+    for i in order {
+        let f = &spec.flows[i];
+        let roads = route_roads(&net, graph, f.from, f.to)?;
+        // SUMO needs an end; mapc's open-ended flows run past any horizon.
+        let end = if f.end_s.is_finite() {
+            f.end_s
+        } else {
+            86_400.0
+        };
+        start(
+            &mut out,
+            4,
+            "flow",
+            &[
+                ("id", flow_ids[i].clone()),
+                ("type", spec.vehicle_types[f.vehicle_type].name.clone()),
+                ("begin", num(f.begin_s, 4)),
+                ("end", num(end, 4)),
+                ("vehsPerHour", num(f.vehs_per_hour, 4)),
+                ("departLane", "free".into()),
+                ("departSpeed", num(f.depart_speed, 4)),
+            ],
+        );
+        element(
+            &mut out,
+            8,
+            "route",
+            &[("edges", edge_list(graph, names, &roads))],
+        );
+        out.push_str("    </flow>\n");
+    }
+    out.push_str("</routes>\n");
+    Ok(out)
+}
+
+/// The `.sumocfg`: the files, the step, and the options of the paper's runs (REFERENCE.md): no teleporting,
+/// collisions checked inside junctions but not acted on, no min gap in the collision check.
+pub fn sumocfg(net_file: &str, routes_file: &str, step_s: f64, end_s: f64) -> String {
+    let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\n");
+    out.push_str("<!-- written by `mapc export` for SUMO 1.8; tools/sumo_check drives it with speed mode 9 -->\n");
+    start(&mut out, 0, "configuration", &[]);
+    let section = |out: &mut String, name: &str, items: &[(&str, String)]| {
+        start(out, 4, name, &[]);
+        for (k, v) in items {
+            element(out, 8, k, &[("value", v.clone())]);
+        }
+        out.push_str(&format!("    </{name}>\n"));
+    };
+    section(
+        &mut out,
+        "input",
+        &[
+            ("net-file", net_file.into()),
+            ("route-files", routes_file.into()),
+        ],
+    );
+    section(
+        &mut out,
+        "time",
+        &[
+            ("begin", "0".into()),
+            ("end", num(end_s, 2)),
+            ("step-length", num(step_s, 4)),
+        ],
+    );
+    section(
+        &mut out,
+        "processing",
+        &[
+            ("time-to-teleport", "-1".into()),
+            ("collision.check-junctions", "true".into()),
+            ("collision.action", "none".into()),
+            ("collision.mingap-factor", "0".into()),
+        ],
+    );
+    // The PyPI builds of SUMO ship without their XML schemas: validating would only warn that they are missing.
+    section(
+        &mut out,
+        "report",
+        &[
+            ("no-step-log", "true".into()),
+            ("xml-validation", "never".into()),
+            ("xml-validation.net", "never".into()),
+        ],
+    );
+    out.push_str("</configuration>\n");
+    out
+}
