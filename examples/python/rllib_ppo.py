@@ -11,9 +11,8 @@ package installed), then `python examples/python/rllib_ppo.py --address auto --e
 """
 
 import argparse
-import json
 import os
-import time
+import sys
 
 import ray
 from ray.rllib.algorithms.ppo import PPOConfig
@@ -23,11 +22,12 @@ from ray.tune.registry import register_env
 import mapc
 from mapc.export import save_rllib_policy
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from rllib_common import runner_seed, train  # noqa: E402
+
 
 def make_env(cfg):
-    # every env runner and vector slot plays its own seeds
-    seed = cfg["seed"] + 100_000 * getattr(cfg, "worker_index", 0) + 1_000 * getattr(cfg, "vector_index", 0)
-    return mapc.make_env(cfg["scenario"], reward=cfg["reward"], seed=seed)
+    return mapc.make_env(cfg["scenario"], reward=cfg["reward"], seed=runner_seed(cfg))
 
 
 def main():
@@ -61,17 +61,7 @@ def main():
         .debugging(seed=a.seed)
     )
     algo = config.build_algo()
-    os.makedirs(a.out, exist_ok=True)
-    start, log = time.perf_counter(), []
-    for it in range(1, a.iters + 1):
-        r = algo.train()
-        runners = r.get("env_runners", {})
-        row = {"iteration": it, "wall_s": round(time.perf_counter() - start, 1),
-               "env_steps": r.get("num_env_steps_sampled_lifetime", runners.get("num_env_steps_sampled_lifetime")),
-               "episode_return_mean": runners.get("episode_return_mean")}
-        log.append(row)
-        print(json.dumps(row), flush=True)
-    wall = time.perf_counter() - start
+    log, wall = train(algo, a.iters, a.out)
     policy = os.path.join(a.out, "policy.json")
     save_rllib_policy(algo.get_module(), policy, scenario=a.scenario, reward=a.reward)
     algo.stop()
@@ -85,8 +75,6 @@ def main():
     print(f"policy outflow {o['mean']:.1f} ± {o['ci95']:.1f} veh/h, humans {h['mean']:.1f} ± {h['ci95']:.1f} "
           f"({report['comparison']['outflow_change_pct']:+.1f} %, 95 % CIs "
           f"{'disjoint' if report['comparison']['outflow_ci_disjoint'] else 'overlap'}) over {a.eval_seeds} seeds")
-    with open(os.path.join(a.out, "progress.jsonl"), "w") as f:
-        f.writelines(json.dumps(row) + "\n" for row in log)
 
 
 if __name__ == "__main__":
