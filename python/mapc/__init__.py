@@ -7,6 +7,8 @@
 - ``simulate(scenario, seeds)`` and ``evaluate(policy, scenario, seeds)``: the dicts that ``mapc sim --json`` and
   ``mapc eval --json`` print, computed by the same library code.
 - ``Policy(path)``: a trained policy's mean action.
+- ``import_map``, ``simplify``, ``window``: the scenario pipeline, writing the stages' files and returning the
+  reports of ``mapc import|simplify|window --json``.
 
 Every error of mapc is raised as ``MapcError`` with mapc's message (the file and the place).
 """
@@ -15,12 +17,15 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Dict, Optional, Union
+from typing import Any, Dict, Optional, Sequence, Union
 
 from ._mapc import MapcError, __version__
 from ._mapc import Policy as _NativePolicy
 from ._mapc import evaluate as _evaluate
+from ._mapc import import_map as _import_map
+from ._mapc import simplify as _simplify
 from ._mapc import simulate as _simulate
+from ._mapc import window as _window
 from .env import MergeEnv, MergeVecEnv
 
 __all__ = [
@@ -29,10 +34,13 @@ __all__ = [
     "MergeVecEnv",
     "Policy",
     "evaluate",
+    "import_map",
     "make_env",
     "make_vec_env",
     "parallel_env",
+    "simplify",
     "simulate",
+    "window",
     "__version__",
 ]
 
@@ -106,6 +114,30 @@ def evaluate(
     return json.loads(
         _evaluate(os.fspath(policy), os.fspath(scenario), seeds, first_seed, sample, baseline)
     )
+
+
+def import_map(path: PathLike, output: Optional[PathLike] = None,
+               highways: Optional[Sequence[str]] = None) -> Dict[str, Any]:
+    """Read an OSM (.osm, .osm.pbf) or SUMO (.net.xml) map into a lane graph, written to ``output`` if given."""
+    out = os.fspath(output) if output is not None else None
+    return json.loads(_import_map(os.fspath(path), out, list(highways) if highways is not None else None))
+
+
+def simplify(map: PathLike, output: PathLike, via: Sequence[str] = (), classes: Optional[Sequence[str]] = None,
+             feeder_length: Optional[float] = None, keep_exits: bool = False) -> Dict[str, Any]:
+    """Reduce a map to a single-lane corridor with its merging roads (``via``: ids the main road passes, in
+    order, as ``mapc simplify --via``), written to ``output``."""
+    return json.loads(_simplify(os.fspath(map), os.fspath(output), list(via),
+                                list(classes) if classes is not None else None, feeder_length, keep_exits))
+
+
+def window(map: PathLike, junction: str, output: PathLike, match: PathLike = "simple_merge",
+           main_vph: Optional[float] = None, merge_vph: Optional[float] = None, n_av: Optional[int] = None,
+           via: Sequence[str] = ()) -> Dict[str, Any]:
+    """Cut a window around the merge ``junction`` of a corridor (or a map) matched to the ``match`` scenario's
+    lengths, and write it as a scenario at ``output`` (its graph beside it)."""
+    return json.loads(_window(os.fspath(map), junction, os.fspath(output), os.fspath(match), main_vph, merge_vph,
+                              n_av, list(via)))
 
 
 class Policy:

@@ -30,6 +30,31 @@ def save_policy(
 ) -> None:
     """Write float32 parameters in mapc's layout as a mapc policy file (see mapc.export)."""
 
+def import_map(path: str, output: Optional[str] = None, highways: Optional[List[str]] = None) -> str:
+    """`mapc import --json`'s summary; the graph written to `output` if given."""
+
+def simplify(
+    map: str,
+    output: str,
+    via: List[str] = [],
+    classes: Optional[List[str]] = None,
+    feeder_length: Optional[float] = None,
+    keep_exits: bool = False,
+) -> str:
+    """`mapc simplify --json`'s report; the corridor written to `output`."""
+
+def window(
+    map: str,
+    junction: str,
+    output: str,
+    match_: str = "simple_merge",
+    main_vph: Optional[float] = None,
+    merge_vph: Optional[float] = None,
+    n_av: Optional[int] = None,
+    via: List[str] = [],
+) -> str:
+    """`mapc window --json`'s report; the scenario written to `output`, its graph beside it."""
+
 class Env:
     scenario: str
     obs_dim: int

@@ -208,3 +208,31 @@ def test_a_policy_written_from_torch_layers_is_the_same_policy_to_mapc_eval(tmp_
     with pytest.raises(mapc.MapcError, match="parameter bytes"):
         mapc._mapc.save_policy(str(tmp_path / "short.json"), raw[:-4], "simple_merge", "outflow", act, arch["hidden"])
     assert not (tmp_path / "short.json").exists()
+
+
+def test_the_pipeline_from_python_writes_what_the_binary_writes(tmp_path):
+    via = ["osm-way:59440544", "osm-way:8667198", "osm-way:8708084"]
+    osm = str(ROOT / "maps" / "i696.osm")
+    ours = mapc.import_map(osm, tmp_path / "py.graph.json")
+    theirs = binary_json("import", osm, "-o", str(tmp_path / "bin.graph.json"))
+    assert {k: v for k, v in ours.items() if k != "output"} == {k: v for k, v in theirs.items() if k != "output"}
+    assert (tmp_path / "py.graph.json").read_bytes() == (tmp_path / "bin.graph.json").read_bytes()
+
+    corridor = tmp_path / "i696.corridor.graph.json"
+    ours = mapc.simplify(osm, corridor, via=via)
+    theirs = binary_json("simplify", osm, *sum([["--via", v] for v in via], []), "-o", str(corridor))
+    assert ours == theirs and len(ours["merges"]) == 5
+
+    ours = mapc.window(corridor, "osm:61862553", tmp_path / "py" / "w.toml")
+    theirs = binary_json("window", str(corridor), "--junction", "osm:61862553", "-o", str(tmp_path / "w.toml"))
+    for key in ("junction", "osm_node", "upstream_m", "merge_m", "downstream_m", "region", "cuts"):
+        assert ours[key] == theirs[key], key
+    assert (tmp_path / "py" / "w.graph.json").read_bytes() == (tmp_path / "w.graph.json").read_bytes()
+    # the written window is a scenario like any other
+    assert mapc.simulate(tmp_path / "py" / "w.toml", seeds=1)["seeds"] == 1
+
+    with pytest.raises(mapc.MapcError, match="nowhere.osm"):
+        mapc.import_map(tmp_path / "nowhere.osm")
+    with pytest.raises(mapc.MapcError, match="must be zero or a positive rate"):
+        mapc.window(corridor, "osm:61862553", tmp_path / "bad.toml", main_vph=float("nan"))
+    assert not (tmp_path / "bad.toml").exists()

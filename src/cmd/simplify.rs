@@ -1,9 +1,8 @@
 //! `mapc simplify`: a highway map becomes a single-lane corridor with its merging roads (a `*.graph.json`).
 
-use anyhow::Context;
-use mapc_scenario::simplify::{MergeSummary, Simplified, corridor_merges, simplify};
-use mapc_scenario::transform::{Corridor, SimplifyOptions, pick_route::describe_junction};
-use serde_json::json;
+use mapc_scenario::compile::{corridor_report, simplify_map};
+use mapc_scenario::simplify::corridor_merges;
+use mapc_scenario::transform::{Corridor, SimplifyOptions};
 use std::path::{Path, PathBuf};
 
 /// Options shared with `mapc window` when it is given a raw map.
@@ -81,41 +80,8 @@ pub fn map_stem(path: &Path) -> String {
     name
 }
 
-/// Load a map or graph file with the importer's defaults.
-pub fn load_map(path: &Path) -> anyhow::Result<mapc_graph::LaneGraph> {
-    mapc_import::load_any(path).with_context(|| format!("cannot read map {}", path.display()))
-}
-
-pub fn run_simplify(map: &Path, route: &RouteArgs) -> anyhow::Result<Simplified> {
-    let raw = load_map(map)?;
-    simplify(&raw, &route.options()).map_err(|e| anyhow::anyhow!("{}: {e}", map.display()))
-}
-
-/// The JSON report of a corridor: its main road, merges and steps.
-pub fn corridor_json(s: &Simplified, map: &Path, output: &Path) -> serde_json::Value {
-    let g = &s.graph;
-    let merges: Vec<MergeSummary> = corridor_merges(g, &s.roles);
-    let first = g.road(s.roles.main[0]).unwrap().from;
-    let last = g.road(*s.roles.main.last().unwrap()).unwrap().to;
-    json!({
-        "map": map.display().to_string(),
-        "output": output.display().to_string(),
-        "main_road": {
-            "roads": s.roles.main.iter().map(|r| r.to_string()).collect::<Vec<_>>(),
-            "length_m": Corridor::chain_length_m(g, &s.roles.main),
-            "from": describe_junction(g, first),
-            "to": describe_junction(g, last),
-        },
-        "merges": merges,
-        "exits": s.roles.exits.len(),
-        "roads": g.roads.len(),
-        "junctions": g.junctions.len(),
-        "steps": s.steps,
-    })
-}
-
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let s = run_simplify(&args.map, &args.route)?;
+    let s = simplify_map(&args.map, &args.route.options())?;
     let output = args
         .output
         .clone()
@@ -124,7 +90,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&corridor_json(&s, &args.map, &output))?
+            serde_json::to_string_pretty(&corridor_report(&s, &args.map, &output))?
         );
         return Ok(());
     }

@@ -10,6 +10,8 @@
 //!   its vehicle id here and by its order of appearance (`av_0`, `av_1`, ...) in Python's PettingZoo wrapper.
 //! - **buffer**: observations, actions and rewards cross into Python as little-endian `float32` bytes, which
 //!   `numpy.frombuffer` reads without a copy per value.
+//! - **pipeline**: `import_map`, `simplify` and `window` write the stages' files and return the reports of
+//!   `mapc import|simplify|window --json`.
 //! - **report**: `simulate` and `evaluate` return the JSON that `mapc sim --json` and `mapc eval --json` print
 //!   (the same library structs), which the Python side parses into dicts.
 //!
@@ -17,6 +19,7 @@
 //! bad input.
 
 mod envs;
+mod pipeline;
 
 use mapc_rl::Checkpoint;
 use mapc_rl::eval::evaluate as evaluate_policy;
@@ -161,6 +164,9 @@ fn _mapc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(save_policy, m)?)?;
+    m.add_function(wrap_pyfunction!(pipeline::import_map, m)?)?;
+    m.add_function(wrap_pyfunction!(pipeline::simplify, m)?)?;
+    m.add_function(wrap_pyfunction!(pipeline::window, m)?)?;
     m.add_class::<envs::Env>()?;
     m.add_class::<envs::VecEnv>()?;
     m.add_class::<envs::DistEnv>()?;

@@ -10,6 +10,7 @@
 //! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's.
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
 
+pub mod compile;
 pub mod generator;
 pub mod model;
 pub mod simplify;
