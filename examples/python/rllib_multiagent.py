@@ -14,6 +14,7 @@ import argparse
 import os
 import sys
 
+import gymnasium as gym
 import ray
 from ray.rllib.algorithms.ppo import PPOConfig
 from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
@@ -26,8 +27,20 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from rllib_common import runner_seed, train  # noqa: E402
 
 
+class MapcAgents(ParallelPettingZooEnv):
+    """RLlib's PettingZoo wrapper takes the agents' spaces from the agents present after a reset; mapc's agents
+    come and go with their AVs, so every possible agent's spaces are declared."""
+
+    def __init__(self, env):
+        super().__init__(env)
+        self._agent_ids = set(env.possible_agents)
+        self.possible_agents = list(env.possible_agents)
+        self.observation_space = gym.spaces.Dict({a: env.observation_space(a) for a in env.possible_agents})
+        self.action_space = gym.spaces.Dict({a: env.action_space(a) for a in env.possible_agents})
+
+
 def make_env(cfg):
-    return ParallelPettingZooEnv(mapc.parallel_env(cfg["scenario"], features=cfg["features"], seed=runner_seed(cfg)))
+    return MapcAgents(mapc.parallel_env(cfg["scenario"], features=cfg["features"], seed=runner_seed(cfg)))
 
 
 def main():
@@ -54,7 +67,7 @@ def main():
         .multi_agent(policies={"shared"}, policy_mapping_fn=lambda agent_id, episode, **kw: "shared")
         # the paper's distributed PPO (REFERENCE.md sec. 5)
         .training(lr=5e-4, gamma=0.998, lambda_=0.95, clip_param=0.2, entropy_coeff=1e-3,
-                  train_batch_size_per_learner=a.batch, minibatch_size=4096, num_epochs=10, kl_coeff=0.01,
+                  train_batch_size_per_learner=a.batch, minibatch_size=min(4096, a.batch), num_epochs=10, kl_coeff=0.01,
                   vf_loss_coeff=0.5)
         .rl_module(model_config=DefaultModelConfig(fcnet_hiddens=[100, 50, 25], fcnet_activation="tanh",
                                                    vf_share_layers=True))
