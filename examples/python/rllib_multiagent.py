@@ -3,11 +3,11 @@ mapc's PettingZoo environment, and all agents share one policy (the paper's Tabl
 runners on a local Ray cluster or an existing one (--address).
 
     pip install ./python "ray[rllib]" torch pettingzoo
-    python examples/python/rllib_multiagent.py --iters 2 --env-runners 1           # smoke run
+    python examples/python/rllib_multiagent.py --iters 2 --env-runners 1 --batch 4000 --eval-seeds 2  # smoke
     python examples/python/rllib_multiagent.py --iters 100 --env-runners 2         # a longer run
 
-It prints each iteration's mean episode return and the env steps sampled; the outflow of the trained agents is
-in the episodes' last infos (`outflow`), as mapc defines it.
+It prints each iteration's mean episode return and the env steps sampled, writes the shared policy as a mapc
+distributed policy file and evaluates it with mapc's evaluation (what `mapc eval` prints).
 """
 
 import argparse
@@ -22,6 +22,7 @@ from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
 from ray.tune.registry import register_env
 
 import mapc
+from mapc.export import save_rllib_distributed_policy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from rllib_common import runner_seed, train  # noqa: E402
@@ -52,6 +53,7 @@ def main():
     p.add_argument("--batch", type=int, default=60_000, help="agent steps per iteration (the paper's)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--address", default=None, help="an existing Ray cluster (`auto`); default: a local one")
+    p.add_argument("--eval-seeds", type=int, default=100)
     p.add_argument("--out", default="out/rllib_multiagent")
     a = p.parse_args()
 
@@ -75,8 +77,15 @@ def main():
     )
     algo = config.build_algo()
     train(algo, a.iters, a.out)
+    policy = os.path.join(a.out, "policy.json")
+    save_rllib_distributed_policy(algo.get_module("shared"), policy, features=a.features, scenario=a.scenario)
     algo.stop()
     ray.shutdown()
+    report = mapc.evaluate(policy, a.scenario, seeds=a.eval_seeds)
+    o, h = report["outflow"], report["baseline"]["outflow"]
+    print(f"mapc policy file: {policy}")
+    print(f"policy outflow {o['mean']:.1f} ± {o['ci95']:.1f} veh/h, humans {h['mean']:.1f} ± {h['ci95']:.1f} "
+          f"({report['comparison']['outflow_change_pct']:+.1f} %) over {a.eval_seeds} seeds")
 
 
 if __name__ == "__main__":

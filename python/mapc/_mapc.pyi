@@ -27,8 +27,13 @@ def save_policy(
     reward: str = "outflow",
     n_av: int = 5,
     hidden: List[int] = [100, 50, 25],
+    features: Optional[str] = None,
+    eta1: float = 0.9,
+    eta2: float = 0.1,
+    exit_bonus: float = 20.0,
 ) -> None:
-    """Write float32 parameters in mapc's layout as a mapc policy file (see mapc.export)."""
+    """Write float32 parameters in mapc's layout as a mapc policy file (see mapc.export); with `features`, a
+    distributed one."""
 
 def import_map(path: str, output: Optional[str] = None, highways: Optional[List[str]] = None) -> str:
     """`mapc import --json`'s summary; the graph written to `output` if given."""

@@ -10,7 +10,7 @@ biases. Only the weights' values cross: mapc evaluates with its own forward pass
 from __future__ import annotations
 
 import os
-from typing import Iterable, List, Sequence, Tuple
+from typing import Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -35,11 +35,15 @@ def gaussian_head(mean: Layer, log_std: np.ndarray) -> Layer:
     return np.concatenate([w, np.zeros_like(w)]), np.concatenate([b.reshape(-1), log_std])
 
 
-def mapc_params(hidden: Sequence[Layer], last: Layer, value_hidden: Sequence[Layer], value_out: Layer) -> bytes:
+def mapc_params(hidden: Sequence[Layer], last: Layer, value_hidden: Sequence[Layer] = (),
+                value_out: Optional[Layer] = None) -> bytes:
     """The float32 bytes of a policy in mapc's layout (each layer's weights input-major, then its biases).
-    ``last`` gives the means then the log-stds of the actions (``gaussian_head`` makes one)."""
+    ``last`` gives the means then the log-stds of the actions (``gaussian_head`` makes one), and for a policy
+    whose value shares its layers (mapc's distributed policies) the value as one more output; a centralized
+    policy's separate value net follows as ``value_hidden`` and ``value_out``."""
+    layers = list(hidden) + [last] + (list(value_hidden) + [value_out] if value_out is not None else [])
     out: List[np.ndarray] = []
-    for w, b in list(hidden) + [last] + list(value_hidden) + [value_out]:
+    for w, b in layers:
         w, b = np.asarray(w, np.float32), np.asarray(b, np.float32).reshape(-1)
         if w.shape[0] != b.shape[0]:
             raise _mapc.MapcError(f"a layer with {w.shape[0]} outputs and {b.shape[0]} biases")
@@ -49,10 +53,20 @@ def mapc_params(hidden: Sequence[Layer], last: Layer, value_hidden: Sequence[Lay
 
 def save_policy(path: os.PathLike, hidden: Sequence[Layer], last: Layer, value_hidden: Sequence[Layer],
                 value_out: Layer, scenario: str = "simple_merge", reward: str = "outflow") -> None:
-    """Write the layers as a mapc policy file (atomically)."""
+    """Write a centralized policy's layers as a mapc policy file (atomically)."""
     params = mapc_params(hidden, last, value_hidden, value_out)
     n_av = np.asarray(last[0]).shape[0] // 2
     _mapc.save_policy(os.fspath(path), params, scenario, reward, n_av, [np.asarray(w).shape[0] for w, _ in hidden])
+
+
+def save_distributed_policy(path: os.PathLike, hidden: Sequence[Layer], last: Layer, features: str = "full",
+                            scenario: str = "simple_merge", eta1: float = 0.9, eta2: float = 0.1,
+                            exit_bonus: float = 20.0) -> None:
+    """Write a distributed policy (one acceleration per agent; ``last`` gives its mean, log-std and value) as a
+    mapc policy file, for agents seeing ``features``."""
+    params = mapc_params(hidden, last)
+    _mapc.save_policy(os.fspath(path), params, scenario, "distributed", 5, [np.asarray(w).shape[0] for w, _ in hidden],
+                      features, eta1, eta2, exit_bonus)
 
 
 def save_sb3_policy(model, path: os.PathLike, scenario: str = "simple_merge", reward: str = "outflow") -> None:
@@ -80,3 +94,18 @@ def save_rllib_policy(module, path: os.PathLike, scenario: str = "simple_merge",
         value_hidden = [(np.zeros_like(w), np.zeros_like(b)) for w, b in actor]
         value_out = (np.zeros((1, actor[-1][0].shape[0]), np.float32), np.zeros(1, np.float32))
     save_policy(path, actor, pi[0], value_hidden, value_out, scenario, reward)
+
+
+def save_rllib_distributed_policy(module, path: os.PathLike, features: str = "full", scenario: str = "simple_merge",
+                                  eta1: float = 0.9, eta2: float = 0.1, exit_bonus: float = 20.0) -> None:
+    """An RLlib PPO torch RLModule with shared value layers (``vf_share_layers=True``, tanh, single-layer heads)
+    trained on mapc's PettingZoo env as a mapc distributed policy file. An env runner's inference-only module has
+    no value head: the value output is then written as zeros, which no evaluation reads."""
+    hidden = linear_layers(module.encoder.encoder.modules())
+    pi = linear_layers(module.pi.modules())
+    vf = linear_layers(module.vf.modules()) if getattr(module, "vf", None) is not None else []
+    if len(pi) != 1 or len(vf) > 1:
+        raise _mapc.MapcError("the policy and value heads must be single layers (head_fcnet_hiddens=[])")
+    value = vf[0] if vf else (np.zeros((1, pi[0][0].shape[1]), np.float32), np.zeros(1, np.float32))
+    last = (np.concatenate([pi[0][0], value[0]]), np.concatenate([pi[0][1], value[1]]))
+    save_distributed_policy(path, hidden, last, features, scenario, eta1, eta2, exit_bonus)

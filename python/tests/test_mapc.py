@@ -236,3 +236,19 @@ def test_the_pipeline_from_python_writes_what_the_binary_writes(tmp_path):
     with pytest.raises(mapc.MapcError, match="must be zero or a positive rate"):
         mapc.window(corridor, "osm:61862553", tmp_path / "bad.toml", main_vph=float("nan"))
     assert not (tmp_path / "bad.toml").exists()
+
+
+def test_a_distributed_policy_written_from_its_layers_is_the_same_policy_to_mapc_eval(tmp_path):
+    from mapc.export import save_distributed_policy
+
+    shipped = ROOT / "policies" / "simple_merge_distributed.json"
+    ck = json.loads(shipped.read_text())
+    arch, params = ck["state"]["model"]["arch"], ck["state"]["model"]["params"]
+    assert arch["shared_value"]
+    layers, used = _torch_layers(params, [arch["obs_dim"], *arch["hidden"], 2 * arch["act_dim"] + 1])
+    assert used == len(params)
+    out = tmp_path / "distributed.json"
+    save_distributed_policy(out, layers[:-1], layers[-1], features=mapc.Policy(shipped).features)
+    ours = mapc.evaluate(out, "simple_merge", seeds=2, baseline=False)
+    theirs = mapc.evaluate(shipped, "simple_merge", seeds=2, baseline=False)
+    assert (ours["outflow"], ours["speed"]) == (theirs["outflow"], theirs["speed"])

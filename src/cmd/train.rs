@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressStyle};
-use mapc_rl::checkpoint::{BestBy, DistributedSpec, PolicySpec};
-use mapc_rl::env::distributed::{AgentReward, DistributedEnv, Features, SIMPLE_MERGE_DIST_NORM};
+use mapc_rl::checkpoint::{BestBy, PolicySpec};
+use mapc_rl::env::distributed::{AgentReward, DistributedEnv, Features};
 use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind};
 use mapc_rl::rollout::Env;
 use mapc_rl::run::{TrainRun, log_path};
@@ -315,20 +315,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     args.reward_share
                 );
             }
-            spec.reward = "distributed".into();
-            spec.obs_dim = features.obs_dim();
-            spec.act_dim = 1;
-            spec.distributed = Some(DistributedSpec {
+            spec = PolicySpec::distributed(
+                &args.scenario,
+                n_av,
                 features,
-                reward: AgentReward {
+                AgentReward {
                     eta1: args.eta1,
                     eta2: args.eta2,
                     exit_bonus: args.exit_bonus,
                     count_waiting: args.count_waiting,
                     share: args.reward_share,
                 },
-                dist_norm: SIMPLE_MERGE_DIST_NORM,
-            });
+            );
         }
         let out = args
             .out

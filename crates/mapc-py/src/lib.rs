@@ -105,12 +105,16 @@ fn evaluate(
     serde_json::to_string(&report).map_err(mapc_error)
 }
 
-/// Write a centralized policy trained elsewhere (RLlib, Stable-Baselines3) as a mapc policy file that `mapc eval`
-/// reads: `params` are float32 bytes in mapc's layout (`mapc.export` builds them from torch layers): the policy
-/// MLP obs -> hidden... -> means then log-stds (tanh hidden layers), then the value MLP obs -> hidden... -> 1;
-/// each layer's weights input-major (`w[i * n_out + j]`), then its biases. Written atomically.
+/// Write a policy trained elsewhere (RLlib, Stable-Baselines3) as a mapc policy file that `mapc eval` reads.
+/// `params` are float32 bytes in mapc's layout (`mapc.export` builds them from torch layers): the policy MLP
+/// obs -> hidden... -> means then log-stds (tanh hidden layers), each layer's weights input-major
+/// (`w[i * n_out + j]`) then its biases, and then the value MLP obs -> hidden... -> 1. With `features` the policy
+/// is distributed (one acceleration per agent, the observation of those features) and its value is one more
+/// output of the policy's last layer instead (shared layers). Written atomically.
 #[pyfunction]
-#[pyo3(signature = (path, params, scenario = "simple_merge", reward = "outflow", n_av = 5, hidden = vec![100, 50, 25]))]
+#[pyo3(signature = (path, params, scenario = "simple_merge", reward = "outflow", n_av = 5,
+                    hidden = vec![100, 50, 25], features = None, eta1 = 0.9, eta2 = 0.1, exit_bonus = 20.0))]
+#[allow(clippy::too_many_arguments)]
 fn save_policy(
     path: PathBuf,
     params: &[u8],
@@ -118,25 +122,48 @@ fn save_policy(
     reward: &str,
     n_av: usize,
     hidden: Vec<usize>,
+    features: Option<&str>,
+    eta1: f64,
+    eta2: f64,
+    exit_bonus: f64,
 ) -> PyResult<()> {
+    use mapc_rl::env::distributed::{AgentReward, Features};
     use mapc_rl::env::merge::RewardKind;
-    let reward: RewardKind = reward.parse().map_err(mapc_error)?;
-    if n_av == 0 || hidden.contains(&0) {
+    if n_av == 0 || hidden.is_empty() || hidden.contains(&0) {
         return Err(mapc_error("n_av and every hidden size must be at least 1"));
     }
-    let spec = mapc_rl::PolicySpec::centralized(scenario, reward.name(), n_av);
-    let config = mapc_rl::PpoConfig {
-        hidden,
-        ..mapc_rl::PpoConfig::default()
+    let (spec, base) = match features {
+        None => {
+            let reward: RewardKind = reward.parse().map_err(mapc_error)?;
+            let spec = mapc_rl::PolicySpec::centralized(scenario, reward.name(), n_av);
+            (spec, mapc_rl::PpoConfig::default())
+        }
+        Some(f) => {
+            let features = Features::parse(f).map_err(mapc_error)?;
+            let reward = AgentReward {
+                eta1,
+                eta2,
+                exit_bonus,
+                ..AgentReward::PAPER
+            };
+            let spec = mapc_rl::PolicySpec::distributed(scenario, n_av, features, reward);
+            (spec, mapc_rl::PpoConfig::distributed())
+        }
     };
+    let config = mapc_rl::PpoConfig { hidden, ..base };
     let mut state = mapc_rl::TrainerState::new(config, spec.obs_dim, spec.act_dim);
     if params.len() != 4 * state.model.params.len() {
         return Err(mapc_error(format!(
-            "{} parameter bytes where this architecture ({} inputs, hidden {:?}, {} actions) has {} float32 values",
+            "{} parameter bytes where this architecture ({} inputs, hidden {:?}, {} actions{}) has {} float32 values",
             params.len(),
             spec.obs_dim,
             state.model.arch.hidden,
             spec.act_dim,
+            if state.model.arch.shared_value {
+                ", value in the last layer"
+            } else {
+                ", a value net"
+            },
             state.model.params.len()
         )));
     }

@@ -64,6 +64,26 @@ impl PolicySpec {
         }
     }
 
+    /// A distributed policy (one shared policy, one acceleration per agent from its own observation with
+    /// `features`) trained on `scenario` with `reward` (what `mapc train --distributed` writes for a new run).
+    pub fn distributed(
+        scenario: &str,
+        n_av: usize,
+        features: crate::env::distributed::Features,
+        reward: AgentReward,
+    ) -> PolicySpec {
+        PolicySpec {
+            obs_dim: features.obs_dim(),
+            act_dim: 1,
+            distributed: Some(DistributedSpec {
+                features,
+                reward,
+                dist_norm: crate::env::distributed::SIMPLE_MERGE_DIST_NORM,
+            }),
+            ..PolicySpec::centralized(scenario, "distributed", n_av)
+        }
+    }
+
     /// The distributed environment's configuration of a distributed policy.
     pub fn distributed_config(&self) -> Option<DistributedConfig> {
         let d = self.distributed?;
