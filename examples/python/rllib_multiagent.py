@@ -62,8 +62,10 @@ def main():
     scenario = os.path.abspath(a.scenario) if os.path.exists(a.scenario) else a.scenario
     config = (
         PPOConfig()
+        # raw accelerations, as mapc applies the exported means (RLlib would otherwise unsquash them)
         .environment("mapc_merge_agents",
-                     env_config={"scenario": scenario, "features": a.features, "seed": a.seed})
+                     env_config={"scenario": scenario, "features": a.features, "seed": a.seed},
+                     normalize_actions=False)
         .env_runners(num_env_runners=a.env_runners, rollout_fragment_length="auto")
         # one policy shared by every agent
         .multi_agent(policies={"shared"}, policy_mapping_fn=lambda agent_id, episode, **kw: "shared")

@@ -49,7 +49,10 @@ def main():
     scenario = os.path.abspath(a.scenario) if os.path.exists(a.scenario) else a.scenario
     config = (
         PPOConfig()
-        .environment("mapc_merge", env_config={"scenario": scenario, "reward": a.reward, "seed": a.seed})
+        # normalize_actions=False: the raw Gaussian sample is the acceleration (mapc clips it to its bounds), as
+        # in mapc's trainer, so the exported means are the accelerations mapc applies (RLlib would unsquash them)
+        .environment("mapc_merge", env_config={"scenario": scenario, "reward": a.reward, "seed": a.seed},
+                     normalize_actions=False)
         .env_runners(num_env_runners=a.env_runners, num_envs_per_env_runner=a.envs_per_runner,
                      rollout_fragment_length="auto")
         # the paper's centralized PPO (REFERENCE.md sec. 5) at mapc's fast preset's batch
