@@ -41,6 +41,8 @@ fn a_simple_merge_replay_is_self_contained_small_and_shows_the_simulators_figure
         s(&page),
         "--json",
     ]));
+    // the same seed run by `mapc sim`, its trace kept
+    let trace = dir.join("seed3.csv");
     let sim = json_of(&mapc(&[
         "sim",
         "--scenario",
@@ -49,6 +51,8 @@ fn a_simple_merge_replay_is_self_contained_small_and_shows_the_simulators_figure
         "1",
         "--first-seed",
         "3",
+        "--trace",
+        s(&trace),
         "--json",
     ]));
     let run = &sim["runs"][0];
@@ -81,19 +85,7 @@ fn a_simple_merge_replay_is_self_contained_small_and_shows_the_simulators_figure
     assert_eq!(data["network"]["roads"].as_array().unwrap().len(), 5);
     assert_eq!(data["replays"][0]["frames"], 2001);
 
-    // the same seed's trace written by `mapc sim` plays as the same run
-    let trace = dir.join("seed3.csv");
-    assert_success(&mapc(&[
-        "sim",
-        "--scenario",
-        "simple_merge",
-        "--seeds",
-        "1",
-        "--first-seed",
-        "3",
-        "--trace",
-        s(&trace),
-    ]));
+    // that trace plays as the same run
     let replayed = json_of(&mapc(&[
         "view",
         "simple_merge",
