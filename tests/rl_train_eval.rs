@@ -581,3 +581,89 @@ fn the_shipped_shared_reward_policy_beats_the_humans_and_transfers() {
     let change = window["comparison"]["outflow_change_pct"].as_f64().unwrap();
     assert!(change > 2.0, "{window}");
 }
+
+/// A tiny run on the shipped merge distribution, started from the shipped outflow policy: it trains, starts from
+/// that policy's weights, resumes exactly (the draws follow the episodes' seeds), and refuses what does not fit.
+#[test]
+fn a_merge_distribution_trains_from_a_policy_and_resumes_exactly() {
+    let mix = ["--scenario", "scenarios/merge_mix.toml"];
+    let train = |dir: &PathBuf, iters: u64, init: bool| {
+        let mut c = mapc();
+        c.args(["train", "--preset", "fast"]).args(mix);
+        if init {
+            c.args(["--init", "policies/simple_merge_outflow.json"]);
+        }
+        c.args([
+            "--iters",
+            &iters.to_string(),
+            "--batch",
+            "600",
+            "--minibatch",
+            "200",
+        ])
+        .args([
+            "--horizon",
+            "300",
+            "--epochs",
+            "2",
+            "--checkpoint-every",
+            "1",
+            "--json",
+            "-o",
+        ])
+        .arg(dir)
+        .output()
+        .unwrap()
+    };
+    let dir = tmp("mix");
+    common::assert_success(&train(&dir, 2, true));
+    let resumed = mapc_with(["train", "--iters", "3", "--json", "--resume"], &dir);
+    common::assert_success(&resumed);
+    let straight = tmp("mix-straight");
+    common::assert_success(&train(&straight, 3, true));
+    assert_eq!(row3(&dir), row3(&straight));
+    // --init took the shipped weights: a run from scratch differs in its first row
+    let scratch = tmp("mix-scratch");
+    common::assert_success(&train(&scratch, 1, false));
+    let first = |d: &Path| {
+        std::fs::read_to_string(d.join("progress.csv"))
+            .unwrap()
+            .lines()
+            .nth(1)
+            .unwrap()
+            .to_string()
+    };
+    assert_ne!(
+        first(&dir).split(',').nth(3),
+        first(&scratch).split(',').nth(3)
+    );
+    // a policy of another size, and the distributed trainer, are refused
+    let other = tmp("mix-other");
+    let err = refused(
+        mapc()
+            .args([
+                "train",
+                "--preset",
+                "fast",
+                "--n-av",
+                "3",
+                "--init",
+                "policies/simple_merge_outflow.json",
+            ])
+            .args(mix)
+            .args(["--iters", "1", "-o"])
+            .arg(&other),
+    );
+    assert!(err.contains("does not fit"), "{err}");
+    let err = refused(
+        mapc()
+            .args(["train", "--distributed", "--preset", "fast"])
+            .args(mix)
+            .args(["--iters", "1", "-o"])
+            .arg(tmp("mix-dist")),
+    );
+    assert!(err.contains("centralized policies only"), "{err}");
+    for d in [dir, straight, scratch, other] {
+        std::fs::remove_dir_all(d).ok();
+    }
+}

@@ -7,16 +7,19 @@ use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressStyle};
 use mapc_rl::checkpoint::{BestBy, PolicySpec};
 use mapc_rl::env::distributed::{AgentReward, DistributedEnv, Features};
-use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind};
+use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind, SpecSource};
 use mapc_rl::rollout::Env;
 use mapc_rl::run::{TrainRun, log_path};
 use mapc_rl::{IterationStats, PpoConfig};
+use mapc_scenario::distribution::{LoadedDistribution, MergeDistribution};
+use std::sync::Arc;
 
 /// Train a centralized PPO policy, or with `--distributed` one shared by every AV (defaults: the paper's
 /// hyperparameters; `--preset fast` for minutes on CPU).
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Scenario: `simple_merge` or a scenario file.
+    /// Scenario: `simple_merge`, a scenario file, or a merge distribution file (`format =
+    /// "mapc-merge-distribution"`: each episode draws its merge from its seed).
     #[arg(long, default_value = "simple_merge")]
     pub scenario: String,
     /// Reward of a centralized policy: outflow, flow (Flow's desired-velocity reward) or speed (average speed).
@@ -115,6 +118,9 @@ pub struct Args {
     /// Write a checkpoint every K iterations (and at the end).
     #[arg(long, default_value_t = 5)]
     pub checkpoint_every: u64,
+    /// Start a new centralized run from this policy's weights (a fresh optimiser; the architectures must agree).
+    #[arg(long, conflicts_with_all = ["resume", "distributed"])]
+    pub init: Option<PathBuf>,
     /// Also keep every checkpoint written, as RUN/checkpoints/iteration-NNNNN.json (`mapc eval --policy` reads
     /// them), to evaluate earlier policies of the run.
     #[arg(long)]
@@ -166,6 +172,50 @@ pub struct LoadedScenario {
     pub spec: mapc_sim::SimSpec,
     pub name: String,
     pub n_av: Option<usize>,
+}
+
+/// A merge distribution file, if `arg` names one (recognised by its content).
+fn distribution_of(arg: &str) -> anyhow::Result<Option<LoadedDistribution>> {
+    let path = Path::new(arg);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {arg}"))?;
+    if !MergeDistribution::is_distribution(&text) {
+        return Ok(None);
+    }
+    Ok(Some(LoadedDistribution::load(path)?))
+}
+
+/// Where a training run's episodes come from: one scenario, or a merge drawn per episode.
+fn training_source(arg: &str, horizon_steps: u64) -> anyhow::Result<SpecSource> {
+    Ok(match distribution_of(arg)? {
+        Some(d) => SpecSource::Drawn {
+            distribution: Arc::new(d),
+            horizon_steps,
+        },
+        None => {
+            let mut spec = load_scenario(arg)?.spec;
+            spec.horizon_steps = horizon_steps;
+            SpecSource::Fixed(spec)
+        }
+    })
+}
+
+/// A training scenario: a scenario, or a merge distribution's seed-0 draw (its name, N_AV and horizon stand for
+/// every draw's).
+fn load_training_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
+    let Some(d) = distribution_of(arg)? else {
+        return load_scenario(arg);
+    };
+    let resolved = d.resolve(0)?;
+    let spec =
+        mapc_sim::spec_from_scenario(&resolved).with_context(|| format!("scenario {arg}"))?;
+    Ok(LoadedScenario {
+        spec,
+        name: d.file.name.clone(),
+        n_av: resolved.scenario.control.as_ref().map(|c| c.n_av as usize),
+    })
 }
 
 /// Resolves `simple_merge` or a scenario file into a simulator spec.
@@ -291,7 +341,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             config = read_config(p, config)?;
         }
         apply_flags(&mut config, &args);
-        let sc = load_scenario(&args.scenario)?;
+        let sc = load_training_scenario(&args.scenario)?;
+        if args.distributed && distribution_of(&args.scenario)?.is_some() {
+            bail!(
+                "{}: a merge distribution trains centralized policies only",
+                args.scenario
+            );
+        }
         if args.horizon.is_none() {
             config.horizon = sc.spec.horizon_steps as usize;
         }
@@ -332,13 +388,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .out
             .clone()
             .unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, spec.reward)));
-        TrainRun::create(&out, spec, config, args.checkpoint_every)?
+        let mut run = TrainRun::create(&out, spec, config, args.checkpoint_every)?;
+        if let Some(init) = &args.init {
+            start_from_policy(&mut run, init)?;
+        }
+        run
     };
     run.keep_checkpoints = args.keep_checkpoints;
     if let Some(by) = args.best_by {
         run.set_best_by(by.into())?;
     }
-    let sc = load_scenario(&run.spec.scenario)?;
+    let sc = load_training_scenario(&run.spec.scenario)?;
     let mut spec = sc.spec.clone();
     spec.horizon_steps = run.state.config.horizon as u64;
     if let Some(dcfg) = run.spec.distributed_config() {
@@ -357,7 +417,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         accel_min: run.spec.accel_min,
         accel_max: run.spec.accel_max,
     };
-    let probe = MergeEnv::new(spec.clone(), env_cfg.clone())?;
+    let source = training_source(&run.spec.scenario, spec.horizon_steps)?;
+    let probe = MergeEnv::with_source(source.clone(), env_cfg.clone())?;
     if probe.obs_dim() != run.spec.obs_dim {
         bail!(
             "run expects {} observation values, scenario gives {}",
@@ -366,9 +427,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     let factory = move || -> Box<dyn Env> {
-        Box::new(MergeEnv::new(spec.clone(), env_cfg.clone()).expect("validated"))
+        Box::new(MergeEnv::with_source(source.clone(), env_cfg.clone()).expect("validated"))
     };
     train_loop(&mut run, &args, &mut |r| r.step(&factory))
+}
+
+/// `--init`: a new run takes the weights of a policy with the same architecture and observation layout.
+fn start_from_policy(run: &mut TrainRun, init: &Path) -> anyhow::Result<()> {
+    let ck = mapc_rl::Checkpoint::load(&mapc_rl::checkpoint::policy_file(init))?;
+    let (a, b) = (&ck.spec, &run.spec);
+    if ck.spec.distributed.is_some()
+        || (a.obs_dim, a.act_dim, a.max_speed, a.norm_length)
+            != (b.obs_dim, b.act_dim, b.max_speed, b.norm_length)
+        || ck.state.config.hidden != run.state.config.hidden
+        || ck.state.config.shared_value != run.state.config.shared_value
+    {
+        bail!(
+            "--init {}: its policy ({} observation values, {} actions, hidden {:?}) does not fit this run's ({}, {}, {:?})",
+            init.display(),
+            a.obs_dim,
+            a.act_dim,
+            ck.state.config.hidden,
+            b.obs_dim,
+            b.act_dim,
+            run.state.config.hidden
+        );
+    }
+    run.state.model = ck.state.model;
+    Ok(())
 }
 
 /// Runs the remaining iterations with a progress bar, then saves and reports.

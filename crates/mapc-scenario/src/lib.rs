@@ -8,9 +8,12 @@
 //! - **controlled region**: the roads where AVs are driven by a policy (a transfer window), and `n_av`, how many.
 //! - **corridor**: a single-lane main road with the roads merging into it (what `simplify` makes of a highway).
 //! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's.
+//! - **merge distribution**: a Simple Merge whose demand, right of way, lengths, speed limit and AV share are
+//!   drawn per episode from the seed (`distribution`), to train one policy over many merges.
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
 
 pub mod compile;
+pub mod distribution;
 pub mod generator;
 pub mod model;
 pub mod simplify;

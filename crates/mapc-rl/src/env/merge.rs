@@ -3,6 +3,10 @@
 
 use std::str::FromStr;
 
+use std::borrow::Cow;
+use std::sync::Arc;
+
+use mapc_scenario::distribution::LoadedDistribution;
 use mapc_sim::{SimSpec, Simulation, VehicleId};
 use serde::{Deserialize, Serialize};
 
@@ -85,8 +89,52 @@ impl MergeEnvConfig {
     }
 }
 
+/// Where an episode's simulation comes from.
+#[derive(Clone, Debug)]
+pub enum SpecSource {
+    /// One scenario for every episode.
+    Fixed(SimSpec),
+    /// A merge drawn from the episode's seed, simulated for `horizon_steps`.
+    Drawn {
+        distribution: Arc<LoadedDistribution>,
+        horizon_steps: u64,
+    },
+}
+
+impl SpecSource {
+    /// The scenario of the episode with seed `seed`.
+    pub fn spec_for(&self, seed: u64) -> Result<Cow<'_, SimSpec>, RlError> {
+        match self {
+            SpecSource::Fixed(spec) => Ok(Cow::Borrowed(spec)),
+            SpecSource::Drawn {
+                distribution,
+                horizon_steps,
+            } => {
+                let scenario_error = |e: String| RlError::Scenario {
+                    scenario: distribution.origin.clone(),
+                    msg: e,
+                };
+                let resolved = distribution
+                    .resolve(seed)
+                    .map_err(|e| scenario_error(e.to_string()))?;
+                let mut spec = mapc_sim::spec_from_scenario(&resolved)
+                    .map_err(|e| scenario_error(format!("draw {seed}: {e}")))?;
+                spec.horizon_steps = *horizon_steps;
+                Ok(Cow::Owned(spec))
+            }
+        }
+    }
+
+    pub fn horizon_steps(&self) -> u64 {
+        match self {
+            SpecSource::Fixed(spec) => spec.horizon_steps,
+            SpecSource::Drawn { horizon_steps, .. } => *horizon_steps,
+        }
+    }
+}
+
 pub struct MergeEnv {
-    spec: SimSpec,
+    source: SpecSource,
     cfg: MergeEnvConfig,
     sim: Option<Simulation>,
     queue: ControlQueue,
@@ -98,11 +146,19 @@ impl MergeEnv {
     /// An environment over `spec` (the control region, if any, is the spec's).
     pub fn new(spec: SimSpec, cfg: MergeEnvConfig) -> Result<Self, RlError> {
         super::validate_spec(&spec)?;
+        Self::with_source(SpecSource::Fixed(spec), cfg)
+    }
+
+    /// An environment whose episodes draw their scenario from `source` (each draw checked when it is built).
+    pub fn with_source(source: SpecSource, cfg: MergeEnvConfig) -> Result<Self, RlError> {
+        if let SpecSource::Drawn { .. } = &source {
+            super::validate_spec(source.spec_for(0)?.as_ref())?;
+        }
         if cfg.n_av == 0 {
             return Err(RlError::Config("N_AV must be at least 1".into()));
         }
         Ok(Self {
-            spec,
+            source,
             cfg,
             sim: None,
             queue: ControlQueue::default(),
@@ -117,7 +173,7 @@ impl MergeEnv {
 
     /// Horizon of the scenario (steps).
     pub fn horizon(&self) -> usize {
-        self.spec.horizon_steps as usize
+        self.source.horizon_steps() as usize
     }
 
     fn sim(&self) -> &Simulation {
@@ -228,7 +284,8 @@ impl Env for MergeEnv {
         self.cfg.n_av
     }
     fn reset(&mut self, seed: u64) -> Result<Vec<f32>, RlError> {
-        self.sim = Some(super::episode_simulation(&self.spec, seed)?);
+        let spec = self.source.spec_for(seed)?;
+        self.sim = Some(super::episode_simulation(&spec, seed)?);
         self.queue.clear();
         Ok(self.observe())
     }

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# The set of real merges a policy is checked on before it is trusted elsewhere: windows cut with
+# `mapc window --match simple_merge` around motorway merges of three real maps (I-696, Flow's I-210, osm2streets'
+# Arizona Loop 101), the paper's I-696 window and the Simple Merge itself.
+#
+#   tools/merge_set.sh cut                  # (re)write scenarios/merges/*.toml and their graphs
+#   tools/merge_set.sh eval POLICY...       # one markdown row per merge: humans, then each policy (100 seeds)
+#
+# MAPC (default target/release/mapc), SEEDS (default 100).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+MAPC=${MAPC:-target/release/mapc}
+SEEDS=${SEEDS:-100}
+DIR=scenarios/merges
+
+# name, map, merge junction (the source map's id)
+MERGES=(
+  "i696_26913188 maps/i696.osm osm:26913188"
+  "i696_61860349 maps/i696.osm osm:61860349"
+  "i696_61860453 maps/i696.osm osm:61860453"
+  "i696_62339771 maps/i696.osm osm:62339771"
+  "i696_61860343 maps/i696.osm osm:61860343"
+  "i210_300944078 maps/i210.net.xml osm:300944078"
+  "i210_300944436 maps/i210.net.xml osm:300944436"
+  "arizona_5134463770 maps/arizona_highways.osm osm:5134463770"
+)
+
+cut() {
+  mkdir -p "$DIR"
+  for m in "${MERGES[@]}"; do
+    read -r name map junction <<<"$m"
+    "$MAPC" window "$map" --junction "$junction" --match simple_merge -o "$DIR/$name.toml" >/dev/null
+    echo "wrote $DIR/$name.toml"
+  done
+}
+
+# mean ± ci95 (change vs humans, disjoint?) from mapc eval --json
+row_cell() {
+  python3 -c '
+import json, sys
+r = json.load(sys.stdin)
+o, c = r["outflow"], r["comparison"]
+mark = "disjoint" if c["outflow_ci_disjoint"] else "overlap"
+print(f"{o[\"mean\"]:.1f} ± {o[\"ci95\"]:.1f} ({c[\"outflow_change_pct\"]:+.1f} %, {mark})", end="")'
+}
+
+evaluate() {
+  local scenarios=(simple_merge scenarios/i696_window.toml)
+  for m in "${MERGES[@]}"; do
+    read -r name _ _ <<<"$m"
+    scenarios+=("$DIR/$name.toml")
+  done
+  printf '| merge | humans (veh/h) |'
+  for p in "$@"; do printf ' %s |' "$(basename "$p" .json)"; done
+  printf '\n|---|---|'
+  for _ in "$@"; do printf -- '---|'; done
+  printf '\n'
+  for s in "${scenarios[@]}"; do
+    local first=1
+    for p in "$@"; do
+      json=$("$MAPC" eval --policy "$p" --scenario "$s" --seeds "$SEEDS" --json)
+      if [ $first = 1 ]; then
+        human=$(python3 -c 'import json,sys; b=json.load(sys.stdin)["baseline"]["outflow"]; print(f"{b[\"mean\"]:.1f} ± {b[\"ci95\"]:.1f}")' <<<"$json")
+        printf '| %s | %s |' "$(basename "$s" .toml)" "$human"
+        first=0
+      fi
+      printf ' %s |' "$(row_cell <<<"$json")"
+    done
+    printf '\n'
+  done
+}
+
+case "${1:-}" in
+  cut) cut ;;
+  eval) shift; [ $# -ge 1 ] || { echo "usage: $0 eval POLICY..." >&2; exit 2; }; evaluate "$@" ;;
+  *) echo "usage: $0 cut | eval POLICY..." >&2; exit 2 ;;
+esac
