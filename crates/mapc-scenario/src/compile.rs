@@ -2,7 +2,9 @@
 //! simplified to a corridor, a window cut and written as a scenario beside its graph and checked by reading it
 //! back, and the JSON reports both print.
 
-use crate::simplify::{MergeSummary, Simplified, corridor_merges, simplify};
+use crate::simplify::{
+    MergeSummary, Simplified, corridor_complex_junctions, corridor_merges, simplify,
+};
 use crate::transform::pick_route::describe_junction;
 use crate::transform::{Corridor, CorridorRoles, SimplifyOptions, TransformError};
 use crate::window::{DemandOverride, SourceShape, WindowCut, cut_window, window_scenario};
@@ -67,7 +69,8 @@ pub fn corridor_report(s: &Simplified, map: &Path, output: &Path) -> Value {
     let merges: Vec<MergeSummary> = corridor_merges(g, &s.roles);
     let first = g.road(s.roles.main[0]).map(|r| r.from);
     let last = s.roles.main.last().and_then(|r| g.road(*r)).map(|r| r.to);
-    json!({
+    let complex = corridor_complex_junctions(g, &s.roles);
+    let mut report = json!({
         "map": map.display().to_string(),
         "output": output.display().to_string(),
         "main_road": {
@@ -81,7 +84,11 @@ pub fn corridor_report(s: &Simplified, map: &Path, output: &Path) -> Value {
         "roads": g.roads.len(),
         "junctions": g.junctions.len(),
         "steps": s.steps,
-    })
+    });
+    if !complex.is_empty() {
+        report["junctions_with_several_merging_roads"] = json!(complex);
+    }
+    report
 }
 
 /// The corridor of `map`: the graph itself when it is one, else the map simplified with `options` (without
