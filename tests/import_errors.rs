@@ -244,7 +244,7 @@ fn a_duplicate_way_id_with_other_nodes_is_an_error() {
 fn a_sumo_lane_of_speed_zero_is_an_error_naming_the_lane() {
     let text = String::from_utf8(map("simple_merge.net.xml")).unwrap();
     let lane = "<lane id=\"left_0\" index=\"0\" speed=\"30.00\"";
-    let line = text[..text.find(lane).unwrap()].lines().count() + 1;
+    let line = text[..text.find(lane).unwrap()].lines().count();
     let bad = text.replacen(lane, "<lane id=\"left_0\" index=\"0\" speed=\"0.00\"", 1);
     fails_with(
         &scratch("speed0.net.xml", bad.as_bytes()),
