@@ -207,7 +207,11 @@ fn a_duplicate_node_id_is_an_error_unless_it_is_the_same_node() {
         .arg(file.with_extension("graph.json"))
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(summary["warnings"]["duplicate_node"], 1, "{summary}");
 }

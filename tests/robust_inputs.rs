@@ -108,7 +108,10 @@ fn a_scenario_and_a_policy_read_back_whatever_their_name() {
     let sim = run_mapc(&["sim", "--scenario", s(&scenario), "--seeds", "1"]);
     assert_success(&sim);
     let text = String::from_utf8_lossy(&sim.stdout);
-    assert!(text.contains("n = 1, no CI") && !text.contains('±'), "{text}");
+    assert!(
+        text.contains("n = 1, no CI") && !text.contains('±'),
+        "{text}"
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -253,9 +256,16 @@ fn footway_and_service_junctions_are_no_merges_unless_asked() {
     let changed: Vec<&Value> = all
         .iter()
         .filter(|j| minor(j))
-        .filter_map(|j| kind_of(&main, &j["id"]).filter(|k| k != &j["kind"]).map(|_| &j["id"]))
+        .filter_map(|j| {
+            kind_of(&main, &j["id"])
+                .filter(|k| k != &j["kind"])
+                .map(|_| &j["id"])
+        })
         .collect();
-    assert!(!changed.is_empty(), "some junction changes kind without its service roads");
+    assert!(
+        !changed.is_empty(),
+        "some junction changes kind without its service roads"
+    );
     // The corridor's merging roads leave them out too.
     let dir = scratch_dir("minor");
     let report = json_of(&[

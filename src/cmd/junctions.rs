@@ -133,7 +133,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 return None;
             }
             let kind = JunctionKind::classify(incoming.len(), outgoing.len());
-            want.is_none_or(|k| kind == k).then_some((j, kind, incoming, outgoing))
+            want.is_none_or(|k| kind == k)
+                .then_some((j, kind, incoming, outgoing))
         })
         .map(|(j, kind, incoming, outgoing)| {
             let lonlat = graph.junction_lonlat(j.id);

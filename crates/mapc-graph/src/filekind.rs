@@ -102,7 +102,12 @@ mod tests {
     use super::*;
 
     fn shipped(name: &str) -> Vec<u8> {
-        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(name)).unwrap()
+        std::fs::read(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../..")
+                .join(name),
+        )
+        .unwrap()
     }
 
     #[test]
@@ -126,7 +131,10 @@ mod tests {
         assert_eq!(sniff(&shipped("maps/i696.osm")[..4096]), None);
         assert_eq!(sniff(&shipped("maps/simple_merge.net.xml")), None);
         assert_eq!(sniff(b"{\"format\": \"geojson\"}"), None);
-        assert_eq!(sniff(b"   {\"format\" :  \"mapc-graph\", \"version\": 9}"), Some(MapcFile::Graph));
+        assert_eq!(
+            sniff(b"   {\"format\" :  \"mapc-graph\", \"version\": 9}"),
+            Some(MapcFile::Graph)
+        );
         assert_eq!(sniff(b"name = \"x\"\n"), None);
     }
 }

@@ -127,7 +127,9 @@ impl LaneGraph {
 
     /// Why `query` names no junction: a road that absorbed it (its mapc id, OSM node or SUMO id), or plainly none.
     fn joined_junction(&self, query: &str) -> LookupError {
-        let node = query.strip_prefix("osm:").and_then(|n| n.parse::<i64>().ok());
+        let node = query
+            .strip_prefix("osm:")
+            .and_then(|n| n.parse::<i64>().ok());
         let absorbed = |r: &&Road| {
             let p = &r.provenance;
             if p.joined.iter().any(|id| id == query) {
@@ -137,7 +139,10 @@ impl LaneGraph {
             !p.joined.is_empty()
                 && (node.is_some_and(|n| {
                     p.osm_nodes.contains(&n)
-                        && !self.junctions.iter().any(|j| j.provenance.osm_nodes.contains(&n))
+                        && !self
+                            .junctions
+                            .iter()
+                            .any(|j| j.provenance.osm_nodes.contains(&n))
                 }) || p.sumo_ids.iter().any(|s| s == query))
         };
         match self.roads.iter().find(absorbed) {

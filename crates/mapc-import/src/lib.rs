@@ -13,10 +13,16 @@
 //!   (`Connection::via_length_m`, `via_speed_mps`), never a road.
 //! - **major / minor**: right of way. OSM: the higher class, then more lanes, then the straighter road in is major.
 //!   SUMO: the connection's state (`M`/`m`) or, without one, the junction's request table. [`MajorRoad`] overrides.
+//! - **duplicate element**: a node or kept way whose id appears twice. The same element again is a counted
+//!   warning (`duplicate_node`, `duplicate_way`); another one under the same id is an error naming the id, since
+//!   either choice would silently change roads.
+//! - **dropped way**: a kept way that cannot be driven as a line (`area=yes`, `oneway=reversible|alternating`);
+//!   counted by kind.
 //!
 //! Entry points: [`import_path`] (chosen by file name, then by content), [`import_bytes`] (in memory) and
-//! [`load_any`] (a graph mapc wrote, recognised by its content whatever its name, or any map). Ids are deterministic: junctions by OSM node id or SUMO file
-//! order, roads by (way id, piece, forward first) or SUMO file order.
+//! [`load_any`] (a graph mapc wrote, recognised by its content whatever its name, or any map). Ids are
+//! deterministic: junctions by OSM node id or SUMO file order, roads by (way id, piece, forward first) or SUMO file
+//! order.
 
 // `!(x > 0.0)` and the like reject NaN on purpose; `partial_cmp` would hide that.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -216,8 +222,7 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, Im
     };
     let graph = match format {
         MapFormat::OsmXml => {
-            let data =
-                osm_xml::read(open, &options.highways).map_err(|e| located.error(e))?;
+            let data = osm_xml::read(open, &options.highways).map_err(|e| located.error(e))?;
             osm::build_graph(data, source, options)
                 .map_err(|m| ImportError::unsupported(path, m))?
         }

@@ -97,7 +97,8 @@ impl OsmData {
     pub fn add_way(&mut self, way: OsmWay) -> Result<(), String> {
         if let Some(&i) = self.way_index.get(&way.id) {
             if self.ways[i] == way {
-                self.warnings.add("duplicate_way", format!("way {} appears twice", way.id));
+                self.warnings
+                    .add("duplicate_way", format!("way {} appears twice", way.id));
                 return Ok(());
             }
             return Err(format!(
@@ -117,7 +118,8 @@ impl OsmData {
         match self.nodes.insert(id, pos) {
             None => Ok(()),
             Some(old) if old == pos => {
-                self.warnings.add("duplicate_node", format!("node {id} appears twice"));
+                self.warnings
+                    .add("duplicate_node", format!("node {id} appears twice"));
                 Ok(())
             }
             Some(old) => Err(format!(
@@ -262,7 +264,10 @@ fn directions(way: &OsmWay, warnings: &mut Warnings) -> Directions {
 /// drive along) or a way whose direction changes with the time of day (`oneway=reversible|alternating`).
 fn unusable(way: &OsmWay) -> Option<(&'static str, String)> {
     if way.tags.area.as_deref() == Some("yes") {
-        return Some(("area_dropped", format!("{} with area=yes", way.tags.highway)));
+        return Some((
+            "area_dropped",
+            format!("{} with area=yes", way.tags.highway),
+        ));
     }
     match way.tags.oneway.as_deref() {
         Some(v @ ("reversible" | "alternating")) => Some((
@@ -298,7 +303,8 @@ fn lane_counts(way: &OsmWay, dirs: Directions, warnings: &mut Warnings) -> (u8, 
     };
     let total = read("lanes", &t.lanes);
     let fwd = read("lanes:forward", &t.lanes_forward).or_else(|| turn_count(&t.turn_lanes_forward));
-    let bwd = read("lanes:backward", &t.lanes_backward).or_else(|| turn_count(&t.turn_lanes_backward));
+    let bwd =
+        read("lanes:backward", &t.lanes_backward).or_else(|| turn_count(&t.turn_lanes_backward));
     let one_way = dirs.forward != dirs.backward;
     let total = total.or_else(|| turn_count(&t.turn_lanes).filter(|_| one_way));
     let two_way = dirs.forward && dirs.backward;

@@ -212,7 +212,8 @@ fn read_ways(bytes: &[u8], blobs: &[BlobAt], classes: &[String]) -> Result<OsmDa
             for r in &g.relations {
                 let mut restriction = false;
                 for (&k, &v) in r.keys.iter().zip(&r.vals) {
-                    if string(&b, k, at)? == b"type" && string(&b, v, at)?.starts_with(b"restriction")
+                    if string(&b, k, at)? == b"type"
+                        && string(&b, v, at)?.starts_with(b"restriction")
                     {
                         restriction = true;
                     }

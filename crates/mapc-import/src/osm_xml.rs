@@ -107,7 +107,8 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                         if let Some((_, members, _)) = relation.as_mut() {
                             let kv = attrs(&element)
                                 .map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
-                            let get = |key: &str| kv.iter().find(|(k, _)| *k == key).map(|(_, v)| v);
+                            let get =
+                                |key: &str| kv.iter().find(|(k, _)| *k == key).map(|(_, v)| v);
                             if get("type").is_some_and(|t| t == "way")
                                 && let Some(Ok(r)) = get("ref").map(|r| r.trim().parse::<i64>())
                             {
@@ -151,7 +152,8 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                         } else if let Some((_, _, restriction)) = relation.as_mut() {
                             let kv = attrs(&element)
                                 .map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
-                            let get = |key: &str| kv.iter().find(|(k, _)| *k == key).map(|(_, v)| v);
+                            let get =
+                                |key: &str| kv.iter().find(|(k, _)| *k == key).map(|(_, v)| v);
                             if get("k").is_some_and(|k| k == "type")
                                 && get("v").is_some_and(|v| v.starts_with("restriction"))
                             {

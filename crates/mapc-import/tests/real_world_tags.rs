@@ -10,7 +10,10 @@ use std::fmt::Write;
 
 /// Node positions along a real stretch of I-696 (around osm:61862553), 1e-7 degree steps apart.
 fn node(i: usize) -> (f64, f64) {
-    (42.4869153 + 0.0009 * i as f64, -83.4764083 + 0.0011 * i as f64)
+    (
+        42.4869153 + 0.0009 * i as f64,
+        -83.4764083 + 0.0011 * i as f64,
+    )
 }
 
 #[derive(Clone, Debug)]
@@ -60,12 +63,18 @@ fn osm(c: &Case) -> String {
     let ids = [1, 2, 3, 4, 10, 11, 12, 20, 21, 22];
     for (k, id) in ids.iter().enumerate() {
         let (lat, lon) = node(k);
-        let _ = writeln!(nodes, "  <node id=\"{id}\" lat=\"{lat:.7}\" lon=\"{lon:.7}\"/>");
+        let _ = writeln!(
+            nodes,
+            "  <node id=\"{id}\" lat=\"{lat:.7}\" lon=\"{lon:.7}\"/>"
+        );
     }
     match c.duplicate_node {
         1 => {
             let (lat, lon) = node(1);
-            let _ = writeln!(nodes, "  <node id=\"2\" lat=\"{lat:.7}\" lon=\"{lon:.7}\"/>");
+            let _ = writeln!(
+                nodes,
+                "  <node id=\"2\" lat=\"{lat:.7}\" lon=\"{lon:.7}\"/>"
+            );
         }
         2 => nodes.push_str("  <node id=\"2\" lat=\"43.4869153\" lon=\"-83.4764083\"/>\n"),
         _ => {}
@@ -96,7 +105,11 @@ fn osm(c: &Case) -> String {
     let (ring, mut t4) = if c.roundabout {
         (
             vec![20, 21, 22, 20],
-            format!("{}{}", tag("highway", "primary"), tag("junction", "roundabout")),
+            format!(
+                "{}{}",
+                tag("highway", "primary"),
+                tag("junction", "roundabout")
+            ),
         )
     } else {
         (vec![20, 21, 22, 3], tag("highway", "primary"))

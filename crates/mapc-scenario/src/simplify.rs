@@ -3,10 +3,10 @@
 //! internal length of a junction that remains (a merge) is not counted, that of a removed joint is part of the
 //! joined road.
 
+use crate::transform::pick_route::describe_junction;
 use crate::transform::{
     self, Corridor, CorridorRoles, SimplifyOptions, StepReport, TransformError,
 };
-use crate::transform::pick_route::describe_junction;
 use mapc_graph::{JunctionId, LaneGraph, LookupError, RoadId, Source, SourceFormat};
 use serde::Serialize;
 
@@ -123,7 +123,9 @@ pub fn check_via(g: &LaneGraph, roles: &CorridorRoles, query: &str) -> Result<()
                 )))
             }
         }
-        Err(e) => Err(not_honoured(format!("the corridor has no such point ({e})"))),
+        Err(e) => Err(not_honoured(format!(
+            "the corridor has no such point ({e})"
+        ))),
     }
 }
 
