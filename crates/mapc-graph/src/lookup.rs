@@ -12,7 +12,7 @@ pub enum LookupError {
     NoRoad(String),
     /// The junction was one in an earlier stage, and a transformation joined it into a road here.
     #[error(
-        "`{query}` is no longer a junction here: it had one road in and one out, and `join_chains` made it part of road {road}"
+        "`{query}` is no longer a junction here: `join_chains` made it part of road {road} (it only joined one road to the next)"
     )]
     JoinedInto { query: String, road: String },
     #[error("`{query}` names {count} junctions ({examples}); use a mapc id")]

@@ -97,11 +97,9 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                             current_depth = depth;
                         }
                     }
-                    "relation" => {
-                        if !empty {
-                            relation = Some((id_of(&element, at)?, Vec::new(), false));
-                            current_depth = depth;
-                        }
+                    "relation" if !empty => {
+                        relation = Some((id_of(&element, at)?, Vec::new(), false));
+                        current_depth = depth;
                     }
                     "member" => {
                         if let Some((_, members, _)) = relation.as_mut() {

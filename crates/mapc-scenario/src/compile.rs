@@ -14,52 +14,50 @@ use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
 /// What can go wrong compiling a scenario from files; every message names the file or the argument at fault.
+/// The inner error is part of the message (not a `source`), so that printing the error chain does not repeat it.
 #[derive(Debug, thiserror::Error)]
 pub enum CompileError {
-    #[error("cannot read map {path}: {source}")]
+    #[error("cannot read map {path}: {error}")]
     Map {
         path: PathBuf,
-        source: mapc_import::ImportError,
+        error: mapc_import::ImportError,
     },
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Transform {
         path: PathBuf,
-        source: TransformError,
+        error: TransformError,
     },
-    #[error("--match {arg}: {source}")]
-    Source { arg: String, source: ScenarioError },
-    #[error("--match {arg}: {source}")]
-    SourceShape { arg: String, source: TransformError },
+    #[error("--match {arg}: {error}")]
+    Source { arg: String, error: ScenarioError },
+    #[error("--match {arg}: {error}")]
+    SourceShape { arg: String, error: TransformError },
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Graph {
         path: PathBuf,
-        source: mapc_graph::GraphFileError,
+        error: mapc_graph::GraphFileError,
     },
     #[error("{0}")]
     Demand(String),
-    #[error("the written scenario {path} does not load back: {source}")]
-    ReadBack {
-        path: PathBuf,
-        source: ScenarioError,
-    },
+    #[error("the written scenario {path} does not load back: {error}")]
+    ReadBack { path: PathBuf, error: ScenarioError },
 }
 
 /// A map or graph file, with the importer's defaults.
 pub fn load_map(path: &Path) -> Result<LaneGraph, CompileError> {
-    mapc_import::load_any(path).map_err(|source| CompileError::Map {
+    mapc_import::load_any(path).map_err(|error| CompileError::Map {
         path: path.to_path_buf(),
-        source,
+        error,
     })
 }
 
 /// A map file simplified to a corridor.
 pub fn simplify_map(map: &Path, options: &SimplifyOptions) -> Result<Simplified, CompileError> {
     let raw = load_map(map)?;
-    simplify(&raw, options).map_err(|source| CompileError::Transform {
+    simplify(&raw, options).map_err(|error| CompileError::Transform {
         path: map.to_path_buf(),
-        source,
+        error,
     })
 }
 
@@ -108,9 +106,9 @@ pub fn corridor_of(
     }
     simplify(&g, &opts)
         .map(|s| s.graph)
-        .map_err(|source| CompileError::Transform {
+        .map_err(|error| CompileError::Transform {
             path: map.to_path_buf(),
-            source,
+            error,
         })
 }
 
@@ -149,15 +147,15 @@ pub fn write_window(
     }
     let resolved = ResolvedScenario::load(source).map_err(|e| CompileError::Source {
         arg: source.to_string(),
-        source: e,
+        error: e,
     })?;
-    let transform = |source: TransformError| CompileError::Transform {
+    let transform = |error: TransformError| CompileError::Transform {
         path: map.to_path_buf(),
-        source,
+        error,
     };
     let shape = SourceShape::of(&resolved).map_err(|e| CompileError::SourceShape {
         arg: source.to_string(),
-        source: e,
+        error: e,
     })?;
     let cut = cut_window(corridor, junction, &shape).map_err(transform)?;
     let name = output
@@ -172,15 +170,15 @@ pub fn write_window(
         window_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
     cut.graph
         .save(&graph)
-        .map_err(|source| CompileError::Graph {
+        .map_err(|error| CompileError::Graph {
             path: graph.clone(),
-            source,
+            error,
         })?;
     scenario.save(output)?;
-    ResolvedScenario::load(&output.display().to_string()).map_err(|source| {
+    ResolvedScenario::load(&output.display().to_string()).map_err(|error| {
         CompileError::ReadBack {
             path: output.to_path_buf(),
-            source,
+            error,
         }
     })?;
     Ok(WrittenWindow {
