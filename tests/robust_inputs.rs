@@ -216,6 +216,22 @@ fn a_joined_junction_is_named_and_a_via_off_the_corridor_is_refused() {
         ],
         &[&format!("`{joint}` is no longer a junction"), &road],
     );
+    // --via points the corridor cannot pass in that order: refused, nothing written
+    let never = dir.join("never.graph.json");
+    refused(
+        &[
+            "simplify",
+            "maps/i696.osm",
+            "--via",
+            "osm-way:8708084",
+            "--via",
+            "osm-way:59440544",
+            "-o",
+            s(&never),
+        ],
+        &["--via"],
+    );
+    assert!(!never.exists());
     // a --via the corridor passes through a joined junction is honoured
     assert_success(&run_mapc(&[
         "simplify",

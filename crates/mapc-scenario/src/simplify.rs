@@ -294,6 +294,25 @@ mod tests {
     }
 
     #[test]
+    fn a_via_point_off_the_result_is_refused() {
+        let s = simplify(&highway(), &SimplifyOptions::default()).unwrap();
+        let g = &s.graph;
+        // on the main road: its first junction, and a joint joined into a main road (J1 between R0 and R1)
+        let start = g.road(s.roles.main[0]).unwrap().from;
+        check_via(g, &s.roles, &start.to_string()).unwrap();
+        assert!(g.junction(JunctionId(1)).is_none());
+        check_via(g, &s.roles, "J1").unwrap();
+        check_via(g, &s.roles, "R1").unwrap();
+        // off it: where the merging road starts, the merging road itself, a road the corridor dropped
+        let feeder = s.roles.feeders[0][0];
+        let feeder_start = g.road(feeder).unwrap().from.to_string();
+        for off in [feeder_start.as_str(), &feeder.to_string(), "R6"] {
+            let e = check_via(g, &s.roles, off).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("--via `{off}`")), "{e}");
+        }
+    }
+
+    #[test]
     fn feeder_length_trims_the_merging_road() {
         let opts = SimplifyOptions {
             feeder_length_m: Some(120.0),
