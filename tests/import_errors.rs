@@ -255,3 +255,23 @@ fn a_sumo_lane_of_speed_zero_is_an_error_naming_the_lane() {
         &[&format!("line {line}"), "lane `left_0` has speed 0"],
     );
 }
+
+#[test]
+fn a_duplicate_sumo_junction_id_is_an_error() {
+    let text = String::from_utf8(map("simple_merge.net.xml")).unwrap();
+    let junction = "<junction id=\"bottom\"";
+    // a copy of `center` goes in before `bottom`: the original `center`, a line further down, is the second one
+    let line = text[..text.find("<junction id=\"center\"").unwrap()]
+        .lines()
+        .count()
+        + 1;
+    let bad = text.replacen(
+        junction,
+        "<junction id=\"center\" type=\"dead_end\" x=\"0\" y=\"0\" incLanes=\"\"/>\n    <junction id=\"bottom\"",
+        1,
+    );
+    fails_with(
+        &scratch("dup_junction.net.xml", bad.as_bytes()),
+        &[&format!("line {line}"), "`center`", "duplicate id"],
+    );
+}

@@ -137,6 +137,8 @@ impl Element<'_> {
 struct Net {
     /// What the parser noticed, as (warning kind, example), counted into the graph's warnings.
     notes: Vec<(&'static str, String)>,
+    /// Junction ids seen, to refuse a second junction of the same id.
+    junction_ids: std::collections::HashSet<String>,
     location: Option<([f64; 2], String)>,
     edges: Vec<SumoEdge>,
     junctions: Vec<SumoJunction>,
@@ -273,6 +275,13 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                         net.edges.last_mut().expect("in an edge").lanes.push(lane);
                     }
                     (2, "junction") => {
+                        let id = el.req("id")?;
+                        // a second junction of the same id would silently move the first one's roads
+                        if !net.junction_ids.insert(id.to_string()) {
+                            return Err(el.err(format!(
+                                "a second junction with the id `{id}` (duplicate id)"
+                            )));
+                        }
                         let j = SumoJunction {
                             id: el.req("id")?.to_string(),
                             pos: [el.req_num("x")?, el.req_num("y")?],
