@@ -296,3 +296,34 @@ fn footway_and_service_junctions_are_no_merges_unless_asked() {
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Every merge `mapc junctions` lists on a raw map is a merge `mapc window` can cut at, under the same id: the
+/// corridor it builds keeps that junction a merge (at 62354802 the longest route comes in on the ramp, and the
+/// I-696 road in would be a road that leaves and rejoins it; the route through the I-696 road is taken instead).
+#[test]
+fn every_listed_merge_windows_under_its_id() {
+    let dir = scratch_dir("every-merge");
+    for (map, only) in [
+        ("maps/i696_onelane_proxy.net.xml", None),
+        ("maps/i696.osm", Some("osm:62354802")),
+    ] {
+        let listing = json_of(&["junctions", map, "--kind", "merge", "--json"]);
+        for j in listing.as_array().unwrap() {
+            if only.is_some_and(|p| j["provenance"] != p) {
+                continue;
+            }
+            let id = j["id"].as_str().unwrap();
+            let w = json_of(&[
+                "window",
+                map,
+                "--junction",
+                id,
+                "-o",
+                s(&dir.join(format!("{id}.toml"))),
+                "--json",
+            ]);
+            assert_eq!(w["junction"], id, "{map} {id}: {w}");
+        }
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}

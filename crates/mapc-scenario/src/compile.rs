@@ -89,8 +89,12 @@ pub fn corridor_report(s: &Simplified, map: &Path, output: &Path) -> Value {
     report
 }
 
-/// The corridor of `map`: the graph itself when it is one, else the map simplified with `options` (without
-/// `via`, along the longest route through `junction`).
+/// The corridor of `map`: the graph itself when it is one, else the map simplified with `options`. Without
+/// `via`, the corridor must keep `junction` a merge (the window is cut there): the route through `junction` alone
+/// is tried first, then the routes through each road into it (higher class, then longer, first), since the longest
+/// route through a merge may come in on the merging road and leave the other road in as one that leaves and
+/// rejoins it, which is no merge. The first corridor where `junction` is a merge is taken; failing that, the first
+/// one, whose window cut then says why.
 pub fn corridor_of(
     map: &Path,
     junction: &str,
@@ -100,16 +104,55 @@ pub fn corridor_of(
     if CorridorRoles::of(&g).is_ok() {
         return Ok(g);
     }
-    let mut opts = options.clone();
-    if opts.via.is_empty() {
-        opts.via = vec![junction.to_string()];
+    let transform = |error| CompileError::Transform {
+        path: map.to_path_buf(),
+        error,
+    };
+    if !options.via.is_empty() {
+        return simplify(&g, options).map(|s| s.graph).map_err(transform);
     }
-    simplify(&g, &opts)
-        .map(|s| s.graph)
-        .map_err(|error| CompileError::Transform {
-            path: map.to_path_buf(),
-            error,
-        })
+    let mut attempts = vec![junction.to_string()];
+    if let Ok(j) = g.find_junction(junction) {
+        let mut incoming: Vec<&mapc_graph::Road> = g
+            .junction(j)
+            .map(|x| x.incoming.iter().filter_map(|r| g.road(*r)).collect())
+            .unwrap_or_default();
+        incoming.sort_by(|a, b| {
+            b.priority
+                .cmp(&a.priority)
+                .then(b.length_m.total_cmp(&a.length_m))
+                .then(a.id.cmp(&b.id))
+        });
+        attempts.extend(incoming.iter().map(|r| r.id.to_string()));
+        let mut first = None;
+        for via in attempts {
+            let opts = SimplifyOptions {
+                via: vec![via],
+                ..options.clone()
+            };
+            match simplify(&g, &opts) {
+                Ok(s) => {
+                    let merge = j.to_string();
+                    if corridor_merges(&s.graph, &s.roles)
+                        .iter()
+                        .any(|m| m.junction == merge)
+                    {
+                        return Ok(s.graph);
+                    }
+                    first.get_or_insert(Ok(s.graph));
+                }
+                Err(e) => {
+                    first.get_or_insert(Err(e));
+                }
+            }
+        }
+        return first.expect("one attempt at least").map_err(transform);
+    }
+    let opts = SimplifyOptions {
+        via: attempts,
+        ..options.clone()
+    };
+    simplify(&g, &opts).map(|s| s.graph).map_err(transform)
 }
 
 /// A window cut from a corridor and written: the scenario file and its cut corridor graph beside it.
