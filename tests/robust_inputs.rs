@@ -112,6 +112,19 @@ fn a_scenario_and_a_policy_read_back_whatever_their_name() {
         text.contains("n = 1, no CI") && !text.contains('±'),
         "{text}"
     );
+    // a graph or a policy given as a scenario is named for what it is
+    refused(
+        &["sim", "--scenario", "scenarios/i696_window.graph.json"],
+        &["i696_window.graph.json", "is a mapc graph, not a scenario"],
+    );
+    refused(
+        &["sim", "--scenario", s(&policy)],
+        &["flow.bin", "is a mapc policy, not a scenario"],
+    );
+    refused(
+        &["eval", "--policy", s(&scenario), "--seeds", "1"],
+        &["simple_merge.json", "is a mapc scenario, not a policy"],
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 
