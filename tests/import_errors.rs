@@ -178,3 +178,100 @@ fn bad_options_are_errors_too() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("osm-way:1"));
 }
+
+#[test]
+fn a_duplicate_node_id_is_an_error_unless_it_is_the_same_node() {
+    let text = String::from_utf8(map("i696.osm")).unwrap();
+    let node = "  <node id=\"26913188\" lat=\"42.4869153\" lon=\"-83.4764083\"/>\n";
+    assert!(text.contains(node));
+    // The same id 100 km away: one of the two would stretch roads by as much.
+    let moved = text.replacen(
+        node,
+        &format!("{node}  <node id=\"26913188\" lat=\"43.4869153\" lon=\"-83.4764083\"/>\n"),
+        1,
+    );
+    let line = text[..text.find(node).unwrap()].lines().count() + 2;
+    fails_with(
+        &scratch("dup_node.osm", moved.as_bytes()),
+        &[
+            &format!("line {line}"),
+            "node 26913188 appears twice",
+            "duplicate id",
+        ],
+    );
+    // The very same node twice is read, and counted.
+    let twice = text.replacen(node, &format!("{node}{node}"), 1);
+    let file = scratch("same_node_twice.osm", twice.as_bytes());
+    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .args(["import", file.to_str().unwrap(), "--json", "-o"])
+        .arg(file.with_extension("graph.json"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["warnings"]["duplicate_node"], 1, "{summary}");
+}
+
+#[test]
+fn a_duplicate_way_id_with_other_nodes_is_an_error() {
+    let text = String::from_utf8(map("i696.osm")).unwrap();
+    // a motorway way (ways of other classes are not read, so not compared)
+    let tag = text.find("<tag k=\"highway\" v=\"motorway\"/>").unwrap();
+    let at = text[..tag].rfind("<way id=\"").unwrap();
+    let end = at + text[at..].find("</way>").unwrap() + "</way>".len();
+    let way = &text[at..end];
+    let id: String = way["<way id=\"".len()..]
+        .chars()
+        .take_while(|c| c.is_ascii_digit())
+        .collect();
+    // the same way again, its node list reversed
+    let mut lines: Vec<&str> = way.lines().collect();
+    let nds: Vec<usize> = (0..lines.len())
+        .filter(|&i| lines[i].contains("<nd "))
+        .collect();
+    let (first, last) = (nds[0], *nds.last().unwrap());
+    lines[first..=last].reverse();
+    let twin = lines.join("\n");
+    let bad = text.replacen(way, &format!("{way}\n  {twin}"), 1);
+    let stderr = fails_with(
+        &scratch("dup_way.osm", bad.as_bytes()),
+        &[&format!("way {id} appears twice"), "duplicate id", "line "],
+    );
+    assert!(stderr.contains(&format!("<way id=\"{id}\">")), "{stderr}");
+}
+
+#[test]
+fn a_sumo_lane_of_speed_zero_is_an_error_naming_the_lane() {
+    let text = String::from_utf8(map("simple_merge.net.xml")).unwrap();
+    let lane = "<lane id=\"left_0\" index=\"0\" speed=\"30.00\"";
+    let line = text[..text.find(lane).unwrap()].lines().count();
+    let bad = text.replacen(lane, "<lane id=\"left_0\" index=\"0\" speed=\"0.00\"", 1);
+    fails_with(
+        &scratch("speed0.net.xml", bad.as_bytes()),
+        &[&format!("line {line}"), "lane `left_0` has speed 0"],
+    );
+}
+
+#[test]
+fn a_duplicate_sumo_junction_id_is_an_error() {
+    let text = String::from_utf8(map("simple_merge.net.xml")).unwrap();
+    let junction = "<junction id=\"bottom\"";
+    // a copy of `center` goes in before `bottom`: the original `center`, a line further down, is the second one
+    let line = text[..text.find("<junction id=\"center\"").unwrap()]
+        .lines()
+        .count()
+        + 1;
+    let bad = text.replacen(
+        junction,
+        "<junction id=\"center\" type=\"dead_end\" x=\"0\" y=\"0\" incLanes=\"\"/>\n    <junction id=\"bottom\"",
+        1,
+    );
+    fails_with(
+        &scratch("dup_junction.net.xml", bad.as_bytes()),
+        &[&format!("line {line}"), "`center`", "duplicate id"],
+    );
+}

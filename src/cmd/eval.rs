@@ -93,14 +93,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         report.policy, report.scenario, report.seeds, report.actions
     );
     let row = |name: &str, f: &FigureSet| {
+        // one seed has a mean but no interval: say so rather than print "± 0.00"
+        let pm = |mean: f64, ci: f64, width: usize, digits: usize| {
+            if f.has_ci() {
+                format!("{mean:w$.d$} ± {ci:5.d$}", w = width, d = digits)
+            } else {
+                format!("{mean:w$.d$} (n = 1, no CI)", w = width, d = digits)
+            }
+        };
         println!(
-            "  {name:<8} outflow {:8.2} ± {:5.2} veh/h   inflow {:8.2} ± {:5.2} veh/h   speed {:6.2} ± {:4.2} m/s",
-            f.outflow.mean,
-            f.outflow.ci95,
-            f.inflow.mean,
-            f.inflow.ci95,
-            f.speed.mean,
-            f.speed.ci95
+            "  {name:<8} outflow {} veh/h   inflow {} veh/h   speed {} m/s",
+            pm(f.outflow.mean, f.outflow.ci95, 8, 2),
+            pm(f.inflow.mean, f.inflow.ci95, 8, 2),
+            pm(f.speed.mean, f.speed.ci95, 6, 2)
         )
     };
     row("policy", &figs);
@@ -111,22 +116,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 format!("t = {:.2}, p = {:.2e}", t.t, t.p_value)
             })
         };
-        println!(
-            "  outflow {:+.1}% vs human ({}; 95% CIs {}); Welch outflow {}, speed {}",
-            c.outflow_change_pct,
-            if c.outflow_change_pct >= 0.0 {
-                "higher"
-            } else {
-                "lower"
-            },
-            if c.outflow_ci_disjoint {
-                "disjoint"
-            } else {
-                "overlap"
-            },
-            p(&c.outflow),
-            p(&c.speed)
-        );
+        let direction = if c.outflow_change_pct >= 0.0 {
+            "higher"
+        } else {
+            "lower"
+        };
+        if figs.has_ci() && b.has_ci() {
+            println!(
+                "  outflow {:+.1}% vs human ({direction}; 95% CIs {}); Welch outflow {}, speed {}",
+                c.outflow_change_pct,
+                if c.outflow_ci_disjoint {
+                    "disjoint"
+                } else {
+                    "overlap"
+                },
+                p(&c.outflow),
+                p(&c.speed)
+            );
+        } else {
+            println!(
+                "  outflow {:+.1}% vs human ({direction}; n = 1, no CI and no Welch test: give --seeds 2 or more)",
+                c.outflow_change_pct
+            );
+        }
     }
     if let Some(p) = &args.trace {
         println!(

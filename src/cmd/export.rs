@@ -42,15 +42,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
 }
 
-fn is_scenario(arg: &str) -> bool {
-    let path = Path::new(arg);
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
-        || (!path.exists() && mapc_scenario::Scenario::builtin(arg).is_some())
-}
-
 fn sumo(map: &str, dir: &Path, json: bool) -> anyhow::Result<()> {
-    let summary = if is_scenario(map) {
+    let summary = if super::render::names_scenario(map) {
         let resolved = mapc_scenario::ResolvedScenario::load(map)?;
         mapc_sumo::export_scenario(&resolved, dir)?
     } else {

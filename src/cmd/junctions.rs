@@ -41,6 +41,10 @@ pub struct Args {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Count footways, paths, cycleways and service roads too. By default a junction's kind is that among the
+    /// other roads (a footway touching a motorway makes no merge), and those roads are not listed.
+    #[arg(long)]
+    pub minor_roads: bool,
 }
 
 #[derive(Serialize)]
@@ -108,20 +112,40 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let graph = mapc_import::load_any_with(&args.map, &options)?;
     let want: Option<JunctionKind> = args.kind.map(Into::into);
+    let counted = |ids: &[RoadId]| -> Vec<RoadId> {
+        ids.iter()
+            .copied()
+            .filter(|r| {
+                args.minor_roads
+                    || graph
+                        .road(*r)
+                        .is_some_and(|r| !mapc_graph::is_minor_class(&r.class))
+            })
+            .collect()
+    };
     let rows: Vec<JunctionRow> = graph
         .junctions
         .iter()
-        .filter(|j| want.is_none_or(|k| j.kind == k))
-        .map(|j| {
+        .filter_map(|j| {
+            let (incoming, outgoing) = (counted(&j.incoming), counted(&j.outgoing));
+            // a junction of footways or service roads only is none of the main roads' junctions
+            if incoming.is_empty() && outgoing.is_empty() {
+                return None;
+            }
+            let kind = JunctionKind::classify(incoming.len(), outgoing.len());
+            want.is_none_or(|k| kind == k)
+                .then_some((j, kind, incoming, outgoing))
+        })
+        .map(|(j, kind, incoming, outgoing)| {
             let lonlat = graph.junction_lonlat(j.id);
             JunctionRow {
                 id: j.id.to_string(),
-                kind: j.kind,
+                kind,
                 provenance: provenance_text(j),
                 lat: lonlat.map(|p| (p[1] * 1e7).round() / 1e7),
                 lon: lonlat.map(|p| (p[0] * 1e7).round() / 1e7),
-                incoming: j.incoming.iter().map(|&r| road_row(&graph, r)).collect(),
-                outgoing: j.outgoing.iter().map(|&r| road_row(&graph, r)).collect(),
+                incoming: incoming.iter().map(|&r| road_row(&graph, r)).collect(),
+                outgoing: outgoing.iter().map(|&r| road_row(&graph, r)).collect(),
             }
         })
         .collect();

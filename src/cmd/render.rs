@@ -41,12 +41,20 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Whether a map argument names a scenario (a `.toml` file or a built-in scenario name) rather than a map file.
+/// Whether a map argument names a scenario rather than a map or graph: a file whose content is a scenario
+/// (whatever its name; a `.toml` file that is not recognised is one too, so that its TOML error is reported), or
+/// a built-in scenario name (simple_merge).
 pub fn names_scenario(arg: &str) -> bool {
     let path = Path::new(arg);
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
-        || (!path.exists() && mapc_scenario::Scenario::builtin(arg).is_some())
+    if path.is_file() {
+        return match mapc_graph::filekind::sniff_path(path) {
+            Some(kind) => kind == mapc_graph::MapcFile::Scenario,
+            None => path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("toml")),
+        };
+    }
+    !path.exists() && mapc_scenario::Scenario::builtin(arg).is_some()
 }
 
 /// Any map argument as a lane graph: a file mapc reads, a scenario file, or a built-in scenario name.

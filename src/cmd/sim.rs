@@ -82,10 +82,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             rs.origin, s.seeds, wall_s
         );
         let row = |name: &str, m: &MeanCi, unit: &str| {
-            println!(
-                "  {name:<12} {:>10.2} ± {:<7.2} {unit}  (sd {:.2})",
-                m.mean, m.ci95, m.std
-            );
+            // one seed has a mean but neither an interval nor a spread
+            if m.n < 2 {
+                println!("  {name:<12} {:>10.2} {unit}  (n = 1, no CI)", m.mean);
+            } else {
+                println!(
+                    "  {name:<12} {:>10.2} ± {:<7.2} {unit}  (sd {:.2})",
+                    m.mean, m.ci95, m.std
+                );
+            }
         };
         row("outflow", &s.outflow, "veh/h");
         row("inflow", &s.inflow, "veh/h");

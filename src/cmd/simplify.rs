@@ -25,6 +25,10 @@ pub struct RouteArgs {
         default_value = "motorway,motorway_link,trunk,trunk_link"
     )]
     pub classes: Vec<String>,
+    /// Keep footways, paths, cycleways and service roads that meet the main road as merging roads (by default
+    /// they are dropped, and a junction only they join is no merge).
+    #[arg(long)]
+    pub minor_roads: bool,
 }
 
 impl RouteArgs {
@@ -34,6 +38,7 @@ impl RouteArgs {
             classes: self.classes.clone(),
             feeder_length_m: self.feeder_length,
             keep_exits: self.keep_exits,
+            minor_roads: self.minor_roads,
         }
     }
 }

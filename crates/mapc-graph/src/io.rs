@@ -18,7 +18,7 @@ pub enum GraphFileError {
         column: usize,
         message: String,
     },
-    #[error("{path}: not a mapc graph file (format is `{found}`, expected `{FORMAT_NAME}`)")]
+    #[error("{path}: not a mapc graph file ({found}, expected `{FORMAT_NAME}`)")]
     NotAGraph { path: PathBuf, found: String },
     #[error(
         "{path}: graph file version {found}, but this mapc reads version {FORMAT_VERSION}; re-run `mapc import` on the original map"
@@ -98,9 +98,15 @@ impl LaneGraph {
         let header: Header = serde_json::from_str(text).map_err(parse_err)?;
         let format = header.format.unwrap_or_default();
         if format != FORMAT_NAME {
+            // Say what the file is when it is another of mapc's own files.
+            let found = match crate::filekind::sniff(text.as_bytes()) {
+                Some(kind) => format!("it is {}", kind.name()),
+                None if format.is_empty() => "it has no `format` field".to_string(),
+                None => format!("format is `{format}`"),
+            };
             return Err(GraphFileError::NotAGraph {
                 path: path.to_path_buf(),
-                found: format,
+                found,
             });
         }
         let version = header.version.unwrap_or(0);

@@ -12,8 +12,10 @@
 //! - **local frame**: metres east and north in UTM plus an offset, as SUMO's netconvert does ([`Projection`]).
 //!
 //! A graph is saved as versioned JSON (`*.graph.json`, [`FORMAT_NAME`] version [`FORMAT_VERSION`]); loading a file
-//! of another version or format is an error that says so.
+//! of another version or format is an error that says so. Graphs, scenarios and policies are recognised by their
+//! content, whatever their file name ([`filekind`]).
 
+pub mod filekind;
 pub mod ids;
 pub mod index;
 pub mod io;
@@ -23,6 +25,7 @@ pub mod projection;
 pub mod topology;
 pub mod validate;
 
+pub use filekind::MapcFile;
 pub use ids::{JunctionId, RoadId};
 pub use index::RoadIndex;
 pub use io::{GraphFileError, write_atomically, write_atomically_with};

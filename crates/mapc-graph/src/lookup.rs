@@ -10,6 +10,11 @@ pub enum LookupError {
     NoJunction(String),
     #[error("no road `{0}` in this graph")]
     NoRoad(String),
+    /// The junction was one in an earlier stage, and a transformation joined it into a road here.
+    #[error(
+        "`{query}` is no longer a junction here: `join_chains` made it part of road {road} (it only joined one road to the next)"
+    )]
+    JoinedInto { query: String, road: String },
     #[error("`{query}` names {count} junctions ({examples}); use a mapc id")]
     AmbiguousJunction {
         query: String,
@@ -68,7 +73,7 @@ impl LaneGraph {
                 .collect()
         };
         match matches.as_slice() {
-            [] => Err(LookupError::NoJunction(query.to_string())),
+            [] => Err(self.joined_junction(query)),
             [one] => Ok(*one),
             many => Err(LookupError::AmbiguousJunction {
                 query: query.to_string(),
@@ -106,9 +111,47 @@ impl LaneGraph {
                 .collect()
         };
         if found.is_empty() {
-            return Err(LookupError::NoRoad(query.to_string()));
+            // A road an earlier stage knew under this mapc id, joined onto another since.
+            let joined: Vec<&Road> = self
+                .roads
+                .iter()
+                .filter(|r| r.provenance.joined.iter().any(|id| id == query))
+                .collect();
+            if joined.is_empty() {
+                return Err(LookupError::NoRoad(query.to_string()));
+            }
+            return Ok(order_along_travel(&joined));
         }
         Ok(order_along_travel(&found))
+    }
+
+    /// Why `query` names no junction: a road that absorbed it (its mapc id, OSM node or SUMO id), or plainly none.
+    fn joined_junction(&self, query: &str) -> LookupError {
+        let node = query
+            .strip_prefix("osm:")
+            .and_then(|n| n.parse::<i64>().ok());
+        let absorbed = |r: &&Road| {
+            let p = &r.provenance;
+            if p.joined.iter().any(|id| id == query) {
+                return true;
+            }
+            // a joined road keeps the joint's provenance; only then is an interior OSM node or SUMO id a joint
+            !p.joined.is_empty()
+                && (node.is_some_and(|n| {
+                    p.osm_nodes.contains(&n)
+                        && !self
+                            .junctions
+                            .iter()
+                            .any(|j| j.provenance.osm_nodes.contains(&n))
+                }) || p.sumo_ids.iter().any(|s| s == query))
+        };
+        match self.roads.iter().find(absorbed) {
+            Some(r) => LookupError::JoinedInto {
+                query: query.to_string(),
+                road: r.id.to_string(),
+            },
+            None => LookupError::NoJunction(query.to_string()),
+        }
     }
 }
 

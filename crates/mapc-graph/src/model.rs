@@ -25,6 +25,10 @@ pub struct Provenance {
     /// A generator or transformation step that made or changed the element (`simple_merge`, `cut_at`, ...).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub made_by: Vec<String>,
+    /// The mapc ids of the junctions and roads a transformation joined into this road (`J7`, `R12`): the ids the
+    /// source map's graph gave them stay findable in every later stage.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joined: Vec<String>,
 }
 
 impl Provenance {
@@ -62,6 +66,7 @@ impl Provenance {
             osm_nodes: union(&self.osm_nodes, &other.osm_nodes),
             sumo_ids: union(&self.sumo_ids, &other.sumo_ids),
             made_by: union(&self.made_by, &other.made_by),
+            joined: union(&self.joined, &other.joined),
         }
     }
 }
@@ -82,6 +87,39 @@ pub enum JunctionKind {
     Sink,
     /// Anything else (intersections, interchanges with more legs).
     Complex,
+}
+
+/// Road classes that carry no motor traffic or only access traffic (OSM `highway` values; a SUMO type
+/// `highway.X` counts as `X`). They are roads of the graph, but a junction where one of them meets a motorway is
+/// not a motorway merge: junction kinds "among the main classes" and the corridor's merging roads leave them out
+/// unless asked.
+pub const MINOR_CLASSES: [&str; 14] = [
+    "footway",
+    "path",
+    "cycleway",
+    "pedestrian",
+    "steps",
+    "bridleway",
+    "track",
+    "service",
+    "corridor",
+    "sidewalk",
+    "crossing",
+    "platform",
+    "elevator",
+    "busway",
+];
+
+/// Whether a road class is one of [`MINOR_CLASSES`]; SUMO's rail and ship types (`railway.*`, `ship`) count too.
+pub fn is_minor_class(class: &str) -> bool {
+    if class.starts_with("railway.") || class.starts_with("ship") {
+        return true;
+    }
+    let c = class.strip_prefix("highway.").unwrap_or(class);
+    // SUMO joins types of stacked ways with `|` (`highway.footway|highway.steps`): minor when every part is.
+    c.split('|')
+        .map(|p| p.strip_prefix("highway.").unwrap_or(p))
+        .all(|p| MINOR_CLASSES.contains(&p))
 }
 
 impl JunctionKind {

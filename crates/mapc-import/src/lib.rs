@@ -13,10 +13,16 @@
 //!   (`Connection::via_length_m`, `via_speed_mps`), never a road.
 //! - **major / minor**: right of way. OSM: the higher class, then more lanes, then the straighter road in is major.
 //!   SUMO: the connection's state (`M`/`m`) or, without one, the junction's request table. [`MajorRoad`] overrides.
+//! - **duplicate element**: a node or kept way whose id appears twice. The same element again is a counted
+//!   warning (`duplicate_node`, `duplicate_way`); another one under the same id is an error naming the id, since
+//!   either choice would silently change roads.
+//! - **dropped way**: a kept way that cannot be driven as a line (`area=yes`, `oneway=reversible|alternating`);
+//!   counted by kind.
 //!
 //! Entry points: [`import_path`] (chosen by file name, then by content), [`import_bytes`] (in memory) and
-//! [`load_any`] (a saved `*.graph.json` or any map). Ids are deterministic: junctions by OSM node id or SUMO file
-//! order, roads by (way id, piece, forward first) or SUMO file order.
+//! [`load_any`] (a graph mapc wrote, recognised by its content whatever its name, or any map). Ids are
+//! deterministic: junctions by OSM node id or SUMO file order, roads by (way id, piece, forward first) or SUMO file
+//! order.
 
 // `!(x > 0.0)` and the like reject NaN on purpose; `partial_cmp` would hide that.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -32,7 +38,7 @@ mod xml;
 pub use error::ImportError;
 pub use summary::Summary;
 
-use mapc_graph::{LaneGraph, RightOfWay, Source, SourceFormat};
+use mapc_graph::{LaneGraph, MapcFile, RightOfWay, Source, SourceFormat, filekind};
 use std::io::BufReader;
 use std::path::Path;
 
@@ -113,18 +119,17 @@ impl MapFormat {
         }
     }
 
-    /// By the first bytes: a PBF starts with a length and `OSMHeader`; XML roots `<osm` and `<net`.
+    /// By the first bytes: a PBF starts with a length and `OSMHeader`; XML by its root element (`<osm>`, `<net>`),
+    /// found past the declaration and comments (netconvert's header comment names `<osm-files>`, so a mere
+    /// "contains `<osm`" would misread a SUMO net).
     pub fn sniff(head: &[u8]) -> Option<MapFormat> {
         if head.len() >= 13 && &head[4..7] == b"\x0a\x09O" && head[6..].starts_with(b"OSMHeader") {
             return Some(MapFormat::OsmPbf);
         }
-        let text = String::from_utf8_lossy(head);
-        if text.contains("<osm") {
-            Some(MapFormat::OsmXml)
-        } else if text.contains("<net") {
-            Some(MapFormat::SumoNet)
-        } else {
-            None
+        match xml_root(head)? {
+            "osm" => Some(MapFormat::OsmXml),
+            "net" => Some(MapFormat::SumoNet),
+            _ => None,
         }
     }
 
@@ -137,7 +142,32 @@ impl MapFormat {
     }
 }
 
-/// The format of a map file: by its name, else by its first bytes.
+/// The name of the root element of the XML that `head` starts, skipping the declaration, comments, processing
+/// instructions and a doctype; `None` when `head` is not XML or ends before the root.
+fn xml_root(head: &[u8]) -> Option<&str> {
+    let text = std::str::from_utf8(head).unwrap_or_else(|e| {
+        std::str::from_utf8(&head[..e.valid_up_to()]).expect("valid up to here")
+    });
+    let mut rest = text.trim_start_matches('\u{feff}');
+    loop {
+        rest = rest.trim_start();
+        if let Some(after) = rest.strip_prefix("<!--") {
+            rest = &after[after.find("-->")? + 3..];
+        } else if rest.starts_with("<?") || rest.starts_with("<!") {
+            rest = &rest[rest.find('>')? + 1..];
+        } else if let Some(after) = rest.strip_prefix('<') {
+            let end = after
+                .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
+                .unwrap_or(after.len());
+            return (end > 0).then(|| &after[..end]);
+        } else {
+            return None;
+        }
+    }
+}
+
+/// The format of a map file: by its name, else by its first bytes. A file mapc wrote for a later stage (a graph,
+/// a scenario, a policy) is recognised by its content and refused with what it is, whatever its name.
 pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
     let meta = std::fs::metadata(path).map_err(|e| ImportError::io(path, e))?;
     if meta.is_dir() {
@@ -151,17 +181,28 @@ pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
             path: path.to_path_buf(),
         });
     }
+    let head = filekind::read_head(path).map_err(|e| ImportError::io(path, e))?;
+    if let Some(kind) = filekind::sniff(&head) {
+        return Err(ImportError::unsupported(
+            path,
+            format!(
+                "is {}, not a map to import{}",
+                kind.name(),
+                if kind == MapcFile::Graph {
+                    " (every command that takes a map reads it as it is)"
+                } else {
+                    ""
+                }
+            ),
+        ));
+    }
     if let Some(f) = MapFormat::from_name(path) {
         return Ok(f);
     }
-    use std::io::Read;
-    let mut head = vec![0u8; 4096];
-    let mut file = std::fs::File::open(path).map_err(|e| ImportError::io(path, e))?;
-    let n = file.read(&mut head).map_err(|e| ImportError::io(path, e))?;
-    MapFormat::sniff(&head[..n]).ok_or_else(|| {
+    MapFormat::sniff(&head).ok_or_else(|| {
         ImportError::unsupported(
             path,
-            "not a map mapc reads (expected OSM XML .osm, OSM PBF .osm.pbf or SUMO .net.xml)",
+            "not a map mapc reads (expected OSM XML, OSM PBF or a SUMO net.xml, or a graph mapc wrote)",
         )
     })
 }
@@ -181,16 +222,15 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, Im
     };
     let graph = match format {
         MapFormat::OsmXml => {
-            let (ways, nodes) =
-                osm_xml::read(open, &options.highways).map_err(|e| located.error(e))?;
-            osm::build_graph(ways, &nodes, source, options)
+            let data = osm_xml::read(open, &options.highways).map_err(|e| located.error(e))?;
+            osm::build_graph(data, source, options)
                 .map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::OsmPbf => {
             let bytes = std::fs::read(path).map_err(|e| ImportError::io(path, e))?;
-            let (ways, nodes) =
+            let data =
                 osm_pbf::read(&bytes, &options.highways).map_err(|e| binary_error(path, e))?;
-            osm::build_graph(ways, &nodes, source, options)
+            osm::build_graph(data, source, options)
                 .map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::SumoNet => {
@@ -221,15 +261,15 @@ pub fn import_bytes(
     let located = Located::Bytes(path, bytes);
     let graph = match format {
         MapFormat::OsmXml => {
-            let (ways, nodes) =
+            let data =
                 osm_xml::read(|| Ok(bytes), &options.highways).map_err(|e| located.error(e))?;
-            osm::build_graph(ways, &nodes, source, options)
+            osm::build_graph(data, source, options)
                 .map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::OsmPbf => {
-            let (ways, nodes) =
+            let data =
                 osm_pbf::read(bytes, &options.highways).map_err(|e| binary_error(path, e))?;
-            osm::build_graph(ways, &nodes, source, options)
+            osm::build_graph(data, source, options)
                 .map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::SumoNet => sumo::read(bytes, source).map_err(|e| located.error(e))?,
@@ -302,19 +342,28 @@ pub fn apply_major_road(graph: &mut LaneGraph, m: &MajorRoad) -> Result<(), Stri
     Ok(())
 }
 
-/// A saved graph (`*.graph.json`, or any JSON file) or any map file, imported with default options.
+/// A graph mapc wrote (recognised by its content, whatever its name) or any map file, imported with default
+/// options.
 pub fn load_any(path: &Path) -> Result<LaneGraph, ImportError> {
     load_any_with(path, &ImportOptions::default())
 }
 
-/// [`load_any`] with import options for maps (ignored for graph files).
+/// [`load_any`] with import options for maps (ignored for graph files). Any JSON object goes to the graph
+/// loader, which names the format it found when it is not a graph.
 pub fn load_any_with(path: &Path, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    if name.ends_with(".json") {
-        return Ok(LaneGraph::load(path)?);
+    if path.is_file() {
+        let head = filekind::read_head(path).map_err(|e| ImportError::io(path, e))?;
+        match filekind::sniff(&head) {
+            Some(MapcFile::Graph) => return Ok(LaneGraph::load(path)?),
+            Some(other) => {
+                return Err(ImportError::unsupported(
+                    path,
+                    format!("is {}, not a map or a graph", other.name()),
+                ));
+            }
+            None if filekind::is_json_object(&head) => return Ok(LaneGraph::load(path)?),
+            None => {}
+        }
     }
     import_path(path, options)
 }

@@ -15,6 +15,11 @@ pub const OSM_LANE_WIDTH_M: f64 = 3.65;
 const MPH: f64 = 0.447_04;
 const KMH: f64 = 1.0 / 3.6;
 const KNOT: f64 = 0.514_444;
+/// A speed limit above this (300 km/h) is a mistake in the data, not a road.
+pub const MAX_PLAUSIBLE_SPEED_MPS: f64 = 300.0 / 3.6;
+/// Two consecutive nodes of a road further apart than this (10 km) are counted as `long_segment`: real highway
+/// geometry has a node every few hundred metres at most, so this is a misplaced node.
+pub const LONG_SEGMENT_M: f64 = 10_000.0;
 
 /// The tags of a way that the importer reads; everything else is dropped while streaming.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -30,6 +35,12 @@ pub struct WayTags {
     pub maxspeed_backward: Option<String>,
     pub name: Option<String>,
     pub ref_: Option<String>,
+    pub area: Option<String>,
+    /// `turn:lanes` (and per direction): one `|`-separated entry per lane, read for the lane count when `lanes`
+    /// is missing.
+    pub turn_lanes: Option<String>,
+    pub turn_lanes_forward: Option<String>,
+    pub turn_lanes_backward: Option<String>,
 }
 
 impl WayTags {
@@ -50,6 +61,10 @@ impl WayTags {
             "maxspeed:backward" => &mut self.maxspeed_backward,
             "name" => &mut self.name,
             "ref" => &mut self.ref_,
+            "area" => &mut self.area,
+            "turn:lanes" => &mut self.turn_lanes,
+            "turn:lanes:forward" => &mut self.turn_lanes_forward,
+            "turn:lanes:backward" => &mut self.turn_lanes_backward,
             _ => return false,
         };
         *slot = Some(v.to_string());
@@ -63,6 +78,71 @@ pub struct OsmWay {
     pub id: i64,
     pub nodes: Vec<i64>,
     pub tags: WayTags,
+}
+
+/// What a reader collected: the kept ways (file order, one per id), the positions of the nodes they use, and
+/// what the reader noticed on the way (duplicates, ignored turn restrictions), counted.
+#[derive(Clone, Debug, Default)]
+pub struct OsmData {
+    pub ways: Vec<OsmWay>,
+    pub nodes: HashMap<i64, NodePos>,
+    pub warnings: Warnings,
+    /// Kept way ids, to find a second way of the same id.
+    way_index: HashMap<i64, usize>,
+}
+
+impl OsmData {
+    /// Keep a way. A second way with the same id is a counted warning when it is the same way again, and an
+    /// error otherwise: which one is right cannot be known, and taking either silently changes the roads.
+    pub fn add_way(&mut self, way: OsmWay) -> Result<(), String> {
+        if let Some(&i) = self.way_index.get(&way.id) {
+            if self.ways[i] == way {
+                self.warnings
+                    .add("duplicate_way", format!("way {} appears twice", way.id));
+                return Ok(());
+            }
+            return Err(format!(
+                "way {} appears twice with different nodes or tags (duplicate id)",
+                way.id
+            ));
+        }
+        self.way_index.insert(way.id, self.ways.len());
+        self.ways.push(way);
+        Ok(())
+    }
+
+    /// Record a used node's position. The same node twice at the same place is a counted warning; at another
+    /// place it is an error (a duplicate id: one of the two would silently move roads, or stretch them by
+    /// hundreds of kilometres).
+    pub fn add_node(&mut self, id: i64, pos: NodePos) -> Result<(), String> {
+        match self.nodes.insert(id, pos) {
+            None => Ok(()),
+            Some(old) if old == pos => {
+                self.warnings
+                    .add("duplicate_node", format!("node {id} appears twice"));
+                Ok(())
+            }
+            Some(old) => Err(format!(
+                "node {id} appears twice, at {:.7},{:.7} and at {:.7},{:.7} (duplicate id)",
+                old.lat(),
+                old.lon(),
+                pos.lat(),
+                pos.lon()
+            )),
+        }
+    }
+
+    /// Count the turn restrictions that name a kept way: mapc's connections do not model them.
+    pub fn note_restrictions(&mut self, restrictions: &[(i64, Vec<i64>)]) {
+        for (id, members) in restrictions {
+            if members.iter().any(|w| self.way_index.contains_key(w)) {
+                self.warnings.add(
+                    "turn_restriction_ignored",
+                    format!("relation {id} (type=restriction) on a kept way"),
+                );
+            }
+        }
+    }
 }
 
 /// Node position in OSM's own fixed point (1e-7 degree): both file formats store exactly this, so converting from it
@@ -180,6 +260,24 @@ fn directions(way: &OsmWay, warnings: &mut Warnings) -> Directions {
     }
 }
 
+/// Why a kept way cannot become roads, as (warning kind, reason): an area (`area=yes`: a square, not a line to
+/// drive along) or a way whose direction changes with the time of day (`oneway=reversible|alternating`).
+fn unusable(way: &OsmWay) -> Option<(&'static str, String)> {
+    if way.tags.area.as_deref() == Some("yes") {
+        return Some((
+            "area_dropped",
+            format!("{} with area=yes", way.tags.highway),
+        ));
+    }
+    match way.tags.oneway.as_deref() {
+        Some(v @ ("reversible" | "alternating")) => Some((
+            "oneway_reversible_dropped",
+            format!("oneway={v}: its direction depends on the time"),
+        )),
+        _ => None,
+    }
+}
+
 /// Lanes (forward, backward) of a way.
 fn lane_counts(way: &OsmWay, dirs: Directions, warnings: &mut Warnings) -> (u8, u8) {
     let (default, _, _) = class_defaults(&way.tags.highway);
@@ -187,14 +285,28 @@ fn lane_counts(way: &OsmWay, dirs: Directions, warnings: &mut Warnings) -> (u8, 
     let mut read = |key: &str, v: &Option<String>| -> Option<u8> {
         let text = v.as_deref()?;
         let n = parse_lanes(text);
-        if n.is_none() {
-            warnings.add("lanes_unparsed", format!("way {}: {key}={text}", way.id));
+        match n {
+            None => warnings.add("lanes_unparsed", format!("way {}: {key}={text}", way.id)),
+            // `2;3`: the tag holds several values (lanes that change along the way); the first is read
+            Some(first) if text.contains(';') => warnings.add(
+                "lanes_multiple_values",
+                format!("way {}: {key}={text}, read as {first}", way.id),
+            ),
+            Some(_) => {}
         }
         n
     };
+    // `turn:lanes` has one `|`-separated entry per lane: the lane count where `lanes` is missing
+    let turn_count = |v: &Option<String>| -> Option<u8> {
+        let n = v.as_deref()?.split('|').count();
+        (1..=16).contains(&n).then_some(n as u8)
+    };
     let total = read("lanes", &t.lanes);
-    let fwd = read("lanes:forward", &t.lanes_forward);
-    let bwd = read("lanes:backward", &t.lanes_backward);
+    let fwd = read("lanes:forward", &t.lanes_forward).or_else(|| turn_count(&t.turn_lanes_forward));
+    let bwd =
+        read("lanes:backward", &t.lanes_backward).or_else(|| turn_count(&t.turn_lanes_backward));
+    let one_way = dirs.forward != dirs.backward;
+    let total = total.or_else(|| turn_count(&t.turn_lanes).filter(|_| one_way));
     let two_way = dirs.forward && dirs.backward;
     let result = if two_way {
         match (fwd, bwd, total) {
@@ -227,14 +339,28 @@ fn speeds(way: &OsmWay, warnings: &mut Warnings) -> (f64, f64) {
     let t = &way.tags;
     let mut read = |key: &str, v: &Option<String>| -> Option<f64> {
         let text = v.as_deref()?;
-        let s = parse_maxspeed(text);
-        if s.is_none() {
-            warnings.add(
-                "maxspeed_unparsed",
-                format!("way {}: {key}={text}, class default used", way.id),
-            );
+        match parse_maxspeed(text) {
+            None => {
+                warnings.add(
+                    "maxspeed_unparsed",
+                    format!("way {}: {key}={text}, class default used", way.id),
+                );
+                None
+            }
+            // a typo (`650`) or a unit mix-up: the class default is closer to the truth than 650 km/h
+            Some(s) if s > MAX_PLAUSIBLE_SPEED_MPS => {
+                warnings.add(
+                    "maxspeed_implausible",
+                    format!(
+                        "way {}: {key}={text}, above {:.0} km/h: class default used",
+                        way.id,
+                        MAX_PLAUSIBLE_SPEED_MPS * 3.6
+                    ),
+                );
+                None
+            }
+            s => s,
         }
-        s
     };
     let both = read("maxspeed", &t.maxspeed);
     let fwd = read("maxspeed:forward", &t.maxspeed_forward).or(both);
@@ -270,15 +396,27 @@ fn turn_angle(h1: f64, h2: f64) -> f64 {
 /// Build the lane graph from the kept ways and the positions of the nodes they reference. Nodes a way names but
 /// `nodes` lacks (cut off by the extract's bounding box) clip the way there.
 pub fn build_graph(
-    mut ways: Vec<OsmWay>,
-    nodes: &HashMap<i64, NodePos>,
+    data: OsmData,
     source: Source,
     options: &ImportOptions,
 ) -> Result<LaneGraph, String> {
     let _ = options;
-    let mut warnings = Warnings::default();
+    let OsmData {
+        mut ways,
+        nodes,
+        mut warnings,
+        ..
+    } = data;
+    let nodes = &nodes;
+    // Readers keep one way per id (a second one is a warning or an error there).
     ways.sort_by_key(|w| w.id);
-    ways.dedup_by_key(|w| w.id);
+    ways.retain(|w| match unusable(w) {
+        Some((kind, why)) => {
+            warnings.add(kind, format!("way {}: {why}", w.id));
+            false
+        }
+        None => true,
+    });
 
     // Runs of consecutive present nodes per way.
     let mut runs: Vec<(usize, Vec<i64>)> = Vec::new();
@@ -426,6 +564,23 @@ pub fn build_graph(
     for p in &pieces {
         let way = &ways[p.way];
         let wi = &info[&p.way];
+        for w in p.nodes.windows(2) {
+            let (a, b) = (nodes[&w[0]], nodes[&w[1]]);
+            let step =
+                Geodesic.distance(Point::new(a.lon(), a.lat()), Point::new(b.lon(), b.lat()));
+            if step > LONG_SEGMENT_M {
+                warnings.add(
+                    "long_segment",
+                    format!(
+                        "way {}: nodes {} and {} are {:.1} km apart",
+                        way.id,
+                        w[0],
+                        w[1],
+                        step / 1000.0
+                    ),
+                );
+            }
+        }
         for forward in [true, false] {
             let (allowed, lanes, speed) = if forward {
                 (wi.dirs.forward, wi.lanes.0, wi.speeds.0)
@@ -702,9 +857,13 @@ mod tests {
             way(1, &[10, 20, 30], &[("highway", "motorway"), ("lanes", "2")]),
             way(2, &[40, 41, 20, 99], &[("highway", "motorway_link")]),
         ];
+        let mut data = OsmData::default();
+        for w in ways {
+            data.add_way(w).unwrap();
+        }
+        data.nodes = nodes;
         let g = build_graph(
-            ways,
-            &nodes,
+            data,
             Source {
                 file: "t".into(),
                 format: mapc_graph::SourceFormat::OsmXml,

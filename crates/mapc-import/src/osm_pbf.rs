@@ -4,11 +4,11 @@
 //! nodes they use.
 
 use crate::error::ParseError;
-use crate::osm::{NodePos, OsmWay, WayTags, keeps, needed_nodes};
+use crate::osm::{NodePos, OsmData, OsmWay, WayTags, keeps, needed_nodes};
 use osmpbfreader::fileformat::{Blob, BlobHeader};
 use osmpbfreader::osmformat::{HeaderBlock, PrimitiveBlock};
 use protobuf::Message;
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 use std::io::Read;
 
 /// The format's own limits: a blob header under 64 KiB, a blob under 32 MiB.
@@ -203,15 +203,35 @@ fn coordinate(
     Ok(e7 as i32)
 }
 
-fn read_ways(
-    bytes: &[u8],
-    blobs: &[BlobAt],
-    classes: &[String],
-) -> Result<Vec<OsmWay>, ParseError> {
-    let mut ways = Vec::new();
+fn read_ways(bytes: &[u8], blobs: &[BlobAt], classes: &[String]) -> Result<OsmData, ParseError> {
+    let mut data = OsmData::default();
+    let mut restrictions: Vec<(i64, Vec<i64>)> = Vec::new();
     for at in blobs.iter().filter(|b| b.kind == "OSMData") {
         let b = block(bytes, at)?;
         for g in &b.primitivegroup {
+            for r in &g.relations {
+                let mut restriction = false;
+                for (&k, &v) in r.keys.iter().zip(&r.vals) {
+                    if string(&b, k, at)? == b"type"
+                        && string(&b, v, at)?.starts_with(b"restriction")
+                    {
+                        restriction = true;
+                    }
+                }
+                if !restriction {
+                    continue;
+                }
+                // member ids are delta-coded; type 1 is a way
+                let mut id = 0i64;
+                let mut members = Vec::new();
+                for (i, &delta) in r.memids.iter().enumerate() {
+                    id = id.wrapping_add(delta);
+                    if r.types.get(i).is_some_and(|t| t.value() == 1) {
+                        members.push(id);
+                    }
+                }
+                restrictions.push((r.id(), members));
+            }
             for w in &g.ways {
                 if w.keys.len() != w.vals.len() {
                     return Err(err(
@@ -246,23 +266,26 @@ fn read_ways(
                     })?;
                     nodes.push(id);
                 }
-                ways.push(OsmWay {
+                data.add_way(OsmWay {
                     id: w.id(),
                     nodes,
                     tags,
-                });
+                })
+                .map_err(|m| err(at.offset, at.index, m))?;
             }
         }
     }
-    Ok(ways)
+    data.note_restrictions(&restrictions);
+    Ok(data)
 }
 
 fn read_nodes(
     bytes: &[u8],
     blobs: &[BlobAt],
     needed: &HashSet<i64>,
-) -> Result<HashMap<i64, NodePos>, ParseError> {
-    let mut out = HashMap::with_capacity(needed.len());
+    data: &mut OsmData,
+) -> Result<(), ParseError> {
+    data.nodes.reserve(needed.len());
     for at in blobs.iter().filter(|b| b.kind == "OSMData") {
         let b = block(bytes, at)?;
         let (gran, lat_off, lon_off) = (b.granularity(), b.lat_offset(), b.lon_offset());
@@ -277,7 +300,8 @@ fn read_nodes(
             let lat_e7 = coordinate(lat_off, gran, lat, 90, at, "latitude", id)?;
             let lon_e7 = coordinate(lon_off, gran, lon, 180, at, "longitude", id)?;
             if needed.contains(&id) {
-                out.insert(id, NodePos { lat_e7, lon_e7 });
+                data.add_node(id, NodePos { lat_e7, lon_e7 })
+                    .map_err(|m| err(at.offset, at.index, m))?;
             }
             Ok(())
         };
@@ -304,17 +328,15 @@ fn read_nodes(
             }
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Both passes over a PBF file held in memory (it is compressed: a tenth of the XML's size).
-pub(crate) fn read(
-    bytes: &[u8],
-    classes: &[String],
-) -> Result<(Vec<OsmWay>, HashMap<i64, NodePos>), ParseError> {
+pub(crate) fn read(bytes: &[u8], classes: &[String]) -> Result<OsmData, ParseError> {
     let blobs = frame(bytes)?;
     check_header(bytes, &blobs[0])?;
-    let ways = read_ways(bytes, &blobs, classes)?;
-    let nodes = read_nodes(bytes, &blobs, &needed_nodes(&ways))?;
-    Ok((ways, nodes))
+    let mut data = read_ways(bytes, &blobs, classes)?;
+    let needed = needed_nodes(&data.ways);
+    read_nodes(bytes, &blobs, &needed, &mut data)?;
+    Ok(data)
 }

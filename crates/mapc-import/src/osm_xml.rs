@@ -3,14 +3,15 @@
 //! nodes' coordinates (checking every node's coordinates on the way).
 
 use crate::error::ParseError;
-use crate::osm::{NodePos, OsmWay, WayTags, keeps, needed_nodes, parse_degrees};
+use crate::osm::{NodePos, OsmData, OsmWay, WayTags, keeps, needed_nodes, parse_degrees};
 use crate::xml::{Item, XmlStream, attrs, describe};
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 use std::io::BufRead;
 
 /// What pass one found.
 pub(crate) struct WaysPass {
-    pub ways: Vec<OsmWay>,
+    /// The kept ways (and the warnings about them); pass two adds the nodes.
+    pub data: OsmData,
     /// True when every node came before the first way (the usual order), so pass two may stop at the first way.
     pub nodes_first: bool,
 }
@@ -33,12 +34,16 @@ fn id_of(element: &quick_xml::events::BytesStart<'_>, at: u64) -> Result<i64, Pa
 /// Pass one: the kept ways, in file order.
 pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<WaysPass, ParseError> {
     let mut xml = XmlStream::new(input);
-    let mut ways = Vec::new();
+    let mut data = OsmData::default();
     let mut seen_way = false;
     let mut nodes_first = true;
-    // The way being read: (id, nodes, tags, element description for errors).
+    // The way being read: (id, nodes, tags) and where it starts, for errors.
     let mut current: Option<(i64, Vec<i64>, WayTags)> = None;
+    let mut current_at = 0;
     let mut current_depth = 0;
+    // The relation being read: (id, member ways, whether it is a turn restriction); those found.
+    let mut relation: Option<(i64, Vec<i64>, bool)> = None;
+    let mut restrictions: Vec<(i64, Vec<i64>)> = Vec::new();
     let mut root_checked = false;
     loop {
         match xml.next()? {
@@ -48,7 +53,15 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                 if current.is_some() && xml.depth() < current_depth {
                     let (id, nodes, tags) = current.take().unwrap();
                     if keeps(classes, &tags) {
-                        ways.push(OsmWay { id, nodes, tags });
+                        data.add_way(OsmWay { id, nodes, tags }).map_err(|m| {
+                            ParseError::new(current_at, Some(format!("<way id=\"{id}\">")), m)
+                        })?;
+                    }
+                }
+                if relation.is_some() && xml.depth() < current_depth {
+                    let (id, members, restriction) = relation.take().unwrap();
+                    if restriction {
+                        restrictions.push((id, members));
                     }
                 }
             }
@@ -80,7 +93,25 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                         let id = id_of(&element, at)?;
                         if !empty {
                             current = Some((id, Vec::new(), WayTags::default()));
+                            current_at = at;
                             current_depth = depth;
+                        }
+                    }
+                    "relation" if !empty => {
+                        relation = Some((id_of(&element, at)?, Vec::new(), false));
+                        current_depth = depth;
+                    }
+                    "member" => {
+                        if let Some((_, members, _)) = relation.as_mut() {
+                            let kv = attrs(&element)
+                                .map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
+                            let get =
+                                |key: &str| kv.iter().find(|(k, _)| *k == key).map(|(_, v)| v);
+                            if get("type").is_some_and(|t| t == "way")
+                                && let Some(Ok(r)) = get("ref").map(|r| r.trim().parse::<i64>())
+                            {
+                                members.push(r);
+                            }
                         }
                     }
                     "nd" => {
@@ -116,6 +147,16 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                             if let (Some(k), Some(v)) = (k, v) {
                                 tags.set(k, v);
                             }
+                        } else if let Some((_, _, restriction)) = relation.as_mut() {
+                            let kv = attrs(&element)
+                                .map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
+                            let get =
+                                |key: &str| kv.iter().find(|(k, _)| *k == key).map(|(_, v)| v);
+                            if get("k").is_some_and(|k| k == "type")
+                                && get("v").is_some_and(|v| v.starts_with("restriction"))
+                            {
+                                *restriction = true;
+                            }
                         }
                     }
                     _ => {}
@@ -123,7 +164,8 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
             }
         }
     }
-    Ok(WaysPass { ways, nodes_first })
+    data.note_restrictions(&restrictions);
+    Ok(WaysPass { data, nodes_first })
 }
 
 /// Pass two: coordinates of the `needed` nodes. Every node's coordinates are checked, used or not.
@@ -131,9 +173,10 @@ pub(crate) fn read_nodes<R: BufRead>(
     input: R,
     needed: &HashSet<i64>,
     nodes_first: bool,
-) -> Result<HashMap<i64, NodePos>, ParseError> {
+    data: &mut OsmData,
+) -> Result<(), ParseError> {
     let mut xml = XmlStream::new(input);
-    let mut out = HashMap::with_capacity(needed.len());
+    data.nodes.reserve(needed.len());
     loop {
         match xml.next()? {
             Item::Eof => break,
@@ -166,7 +209,8 @@ pub(crate) fn read_nodes<R: BufRead>(
                     let lon_e7 = parse_degrees(&lon, 180.0)
                         .map_err(|m| ParseError::new(at, el(), format!("lon: {m}")))?;
                     if needed.contains(&id) {
-                        out.insert(id, NodePos { lat_e7, lon_e7 });
+                        data.add_node(id, NodePos { lat_e7, lon_e7 })
+                            .map_err(|m| ParseError::new(at, el(), m))?;
                     }
                 }
                 "way" | "relation" if nodes_first => break,
@@ -174,16 +218,16 @@ pub(crate) fn read_nodes<R: BufRead>(
             },
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Both passes over a re-openable input.
 pub(crate) fn read<R: BufRead>(
     mut open: impl FnMut() -> Result<R, ParseError>,
     classes: &[String],
-) -> Result<(Vec<OsmWay>, HashMap<i64, NodePos>), ParseError> {
-    let pass = read_ways(open()?, classes)?;
-    let needed = needed_nodes(&pass.ways);
-    let nodes = read_nodes(open()?, &needed, pass.nodes_first)?;
-    Ok((pass.ways, nodes))
+) -> Result<OsmData, ParseError> {
+    let mut pass = read_ways(open()?, classes)?;
+    let needed = needed_nodes(&pass.data.ways);
+    read_nodes(open()?, &needed, pass.nodes_first, &mut pass.data)?;
+    Ok(pass.data)
 }

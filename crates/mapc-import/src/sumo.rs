@@ -11,6 +11,11 @@ use mapc_graph::{
 use std::collections::HashMap;
 use std::io::BufRead;
 
+// Above this (300 km/h) a lane's speed is a mistake in the data; counted as `speed_implausible`.
+use crate::osm::MAX_PLAUSIBLE_SPEED_MPS;
+/// A lane longer than this (100 km) is counted as `length_implausible`.
+const MAX_PLAUSIBLE_LANE_M: f64 = 100_000.0;
+
 /// Width SUMO gives a lane that states none.
 const SUMO_DEFAULT_LANE_WIDTH_M: f64 = 3.2;
 
@@ -130,6 +135,10 @@ impl Element<'_> {
 
 #[derive(Default)]
 struct Net {
+    /// What the parser noticed, as (warning kind, example), counted into the graph's warnings.
+    notes: Vec<(&'static str, String)>,
+    /// Junction ids seen, to refuse a second junction of the same id.
+    junction_ids: std::collections::HashSet<String>,
     location: Option<([f64; 2], String)>,
     edges: Vec<SumoEdge>,
     junctions: Vec<SumoJunction>,
@@ -234,9 +243,45 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                         if lane.length < 0.0 || lane.speed < 0.0 {
                             return Err(el.err("negative length or speed"));
                         }
+                        // A lane nobody may drive on cannot be given a speed by guessing.
+                        if lane.speed == 0.0 {
+                            return Err(el.err(format!(
+                                "lane `{}` has speed 0 (a normal or internal lane needs a positive speed limit)",
+                                lane.id
+                            )));
+                        }
+                        if lane.speed > MAX_PLAUSIBLE_SPEED_MPS {
+                            net.notes.push((
+                                "speed_implausible",
+                                format!(
+                                    "lane {}: speed {} m/s (above {:.0} km/h), kept",
+                                    lane.id,
+                                    lane.speed,
+                                    MAX_PLAUSIBLE_SPEED_MPS * 3.6
+                                ),
+                            ));
+                        }
+                        if lane.length > MAX_PLAUSIBLE_LANE_M {
+                            net.notes.push((
+                                "length_implausible",
+                                format!(
+                                    "lane {}: length {} m (over {:.0} km), kept",
+                                    lane.id,
+                                    lane.length,
+                                    MAX_PLAUSIBLE_LANE_M / 1000.0
+                                ),
+                            ));
+                        }
                         net.edges.last_mut().expect("in an edge").lanes.push(lane);
                     }
                     (2, "junction") => {
+                        let id = el.req("id")?;
+                        // a second junction of the same id would silently move the first one's roads
+                        if !net.junction_ids.insert(id.to_string()) {
+                            return Err(el.err(format!(
+                                "a second junction with the id `{id}` (duplicate id)"
+                            )));
+                        }
                         let j = SumoJunction {
                             id: el.req("id")?.to_string(),
                             pos: [el.req_num("x")?, el.req_num("y")?],
@@ -261,6 +306,17 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                             .expect("in a junction")
                             .requests
                             .push((index, response));
+                    }
+                    (2, "tlLogic") => {
+                        // Signal programs are not simulated: the connections' states (`o`/`O` for a
+                        // signal that is off, the request table otherwise) give the right of way.
+                        net.notes.push((
+                            "traffic_light_ignored",
+                            format!(
+                                "tlLogic {}: signal program not simulated; right of way from the connections",
+                                el.get("id").unwrap_or("?")
+                            ),
+                        ));
                     }
                     (2, "connection") => {
                         net.connections.push(SumoConnection {
@@ -304,6 +360,9 @@ fn osm_id_in(sumo_id: &str) -> Option<i64> {
 pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, ParseError> {
     let net = parse(input)?;
     let mut warnings = Warnings::default();
+    for (kind, example) in &net.notes {
+        warnings.add(kind, example.clone());
+    }
     let projection = match &net.location {
         None => {
             warnings.add(

@@ -21,6 +21,7 @@ fn options(
         classes: classes.unwrap_or(defaults.classes),
         feeder_length_m: feeder_length,
         keep_exits,
+        minor_roads: defaults.minor_roads,
     }
 }
 

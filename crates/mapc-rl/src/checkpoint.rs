@@ -169,6 +169,15 @@ impl Checkpoint {
             path: path.into(),
             source: e,
         })?;
+        // another of mapc's files, whatever its name: say what it is rather than name a missing field
+        if let Some(kind) = mapc_graph::filekind::sniff(text.as_bytes())
+            && kind != mapc_graph::MapcFile::Policy
+        {
+            return Err(RlError::Format {
+                path: path.into(),
+                msg: format!("is {}, not a policy", kind.name()),
+            });
+        }
         let ck: Checkpoint = serde_json::from_str(&text).map_err(|e| RlError::Format {
             path: path.into(),
             msg: format!("line {} column {}: {e}", e.line(), e.column()),

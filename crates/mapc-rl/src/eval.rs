@@ -53,8 +53,16 @@ impl FigureSet {
             seeds: runs.len(),
         }
     }
-    /// Whether the 95% intervals of the outflow do not overlap.
+    /// Whether both sets have an interval at all: one seed gives a mean but no confidence interval (the zero
+    /// half-width `MeanCi` reports for n = 1 is not an interval).
+    pub fn has_ci(&self) -> bool {
+        self.seeds >= 2
+    }
+    /// Whether the 95% intervals of the outflow do not overlap; false where either side has no interval.
     pub fn outflow_ci_disjoint(&self, other: &FigureSet) -> bool {
+        if !(self.has_ci() && other.has_ci()) {
+            return false;
+        }
         let (a, b) = (self.outflow, other.outflow);
         a.mean - a.ci95 > b.mean + b.ci95 || b.mean - b.ci95 > a.mean + a.ci95
     }

@@ -2,7 +2,9 @@
 //! simplified to a corridor, a window cut and written as a scenario beside its graph and checked by reading it
 //! back, and the JSON reports both print.
 
-use crate::simplify::{MergeSummary, Simplified, corridor_merges, simplify};
+use crate::simplify::{
+    MergeSummary, Simplified, corridor_complex_junctions, corridor_merges, simplify,
+};
 use crate::transform::pick_route::describe_junction;
 use crate::transform::{Corridor, CorridorRoles, SimplifyOptions, TransformError};
 use crate::window::{DemandOverride, SourceShape, WindowCut, cut_window, window_scenario};
@@ -12,52 +14,50 @@ use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
 /// What can go wrong compiling a scenario from files; every message names the file or the argument at fault.
+/// The inner error is part of the message (not a `source`), so that printing the error chain does not repeat it.
 #[derive(Debug, thiserror::Error)]
 pub enum CompileError {
-    #[error("cannot read map {path}: {source}")]
+    #[error("cannot read map {path}: {error}")]
     Map {
         path: PathBuf,
-        source: mapc_import::ImportError,
+        error: mapc_import::ImportError,
     },
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Transform {
         path: PathBuf,
-        source: TransformError,
+        error: TransformError,
     },
-    #[error("--match {arg}: {source}")]
-    Source { arg: String, source: ScenarioError },
-    #[error("--match {arg}: {source}")]
-    SourceShape { arg: String, source: TransformError },
+    #[error("--match {arg}: {error}")]
+    Source { arg: String, error: ScenarioError },
+    #[error("--match {arg}: {error}")]
+    SourceShape { arg: String, error: TransformError },
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Graph {
         path: PathBuf,
-        source: mapc_graph::GraphFileError,
+        error: mapc_graph::GraphFileError,
     },
     #[error("{0}")]
     Demand(String),
-    #[error("the written scenario {path} does not load back: {source}")]
-    ReadBack {
-        path: PathBuf,
-        source: ScenarioError,
-    },
+    #[error("the written scenario {path} does not load back: {error}")]
+    ReadBack { path: PathBuf, error: ScenarioError },
 }
 
 /// A map or graph file, with the importer's defaults.
 pub fn load_map(path: &Path) -> Result<LaneGraph, CompileError> {
-    mapc_import::load_any(path).map_err(|source| CompileError::Map {
+    mapc_import::load_any(path).map_err(|error| CompileError::Map {
         path: path.to_path_buf(),
-        source,
+        error,
     })
 }
 
 /// A map file simplified to a corridor.
 pub fn simplify_map(map: &Path, options: &SimplifyOptions) -> Result<Simplified, CompileError> {
     let raw = load_map(map)?;
-    simplify(&raw, options).map_err(|source| CompileError::Transform {
+    simplify(&raw, options).map_err(|error| CompileError::Transform {
         path: map.to_path_buf(),
-        source,
+        error,
     })
 }
 
@@ -67,7 +67,8 @@ pub fn corridor_report(s: &Simplified, map: &Path, output: &Path) -> Value {
     let merges: Vec<MergeSummary> = corridor_merges(g, &s.roles);
     let first = g.road(s.roles.main[0]).map(|r| r.from);
     let last = s.roles.main.last().and_then(|r| g.road(*r)).map(|r| r.to);
-    json!({
+    let complex = corridor_complex_junctions(g, &s.roles);
+    let mut report = json!({
         "map": map.display().to_string(),
         "output": output.display().to_string(),
         "main_road": {
@@ -81,11 +82,19 @@ pub fn corridor_report(s: &Simplified, map: &Path, output: &Path) -> Value {
         "roads": g.roads.len(),
         "junctions": g.junctions.len(),
         "steps": s.steps,
-    })
+    });
+    if !complex.is_empty() {
+        report["junctions_with_several_merging_roads"] = json!(complex);
+    }
+    report
 }
 
-/// The corridor of `map`: the graph itself when it is one, else the map simplified with `options` (without
-/// `via`, along the longest route through `junction`).
+/// The corridor of `map`: the graph itself when it is one, else the map simplified with `options`. Without
+/// `via`, the corridor must keep `junction` a merge (the window is cut there): the route through `junction` alone
+/// is tried first, then the routes through each road into it (higher class, then longer, first), since the longest
+/// route through a merge may come in on the merging road and leave the other road in as one that leaves and
+/// rejoins it, which is no merge. The first corridor where `junction` is a merge is taken; failing that, the first
+/// one, whose window cut then says why.
 pub fn corridor_of(
     map: &Path,
     junction: &str,
@@ -95,16 +104,55 @@ pub fn corridor_of(
     if CorridorRoles::of(&g).is_ok() {
         return Ok(g);
     }
-    let mut opts = options.clone();
-    if opts.via.is_empty() {
-        opts.via = vec![junction.to_string()];
+    let transform = |error| CompileError::Transform {
+        path: map.to_path_buf(),
+        error,
+    };
+    if !options.via.is_empty() {
+        return simplify(&g, options).map(|s| s.graph).map_err(transform);
     }
-    simplify(&g, &opts)
-        .map(|s| s.graph)
-        .map_err(|source| CompileError::Transform {
-            path: map.to_path_buf(),
-            source,
-        })
+    let mut attempts = vec![junction.to_string()];
+    if let Ok(j) = g.find_junction(junction) {
+        let mut incoming: Vec<&mapc_graph::Road> = g
+            .junction(j)
+            .map(|x| x.incoming.iter().filter_map(|r| g.road(*r)).collect())
+            .unwrap_or_default();
+        incoming.sort_by(|a, b| {
+            b.priority
+                .cmp(&a.priority)
+                .then(b.length_m.total_cmp(&a.length_m))
+                .then(a.id.cmp(&b.id))
+        });
+        attempts.extend(incoming.iter().map(|r| r.id.to_string()));
+        let mut first = None;
+        for via in attempts {
+            let opts = SimplifyOptions {
+                via: vec![via],
+                ..options.clone()
+            };
+            match simplify(&g, &opts) {
+                Ok(s) => {
+                    let merge = j.to_string();
+                    if corridor_merges(&s.graph, &s.roles)
+                        .iter()
+                        .any(|m| m.junction == merge)
+                    {
+                        return Ok(s.graph);
+                    }
+                    first.get_or_insert(Ok(s.graph));
+                }
+                Err(e) => {
+                    first.get_or_insert(Err(e));
+                }
+            }
+        }
+        return first.expect("one attempt at least").map_err(transform);
+    }
+    let opts = SimplifyOptions {
+        via: attempts,
+        ..options.clone()
+    };
+    simplify(&g, &opts).map(|s| s.graph).map_err(transform)
 }
 
 /// A window cut from a corridor and written: the scenario file and its cut corridor graph beside it.
@@ -142,15 +190,15 @@ pub fn write_window(
     }
     let resolved = ResolvedScenario::load(source).map_err(|e| CompileError::Source {
         arg: source.to_string(),
-        source: e,
+        error: e,
     })?;
-    let transform = |source: TransformError| CompileError::Transform {
+    let transform = |error: TransformError| CompileError::Transform {
         path: map.to_path_buf(),
-        source,
+        error,
     };
     let shape = SourceShape::of(&resolved).map_err(|e| CompileError::SourceShape {
         arg: source.to_string(),
-        source: e,
+        error: e,
     })?;
     let cut = cut_window(corridor, junction, &shape).map_err(transform)?;
     let name = output
@@ -165,15 +213,15 @@ pub fn write_window(
         window_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
     cut.graph
         .save(&graph)
-        .map_err(|source| CompileError::Graph {
+        .map_err(|error| CompileError::Graph {
             path: graph.clone(),
-            source,
+            error,
         })?;
     scenario.save(output)?;
-    ResolvedScenario::load(&output.display().to_string()).map_err(|source| {
+    ResolvedScenario::load(&output.display().to_string()).map_err(|error| {
         CompileError::ReadBack {
             path: output.to_path_buf(),
-            source,
+            error,
         }
     })?;
     Ok(WrittenWindow {

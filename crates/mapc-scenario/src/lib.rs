@@ -139,6 +139,15 @@ impl Scenario {
             path: path.to_path_buf(),
             source,
         })?;
+        // another of mapc's files, whatever its name: say what it is rather than fail on TOML syntax
+        if let Some(kind) = mapc_graph::filekind::sniff(text.as_bytes())
+            && kind != mapc_graph::MapcFile::Scenario
+        {
+            return Err(ScenarioError::Toml {
+                path: path.to_path_buf(),
+                message: format!("is {}, not a scenario", kind.name()),
+            });
+        }
         Scenario::from_toml(&text, path)
     }
 

@@ -3,10 +3,11 @@
 //! internal length of a junction that remains (a merge) is not counted, that of a removed joint is part of the
 //! joined road.
 
+use crate::transform::pick_route::describe_junction;
 use crate::transform::{
     self, Corridor, CorridorRoles, SimplifyOptions, StepReport, TransformError,
 };
-use mapc_graph::{JunctionId, LaneGraph, RoadId, Source, SourceFormat};
+use mapc_graph::{JunctionId, LaneGraph, LookupError, RoadId, Source, SourceFormat};
 use serde::Serialize;
 
 pub use crate::transform::SimplifyOptions as Options;
@@ -61,11 +62,71 @@ pub fn simplify(raw: &LaneGraph, opts: &SimplifyOptions) -> Result<Simplified, T
         feeders: corridor.feeders,
         exits: corridor.exits,
     };
+    for query in &opts.via {
+        check_via(&corridor.graph, &roles, query)?;
+    }
     Ok(Simplified {
         graph: corridor.graph,
         roles,
         steps: reports,
     })
+}
+
+/// That the finished corridor's main road passes a `--via` point: the junction is on it (or was joined into one
+/// of its roads), or every road the point names is part of it. A point the result does not honour is an error,
+/// never a corridor that quietly goes elsewhere.
+pub fn check_via(g: &LaneGraph, roles: &CorridorRoles, query: &str) -> Result<(), TransformError> {
+    let on_main = |r: &RoadId| roles.main.contains(r);
+    let not_honoured = |why: String| TransformError::ViaNotHonoured {
+        query: query.to_string(),
+        why,
+    };
+    let junction_syntax = query.starts_with("osm:") || query.parse::<JunctionId>().is_ok();
+    if !junction_syntax && let Ok(roads) = g.find_roads(query) {
+        let off: Vec<String> = roads
+            .iter()
+            .filter(|r| !on_main(r))
+            .map(|r| r.to_string())
+            .collect();
+        return if off.is_empty() {
+            Ok(())
+        } else {
+            Err(not_honoured(format!(
+                "the corridor's main road does not use {} of the roads it names ({})",
+                off.len(),
+                off.join(", ")
+            )))
+        };
+    }
+    match g.find_junction(query) {
+        Ok(j) => {
+            let passes = roles
+                .main
+                .iter()
+                .filter_map(|r| g.road(*r))
+                .any(|r| r.from == j || r.to == j);
+            if passes {
+                Ok(())
+            } else {
+                Err(not_honoured(format!(
+                    "the corridor's main road does not pass {}",
+                    describe_junction(g, j)
+                )))
+            }
+        }
+        Err(LookupError::JoinedInto { road, .. }) => {
+            if road.parse::<RoadId>().is_ok_and(|r| on_main(&r)) {
+                Ok(())
+            } else {
+                Err(not_honoured(format!(
+                    "it became part of road {road}, which is not on the corridor's main road"
+                )))
+            }
+        }
+        Err(e) => Err(not_honoured(format!(
+            "the corridor has no such point ({e})"
+        ))),
+    }
 }
 
 fn road_sum(g: &LaneGraph, roads: &[RoadId]) -> f64 {
@@ -76,16 +137,22 @@ fn road_sum(g: &LaneGraph, roads: &[RoadId]) -> f64 {
         .sum()
 }
 
-/// Every merge on the corridor's main road, in driving order.
+/// Every merge on the corridor's main road, in driving order: a junction where exactly one merging road joins
+/// it (a junction where several join is not a merge, and is listed by [`corridor_complex_junctions`]), so no
+/// junction is listed twice.
 pub fn corridor_merges(g: &LaneGraph, roles: &CorridorRoles) -> Vec<MergeSummary> {
     let mut out = Vec::new();
     for (i, rid) in roles.main.iter().enumerate().skip(1) {
         let j: JunctionId = g.road(*rid).unwrap().from;
-        for feeder in roles
+        let joining: Vec<&Vec<RoadId>> = roles
             .feeders
             .iter()
             .filter(|f| g.road(*f.last().unwrap()).unwrap().to == j)
-        {
+            .collect();
+        if joining.len() != 1 {
+            continue;
+        }
+        for feeder in joining {
             let junction = g.junction(j).unwrap();
             let last = *feeder.last().unwrap();
             let row = |from: RoadId| {
@@ -113,6 +180,26 @@ pub fn corridor_merges(g: &LaneGraph, roles: &CorridorRoles) -> Vec<MergeSummary
         }
     }
     out
+}
+
+/// Junctions of the main road where several merging roads join at once (not merges; `mapc window` refuses
+/// them), in driving order, as `describe_junction` names them.
+pub fn corridor_complex_junctions(g: &LaneGraph, roles: &CorridorRoles) -> Vec<String> {
+    roles
+        .main
+        .iter()
+        .skip(1)
+        .map(|r| g.road(*r).unwrap().from)
+        .filter(|&j| {
+            roles
+                .feeders
+                .iter()
+                .filter(|f| g.road(*f.last().unwrap()).unwrap().to == j)
+                .count()
+                > 1
+        })
+        .map(|j| describe_junction(g, j))
+        .collect()
 }
 
 #[cfg(test)]
@@ -204,6 +291,25 @@ mod tests {
             },
         );
         assert!(err.unwrap_err().to_string().contains("osm:42"));
+    }
+
+    #[test]
+    fn a_via_point_off_the_result_is_refused() {
+        let s = simplify(&highway(), &SimplifyOptions::default()).unwrap();
+        let g = &s.graph;
+        // on the main road: its first junction, and a joint joined into a main road (J1 between R0 and R1)
+        let start = g.road(s.roles.main[0]).unwrap().from;
+        check_via(g, &s.roles, &start.to_string()).unwrap();
+        assert!(g.junction(JunctionId(1)).is_none());
+        check_via(g, &s.roles, "J1").unwrap();
+        check_via(g, &s.roles, "R1").unwrap();
+        // off it: where the merging road starts, the merging road itself, a road the corridor dropped
+        let feeder = s.roles.feeders[0][0];
+        let feeder_start = g.road(feeder).unwrap().from.to_string();
+        for off in [feeder_start.as_str(), &feeder.to_string(), "R6"] {
+            let e = check_via(g, &s.roles, off).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("--via `{off}`")), "{e}");
+        }
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! `join_chains`: a junction with one road in and one out is only a joint; the two roads become one (the first
-//! keeps its id). The joined road's length is the driving length, the connection's internal length included, so
+//! keeps its id; the joint's and the second road's ids go to its provenance's `joined`, where lookups find them). The joined road's length is the driving length, the connection's internal length included, so
 //! no length is lost; its speed is the one that keeps the free-flow travel time; class, name and ref are the
 //! longer piece's, the priority the downstream piece's (it meets the next junction).
 
@@ -48,6 +48,13 @@ pub fn join_at(c: &mut Corridor, j: JunctionId) -> Option<(RoadId, RoadId)> {
         .merged(&junction.provenance)
         .merged(&b.provenance);
     mark(&mut provenance, NAME);
+    // The joint and the second road keep their ids as names of this road, so that a junction or road id that
+    // `mapc junctions` listed on the map is still found on the corridor.
+    for id in [j.to_string(), b_id.to_string()] {
+        if !provenance.joined.contains(&id) {
+            provenance.joined.push(id);
+        }
+    }
     let to = b.to;
 
     let a = c.graph.road_mut(a_id).unwrap();

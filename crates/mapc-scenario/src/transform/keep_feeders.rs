@@ -1,7 +1,8 @@
 //! `keep_feeders`: find the roads that merge into the main road and keep each back to where it starts in the map:
 //! walking upstream while the road only continues another (a junction with one road in and one out), or until it
 //! is `--feeder-length` long. A road that starts on the main road itself (a loop ramp or a collector that leaves
-//! and rejoins the corridor) is not a merging road and is dropped.
+//! and rejoins the corridor) is not a merging road and is dropped; so are footways, paths and service roads
+//! ([`mapc_graph::MINOR_CLASSES`]) unless `--minor-roads` asks for them.
 
 use super::{Corridor, SimplifyOptions, TransformError, mark};
 use mapc_graph::{JunctionId, LaneGraph, RoadId};
@@ -28,9 +29,15 @@ pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, Transfo
     let mut taken: HashSet<RoadId> = main_set.clone();
     let mut feeders = Vec::new();
     let mut loops = Vec::new();
+    let mut minor = Vec::new();
     for j in interior_junctions(g, &c.main) {
         for &first in &g.junction(j).unwrap().incoming {
             if taken.contains(&first) {
+                continue;
+            }
+            // a footway or service road that touches the motorway is not a merging road (unless asked)
+            if !opts.minor_roads && mapc_graph::is_minor_class(&g.road(first).unwrap().class) {
+                minor.push(first);
                 continue;
             }
             let mut chain = vec![first];
@@ -70,6 +77,17 @@ pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, Transfo
         "{} merging roads kept ({pieces} road pieces)",
         c.feeders.len()
     );
+    if !minor.is_empty() {
+        summary += &format!(
+            "; {} footways, paths or service roads dropped ({}; --minor-roads keeps them)",
+            minor.len(),
+            minor
+                .iter()
+                .map(|r| r.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     if !loops.is_empty() {
         summary += &format!(
             "; {} roads that leave and rejoin the main road dropped ({})",

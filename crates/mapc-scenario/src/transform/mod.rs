@@ -47,6 +47,9 @@ pub enum TransformError {
     NotACorridor(String),
     #[error("{0}")]
     Cut(String),
+    /// A `--via` point the finished corridor does not pass: never a silent success.
+    #[error("--via `{query}`: {why}")]
+    ViaNotHonoured { query: String, why: String },
 }
 
 /// What `simplify` asks of the steps.
@@ -61,6 +64,9 @@ pub struct SimplifyOptions {
     pub feeder_length_m: Option<f64>,
     /// Keep diverging roads as exits (back to the next junction) instead of dropping them.
     pub keep_exits: bool,
+    /// Keep footways, paths, service roads and the like ([`mapc_graph::MINOR_CLASSES`]) that meet the main road
+    /// as merging roads; by default they are dropped, and a junction where only they join is no merge.
+    pub minor_roads: bool,
 }
 
 impl Default for SimplifyOptions {
@@ -72,6 +78,7 @@ impl Default for SimplifyOptions {
                 .to_vec(),
             feeder_length_m: None,
             keep_exits: false,
+            minor_roads: false,
         }
     }
 }

@@ -4,7 +4,7 @@
 //! the search ignores the edge that closes a cycle, so the result is a simple route and the same on every run.
 
 use super::{Corridor, SimplifyOptions, TransformError, chains_of, mark};
-use mapc_graph::{JunctionId, LaneGraph, Road, RoadId};
+use mapc_graph::{JunctionId, LaneGraph, LookupError, Road, RoadId};
 use std::collections::{HashMap, HashSet};
 
 pub const NAME: &str = "pick_route";
@@ -37,6 +37,13 @@ pub fn resolve_via(g: &LaneGraph, query: &str) -> Result<Waypoint, TransformErro
     }
     match g.find_junction(query) {
         Ok(j) => Ok(Waypoint::Junction(j)),
+        // a junction an earlier stage joined into a road: the route passes it by taking that road
+        Err(LookupError::JoinedInto { road, .. }) => match road.parse::<RoadId>() {
+            Ok(r) if g.road(r).is_some() => Ok(Waypoint::Roads(vec![r])),
+            _ => Err(TransformError::NoRoute(format!(
+                "--via `{query}`: joined into road {road}, which this graph lacks"
+            ))),
+        },
         Err(source) => {
             if is_junction_syntax {
                 Err(TransformError::Via {
