@@ -41,7 +41,7 @@ import json, sys
 r = json.load(sys.stdin)
 o, c = r["outflow"], r["comparison"]
 mark = "disjoint" if c["outflow_ci_disjoint"] else "overlap"
-print(f"{o[\"mean\"]:.1f} ± {o[\"ci95\"]:.1f} ({c[\"outflow_change_pct\"]:+.1f} %, {mark})", end="")'
+print("%.1f ± %.1f (%+.1f %%, %s)" % (o["mean"], o["ci95"], c["outflow_change_pct"], mark), end="")'
 }
 
 evaluate() {
@@ -60,7 +60,7 @@ evaluate() {
     for p in "$@"; do
       json=$("$MAPC" eval --policy "$p" --scenario "$s" --seeds "$SEEDS" --json)
       if [ $first = 1 ]; then
-        human=$(python3 -c 'import json,sys; b=json.load(sys.stdin)["baseline"]["outflow"]; print(f"{b[\"mean\"]:.1f} ± {b[\"ci95\"]:.1f}")' <<<"$json")
+        human=$(python3 -c 'import json,sys; b=json.load(sys.stdin)["baseline"]["outflow"]; print("%.1f ± %.1f" % (b["mean"], b["ci95"]))' <<<"$json")
         printf '| %s | %s |' "$(basename "$s" .toml)" "$human"
         first=0
       fi
