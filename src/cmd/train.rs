@@ -11,7 +11,7 @@ use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind, SpecSource};
 use mapc_rl::rollout::Env;
 use mapc_rl::run::{TrainRun, log_path};
 use mapc_rl::{IterationStats, PpoConfig};
-use mapc_scenario::distribution::{LoadedDistribution, MergeDistribution};
+use mapc_scenario::distribution::LoadedDistribution;
 use std::sync::Arc;
 
 /// Train a centralized PPO policy, or with `--distributed` one shared by every AV (defaults: the paper's
@@ -177,11 +177,7 @@ pub struct LoadedScenario {
 /// A merge distribution file, if `arg` names one (recognised by its content).
 fn distribution_of(arg: &str) -> anyhow::Result<Option<LoadedDistribution>> {
     let path = Path::new(arg);
-    if !path.is_file() {
-        return Ok(None);
-    }
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {arg}"))?;
-    if !MergeDistribution::is_distribution(&text) {
+    if mapc_graph::filekind::sniff_path(path) != Some(mapc_graph::MapcFile::MergeDistribution) {
         return Ok(None);
     }
     Ok(Some(LoadedDistribution::load(path)?))

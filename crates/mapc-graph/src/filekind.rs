@@ -15,6 +15,8 @@ pub enum MapcFile {
     Scenario,
     /// A policy (a training checkpoint): JSON with `format_version` and `spec`.
     Policy,
+    /// A distribution of merges to train on: TOML with `format = "mapc-merge-distribution"`.
+    MergeDistribution,
 }
 
 impl MapcFile {
@@ -24,6 +26,7 @@ impl MapcFile {
             MapcFile::Graph => "a mapc graph",
             MapcFile::Scenario => "a mapc scenario",
             MapcFile::Policy => "a mapc policy",
+            MapcFile::MergeDistribution => "a mapc merge distribution",
         }
     }
 }
@@ -55,6 +58,13 @@ pub fn sniff(head: &[u8]) -> Option<MapcFile> {
     let mut horizon = false;
     let mut network = false;
     for line in text.lines().map(str::trim) {
+        if toml_key(line) == Some("format")
+            && line
+                .split_once('=')
+                .is_some_and(|(_, v)| v.trim() == "\"mapc-merge-distribution\"")
+        {
+            return Some(MapcFile::MergeDistribution);
+        }
         horizon |= toml_key(line) == Some("horizon_steps");
         network |= line.starts_with("[network") || toml_key(line) == Some("network");
     }
@@ -136,5 +146,9 @@ mod tests {
             Some(MapcFile::Graph)
         );
         assert_eq!(sniff(b"name = \"x\"\n"), None);
+        assert_eq!(
+            sniff(&shipped("scenarios/merge_mix.toml")),
+            Some(MapcFile::MergeDistribution)
+        );
     }
 }

@@ -97,16 +97,6 @@ pub struct LoadedDistribution {
     roles: FlowRoles,
 }
 
-impl MergeDistribution {
-    /// Whether `text` is a distribution file (its `format` key), without parsing the rest.
-    pub fn is_distribution(text: &str) -> bool {
-        toml::from_str::<toml::Table>(text)
-            .ok()
-            .and_then(|t| t.get("format").and_then(|v| v.as_str().map(str::to_owned)))
-            .is_some_and(|f| f == DISTRIBUTION_FORMAT)
-    }
-}
-
 impl LoadedDistribution {
     /// Reads and checks a distribution file.
     pub fn load(path: &Path) -> Result<LoadedDistribution, ScenarioError> {
@@ -333,7 +323,10 @@ post_merge_m = [60.0, 300.0]
         let dir = std::env::temp_dir().join(format!("mapc-dist-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let d = LoadedDistribution::load(&write(&dir, MIX)).unwrap();
-        assert!(MergeDistribution::is_distribution(MIX));
+        assert_eq!(
+            mapc_graph::filekind::sniff(MIX.as_bytes()),
+            Some(mapc_graph::MapcFile::MergeDistribution)
+        );
         let mut ramp_major = 0;
         for seed in 0..200 {
             let a = d.draw(seed);
@@ -372,9 +365,6 @@ post_merge_m = [60.0, 300.0]
             .unwrap_err()
             .to_string();
         assert!(e.contains("version"), "{e}");
-        assert!(!MergeDistribution::is_distribution(
-            "name = \"x\"\nhorizon_steps = 3"
-        ));
         std::fs::remove_dir_all(&dir).ok();
     }
 }
