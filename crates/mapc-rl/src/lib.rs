@@ -21,12 +21,14 @@
 //!
 //! Layout: `ppo::tensor` holds all tensor code (burn for the loss gradient, plain `f32` for rollout inference),
 //! `ppo::gae` the advantage estimation, `rollout` the `Env` trait and parallel collection, `env` the merge
-//! environment on `mapc-sim`, `run` a training run on disk, `eval` evaluation against the human baseline.
+//! environment on `mapc-sim`, `run` a training run on disk, `eval` evaluation against the human baseline, `eval_windows`
+//! its several-window form (one FIFO per window, the flow past every merge).
 
 pub mod checkpoint;
 pub mod env;
 pub mod error;
 pub mod eval;
+pub mod eval_windows;
 pub mod log;
 pub mod ppo;
 pub mod rng;

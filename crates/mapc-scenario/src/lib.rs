@@ -19,7 +19,7 @@ pub mod window;
 
 pub use model::*;
 
-use mapc_graph::{LaneGraph, RoadId};
+use mapc_graph::{JunctionId, LaneGraph, RoadId};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
@@ -59,8 +59,21 @@ pub struct ResolvedScenario {
     pub origin: String,
     /// Each flow's entry road and optional last road.
     pub flow_roads: Vec<(RoadId, Option<RoadId>)>,
-    /// The control region's roads (empty: the whole network).
+    /// The control region's roads (empty: the whole network); with several windows, all their roads.
     pub region_roads: Vec<RoadId>,
+    /// The windows of a several-window scenario (`control.windows`), in the file's order; empty otherwise.
+    pub windows: Vec<ResolvedWindow>,
+}
+
+/// One controlled region of a several-window scenario, its references checked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedWindow {
+    /// How the scenario names its first merge (`osm:NODE`, a SUMO id or `J12`).
+    pub name: String,
+    /// Its merge junctions, in driving order.
+    pub merges: Vec<JunctionId>,
+    /// Its roads, sorted.
+    pub roads: Vec<RoadId>,
 }
 
 impl Scenario {
@@ -98,7 +111,7 @@ impl Scenario {
                 flow("ramp_human", generator::RAMP_ENTRY, 200.0, "human", 7.5),
             ],
             initial_vehicles: Some(InitialVehicles { count: 5, vehicle_type: "human".to_string(), speed_mps: 0.0 }),
-            control: Some(Control { n_av: 5, region: vec![], window: None }),
+            control: Some(Control { n_av: 5, region: vec![], window: None, windows: vec![] }),
         }
     }
 
@@ -297,14 +310,73 @@ impl ResolvedScenario {
             region_roads.sort();
             region_roads.dedup();
         }
+        let windows = match &scenario.control {
+            Some(c) if !c.windows.is_empty() => {
+                if !c.region.is_empty() || c.window.is_some() {
+                    return Err(invalid(
+                        "control.windows".into(),
+                        "a scenario with `windows` lists its roads there, not in `region` or `window`".into(),
+                    ));
+                }
+                let windows = resolve_windows(&graph, &c.windows, &invalid)?;
+                region_roads = windows.iter().flat_map(|w| w.roads.clone()).collect();
+                region_roads.sort();
+                windows
+            }
+            _ => Vec::new(),
+        };
         Ok(ResolvedScenario {
             scenario,
             graph,
             origin: origin.to_string(),
             flow_roads,
             region_roads,
+            windows,
         })
     }
+}
+
+/// The windows of `control.windows` resolved against `graph`: each merge a junction, each road found, no road in
+/// two windows.
+fn resolve_windows(
+    graph: &LaneGraph,
+    windows: &[ControlWindow],
+    invalid: &dyn Fn(String, String) -> ScenarioError,
+) -> Result<Vec<ResolvedWindow>, ScenarioError> {
+    let mut owner: std::collections::HashMap<RoadId, usize> = Default::default();
+    let mut out = Vec::new();
+    for (k, w) in windows.iter().enumerate() {
+        let mut merges = Vec::new();
+        for (i, m) in w.merges().enumerate() {
+            let key = if i == 0 {
+                format!("control.windows[{k}].junction")
+            } else {
+                format!("control.windows[{k}].joined[{}]", i - 1)
+            };
+            merges.push(graph.find_junction(m).map_err(|e| invalid(key, e.to_string()))?);
+        }
+        if w.region.is_empty() {
+            return Err(invalid(format!("control.windows[{k}].region"), "is empty".into()));
+        }
+        let mut roads = Vec::new();
+        for (i, r) in w.region.iter().enumerate() {
+            let key = format!("control.windows[{k}].region[{i}]");
+            let found = graph.find_roads(r).map_err(|e| invalid(key.clone(), e.to_string()))?;
+            for road in found {
+                if let Some(&other) = owner.get(&road)
+                    && other != k
+                {
+                    return Err(invalid(key, format!("road {road} is also in control.windows[{other}]")));
+                }
+                owner.insert(road, k);
+                roads.push(road);
+            }
+        }
+        roads.sort();
+        roads.dedup();
+        out.push(ResolvedWindow { name: w.junction.clone(), merges, roads });
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
