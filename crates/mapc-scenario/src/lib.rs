@@ -7,7 +7,9 @@
 //! - **vehicle type**: IDM driver parameters; `controlled = true` marks an AV a policy may drive.
 //! - **controlled region**: the roads where AVs are driven by a policy (a transfer window), and `n_av`, how many.
 //! - **corridor**: a single-lane main road with the roads merging into it (what `simplify` makes of a highway).
-//! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's.
+//! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's; a scenario may
+//!   have several (`[[control.windows]]`), each its own controlled region, or a **joined** region spanning
+//!   merges whose windows overlap.
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
 
 pub mod compile;
