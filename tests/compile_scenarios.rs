@@ -289,13 +289,19 @@ fn i696_three_merges_as_several_windows() {
         "--json",
     ]);
     let windows = report["windows"].as_array().unwrap();
-    let names: Vec<&str> = windows.iter().map(|w| w["name"].as_str().unwrap()).collect();
+    let names: Vec<&str> = windows
+        .iter()
+        .map(|w| w["name"].as_str().unwrap())
+        .collect();
     assert_eq!(names, ["osm:61862553", "osm:62339771", "osm:61860453"]);
     let mut end_before = f64::NEG_INFINITY;
     for (w, up) in windows.iter().zip([600.0, 340.0, 240.0]) {
         let f = |k: &str| w[k].as_f64().unwrap();
         assert!((f("upstream_m") - up).abs() <= 0.5, "{w}");
-        assert!((w["merge_m"][0].as_f64().unwrap() - 200.0).abs() <= 0.5, "{w}");
+        assert!(
+            (w["merge_m"][0].as_f64().unwrap() - 200.0).abs() <= 0.5,
+            "{w}"
+        );
         assert!((f("downstream_m") - 100.0).abs() <= 0.5, "{w}");
         assert!((f("end_m") - f("start_m") - up - 100.0).abs() <= 0.5, "{w}");
         assert!(f("start_m") >= end_before, "windows overlap: {report}");
@@ -350,8 +356,18 @@ fn i696_three_merges_as_several_windows() {
     assert_eq!(kept, ["osm:61862553", "osm:61860453", "osm:62339791"]);
     let skipped = all["skipped"].as_array().unwrap();
     assert_eq!(skipped.len(), 2, "{all}");
-    assert!(skipped[0].as_str().unwrap().starts_with("J59 (osm:62339771)"));
-    assert!(skipped[1].as_str().unwrap().starts_with("J61 (osm:62339796)"));
+    assert!(
+        skipped[0]
+            .as_str()
+            .unwrap()
+            .starts_with("J59 (osm:62339771)")
+    );
+    assert!(
+        skipped[1]
+            .as_str()
+            .unwrap()
+            .starts_with("J61 (osm:62339796)")
+    );
 
     let (code, _, stderr) = mapc(&[
         "window",
@@ -363,6 +379,9 @@ fn i696_three_merges_as_several_windows() {
         dir.join("y.toml").to_str().unwrap(),
     ]);
     assert_eq!(code, 2);
-    assert!(stderr.contains("--ramp-vph R54") && stderr.contains("not on a merging road"), "{stderr}");
+    assert!(
+        stderr.contains("--ramp-vph R54") && stderr.contains("not on a merging road"),
+        "{stderr}"
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -155,7 +155,8 @@ fn run_several(
     output: &std::path::Path,
     demand: &DemandOverride,
 ) -> anyhow::Result<()> {
-    let mut requests: Vec<WindowRequest> = args.junction.iter().map(|j| WindowRequest::at(j)).collect();
+    let mut requests: Vec<WindowRequest> =
+        args.junction.iter().map(|j| WindowRequest::at(j)).collect();
     for (j, m) in &args.upstream_m {
         let want = corridor
             .find_junction(j)
@@ -220,7 +221,10 @@ fn run_several(
 }
 
 /// The corridor with every window highlighted.
-fn render_several(written: &WrittenWindows, args: &Args) -> anyhow::Result<mapc_viz::MapRenderSummary> {
+fn render_several(
+    written: &WrittenWindows,
+    args: &Args,
+) -> anyhow::Result<mapc_viz::MapRenderSummary> {
     let cut = &written.cut;
     let roads = cut.regions.iter().flat_map(|r| r.roads());
     let merges = cut.regions.iter().flat_map(|r| r.merges.clone());
@@ -244,7 +248,11 @@ fn render_several(written: &WrittenWindows, args: &Args) -> anyhow::Result<mapc_
         args.match_
     ));
     h.label = Some("transfer windows".to_string());
-    Ok(mapc_viz::render_map(&cut.graph, &h, args.render.as_ref().unwrap())?)
+    Ok(mapc_viz::render_map(
+        &cut.graph,
+        &h,
+        args.render.as_ref().unwrap(),
+    )?)
 }
 
 fn describe(g: &LaneGraph, j: mapc_graph::JunctionId) -> String {

@@ -110,7 +110,8 @@ pub fn evaluate(
         PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
             // Several windows: the corridor's figures and the flow past every merge, policy and humans.
             let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
-            let eps = crate::eval_windows::run_windows_policy(&ck.state.model, spec, cfg, &pairs, mode)?;
+            let eps =
+                crate::eval_windows::run_windows_policy(&ck.state.model, spec, cfg, &pairs, mode)?;
             let human = if baseline {
                 Some(crate::eval_windows::run_human_windows(spec, seeds)?)
             } else {
@@ -201,8 +202,15 @@ impl PolicyDriver {
     ) -> Result<Vec<EpisodeMetrics>, RlError> {
         match self {
             PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
-                let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
-                let eps = crate::eval_windows::run_windows_policy(&ck.state.model, spec, cfg, &pairs, mode)?;
+                let pairs: Vec<(u64, u64)> =
+                    seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
+                let eps = crate::eval_windows::run_windows_policy(
+                    &ck.state.model,
+                    spec,
+                    cfg,
+                    &pairs,
+                    mode,
+                )?;
                 Ok(eps.into_iter().map(|e| e.metrics).collect())
             }
             PolicyDriver::Centralized(cfg) => run_policy(ck, spec, cfg, seeds, mode),

@@ -255,8 +255,13 @@ pub fn write_windows(
         let roles = CorridorRoles::of(corridor).map_err(transform)?;
         for m in corridor_merges(corridor, &roles) {
             // A merge asked for by name keeps its own upstream length.
-            let j = corridor.find_junction(&m.junction).expect("a corridor's own junction");
-            if !requests.iter().any(|r| corridor.find_junction(&r.junction) == Ok(j)) {
+            let j = corridor
+                .find_junction(&m.junction)
+                .expect("a corridor's own junction");
+            if !requests
+                .iter()
+                .any(|r| corridor.find_junction(&r.junction) == Ok(j))
+            {
                 requests.push(WindowRequest::at(&m.junction));
             }
         }
@@ -270,8 +275,8 @@ pub fn write_windows(
     };
     let cut = cut_windows(corridor, &requests, &shape, overlap).map_err(transform)?;
     let (name, graph_file, graph) = output_names(output);
-    let scenario = windows_scenario(&cut, &resolved, &shape, &name, &graph_file, demand)
-        .map_err(transform)?;
+    let scenario =
+        windows_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
     save_checked(&cut.graph, &graph, &scenario, output)?;
     Ok(WrittenWindows {
         cut,

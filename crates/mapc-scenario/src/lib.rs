@@ -355,20 +355,32 @@ fn resolve_windows(
             } else {
                 format!("control.windows[{k}].joined[{}]", i - 1)
             };
-            merges.push(graph.find_junction(m).map_err(|e| invalid(key, e.to_string()))?);
+            merges.push(
+                graph
+                    .find_junction(m)
+                    .map_err(|e| invalid(key, e.to_string()))?,
+            );
         }
         if w.region.is_empty() {
-            return Err(invalid(format!("control.windows[{k}].region"), "is empty".into()));
+            return Err(invalid(
+                format!("control.windows[{k}].region"),
+                "is empty".into(),
+            ));
         }
         let mut roads = Vec::new();
         for (i, r) in w.region.iter().enumerate() {
             let key = format!("control.windows[{k}].region[{i}]");
-            let found = graph.find_roads(r).map_err(|e| invalid(key.clone(), e.to_string()))?;
+            let found = graph
+                .find_roads(r)
+                .map_err(|e| invalid(key.clone(), e.to_string()))?;
             for road in found {
                 if let Some(&other) = owner.get(&road)
                     && other != k
                 {
-                    return Err(invalid(key, format!("road {road} is also in control.windows[{other}]")));
+                    return Err(invalid(
+                        key,
+                        format!("road {road} is also in control.windows[{other}]"),
+                    ));
                 }
                 owner.insert(road, k);
                 roads.push(road);
@@ -376,7 +388,11 @@ fn resolve_windows(
         }
         roads.sort();
         roads.dedup();
-        out.push(ResolvedWindow { name: w.junction.clone(), merges, roads });
+        out.push(ResolvedWindow {
+            name: w.junction.clone(),
+            merges,
+            roads,
+        });
     }
     Ok(out)
 }

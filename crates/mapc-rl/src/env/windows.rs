@@ -52,7 +52,10 @@ impl MergeFlowCounter {
                     .junction(j)
                     .and_then(|jn| jn.outgoing.first().copied())
                     .ok_or_else(|| {
-                        super::scenario_error(spec, format!("window merge {j} has no road after it"))
+                        super::scenario_error(
+                            spec,
+                            format!("window merge {j} has no road after it"),
+                        )
                     })
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -289,7 +292,8 @@ impl WindowsEnv {
 /// The all-human episode of `seed` on `spec` (every AV driving as a human), with the flow past every window's
 /// merge; its traffic figures are those of `mapc_sim::run_baseline_spec`.
 pub fn human_windows_episode(spec: &SimSpec, seed: u64) -> Result<WindowsMetrics, RlError> {
-    let mut sim = Simulation::from_spec(spec.clone(), seed).map_err(|e| super::scenario_error(spec, e))?;
+    let mut sim =
+        Simulation::from_spec(spec.clone(), seed).map_err(|e| super::scenario_error(spec, e))?;
     let mut counter = MergeFlowCounter::new(spec, &MergeFlowCounter::merges_of(spec))?;
     counter.reset(&sim);
     while !sim.is_done() {

@@ -36,17 +36,26 @@ fn each_av_has_one_controller_and_none_after_leaving() {
         for (k, w) in env.windows.iter().enumerate() {
             assert!(w.controlled.len() <= 5);
             for &id in &w.controlled {
-                assert!(owner.insert(id, k).is_none(), "step {step}: AV {id} in two windows");
-                assert!(!left.contains(&(k, id)), "step {step}: AV {id} back under window {k}");
+                assert!(
+                    owner.insert(id, k).is_none(),
+                    "step {step}: AV {id} in two windows"
+                );
+                assert!(
+                    !left.contains(&(k, id)),
+                    "step {step}: AV {id} back under window {k}"
+                );
                 let v = sim.vehicle(id).unwrap();
-                assert!(w.contains(v.road, v.in_junction), "step {step}: AV {id} outside window {k}");
+                assert!(
+                    w.contains(v.road, v.in_junction),
+                    "step {step}: AV {id} outside window {k}"
+                );
                 controlled_by.entry(id).or_default().insert(k);
             }
             // An AV that dropped out of the FIFO without being on the window's roads has left it.
             for &id in &before[k] {
-                let inside = sim
-                    .vehicle(id)
-                    .is_some_and(|v| v.status == mapc_sim::VehicleStatus::Active && w.contains(v.road, v.in_junction));
+                let inside = sim.vehicle(id).is_some_and(|v| {
+                    v.status == mapc_sim::VehicleStatus::Active && w.contains(v.road, v.in_junction)
+                });
                 if !inside {
                     left.insert((k, id));
                 }
@@ -85,7 +94,8 @@ fn one_window_in_the_windows_form_is_the_single_window_env() {
         region: std::mem::take(&mut control.region),
     }];
     let as_windows =
-        mapc_scenario::ResolvedScenario::resolve(scenario, &root().join("scenarios"), "w.toml").unwrap();
+        mapc_scenario::ResolvedScenario::resolve(scenario, &root().join("scenarios"), "w.toml")
+            .unwrap();
     assert_eq!(as_windows.region_roads, single.region_roads);
     let ck = Checkpoint::load(&root().join("policies/simple_merge_outflow.json")).unwrap();
     let cfg = crate::eval::env_config_for(&ck, Path::new("p"), "s", Some(5)).unwrap();
@@ -100,7 +110,8 @@ fn one_window_in_the_windows_form_is_the_single_window_env() {
             mode: ActionMode::Mean,
             record: false,
         };
-        let a = crate::rollout::run_episode(&mut merge, &ck.state.model, &mut scratch, settings).unwrap();
+        let a = crate::rollout::run_episode(&mut merge, &ck.state.model, &mut scratch, settings)
+            .unwrap();
         let mut windows = WindowsEnv::new(spec_of(as_windows.clone()), cfg.clone()).unwrap();
         let b = crate::eval_windows::run_windows_episode(
             &mut windows,
@@ -125,6 +136,9 @@ fn human_windows_episode_is_the_baseline() {
     assert_eq!(with_flows.metrics, EpisodeMetrics::from(&base[0]));
     assert_eq!(with_flows.merge_flows.len(), 3);
     for f in &with_flows.merge_flows {
-        assert!(*f > 500.0 && *f <= with_flows.metrics.inflow, "{with_flows:?}");
+        assert!(
+            *f > 500.0 && *f <= with_flows.metrics.inflow,
+            "{with_flows:?}"
+        );
     }
 }

@@ -5,7 +5,9 @@
 //! window alone is cut exactly as before several existed. Two windows whose intervals overlap by more than
 //! [`SNAP_M`] are refused, the later one skipped, or both joined into one region ([`Overlap`]).
 
-use super::{Boundary, SNAP_M, SourceShape, boundary_downstream, boundary_upstream, merge_list, sum};
+use super::{
+    Boundary, SNAP_M, SourceShape, boundary_downstream, boundary_upstream, merge_list, sum,
+};
 use crate::transform::{self, CorridorRoles, TransformError, pick_route::describe_junction};
 use mapc_graph::{JunctionId, LaneGraph, RoadId};
 
@@ -188,12 +190,12 @@ fn check_fits(
         ))
     };
     let (before, after) = (&roles.main[..i], &roles.main[i..]);
-    boundary_upstream(g, before, up).ok_or_else(|| short("the main road before", sum(g, before), up))?;
+    boundary_upstream(g, before, up)
+        .ok_or_else(|| short("the main road before", sum(g, before), up))?;
     boundary_upstream(g, &feeder, shape.merge_m)
         .ok_or_else(|| short("the merging road into", sum(g, &feeder), shape.merge_m))?;
-    boundary_downstream(g, after, shape.downstream_m).ok_or_else(|| {
-        short("the main road after", sum(g, after), shape.downstream_m)
-    })?;
+    boundary_downstream(g, after, shape.downstream_m)
+        .ok_or_else(|| short("the main road after", sum(g, after), shape.downstream_m))?;
     Ok(())
 }
 
@@ -215,11 +217,17 @@ fn apply_boundary(
         }
         Boundary::AtStartOf(k) => {
             let at = g.road(chain[k]).unwrap().from;
-            notes.push(format!("{what}: boundary at junction {}", describe_junction(g, at)));
+            notes.push(format!(
+                "{what}: boundary at junction {}",
+                describe_junction(g, at)
+            ));
         }
         Boundary::AtEndOf(k) => {
             let at = g.road(chain[k]).unwrap().to;
-            notes.push(format!("{what}: boundary at junction {}", describe_junction(g, at)));
+            notes.push(format!(
+                "{what}: boundary at junction {}",
+                describe_junction(g, at)
+            ));
         }
     }
     Ok(())
@@ -237,7 +245,14 @@ fn cut_region(
         if merges.len() == 1 {
             what.to_string()
         } else {
-            format!("{what} ({})", merges.iter().map(|m| m.0.to_string()).collect::<Vec<_>>().join("+"))
+            format!(
+                "{what} ({})",
+                merges
+                    .iter()
+                    .map(|m| m.0.to_string())
+                    .collect::<Vec<_>>()
+                    .join("+")
+            )
         }
     };
     let (first, up) = merges[0];
@@ -249,7 +264,8 @@ fn cut_region(
     let (last, _) = *merges.last().unwrap();
     let (i_last, _) = locate(g, &roles, last)?;
     let after: Vec<RoadId> = roles.main[i_last..].to_vec();
-    let b_down = boundary_downstream(g, &after, shape.downstream_m).expect("checked before cutting");
+    let b_down =
+        boundary_downstream(g, &after, shape.downstream_m).expect("checked before cutting");
     apply_boundary(g, &prefix("upstream"), &before, b_up, notes)?;
     apply_boundary(g, &prefix("merging road"), &feeder, b_merge, notes)?;
     // The further merges' merging roads (a joined region), each on the graph as the previous cuts left it.
@@ -346,7 +362,9 @@ pub fn cut_windows(
             .map_err(|e| TransformError::NotACorridor(format!("--junction: {e}")))?;
         let name = describe_junction(&g, j);
         if located.iter().any(|l| l.junction == j) {
-            return Err(TransformError::NotACorridor(format!("{name} is asked for twice")));
+            return Err(TransformError::NotACorridor(format!(
+                "{name} is asked for twice"
+            )));
         }
         let up = r.upstream_m.unwrap_or(shape.upstream_m);
         if !(up.is_finite() && up > 0.0) {
@@ -450,8 +468,17 @@ pub fn cut_window(
     junction: &str,
     shape: &SourceShape,
 ) -> Result<WindowCut, TransformError> {
-    let cut = cut_windows(corridor, &[WindowRequest::at(junction)], shape, Overlap::Refuse)?;
-    let region = cut.regions.into_iter().next().expect("one window asked for");
+    let cut = cut_windows(
+        corridor,
+        &[WindowRequest::at(junction)],
+        shape,
+        Overlap::Refuse,
+    )?;
+    let region = cut
+        .regions
+        .into_iter()
+        .next()
+        .expect("one window asked for");
     Ok(WindowCut {
         upstream_m: region.upstream_m,
         merge_m: region.merge_m[0],

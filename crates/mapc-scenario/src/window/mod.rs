@@ -170,4 +170,3 @@ fn merge_list(g: &LaneGraph, roles: &CorridorRoles) -> String {
         list.join(", ")
     }
 }
-

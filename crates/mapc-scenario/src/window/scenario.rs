@@ -53,7 +53,10 @@ fn matched_to(source: &ResolvedScenario) -> String {
 fn ramp_entries(g: &LaneGraph, roles: &CorridorRoles) -> Vec<RoadId> {
     let at = |f: &Vec<RoadId>| {
         let j = g.road(*f.last().unwrap()).unwrap().to;
-        roles.main.iter().position(|r| g.road(*r).unwrap().from == j)
+        roles
+            .main
+            .iter()
+            .position(|r| g.road(*r).unwrap().from == j)
     };
     let mut feeders: Vec<&Vec<RoadId>> = roles.feeders.iter().collect();
     feeders.sort_by_key(|f| (at(f), f[0]));

@@ -67,8 +67,7 @@ fn window_cuts_exactly_and_keeps_the_corridor() {
     assert_eq!(control.n_av, 5);
     assert_eq!(control.region.len(), cut.region().len());
     // The scenario comes back from TOML exactly, and resolves against its graph.
-    let back =
-        Scenario::from_toml(&scenario.to_toml(), std::path::Path::new("w.toml")).unwrap();
+    let back = Scenario::from_toml(&scenario.to_toml(), std::path::Path::new("w.toml")).unwrap();
     assert_eq!(back, scenario);
     let dir = std::env::temp_dir().join(format!("mapc-window-test-{}", std::process::id()));
     cut.graph.save(&dir.join("w.graph.json")).unwrap();
@@ -173,7 +172,10 @@ fn check_regions(cut: &WindowsCut, ups: &[f64], shape: &SourceShape) {
     let mut seen = std::collections::HashSet::new();
     for (r, up) in cut.regions.iter().zip(ups) {
         assert!((r.upstream_m - up).abs() <= SNAP_M, "{r:?}");
-        assert!((r.downstream_m - shape.downstream_m).abs() <= SNAP_M, "{r:?}");
+        assert!(
+            (r.downstream_m - shape.downstream_m).abs() <= SNAP_M,
+            "{r:?}"
+        );
         for m in &r.merge_m {
             assert!((m - shape.merge_m).abs() <= SNAP_M, "{r:?}");
         }
@@ -208,7 +210,9 @@ fn two_windows_that_overlap_are_refused_naming_both() {
     .to_string();
     // J59 lies 446.0 m after J43: its 600 m before reach 254.0 m back past J43's end (100 m after J43).
     assert!(
-        err.contains("J43 (osm:61862553)") && err.contains("J59 (osm:62339771)") && err.contains("overlap by 254.0 m"),
+        err.contains("J43 (osm:61862553)")
+            && err.contains("J59 (osm:62339771)")
+            && err.contains("overlap by 254.0 m"),
         "{err}"
     );
 }
@@ -217,12 +221,17 @@ fn two_windows_that_overlap_are_refused_naming_both() {
 fn all_keeps_the_first_of_overlapping_merges() {
     let g = i696();
     let shape = simple_merge_shape();
-    let all: Vec<WindowRequest> = crate::simplify::corridor_merges(&g, &CorridorRoles::of(&g).unwrap())
-        .iter()
-        .map(|m| WindowRequest::at(&m.junction))
-        .collect();
+    let all: Vec<WindowRequest> =
+        crate::simplify::corridor_merges(&g, &CorridorRoles::of(&g).unwrap())
+            .iter()
+            .map(|m| WindowRequest::at(&m.junction))
+            .collect();
     let cut = cut_windows(&g, &all, &shape, Overlap::SkipLater).unwrap();
-    let merges: Vec<String> = cut.regions.iter().map(|r| r.merges[0].to_string()).collect();
+    let merges: Vec<String> = cut
+        .regions
+        .iter()
+        .map(|r| r.merges[0].to_string())
+        .collect();
     assert_eq!(merges, ["J43", "J37", "J60"]);
     assert_eq!(cut.skipped.len(), 2, "{:?}", cut.skipped);
     assert!(cut.skipped[0].starts_with("J59 (osm:62339771)") && cut.skipped[0].contains("J43"));
@@ -247,7 +256,11 @@ fn windows_cut_shorter_upstream_fit_three_close_merges() {
         Overlap::Refuse,
     )
     .unwrap();
-    let merges: Vec<String> = cut.regions.iter().map(|r| r.merges[0].to_string()).collect();
+    let merges: Vec<String> = cut
+        .regions
+        .iter()
+        .map(|r| r.merges[0].to_string())
+        .collect();
     assert_eq!(merges, ["J43", "J59", "J37"]);
     check_regions(&cut, &[600.0, 340.0, 240.0], &shape);
     // One metre more before J37 and its window reaches into J59's.
@@ -279,7 +292,10 @@ fn joined_windows_make_one_region_over_three_merges() {
     check_regions(&cut, &[600.0], &shape);
     // From 600 m before J43 to 100 m after J37: 600 + 446.0 + 345.7 + 100 m of main road.
     let span = r.end_m() - r.start_m();
-    assert!((span - (600.0 + 3983.0886 - 3191.4065 + 100.0)).abs() < 0.01, "{span}");
+    assert!(
+        (span - (600.0 + 3983.0886 - 3191.4065 + 100.0)).abs() < 0.01,
+        "{span}"
+    );
     // A single window through the general cut is the one-window cut.
     let one = cut_window(&g, "J43", &shape).unwrap();
     let many = cut_windows(&g, &[WindowRequest::at("J43")], &shape, Overlap::Refuse).unwrap();
