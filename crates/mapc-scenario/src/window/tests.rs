@@ -1,4 +1,5 @@
 use super::*;
+use crate::Scenario;
 use crate::simplify::simplify;
 use crate::transform::SimplifyOptions;
 use crate::transform::test_maps::{build, highway};
