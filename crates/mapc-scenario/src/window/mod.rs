@@ -98,8 +98,6 @@ impl SourceShape {
     }
 }
 
-/// A corridor cut for a window.
-
 /// Where along a chain of roads (driving order) a distance measured from one end falls.
 enum Boundary {
     /// At the start of road `chain[k]` (an existing junction).
