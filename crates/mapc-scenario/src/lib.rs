@@ -471,4 +471,52 @@ mod tests {
             "{err}"
         );
     }
+
+    /// `control.windows` resolves each window's roads; a road in two windows, or windows beside `region`, are
+    /// errors naming the key.
+    #[test]
+    fn several_windows_resolve_and_bad_ones_are_named() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+        let path = dir.join("i696_3merge.toml");
+        let r = ResolvedScenario::load(path.to_str().unwrap()).unwrap();
+        assert_eq!(r.windows.len(), 3);
+        assert_eq!(r.windows[0].name, "osm:61862553");
+        assert_eq!(
+            r.windows[0].merges,
+            vec![r.graph.find_junction("osm:61862553").unwrap()]
+        );
+        let union: usize = r.windows.iter().map(|w| w.roads.len()).sum();
+        assert_eq!(union, r.region_roads.len());
+
+        let mut s = r.scenario.clone();
+        let c = s.control.as_mut().unwrap();
+        let stolen = c.windows[0].region[0].clone();
+        c.windows[2].region.push(stolen.clone());
+        let err = ResolvedScenario::resolve(s, &dir, "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            format!(
+                "m.toml: control.windows[2].region[3]: road {stolen} is also in control.windows[0]"
+            )
+        );
+
+        let mut s = r.scenario.clone();
+        s.control.as_mut().unwrap().region = vec!["R54".into()];
+        let err = ResolvedScenario::resolve(s, &dir, "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("m.toml: control.windows: "), "{err}");
+
+        let mut s = r.scenario.clone();
+        s.control.as_mut().unwrap().windows[1].junction = "osm:1".into();
+        let err = ResolvedScenario::resolve(s, &dir, "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("m.toml: control.windows[1].junction: ") && err.contains("osm:1"),
+            "{err}"
+        );
+    }
 }
