@@ -261,3 +261,127 @@ fn bad_junctions_are_clear_errors() {
     assert!(stderr.contains("osm-way:1"), "{stderr}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The multi-window cut on the shipped corridor: `mapc window` with three merges (two cut shorter upstream)
+/// writes exactly `scenarios/i696_3merge.toml`; each window's lengths are the asked ones to 0.5 m; two windows
+/// that overlap are refused naming both merges and the overlap; `--all` keeps J43, J37 and J60 and says which
+/// merges it skipped.
+#[test]
+fn i696_three_merges_as_several_windows() {
+    let dir = scratch("multi");
+    let corridor = "scenarios/i696.corridor.graph.json";
+    let out = dir.join("i696_3merge.toml");
+    let report = mapc_json(&[
+        "window",
+        corridor,
+        "--junction",
+        "osm:61862553",
+        "--junction",
+        "osm:62339771",
+        "--junction",
+        "osm:61860453",
+        "--upstream-m",
+        "osm:62339771=340",
+        "--upstream-m",
+        "osm:61860453=240",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    let windows = report["windows"].as_array().unwrap();
+    let names: Vec<&str> = windows
+        .iter()
+        .map(|w| w["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["osm:61862553", "osm:62339771", "osm:61860453"]);
+    let mut end_before = f64::NEG_INFINITY;
+    for (w, up) in windows.iter().zip([600.0, 340.0, 240.0]) {
+        let f = |k: &str| w[k].as_f64().unwrap();
+        assert!((f("upstream_m") - up).abs() <= 0.5, "{w}");
+        assert!(
+            (w["merge_m"][0].as_f64().unwrap() - 200.0).abs() <= 0.5,
+            "{w}"
+        );
+        assert!((f("downstream_m") - 100.0).abs() <= 0.5, "{w}");
+        assert!((f("end_m") - f("start_m") - up - 100.0).abs() <= 0.5, "{w}");
+        assert!(f("start_m") >= end_before, "windows overlap: {report}");
+        end_before = f("end_m");
+    }
+    // The written scenario and graph are the shipped ones, byte for byte.
+    for name in ["i696_3merge.toml", "i696_3merge.graph.json"] {
+        let written = std::fs::read(dir.join(name)).unwrap();
+        let shipped = std::fs::read(root().join("scenarios").join(name)).unwrap();
+        assert!(written == shipped, "{name} differs from scenarios/{name}");
+    }
+    // Demand on every merging road; three controlled regions with disjoint roads.
+    let resolved = mapc_scenario::ResolvedScenario::load(out.to_str().unwrap()).unwrap();
+    assert_eq!(resolved.scenario.flows.len(), 2 + 5);
+    assert_eq!(resolved.windows.len(), 3);
+    let roads: usize = resolved.windows.iter().map(|w| w.roads.len()).sum();
+    assert_eq!(roads, resolved.region_roads.len());
+
+    let (code, _, stderr) = mapc(&[
+        "window",
+        corridor,
+        "--junction",
+        "osm:61862553",
+        "--junction",
+        "osm:62339771",
+        "-o",
+        dir.join("x.toml").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("J43 (osm:61862553)")
+            && stderr.contains("J59 (osm:62339771)")
+            && stderr.contains("overlap by 254.0 m"),
+        "{stderr}"
+    );
+    assert!(!dir.join("x.toml").exists());
+
+    let all = mapc_json(&[
+        "window",
+        corridor,
+        "--all",
+        "-o",
+        dir.join("all.toml").to_str().unwrap(),
+        "--json",
+    ]);
+    let kept: Vec<&str> = all["windows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(kept, ["osm:61862553", "osm:61860453", "osm:62339791"]);
+    let skipped = all["skipped"].as_array().unwrap();
+    assert_eq!(skipped.len(), 2, "{all}");
+    assert!(
+        skipped[0]
+            .as_str()
+            .unwrap()
+            .starts_with("J59 (osm:62339771)")
+    );
+    assert!(
+        skipped[1]
+            .as_str()
+            .unwrap()
+            .starts_with("J61 (osm:62339796)")
+    );
+
+    let (code, _, stderr) = mapc(&[
+        "window",
+        corridor,
+        "--all",
+        "--ramp-vph",
+        "R54=100",
+        "-o",
+        dir.join("y.toml").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("--ramp-vph R54") && stderr.contains("not on a merging road"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

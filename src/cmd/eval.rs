@@ -147,6 +147,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             p.display()
         );
     }
+    for m in report.merges.iter().flatten() {
+        let human = m
+            .baseline
+            .map(|b| format!("   human {:8.2} ± {:5.2} veh/h", b.mean, b.ci95))
+            .unwrap_or_default();
+        let welch = m
+            .welch
+            .map(|w| format!("   Welch t = {:.2}", w.t))
+            .unwrap_or_default();
+        println!(
+            "  past merge {:>4} (window {}): policy {:8.2} ± {:5.2} veh/h{human}{welch}",
+            m.merge, m.window, m.flow.mean, m.flow.ci95
+        );
+    }
     println!("  {:.1} s wall", report.wall_s);
     // a run directory means its last checkpoint; its best policy is a file beside it (a hint: a best.json that
     // cannot be read is named, and the evaluation above stands)

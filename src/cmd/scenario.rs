@@ -51,6 +51,11 @@ fn show(a: ShowArgs) -> anyhow::Result<()> {
             },
             "flows": flows,
             "region_roads": r.region_roads.iter().map(|x| x.to_string()).collect::<Vec<_>>(),
+            "windows": r.windows.iter().map(|w| serde_json::json!({
+                "junction": w.name,
+                "merges": w.merges.iter().map(|j| j.to_string()).collect::<Vec<_>>(),
+                "roads": w.roads.iter().map(|x| x.to_string()).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
@@ -75,7 +80,19 @@ fn show(a: ShowArgs) -> anyhow::Result<()> {
             to
         );
     }
-    if !r.region_roads.is_empty() {
+    if !r.windows.is_empty() {
+        let n_av = r.scenario.control.as_ref().map_or(0, |c| c.n_av);
+        for (k, w) in r.windows.iter().enumerate() {
+            let roads: Vec<String> = w.roads.iter().map(|x| road_text(*x)).collect();
+            let merges: Vec<String> = w.merges.iter().map(|j| j.to_string()).collect();
+            println!(
+                "# window {k} at {} (merges {}; up to {n_av} AVs): {}",
+                w.name,
+                merges.join(", "),
+                roads.join(", ")
+            );
+        }
+    } else if !r.region_roads.is_empty() {
         let roads: Vec<String> = r.region_roads.iter().map(|x| road_text(*x)).collect();
         println!("# controlled region: {}", roads.join(", "));
     }

@@ -203,6 +203,29 @@ fn windows(resolved: &ResolvedScenario) -> Vec<WindowMark> {
     if resolved.region_roads.is_empty() {
         return Vec::new();
     }
+    if !control.windows.is_empty() {
+        // Several windows: one mark each, with the roads the scenario resolved for it.
+        return control
+            .windows
+            .iter()
+            .zip(&resolved.windows)
+            .map(|(w, r)| {
+                let merges: Vec<String> = w.merges().cloned().collect();
+                WindowMark {
+                    roads: r.roads.clone(),
+                    junction: Some(w.junction.clone()),
+                    label: format!(
+                        "window at {} ({:.0} m up, {:.0} m of merging road, {:.0} m down; {} AVs)",
+                        merges.join(" + "),
+                        w.upstream_m,
+                        w.merge_m,
+                        w.downstream_m,
+                        control.n_av
+                    ),
+                }
+            })
+            .collect();
+    }
     let (junction, label) = match &control.window {
         Some(w) => (
             Some(w.junction.clone()),

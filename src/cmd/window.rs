@@ -1,19 +1,40 @@
-//! `mapc window`: cut a window around a merge of a corridor, matched to a source scenario's lengths, and write
-//! the scenario (the whole corridor, the window as the controlled region, the source's demand).
+//! `mapc window`: cut a window around a merge of a corridor (or several, `--junction` repeated or `--all`),
+//! matched to a source scenario's lengths, and write the scenario (the whole corridor, each window a controlled
+//! region, the source's demand on every entry).
 
 use super::simplify::{RouteArgs, map_stem};
+use anyhow::Context;
 use mapc_graph::LaneGraph;
-use mapc_scenario::compile::{corridor_of, write_window};
-use mapc_scenario::window::DemandOverride;
+use mapc_scenario::compile::{WrittenWindows, corridor_of, write_window, write_windows};
+use mapc_scenario::window::{DemandOverride, WindowRequest};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
     /// A corridor graph from `mapc simplify`, or a map (.osm, .osm.pbf, .net.xml) simplified first.
     pub map: PathBuf,
-    /// The merge junction: `J12`, `osm:NODE` or a SUMO junction id.
-    #[arg(long, value_name = "J")]
-    pub junction: String,
+    /// The merge junction: `J12`, `osm:NODE` or a SUMO junction id; repeat it for several windows, one
+    /// controlled region each (two that overlap are refused, unless --join).
+    #[arg(long, value_name = "J", required_unless_present = "all")]
+    pub junction: Vec<String>,
+    /// A window at every merge of the corridor whose window fits; of two that overlap the first along the
+    /// corridor is kept (merges given by --junction are kept with their --upstream-m).
+    #[arg(long)]
+    pub all: bool,
+    /// Join overlapping windows into one controlled region (one FIFO) instead of refusing them.
+    #[arg(long)]
+    pub join: bool,
+    /// Main road before merge J in its window, if not the source's (`J=METRES`, repeatable): windows cut
+    /// shorter upstream to fit between close merges.
+    #[arg(long = "upstream-m", value_name = "J=M", value_parser = parse_pair)]
+    pub upstream_m: Vec<(String, f64)>,
+    /// Demand of one merging road, named by any of its roads (`ROAD=VPH`, repeatable; 0: no flow there).
+    #[arg(long = "ramp-vph", value_name = "ROAD=VPH", value_parser = parse_pair)]
+    pub ramp_vph: Vec<(String, f64)>,
+    /// With one window: a flow on every merging road of the corridor, not only the window's (several windows
+    /// always have one).
+    #[arg(long)]
+    pub every_ramp: bool,
     /// The source scenario whose lengths and demand the window takes: a built-in name or a scenario file.
     #[arg(
         long = "match",
@@ -46,8 +67,21 @@ pub struct Args {
     pub json: bool,
 }
 
+/// `KEY=NUMBER`.
+fn parse_pair(s: &str) -> Result<(String, f64), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}`: expected KEY=NUMBER"))?;
+    let v: f64 = v
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}`: `{v}` is not a number"))?;
+    Ok((k.trim().to_string(), v))
+}
+
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let corridor = corridor_of(&args.map, &args.junction, &args.route.options())?;
+    let first = args.junction.first().cloned().unwrap_or_default();
+    let corridor = corridor_of(&args.map, &first, &args.route.options())?;
     let output = args
         .output
         .clone()
@@ -56,11 +90,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         main_vph: args.main_vph,
         merge_vph: args.merge_vph,
         n_av: args.n_av,
+        ramp_vph: args.ramp_vph.clone(),
+        every_ramp: args.every_ramp,
     };
+    if args.junction.len() != 1 || args.all || args.join || !args.upstream_m.is_empty() {
+        return run_several(&args, &corridor, &output, &demand);
+    }
     let written = write_window(
         &corridor,
         &args.map,
-        &args.junction,
+        &args.junction[0],
         &args.match_,
         &output,
         &demand,
@@ -72,7 +111,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             h.title = Some(format!(
                 "{}: window at {} matched to {} ({:.0} / {:.0} / {:.0} m)",
                 map_stem(&args.map),
-                args.junction,
+                args.junction[0],
                 args.match_,
                 cut.upstream_m,
                 cut.merge_m,
@@ -107,6 +146,113 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("drew {}", r.path.display());
     }
     Ok(())
+}
+
+/// Several windows (`--junction` repeated, `--all`, `--join` or `--upstream-m`).
+fn run_several(
+    args: &Args,
+    corridor: &LaneGraph,
+    output: &std::path::Path,
+    demand: &DemandOverride,
+) -> anyhow::Result<()> {
+    let mut requests: Vec<WindowRequest> =
+        args.junction.iter().map(|j| WindowRequest::at(j)).collect();
+    for (j, m) in &args.upstream_m {
+        let want = corridor
+            .find_junction(j)
+            .with_context(|| format!("--upstream-m {j}={m}"))?;
+        let Some(r) = requests
+            .iter_mut()
+            .find(|r| corridor.find_junction(&r.junction).ok() == Some(want))
+        else {
+            anyhow::bail!("--upstream-m {j}={m}: {j} is not one of the --junction merges");
+        };
+        r.upstream_m = Some(*m);
+    }
+    let written = write_windows(
+        corridor,
+        &args.map,
+        &requests,
+        args.all,
+        args.join,
+        &args.match_,
+        output,
+        demand,
+    )?;
+    let render = match &args.render {
+        Some(_) => Some(render_several(&written, args)?),
+        None => None,
+    };
+    if args.json {
+        let report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    let g = &written.cut.graph;
+    for r in &written.cut.regions {
+        let merges: Vec<String> = r.merges.iter().map(|j| describe(g, *j)).collect();
+        println!(
+            "window at {} matched to {}: {:.2} m before the merge, {:.2} m of merging road, {:.2} m after \
+             ({:.1} m to {:.1} m along the main road)",
+            merges.join(" + "),
+            args.match_,
+            r.upstream_m,
+            r.merge_m[0],
+            r.downstream_m,
+            r.start_m(),
+            r.end_m()
+        );
+    }
+    for n in &written.cut.notes {
+        println!("  {n}");
+    }
+    for s in &written.cut.skipped {
+        println!("skipped {s}");
+    }
+    println!(
+        "wrote {} and {}",
+        written.scenario.display(),
+        written.graph.display()
+    );
+    if let Some(r) = render {
+        println!("drew {}", r.path.display());
+    }
+    Ok(())
+}
+
+/// The corridor with every window highlighted.
+fn render_several(
+    written: &WrittenWindows,
+    args: &Args,
+) -> anyhow::Result<mapc_viz::MapRenderSummary> {
+    let cut = &written.cut;
+    let roads = cut.regions.iter().flat_map(|r| r.roads());
+    let merges = cut.regions.iter().flat_map(|r| r.merges.clone());
+    let mut h = mapc_viz::Highlight::window(roads, merges);
+    let names: Vec<String> = cut
+        .regions
+        .iter()
+        .map(|r| {
+            r.merges
+                .iter()
+                .map(|j| j.to_string())
+                .collect::<Vec<_>>()
+                .join("+")
+        })
+        .collect();
+    h.title = Some(format!(
+        "{}: {} windows ({}) matched to {}",
+        map_stem(&args.map),
+        cut.regions.len(),
+        names.join(", "),
+        args.match_
+    ));
+    h.label = Some("transfer windows".to_string());
+    Ok(mapc_viz::render_map(
+        &cut.graph,
+        &h,
+        args.render.as_ref().unwrap(),
+    )?)
 }
 
 fn describe(g: &LaneGraph, j: mapc_graph::JunctionId) -> String {

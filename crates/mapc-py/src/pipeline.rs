@@ -91,6 +91,7 @@ pub fn window(
         main_vph,
         merge_vph,
         n_av,
+        ..DemandOverride::default()
     };
     let written =
         write_window(&corridor, &map, junction, match_, &output, &demand).map_err(mapc_error)?;

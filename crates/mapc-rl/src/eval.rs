@@ -92,6 +92,9 @@ pub struct EvalReport {
     pub baseline: Option<FigureSet>,
     pub comparison: Option<Comparison>,
     pub wall_s: f64,
+    /// With several windows and a centralized policy: the flow past every window's merge.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merges: Option<Vec<crate::eval_windows::MergeFlowReport>>,
 }
 
 /// A policy evaluated on a scenario over `seeds` (in parallel, results in seed order), with the human baseline on
@@ -111,13 +114,37 @@ pub fn evaluate(
     let start = std::time::Instant::now();
     let driver =
         PolicyDriver::for_scenario(ck, policy_file, scenario, Some(scenario_n_av.unwrap_or(5)))?;
-    let runs = driver.run(ck, spec, seeds, mode)?;
+    let (runs, human, merges) = match &driver {
+        PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
+            // Several windows: the corridor's figures and the flow past every merge, policy and humans.
+            let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
+            let eps =
+                crate::eval_windows::run_windows_policy(&ck.state.model, spec, cfg, &pairs, mode)?;
+            let human = if baseline {
+                Some(crate::eval_windows::run_human_windows(spec, seeds)?)
+            } else {
+                None
+            };
+            let merges = crate::eval_windows::merge_flow_reports(spec, &eps, human.as_deref());
+            let metrics = |v: &[crate::env::windows::WindowsMetrics]| -> Vec<EpisodeMetrics> {
+                v.iter().map(|m| m.metrics).collect()
+            };
+            (metrics(&eps), human.as_deref().map(metrics), Some(merges))
+        }
+        _ => {
+            let runs = driver.run(ck, spec, seeds, mode)?;
+            let human = if baseline {
+                Some(run_human(spec, seeds)?)
+            } else {
+                None
+            };
+            (runs, human, None)
+        }
+    };
     let figs = FigureSet::of(&runs);
-    let (baseline, comparison) = if baseline {
-        let human = run_human(spec, seeds)?;
-        (Some(FigureSet::of(&human)), Some(compare(&runs, &human)))
-    } else {
-        (None, None)
+    let (baseline, comparison) = match &human {
+        Some(human) => (Some(FigureSet::of(human)), Some(compare(&runs, human))),
+        None => (None, None),
     };
     let report = EvalReport {
         outflow: figs.outflow,
@@ -134,6 +161,7 @@ pub fn evaluate(
         baseline,
         comparison,
         wall_s: start.elapsed().as_secs_f64(),
+        merges,
     };
     Ok((report, driver))
 }
@@ -181,6 +209,18 @@ impl PolicyDriver {
         mode: ActionMode,
     ) -> Result<Vec<EpisodeMetrics>, RlError> {
         match self {
+            PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
+                let pairs: Vec<(u64, u64)> =
+                    seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
+                let eps = crate::eval_windows::run_windows_policy(
+                    &ck.state.model,
+                    spec,
+                    cfg,
+                    &pairs,
+                    mode,
+                )?;
+                Ok(eps.into_iter().map(|e| e.metrics).collect())
+            }
             PolicyDriver::Centralized(cfg) => run_policy(ck, spec, cfg, seeds, mode),
             PolicyDriver::Distributed(cfg) => run_distributed_policy(ck, spec, cfg, seeds, mode),
         }
@@ -196,6 +236,9 @@ impl PolicyDriver {
         out: &mut impl std::io::Write,
     ) -> Result<EpisodeMetrics, RlError> {
         match self {
+            PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
+                trace_windows_policy(ck, spec, cfg, seed, mode, out)
+            }
             PolicyDriver::Centralized(cfg) => trace_policy(ck, spec, cfg, seed, mode, out),
             PolicyDriver::Distributed(cfg) => {
                 trace_distributed_policy(ck, spec, cfg, seed, mode, out)
@@ -241,7 +284,7 @@ pub fn env_config_for(
 }
 
 /// The action-noise stream of an evaluation episode (used by `--sample`), fixed by the environment seed.
-fn eval_noise_seed(seed: u64) -> u64 {
+pub(crate) fn eval_noise_seed(seed: u64) -> u64 {
     mix_seed(&[seed, 0xE7A1])
 }
 
@@ -283,6 +326,27 @@ pub fn trace_policy(
         &mut |env: &MergeEnv| write_sim_rows(env.simulation(), out),
     )?;
     Ok(ep.metrics)
+}
+
+/// [`trace_policy`] on a several-window scenario (the same episode as the evaluation gives for that seed).
+pub fn trace_windows_policy(
+    ck: &Checkpoint,
+    spec: &SimSpec,
+    cfg: &MergeEnvConfig,
+    seed: u64,
+    mode: ActionMode,
+    out: &mut impl std::io::Write,
+) -> Result<EpisodeMetrics, RlError> {
+    let mut env = crate::env::windows::WindowsEnv::new(spec.clone(), cfg.clone())?;
+    let settings = trace_settings(seed, env.horizon(), mode);
+    let m = crate::eval_windows::run_windows_episode(
+        &mut env,
+        &ck.state.model,
+        &mut crate::ppo::tensor::Scratch::default(),
+        settings,
+        &mut |env| write_sim_rows(env.simulation(), out),
+    )?;
+    Ok(m.metrics)
 }
 
 /// The evaluation episode of `seed`, without training data (what a trace runs).

@@ -18,15 +18,20 @@
 //! - **Checkpoint**: weights, optimiser state, KL coefficient, RNG state and the observation spec (`PolicySpec`),
 //!   enough to resume a run exactly or to evaluate the policy on another scenario.
 //! - **Outflow / inflow**: vehicles leaving / entering the network per hour over the episode.
+//! - **Window**: one controlled region around a merge; a scenario may have several (`[[control.windows]]`), each
+//!   with its own FIFO of `N_AV` AVs and its own observation (`env::windows`). **Flow past a merge**: vehicles
+//!   entering the road after the merge per hour.
 //!
 //! Layout: `ppo::tensor` holds all tensor code (burn for the loss gradient, plain `f32` for rollout inference),
 //! `ppo::gae` the advantage estimation, `rollout` the `Env` trait and parallel collection, `env` the merge
-//! environment on `mapc-sim`, `run` a training run on disk, `eval` evaluation against the human baseline.
+//! environment on `mapc-sim`, `run` a training run on disk, `eval` evaluation against the human baseline, `eval_windows`
+//! its several-window form (one FIFO per window, the flow past every merge).
 
 pub mod checkpoint;
 pub mod env;
 pub mod error;
 pub mod eval;
+pub mod eval_windows;
 pub mod log;
 pub mod ppo;
 pub mod rng;

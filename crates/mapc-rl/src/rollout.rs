@@ -103,7 +103,12 @@ pub enum ActionMode {
 }
 
 /// The action for a policy output: its mean, or a sample of the Gaussian.
-fn action_of(mean: &[f32], log_std: &[f32], mode: ActionMode, rng: &mut Rng) -> Vec<f32> {
+pub(crate) fn action_of(
+    mean: &[f32],
+    log_std: &[f32],
+    mode: ActionMode,
+    rng: &mut Rng,
+) -> Vec<f32> {
     match mode {
         ActionMode::Mean => mean.to_vec(),
         ActionMode::Sample => mean

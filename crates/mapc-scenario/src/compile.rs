@@ -7,7 +7,10 @@ use crate::simplify::{
 };
 use crate::transform::pick_route::describe_junction;
 use crate::transform::{Corridor, CorridorRoles, SimplifyOptions, TransformError};
-use crate::window::{DemandOverride, SourceShape, WindowCut, cut_window, window_scenario};
+use crate::window::{
+    DemandOverride, Overlap, SourceShape, WindowCut, WindowRequest, WindowsCut, cut_window,
+    cut_windows, junction_name, window_scenario, windows_scenario,
+};
 use crate::{ResolvedScenario, ScenarioError};
 use mapc_graph::LaneGraph;
 use serde_json::{Value, json};
@@ -176,10 +179,38 @@ pub fn write_window(
     output: &Path,
     demand: &DemandOverride,
 ) -> Result<WrittenWindow, CompileError> {
+    check_demand(demand)?;
+    let (resolved, shape) = source_shape(source)?;
+    let transform = |error: TransformError| CompileError::Transform {
+        path: map.to_path_buf(),
+        error,
+    };
+    let cut = cut_window(corridor, junction, &shape).map_err(transform)?;
+    let (name, graph_file, graph) = output_names(output);
+    let scenario =
+        window_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
+    save_checked(&cut.graph, &graph, &scenario, output)?;
+    Ok(WrittenWindow {
+        cut,
+        shape,
+        scenario: output.to_path_buf(),
+        graph,
+    })
+}
+
+/// Demand overrides must be zero or positive rates.
+fn check_demand(demand: &DemandOverride) -> Result<(), CompileError> {
+    let per_road = demand
+        .ramp_vph
+        .iter()
+        .map(|(road, v)| (format!("--ramp-vph {road}"), Some(*v)));
     for (name, v) in [
-        ("--main-vph", demand.main_vph),
-        ("--merge-vph", demand.merge_vph),
-    ] {
+        ("--main-vph".to_string(), demand.main_vph),
+        ("--merge-vph".to_string(), demand.merge_vph),
+    ]
+    .into_iter()
+    .chain(per_road)
+    {
         if let Some(v) = v
             && !(v.is_finite() && v >= 0.0)
         {
@@ -188,19 +219,24 @@ pub fn write_window(
             )));
         }
     }
+    Ok(())
+}
+
+/// The source scenario (`--match`) and the shape of its merge.
+fn source_shape(source: &str) -> Result<(ResolvedScenario, SourceShape), CompileError> {
     let resolved = ResolvedScenario::load(source).map_err(|e| CompileError::Source {
         arg: source.to_string(),
         error: e,
     })?;
-    let transform = |error: TransformError| CompileError::Transform {
-        path: map.to_path_buf(),
-        error,
-    };
     let shape = SourceShape::of(&resolved).map_err(|e| CompileError::SourceShape {
         arg: source.to_string(),
         error: e,
     })?;
-    let cut = cut_window(corridor, junction, &shape).map_err(transform)?;
+    Ok((resolved, shape))
+}
+
+/// The scenario's name, its graph file's name and path (beside the scenario).
+fn output_names(output: &Path) -> (String, String, PathBuf) {
     let name = output
         .file_name()
         .and_then(|n| n.to_str())
@@ -209,14 +245,20 @@ pub fn write_window(
         .unwrap_or_else(|| "window".into());
     let graph_file = format!("{name}.graph.json");
     let graph = output.parent().unwrap_or(Path::new("")).join(&graph_file);
-    let scenario =
-        window_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
-    cut.graph
-        .save(&graph)
-        .map_err(|error| CompileError::Graph {
-            path: graph.clone(),
-            error,
-        })?;
+    (name, graph_file, graph)
+}
+
+/// Writes the graph and the scenario and loads the scenario back.
+fn save_checked(
+    g: &LaneGraph,
+    graph: &Path,
+    scenario: &crate::Scenario,
+    output: &Path,
+) -> Result<(), CompileError> {
+    g.save(graph).map_err(|error| CompileError::Graph {
+        path: graph.to_path_buf(),
+        error,
+    })?;
     scenario.save(output)?;
     ResolvedScenario::load(&output.display().to_string()).map_err(|error| {
         CompileError::ReadBack {
@@ -224,12 +266,115 @@ pub fn write_window(
             error,
         }
     })?;
-    Ok(WrittenWindow {
+    Ok(())
+}
+
+/// Several windows cut from a corridor and written.
+#[derive(Clone, Debug)]
+pub struct WrittenWindows {
+    pub cut: WindowsCut,
+    pub shape: SourceShape,
+    pub scenario: PathBuf,
+    pub graph: PathBuf,
+}
+
+/// Cut the windows of `requests` (or, with `all`, of every merge of the corridor whose window fits, the first of
+/// two overlapping ones kept) matched to `source`, and write them as one scenario with one controlled region per
+/// window (`join`: overlapping windows become one region instead of an error).
+#[allow(clippy::too_many_arguments)]
+pub fn write_windows(
+    corridor: &LaneGraph,
+    map: &Path,
+    requests: &[WindowRequest],
+    all: bool,
+    join: bool,
+    source: &str,
+    output: &Path,
+    demand: &DemandOverride,
+) -> Result<WrittenWindows, CompileError> {
+    check_demand(demand)?;
+    let (resolved, shape) = source_shape(source)?;
+    let transform = |error: TransformError| CompileError::Transform {
+        path: map.to_path_buf(),
+        error,
+    };
+    let mut requests = requests.to_vec();
+    if all {
+        let roles = CorridorRoles::of(corridor).map_err(transform)?;
+        for m in corridor_merges(corridor, &roles) {
+            // A merge asked for by name keeps its own upstream length.
+            let j = corridor
+                .find_junction(&m.junction)
+                .expect("a corridor's own junction");
+            if !requests
+                .iter()
+                .any(|r| corridor.find_junction(&r.junction) == Ok(j))
+            {
+                requests.push(WindowRequest::at(&m.junction));
+            }
+        }
+    }
+    let overlap = if join {
+        Overlap::Join
+    } else if all {
+        Overlap::SkipLater
+    } else {
+        Overlap::Refuse
+    };
+    let cut = cut_windows(corridor, &requests, &shape, overlap).map_err(transform)?;
+    let (name, graph_file, graph) = output_names(output);
+    let scenario =
+        windows_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
+    save_checked(&cut.graph, &graph, &scenario, output)?;
+    Ok(WrittenWindows {
         cut,
         shape,
         scenario: output.to_path_buf(),
         graph,
     })
+}
+
+impl WrittenWindows {
+    /// The JSON report `mapc window --json` prints for several windows: every window's merges, lengths and
+    /// offsets along the corridor's main road.
+    pub fn report(&self, matched_to: &str, render: Option<&Path>) -> Value {
+        let g = &self.cut.graph;
+        let windows: Vec<Value> = self
+            .cut
+            .regions
+            .iter()
+            .map(|r| {
+                json!({
+                    "junction": r.merges[0].to_string(),
+                    "name": junction_name(g, r.merges[0]),
+                    "joined": r.merges[1..].iter().map(|j| junction_name(g, *j)).collect::<Vec<_>>(),
+                    "merge_at_m": r.merge_at_m,
+                    "start_m": r.start_m(),
+                    "end_m": r.end_m(),
+                    "upstream_m": r.upstream_m,
+                    "merge_m": r.merge_m,
+                    "downstream_m": r.downstream_m,
+                    "region": r.roads().iter().map(|x| x.to_string()).collect::<Vec<_>>(),
+                    "merge_entries": r.merge_entries.iter().map(|x| x.to_string()).collect::<Vec<_>>(),
+                })
+            })
+            .collect();
+        json!({
+            "matched_to": matched_to,
+            "source": {
+                "upstream_m": self.shape.upstream_m,
+                "merge_m": self.shape.merge_m,
+                "downstream_m": self.shape.downstream_m,
+            },
+            "windows": windows,
+            "skipped": self.cut.skipped,
+            "main_entry": self.cut.main_entry.to_string(),
+            "cuts": self.cut.notes,
+            "scenario": self.scenario.display().to_string(),
+            "graph": self.graph.display().to_string(),
+            "render": render.map(|r| r.display().to_string()),
+        })
+    }
 }
 
 impl WrittenWindow {

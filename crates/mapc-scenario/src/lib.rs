@@ -7,9 +7,11 @@
 //! - **vehicle type**: IDM driver parameters; `controlled = true` marks an AV a policy may drive.
 //! - **controlled region**: the roads where AVs are driven by a policy (a transfer window), and `n_av`, how many.
 //! - **corridor**: a single-lane main road with the roads merging into it (what `simplify` makes of a highway).
-//! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's.
 //! - **merge distribution**: a Simple Merge whose demand, right of way, lengths, speed limit and AV share are
 //!   drawn per episode from the seed (`distribution`), to train one policy over many merges.
+//! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's; a scenario may
+//!   have several (`[[control.windows]]`), each its own controlled region, or a **joined** region spanning
+//!   merges whose windows overlap.
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
 
 pub mod compile;
@@ -22,7 +24,7 @@ pub mod window;
 
 pub use model::*;
 
-use mapc_graph::{LaneGraph, RoadId};
+use mapc_graph::{JunctionId, LaneGraph, RoadId};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
@@ -62,8 +64,21 @@ pub struct ResolvedScenario {
     pub origin: String,
     /// Each flow's entry road and optional last road.
     pub flow_roads: Vec<(RoadId, Option<RoadId>)>,
-    /// The control region's roads (empty: the whole network).
+    /// The control region's roads (empty: the whole network); with several windows, all their roads.
     pub region_roads: Vec<RoadId>,
+    /// The windows of a several-window scenario (`control.windows`), in the file's order; empty otherwise.
+    pub windows: Vec<ResolvedWindow>,
+}
+
+/// One controlled region of a several-window scenario, its references checked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedWindow {
+    /// How the scenario names its first merge (`osm:NODE`, a SUMO id or `J12`).
+    pub name: String,
+    /// Its merge junctions, in driving order.
+    pub merges: Vec<JunctionId>,
+    /// Its roads, sorted.
+    pub roads: Vec<RoadId>,
 }
 
 impl Scenario {
@@ -101,7 +116,7 @@ impl Scenario {
                 flow("ramp_human", generator::RAMP_ENTRY, 200.0, "human", 7.5),
             ],
             initial_vehicles: Some(InitialVehicles { count: 5, vehicle_type: "human".to_string(), speed_mps: 0.0 }),
-            control: Some(Control { n_av: 5, region: vec![], window: None }),
+            control: Some(Control { n_av: 5, region: vec![], window: None, windows: vec![] }),
         }
     }
 
@@ -309,14 +324,89 @@ impl ResolvedScenario {
             region_roads.sort();
             region_roads.dedup();
         }
+        let windows = match &scenario.control {
+            Some(c) if !c.windows.is_empty() => {
+                if !c.region.is_empty() || c.window.is_some() {
+                    return Err(invalid(
+                        "control.windows".into(),
+                        "a scenario with `windows` lists its roads there, not in `region` or `window`".into(),
+                    ));
+                }
+                let windows = resolve_windows(&graph, &c.windows, &invalid)?;
+                region_roads = windows.iter().flat_map(|w| w.roads.clone()).collect();
+                region_roads.sort();
+                windows
+            }
+            _ => Vec::new(),
+        };
         Ok(ResolvedScenario {
             scenario,
             graph,
             origin: origin.to_string(),
             flow_roads,
             region_roads,
+            windows,
         })
     }
+}
+
+/// The windows of `control.windows` resolved against `graph`: each merge a junction, each road found, no road in
+/// two windows.
+fn resolve_windows(
+    graph: &LaneGraph,
+    windows: &[ControlWindow],
+    invalid: &dyn Fn(String, String) -> ScenarioError,
+) -> Result<Vec<ResolvedWindow>, ScenarioError> {
+    let mut owner: std::collections::HashMap<RoadId, usize> = Default::default();
+    let mut out = Vec::new();
+    for (k, w) in windows.iter().enumerate() {
+        let mut merges = Vec::new();
+        for (i, m) in w.merges().enumerate() {
+            let key = if i == 0 {
+                format!("control.windows[{k}].junction")
+            } else {
+                format!("control.windows[{k}].joined[{}]", i - 1)
+            };
+            merges.push(
+                graph
+                    .find_junction(m)
+                    .map_err(|e| invalid(key, e.to_string()))?,
+            );
+        }
+        if w.region.is_empty() {
+            return Err(invalid(
+                format!("control.windows[{k}].region"),
+                "is empty".into(),
+            ));
+        }
+        let mut roads = Vec::new();
+        for (i, r) in w.region.iter().enumerate() {
+            let key = format!("control.windows[{k}].region[{i}]");
+            let found = graph
+                .find_roads(r)
+                .map_err(|e| invalid(key.clone(), e.to_string()))?;
+            for road in found {
+                if let Some(&other) = owner.get(&road)
+                    && other != k
+                {
+                    return Err(invalid(
+                        key,
+                        format!("road {road} is also in control.windows[{other}]"),
+                    ));
+                }
+                owner.insert(road, k);
+                roads.push(road);
+            }
+        }
+        roads.sort();
+        roads.dedup();
+        out.push(ResolvedWindow {
+            name: w.junction.clone(),
+            merges,
+            roads,
+        });
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -390,6 +480,54 @@ mod tests {
             .to_string();
         assert!(
             err.starts_with("s.toml: flows[0].from: no road `nowhere`"),
+            "{err}"
+        );
+    }
+
+    /// `control.windows` resolves each window's roads; a road in two windows, or windows beside `region`, are
+    /// errors naming the key.
+    #[test]
+    fn several_windows_resolve_and_bad_ones_are_named() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+        let path = dir.join("i696_3merge.toml");
+        let r = ResolvedScenario::load(path.to_str().unwrap()).unwrap();
+        assert_eq!(r.windows.len(), 3);
+        assert_eq!(r.windows[0].name, "osm:61862553");
+        assert_eq!(
+            r.windows[0].merges,
+            vec![r.graph.find_junction("osm:61862553").unwrap()]
+        );
+        let union: usize = r.windows.iter().map(|w| w.roads.len()).sum();
+        assert_eq!(union, r.region_roads.len());
+
+        let mut s = r.scenario.clone();
+        let c = s.control.as_mut().unwrap();
+        let stolen = c.windows[0].region[0].clone();
+        c.windows[2].region.push(stolen.clone());
+        let err = ResolvedScenario::resolve(s, &dir, "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            format!(
+                "m.toml: control.windows[2].region[3]: road {stolen} is also in control.windows[0]"
+            )
+        );
+
+        let mut s = r.scenario.clone();
+        s.control.as_mut().unwrap().region = vec!["R54".into()];
+        let err = ResolvedScenario::resolve(s, &dir, "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("m.toml: control.windows: "), "{err}");
+
+        let mut s = r.scenario.clone();
+        s.control.as_mut().unwrap().windows[1].junction = "osm:1".into();
+        let err = ResolvedScenario::resolve(s, &dir, "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("m.toml: control.windows[1].junction: ") && err.contains("osm:1"),
             "{err}"
         );
     }

@@ -198,6 +198,38 @@ pub struct Control {
     /// How a window region was cut, for display.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub window: Option<WindowInfo>,
+    /// Several controlled regions (`[[control.windows]]`), each with its own FIFO of up to `n_av` AVs; an AV is
+    /// controlled by the window it is in. Exclusive with `region` and `window` (a one-window scenario keeps
+    /// those).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub windows: Vec<ControlWindow>,
+}
+
+/// One controlled region of a several-window scenario: a window around `junction` (and, for a joined region,
+/// around the further merges in `joined`) with its roads.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlWindow {
+    /// The merge junction the window is cut around (for a joined region, its first merge).
+    pub junction: String,
+    /// Further merges inside a region that joins overlapping windows, in driving order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joined: Vec<String>,
+    /// The scenario whose lengths the window matches.
+    pub matched_to: String,
+    /// Main road before `junction`, merging road(s), main road after the last merge (m).
+    pub upstream_m: f64,
+    pub merge_m: f64,
+    pub downstream_m: f64,
+    /// The window's roads.
+    pub region: Vec<String>,
+}
+
+impl ControlWindow {
+    /// The merges of the window, in driving order.
+    pub fn merges(&self) -> impl Iterator<Item = &String> {
+        std::iter::once(&self.junction).chain(&self.joined)
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

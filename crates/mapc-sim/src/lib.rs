@@ -60,7 +60,7 @@ pub use metrics::{BaselineReport, MeanCi, RunMetrics, Summary, run_baseline_spec
 pub use network::Network;
 pub use scenario::{run_baseline, spec_from_scenario};
 pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleView};
-pub use spec::{FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
+pub use spec::{ControlWindowSpec, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
 pub use trace::trace_run;
 
 /// Header of trace CSV files.

@@ -104,6 +104,15 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
         },
         n_av: sc.control.as_ref().map_or(0, |c| c.n_av as usize),
         main_line,
+        control_windows: rs
+            .windows
+            .iter()
+            .map(|w| crate::ControlWindowSpec {
+                name: w.name.clone(),
+                merges: w.merges.clone(),
+                roads: w.roads.clone(),
+            })
+            .collect(),
     })
 }
 

@@ -93,6 +93,21 @@ pub struct SimSpec {
     pub n_av: usize,
     /// The corridor's main line, upstream first (for corridor positions in traces); empty: derived.
     pub main_line: Vec<RoadId>,
+    /// The windows of a several-window scenario, each its own controlled region (their union is
+    /// `control_region`); the simulator does not use them, the environment keeps one FIFO of `n_av` per window.
+    /// Empty for a scenario with one region.
+    pub control_windows: Vec<ControlWindowSpec>,
+}
+
+/// One window of a several-window scenario.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ControlWindowSpec {
+    /// How the scenario names its first merge.
+    pub name: String,
+    /// Its merge junctions, in driving order.
+    pub merges: Vec<mapc_graph::JunctionId>,
+    /// Its roads, sorted.
+    pub roads: Vec<RoadId>,
 }
 
 impl SimSpec {

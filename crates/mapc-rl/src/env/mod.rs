@@ -1,6 +1,7 @@
 pub mod distributed;
 pub mod merge;
 pub mod obs;
+pub mod windows;
 
 use mapc_sim::{SimSpec, Simulation};
 

@@ -1,0 +1,496 @@
+//! Cutting windows out of a corridor: one window ([`cut_window`]) or several along it ([`cut_windows`]).
+//!
+//! Every window spans an interval of the main road, `upstream_m` before its merge to `downstream_m` after it.
+//! Windows are cut in driving order, each boundary recomputed on the graph the previous cuts left, so one
+//! window alone is cut exactly as before several existed. Two windows whose intervals overlap by more than
+//! [`SNAP_M`] are refused, the later one skipped, or both joined into one region ([`Overlap`]).
+
+use super::{
+    Boundary, SNAP_M, SourceShape, boundary_downstream, boundary_upstream, merge_list, sum,
+};
+use crate::transform::{self, CorridorRoles, TransformError, pick_route::describe_junction};
+use mapc_graph::{JunctionId, LaneGraph, RoadId};
+
+/// A corridor cut for one window.
+#[derive(Clone, Debug)]
+pub struct WindowCut {
+    pub graph: LaneGraph,
+    pub roles: CorridorRoles,
+    pub junction: JunctionId,
+    /// The roads inside the window: main road before the merge, merging road, main road after.
+    pub upstream_roads: Vec<RoadId>,
+    pub merge_roads: Vec<RoadId>,
+    pub downstream_roads: Vec<RoadId>,
+    pub upstream_m: f64,
+    pub merge_m: f64,
+    pub downstream_m: f64,
+    /// Where main-road and merging-road traffic enters the corridor.
+    pub main_entry: RoadId,
+    pub merge_entry: RoadId,
+    /// One line per boundary: where it fell and whether a road was cut.
+    pub notes: Vec<String>,
+}
+
+impl WindowCut {
+    pub fn region(&self) -> Vec<RoadId> {
+        let mut r: Vec<RoadId> = self
+            .upstream_roads
+            .iter()
+            .chain(&self.merge_roads)
+            .chain(&self.downstream_roads)
+            .copied()
+            .collect();
+        r.sort();
+        r
+    }
+}
+
+/// One window asked for: its merge (any id `find_junction` takes) and, if not the source's, how much main road
+/// before the merge it spans.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WindowRequest {
+    pub junction: String,
+    pub upstream_m: Option<f64>,
+}
+
+impl WindowRequest {
+    pub fn at(junction: &str) -> WindowRequest {
+        WindowRequest {
+            junction: junction.to_string(),
+            upstream_m: None,
+        }
+    }
+}
+
+/// What to do with two windows whose main-road intervals overlap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Overlap {
+    /// An error naming both merges and the overlap (asked-for windows).
+    Refuse,
+    /// Keep the first along the corridor, skip the later one and say so (`--all`).
+    SkipLater,
+    /// One controlled region spanning both merges.
+    Join,
+}
+
+/// One controlled region of a cut corridor: a window around one merge, or overlapping windows joined.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CutRegion {
+    /// Its merges, in driving order.
+    pub merges: Vec<JunctionId>,
+    /// Where each merge lies along the main road (m from the corridor's start).
+    pub merge_at_m: Vec<f64>,
+    /// Main road before the first merge, between the merges, after the last one.
+    pub upstream_roads: Vec<RoadId>,
+    pub between_roads: Vec<RoadId>,
+    pub downstream_roads: Vec<RoadId>,
+    /// Each merge's merging road inside the region, in driving order.
+    pub merge_roads: Vec<Vec<RoadId>>,
+    pub upstream_m: f64,
+    /// Each merging road's length inside the region.
+    pub merge_m: Vec<f64>,
+    pub downstream_m: f64,
+    /// Where each merge's merging-road traffic enters the corridor.
+    pub merge_entries: Vec<RoadId>,
+}
+
+impl CutRegion {
+    pub fn roads(&self) -> Vec<RoadId> {
+        let mut r: Vec<RoadId> = self
+            .upstream_roads
+            .iter()
+            .chain(&self.between_roads)
+            .chain(self.merge_roads.iter().flatten())
+            .chain(&self.downstream_roads)
+            .copied()
+            .collect();
+        r.sort();
+        r
+    }
+    /// The region's extent along the main road (m from the corridor's start).
+    pub fn start_m(&self) -> f64 {
+        self.merge_at_m[0] - self.upstream_m
+    }
+    pub fn end_m(&self) -> f64 {
+        self.merge_at_m.last().unwrap() + self.downstream_m
+    }
+}
+
+/// A corridor cut for several windows.
+#[derive(Clone, Debug)]
+pub struct WindowsCut {
+    pub graph: LaneGraph,
+    pub roles: CorridorRoles,
+    /// The regions in driving order.
+    pub regions: Vec<CutRegion>,
+    /// Where main-road traffic enters.
+    pub main_entry: RoadId,
+    /// One line per boundary.
+    pub notes: Vec<String>,
+    /// Merges asked for but left out (with [`Overlap::SkipLater`]), and why.
+    pub skipped: Vec<String>,
+}
+
+/// A merge located on the corridor before any cut.
+struct Located {
+    junction: JunctionId,
+    name: String,
+    at_m: f64,
+    upstream_m: f64,
+}
+
+/// Where merge `j` sits: the index of the main road leaving it and its merging road; errors list the merges.
+fn locate(
+    g: &LaneGraph,
+    roles: &CorridorRoles,
+    j: JunctionId,
+) -> Result<(usize, Vec<RoadId>), TransformError> {
+    let name = describe_junction(g, j);
+    let Some(i) = roles
+        .main
+        .iter()
+        .position(|r| g.road(*r).unwrap().from == j)
+        .filter(|i| *i > 0)
+    else {
+        return Err(TransformError::NotACorridor(format!(
+            "{name} is not inside the corridor's main road; merges on this corridor: {}",
+            merge_list(g, roles)
+        )));
+    };
+    let feeders: Vec<&Vec<RoadId>> = roles
+        .feeders
+        .iter()
+        .filter(|f| g.road(*f.last().unwrap()).unwrap().to == j)
+        .collect();
+    if feeders.len() != 1 {
+        let kind = g.junction(j).unwrap().kind;
+        return Err(TransformError::NotACorridor(format!(
+            "{name} is a {kind:?} junction with {} merging roads, not a merge; merges on this corridor: {}",
+            feeders.len(),
+            merge_list(g, roles)
+        )));
+    }
+    Ok((i, feeders[0].clone()))
+}
+
+/// Checks that the window of `j` fits (upstream `up` m, the shape's merging road and downstream).
+fn check_fits(
+    g: &LaneGraph,
+    roles: &CorridorRoles,
+    j: JunctionId,
+    up: f64,
+    shape: &SourceShape,
+) -> Result<(), TransformError> {
+    let (i, feeder) = locate(g, roles, j)?;
+    let name = describe_junction(g, j);
+    let short = |what: &str, have: f64, need: f64| {
+        TransformError::Cut(format!(
+            "{what} {name} is {have:.1} m long; the window needs {need:.1} m ({:.1} m short)",
+            need - have
+        ))
+    };
+    let (before, after) = (&roles.main[..i], &roles.main[i..]);
+    boundary_upstream(g, before, up)
+        .ok_or_else(|| short("the main road before", sum(g, before), up))?;
+    boundary_upstream(g, &feeder, shape.merge_m)
+        .ok_or_else(|| short("the merging road into", sum(g, &feeder), shape.merge_m))?;
+    boundary_downstream(g, after, shape.downstream_m)
+        .ok_or_else(|| short("the main road after", sum(g, after), shape.downstream_m))?;
+    Ok(())
+}
+
+/// Cuts `chain` at boundary `b` (or notes the junction it falls on).
+fn apply_boundary(
+    g: &mut LaneGraph,
+    what: &str,
+    chain: &[RoadId],
+    b: Boundary,
+    notes: &mut Vec<String>,
+) -> Result<(), TransformError> {
+    match b {
+        Boundary::Inside(k, offset) => {
+            let (_, _, nj) = transform::cut_road(g, chain[k], offset)?;
+            notes.push(format!(
+                "{what}: cut road {} at {offset:.2} m from its start (new junction {nj})",
+                chain[k]
+            ));
+        }
+        Boundary::AtStartOf(k) => {
+            let at = g.road(chain[k]).unwrap().from;
+            notes.push(format!(
+                "{what}: boundary at junction {}",
+                describe_junction(g, at)
+            ));
+        }
+        Boundary::AtEndOf(k) => {
+            let at = g.road(chain[k]).unwrap().to;
+            notes.push(format!(
+                "{what}: boundary at junction {}",
+                describe_junction(g, at)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The boundaries of one region, cut on the current graph: upstream of its first merge, each merging road,
+/// downstream of its last merge (in that order, so that a lone window is cut as it always was).
+fn cut_region(
+    g: &mut LaneGraph,
+    merges: &[(JunctionId, f64)],
+    shape: &SourceShape,
+    notes: &mut Vec<String>,
+) -> Result<(), TransformError> {
+    let prefix = |what: &str| {
+        if merges.len() == 1 {
+            what.to_string()
+        } else {
+            format!(
+                "{what} ({})",
+                merges
+                    .iter()
+                    .map(|m| m.0.to_string())
+                    .collect::<Vec<_>>()
+                    .join("+")
+            )
+        }
+    };
+    let (first, up) = merges[0];
+    let roles = CorridorRoles::of(g)?;
+    let (i, feeder) = locate(g, &roles, first)?;
+    let before: Vec<RoadId> = roles.main[..i].to_vec();
+    let b_up = boundary_upstream(g, &before, up).expect("checked before cutting");
+    let b_merge = boundary_upstream(g, &feeder, shape.merge_m).expect("checked before cutting");
+    let (last, _) = *merges.last().unwrap();
+    let (i_last, _) = locate(g, &roles, last)?;
+    let after: Vec<RoadId> = roles.main[i_last..].to_vec();
+    let b_down =
+        boundary_downstream(g, &after, shape.downstream_m).expect("checked before cutting");
+    apply_boundary(g, &prefix("upstream"), &before, b_up, notes)?;
+    apply_boundary(g, &prefix("merging road"), &feeder, b_merge, notes)?;
+    // The further merges' merging roads (a joined region), each on the graph as the previous cuts left it.
+    for &(j, _) in &merges[1..] {
+        let roles = CorridorRoles::of(g)?;
+        let (_, feeder) = locate(g, &roles, j)?;
+        let b = boundary_upstream(g, &feeder, shape.merge_m).expect("checked before cutting");
+        apply_boundary(g, &format!("merging road into {j}"), &feeder, b, notes)?;
+    }
+    apply_boundary(g, &prefix("downstream"), &after, b_down, notes)?;
+    Ok(())
+}
+
+/// Roads at the end of `chain` (driving order) whose lengths add up to at most `limit` (+ [`SNAP_M`]).
+fn take_back(g: &LaneGraph, chain: &[RoadId], limit: f64) -> Vec<RoadId> {
+    let mut acc = 0.0;
+    let mut out = Vec::new();
+    for r in chain.iter().rev() {
+        let len = g.road(*r).unwrap().length_m;
+        if acc + len > limit + SNAP_M {
+            break;
+        }
+        acc += len;
+        out.insert(0, *r);
+    }
+    out
+}
+
+/// Roads at the start of `chain` whose lengths add up to at most `limit` (+ [`SNAP_M`]).
+fn take_forward(g: &LaneGraph, chain: &[RoadId], limit: f64) -> Vec<RoadId> {
+    let mut acc = 0.0;
+    let mut out = Vec::new();
+    for r in chain {
+        let len = g.road(*r).unwrap().length_m;
+        if acc + len > limit + SNAP_M {
+            break;
+        }
+        acc += len;
+        out.push(*r);
+    }
+    out
+}
+
+/// The roads of a region once every cut is made.
+fn collect_region(
+    g: &LaneGraph,
+    roles: &CorridorRoles,
+    merges: &[(JunctionId, f64)],
+    shape: &SourceShape,
+) -> CutRegion {
+    let mut at = Vec::new();
+    let mut merge_roads = Vec::new();
+    let mut index = Vec::new();
+    for &(j, _) in merges {
+        let (i, feeder) = locate(g, roles, j).expect("located before cutting");
+        at.push(sum(g, &roles.main[..i]));
+        index.push(i);
+        merge_roads.push((take_back(g, &feeder, shape.merge_m), feeder[0]));
+    }
+    let (first, last) = (index[0], *index.last().unwrap());
+    let upstream_roads = take_back(g, &roles.main[..first], merges[0].1);
+    let between_roads = roles.main[first..last].to_vec();
+    let downstream_roads = take_forward(g, &roles.main[last..], shape.downstream_m);
+    CutRegion {
+        merges: merges.iter().map(|m| m.0).collect(),
+        merge_at_m: at,
+        upstream_m: sum(g, &upstream_roads),
+        downstream_m: sum(g, &downstream_roads),
+        merge_m: merge_roads.iter().map(|(r, _)| sum(g, r)).collect(),
+        merge_entries: merge_roads.iter().map(|(_, e)| *e).collect(),
+        merge_roads: merge_roads.into_iter().map(|(r, _)| r).collect(),
+        upstream_roads,
+        between_roads,
+        downstream_roads,
+    }
+}
+
+/// Cut the windows of `requests` (each matched to `shape`, its upstream length possibly shortened) out of a
+/// corridor. Merges that do not fit are errors, or skipped with [`Overlap::SkipLater`]; overlaps are handled
+/// as `overlap` says.
+pub fn cut_windows(
+    corridor: &LaneGraph,
+    requests: &[WindowRequest],
+    shape: &SourceShape,
+    overlap: Overlap,
+) -> Result<WindowsCut, TransformError> {
+    let mut g = corridor.clone();
+    let roles = CorridorRoles::of(&g)?;
+    let mut located: Vec<Located> = Vec::new();
+    let mut skipped = Vec::new();
+    for r in requests {
+        let j = g
+            .find_junction(&r.junction)
+            .map_err(|e| TransformError::NotACorridor(format!("--junction: {e}")))?;
+        let name = describe_junction(&g, j);
+        if located.iter().any(|l| l.junction == j) {
+            return Err(TransformError::NotACorridor(format!(
+                "{name} is asked for twice"
+            )));
+        }
+        let up = r.upstream_m.unwrap_or(shape.upstream_m);
+        if !(up.is_finite() && up > 0.0) {
+            return Err(TransformError::Cut(format!(
+                "{name}: the upstream length must be a positive number of metres, not {up}"
+            )));
+        }
+        if let Err(e) = check_fits(&g, &roles, j, up, shape) {
+            if overlap == Overlap::SkipLater {
+                skipped.push(format!("{name}: {e}"));
+                continue;
+            }
+            return Err(e);
+        }
+        let (i, _) = locate(&g, &roles, j)?;
+        located.push(Located {
+            junction: j,
+            name,
+            at_m: sum(&g, &roles.main[..i]),
+            upstream_m: up,
+        });
+    }
+    if located.is_empty() {
+        return Err(TransformError::Cut(format!(
+            "no window fits on this corridor: {}",
+            skipped.join("; ")
+        )));
+    }
+    located.sort_by(|a, b| a.at_m.total_cmp(&b.at_m));
+    // Group the windows: each group is one region (one window, or overlapping ones joined).
+    let mut groups: Vec<Vec<&Located>> = Vec::new();
+    for l in &located {
+        if let Some(group) = groups.last_mut() {
+            let prev = group.last().unwrap();
+            let gap_overlap = (prev.at_m + shape.downstream_m) - (l.at_m - l.upstream_m);
+            if gap_overlap > SNAP_M {
+                let message = format!(
+                    "the windows at {} and {} overlap by {gap_overlap:.1} m: the first ends {:.1} m along the main \
+                     road, the second starts at {:.1} m ({:.1} m before its merge)",
+                    prev.name,
+                    l.name,
+                    prev.at_m + shape.downstream_m,
+                    l.at_m - l.upstream_m,
+                    l.upstream_m
+                );
+                match overlap {
+                    Overlap::Refuse => return Err(TransformError::Cut(message)),
+                    Overlap::SkipLater => {
+                        skipped.push(format!("{}: {message}", l.name));
+                        continue;
+                    }
+                    Overlap::Join => {
+                        group.push(l);
+                        continue;
+                    }
+                }
+            }
+        }
+        groups.push(vec![l]);
+    }
+    let merges_of = |group: &Vec<&Located>| -> Vec<(JunctionId, f64)> {
+        group.iter().map(|l| (l.junction, l.upstream_m)).collect()
+    };
+    let mut notes = Vec::new();
+    for group in &groups {
+        cut_region(&mut g, &merges_of(group), shape, &mut notes)?;
+    }
+    let problems = g.invariant_violations();
+    if !problems.is_empty() {
+        return Err(TransformError::Invariant {
+            step: transform::CUT_AT.into(),
+            violations: problems,
+        });
+    }
+    // Read the roles again (cut pieces carry their road's role) and collect the roads within the boundaries.
+    let roles = CorridorRoles::of(&g)?;
+    let regions: Vec<CutRegion> = groups
+        .iter()
+        .map(|group| collect_region(&g, &roles, &merges_of(group), shape))
+        .collect();
+    let pieces = mapc_graph::Topology::new(&g).component_count();
+    if pieces != 1 {
+        return Err(TransformError::Invariant {
+            step: transform::CUT_AT.into(),
+            violations: vec![format!("the cut corridor falls into {pieces} pieces")],
+        });
+    }
+    Ok(WindowsCut {
+        main_entry: roles.main[0],
+        roles,
+        graph: g,
+        regions,
+        notes,
+        skipped,
+    })
+}
+
+/// Cut the window around merge `junction` (any id `find_junction` takes) of a corridor graph.
+pub fn cut_window(
+    corridor: &LaneGraph,
+    junction: &str,
+    shape: &SourceShape,
+) -> Result<WindowCut, TransformError> {
+    let cut = cut_windows(
+        corridor,
+        &[WindowRequest::at(junction)],
+        shape,
+        Overlap::Refuse,
+    )?;
+    let region = cut
+        .regions
+        .into_iter()
+        .next()
+        .expect("one window asked for");
+    Ok(WindowCut {
+        upstream_m: region.upstream_m,
+        merge_m: region.merge_m[0],
+        downstream_m: region.downstream_m,
+        main_entry: cut.main_entry,
+        merge_entry: region.merge_entries[0],
+        junction: region.merges[0],
+        upstream_roads: region.upstream_roads,
+        merge_roads: region.merge_roads.into_iter().next().unwrap(),
+        downstream_roads: region.downstream_roads,
+        roles: cut.roles,
+        graph: cut.graph,
+        notes: cut.notes,
+    })
+}

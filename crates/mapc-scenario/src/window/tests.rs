@@ -1,0 +1,305 @@
+use super::*;
+use crate::Scenario;
+use crate::simplify::simplify;
+use crate::transform::SimplifyOptions;
+use crate::transform::test_maps::{build, highway};
+use proptest::prelude::*;
+
+fn corridor() -> LaneGraph {
+    simplify(&highway(), &SimplifyOptions::default())
+        .unwrap()
+        .graph
+}
+
+#[test]
+fn simple_merge_shape_is_600_200_100() {
+    let source = ResolvedScenario::load("simple_merge").unwrap();
+    let shape = SourceShape::of(&source).unwrap();
+    assert_eq!(
+        (shape.upstream_m, shape.merge_m, shape.downstream_m),
+        (600.0, 200.0, 100.0)
+    );
+    let names = |rs: &[RoadId]| -> Vec<String> {
+        rs.iter()
+            .map(|r| source.graph.road(*r).unwrap().name.clone().unwrap())
+            .collect()
+    };
+    assert_eq!(names(&shape.main_roads), ["inflow_highway", "left"]);
+    assert_eq!(names(&shape.merge_roads), ["inflow_merge", "bottom"]);
+}
+
+#[test]
+fn window_cuts_exactly_and_keeps_the_corridor() {
+    let g = corridor();
+    let source = ResolvedScenario::load("simple_merge").unwrap();
+    let shape = SourceShape::of(&source).unwrap();
+    let cut = cut_window(&g, "osm:1002", &shape).unwrap();
+    assert!((cut.upstream_m - 600.0).abs() < 1e-9 && (cut.merge_m - 200.0).abs() < 1e-9);
+    assert!((cut.downstream_m - 100.0).abs() < 1e-9);
+    assert_eq!(cut.notes.len(), 3);
+    assert!(cut.graph.invariant_violations().is_empty());
+    assert!((cut.graph.total_lane_length_m() - g.total_lane_length_m()).abs() < 1e-6);
+    // Three cuts: three new roads above the largest id, three new through junctions.
+    assert_eq!(cut.graph.roads.len(), g.roads.len() + 3);
+    assert_eq!(cut.main_entry, RoadId(0));
+    let scenario = window_scenario(
+        &cut,
+        &source,
+        &shape,
+        "w",
+        "w.graph.json",
+        &DemandOverride::default(),
+    )
+    .unwrap();
+    let flows: Vec<(&str, f64)> = scenario
+        .flows
+        .iter()
+        .map(|f| (f.from.as_str(), f.vehs_per_hour))
+        .collect();
+    assert_eq!(
+        flows,
+        [
+            ("R0", 1800.0),
+            ("R0", 200.0),
+            (cut.merge_entry.to_string().as_str(), 200.0)
+        ]
+    );
+    let control = scenario.control.as_ref().unwrap();
+    assert_eq!(control.n_av, 5);
+    assert_eq!(control.region.len(), cut.region().len());
+    // The scenario comes back from TOML exactly, and resolves against its graph.
+    let back = Scenario::from_toml(&scenario.to_toml(), std::path::Path::new("w.toml")).unwrap();
+    assert_eq!(back, scenario);
+    let dir = std::env::temp_dir().join(format!("mapc-window-test-{}", std::process::id()));
+    cut.graph.save(&dir.join("w.graph.json")).unwrap();
+    let resolved = ResolvedScenario::resolve(scenario, &dir, "w.toml").unwrap();
+    assert_eq!(resolved.region_roads, cut.region());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn shortfalls_and_non_merges_are_named() {
+    let g = corridor();
+    let source = ResolvedScenario::load("simple_merge").unwrap();
+    let mut shape = SourceShape::of(&source).unwrap();
+    shape.upstream_m = 1600.0;
+    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    assert!(
+        err.contains("main road before J2") && err.contains("100.0 m short"),
+        "{err}"
+    );
+    shape.upstream_m = 600.0;
+    shape.merge_m = 2000.0;
+    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    assert!(err.contains("merging road into J2"), "{err}");
+    let err = cut_window(&g, "J0", &shape).unwrap_err().to_string();
+    assert!(
+        err.contains("not inside the corridor's main road") && err.contains("J2 (osm:1002)"),
+        "{err}"
+    );
+    let err = cut_window(&g, "osm:77", &shape).unwrap_err().to_string();
+    assert!(err.contains("osm:77"), "{err}");
+}
+
+#[test]
+fn a_boundary_near_a_junction_snaps_to_it() {
+    let g = corridor();
+    let source = ResolvedScenario::load("simple_merge").unwrap();
+    let mut shape = SourceShape::of(&source).unwrap();
+    shape.upstream_m = 1499.8; // the corridor's start is 1500 m before the merge
+    let cut = cut_window(&g, "J2", &shape).unwrap();
+    assert_eq!(cut.upstream_m, 1500.0);
+    assert!(
+        cut.notes[0].contains("boundary at junction J0"),
+        "{:?}",
+        cut.notes
+    );
+}
+
+proptest! {
+    #[test]
+    fn a_cut_keeps_total_length_and_connectivity(
+        bends in proptest::collection::vec((0.0f64..500.0, -50.0f64..50.0), 0..6),
+        at in 0.001f64..0.999,
+    ) {
+        let mut pts: Vec<[f64; 2]> = bends.iter().map(|&(x, y)| [x, y]).collect();
+        pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        let g = build(&[[-100.0, 0.0], [600.0, 0.0], [700.0, 0.0]], &[
+            (0, 1, "motorway", 2, &pts),
+            (1, 2, "motorway", 1, &[]),
+        ]);
+        let mut cut = g.clone();
+        let length = g.roads[0].length_m;
+        let (a, b, j) = crate::transform::cut_road(&mut cut, RoadId(0), at * length).unwrap();
+        prop_assert!(cut.invariant_violations().is_empty(), "{:?}", cut.invariant_violations());
+        prop_assert_eq!(mapc_graph::Topology::new(&cut).component_count(), 1);
+        let (ra, rb) = (cut.road(a).unwrap(), cut.road(b).unwrap());
+        prop_assert!((ra.length_m + rb.length_m - length).abs() < 1e-9);
+        prop_assert!((cut.total_lane_length_m() - g.total_lane_length_m()).abs() < 1e-6);
+        prop_assert_eq!(ra.to, j);
+        prop_assert_eq!(rb.from, j);
+        prop_assert_eq!(cut.junction(j).unwrap().kind, JunctionKind::Through);
+        prop_assert_eq!(ra.geometry.last(), rb.geometry.first());
+        // The rest of the road still leads on to R1.
+        prop_assert_eq!(cut.shortest_route(JunctionId(0), JunctionId(2)).unwrap(), vec![a, b, RoadId(1)]);
+    }
+}
+
+/// The paper's I-696 corridor as shipped (`scenarios/i696.corridor.graph.json`): five merges, J43 (the paper's),
+/// J59 446 m after it, J37 346 m after that, J60 and J61.
+fn i696() -> LaneGraph {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/i696.corridor.graph.json");
+    LaneGraph::load(&path).unwrap()
+}
+
+fn simple_merge_shape() -> SourceShape {
+    SourceShape::of(&ResolvedScenario::load("simple_merge").unwrap()).unwrap()
+}
+
+fn requests(junctions: &[(&str, Option<f64>)]) -> Vec<WindowRequest> {
+    junctions
+        .iter()
+        .map(|&(j, up)| WindowRequest {
+            junction: j.to_string(),
+            upstream_m: up,
+        })
+        .collect()
+}
+
+/// Regions' roads are disjoint, each region's lengths are what was asked for (to 0.5 m), and the main-road
+/// intervals follow each other without overlap.
+fn check_regions(cut: &WindowsCut, ups: &[f64], shape: &SourceShape) {
+    let mut seen = std::collections::HashSet::new();
+    for (r, up) in cut.regions.iter().zip(ups) {
+        assert!((r.upstream_m - up).abs() <= SNAP_M, "{r:?}");
+        assert!(
+            (r.downstream_m - shape.downstream_m).abs() <= SNAP_M,
+            "{r:?}"
+        );
+        for m in &r.merge_m {
+            assert!((m - shape.merge_m).abs() <= SNAP_M, "{r:?}");
+        }
+        for road in r.roads() {
+            assert!(seen.insert(road), "road {road} in two regions");
+        }
+        let main_len: f64 = r
+            .upstream_roads
+            .iter()
+            .chain(&r.between_roads)
+            .chain(&r.downstream_roads)
+            .map(|x| cut.graph.road(*x).unwrap().length_m)
+            .sum();
+        assert!((main_len - (r.end_m() - r.start_m())).abs() < 1e-6);
+    }
+    for pair in cut.regions.windows(2) {
+        assert!(pair[0].end_m() <= pair[1].start_m() + SNAP_M, "{pair:?}");
+    }
+    assert!(cut.graph.invariant_violations().is_empty());
+}
+
+#[test]
+fn two_windows_that_overlap_are_refused_naming_both() {
+    let shape = simple_merge_shape();
+    let err = cut_windows(
+        &i696(),
+        &requests(&[("osm:61862553", None), ("osm:62339771", None)]),
+        &shape,
+        Overlap::Refuse,
+    )
+    .unwrap_err()
+    .to_string();
+    // J59 lies 446.0 m after J43: its 600 m before reach 254.0 m back past J43's end (100 m after J43).
+    assert!(
+        err.contains("J43 (osm:61862553)")
+            && err.contains("J59 (osm:62339771)")
+            && err.contains("overlap by 254.0 m"),
+        "{err}"
+    );
+}
+
+#[test]
+fn all_keeps_the_first_of_overlapping_merges() {
+    let g = i696();
+    let shape = simple_merge_shape();
+    let all: Vec<WindowRequest> =
+        crate::simplify::corridor_merges(&g, &CorridorRoles::of(&g).unwrap())
+            .iter()
+            .map(|m| WindowRequest::at(&m.junction))
+            .collect();
+    let cut = cut_windows(&g, &all, &shape, Overlap::SkipLater).unwrap();
+    let merges: Vec<String> = cut
+        .regions
+        .iter()
+        .map(|r| r.merges[0].to_string())
+        .collect();
+    assert_eq!(merges, ["J43", "J37", "J60"]);
+    assert_eq!(cut.skipped.len(), 2, "{:?}", cut.skipped);
+    assert!(cut.skipped[0].starts_with("J59 (osm:62339771)") && cut.skipped[0].contains("J43"));
+    assert!(cut.skipped[1].starts_with("J61 (osm:62339796)") && cut.skipped[1].contains("J60"));
+    check_regions(&cut, &[600.0; 3], &shape);
+    assert_eq!(cut.graph.roads.len(), g.roads.len() + 9);
+}
+
+#[test]
+fn windows_cut_shorter_upstream_fit_three_close_merges() {
+    let g = i696();
+    let shape = simple_merge_shape();
+    // Out of order on purpose: windows are cut in driving order.
+    let cut = cut_windows(
+        &g,
+        &requests(&[
+            ("osm:61860453", Some(240.0)),
+            ("osm:61862553", None),
+            ("osm:62339771", Some(340.0)),
+        ]),
+        &shape,
+        Overlap::Refuse,
+    )
+    .unwrap();
+    let merges: Vec<String> = cut
+        .regions
+        .iter()
+        .map(|r| r.merges[0].to_string())
+        .collect();
+    assert_eq!(merges, ["J43", "J59", "J37"]);
+    check_regions(&cut, &[600.0, 340.0, 240.0], &shape);
+    // One metre more before J37 and its window reaches into J59's.
+    let err = cut_windows(
+        &g,
+        &requests(&[("osm:62339771", Some(340.0)), ("osm:61860453", Some(247.0))]),
+        &shape,
+        Overlap::Refuse,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("overlap by 1.3 m"), "{err}");
+}
+
+#[test]
+fn joined_windows_make_one_region_over_three_merges() {
+    let g = i696();
+    let shape = simple_merge_shape();
+    let cut = cut_windows(
+        &g,
+        &requests(&[("J43", None), ("J59", None), ("J37", None)]),
+        &shape,
+        Overlap::Join,
+    )
+    .unwrap();
+    assert_eq!(cut.regions.len(), 1);
+    let r = &cut.regions[0];
+    assert_eq!(r.merges.len(), 3);
+    check_regions(&cut, &[600.0], &shape);
+    // From 600 m before J43 to 100 m after J37: 600 + 446.0 + 345.7 + 100 m of main road.
+    let span = r.end_m() - r.start_m();
+    assert!(
+        (span - (600.0 + 3983.0886 - 3191.4065 + 100.0)).abs() < 0.01,
+        "{span}"
+    );
+    // A single window through the general cut is the one-window cut.
+    let one = cut_window(&g, "J43", &shape).unwrap();
+    let many = cut_windows(&g, &[WindowRequest::at("J43")], &shape, Overlap::Refuse).unwrap();
+    assert_eq!(one.region(), many.regions[0].roads());
+    assert_eq!(one.graph, many.graph);
+}
