@@ -54,6 +54,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = policy_file(&args.policy);
     let ck = Checkpoint::load(&file)?;
     let sc = super::train::load_scenario(&args.scenario)?;
+    if let Some(w) = &sc.horizon_warning {
+        eprintln!("warning: {}: {w}", args.scenario);
+    }
     let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
     let mode = if args.sample {
         ActionMode::Sample

@@ -166,6 +166,8 @@ pub struct LoadedScenario {
     pub spec: mapc_sim::SimSpec,
     pub name: String,
     pub n_av: Option<usize>,
+    /// Set when the horizon is too short for the network (`mapc_scenario::timing`).
+    pub horizon_warning: Option<String>,
 }
 
 /// Resolves `simple_merge` or a scenario file into a simulator spec.
@@ -178,6 +180,7 @@ pub fn load_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
         spec,
         name: resolved.scenario.name.clone(),
         n_av,
+        horizon_warning: mapc_scenario::timing::HorizonFit::of_resolved(&resolved).warning(),
     })
 }
 

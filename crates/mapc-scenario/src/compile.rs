@@ -114,6 +114,8 @@ pub struct WrittenWindow {
     pub shape: SourceShape,
     pub scenario: PathBuf,
     pub graph: PathBuf,
+    /// The warm-up picked for a corridor longer than the source's timing allows (`None`: the source's kept).
+    pub timing: Option<crate::timing::PickedTiming>,
 }
 
 /// Cut the window of `corridor` (read from `map`) around `junction` matched to the scenario `source` (a built-in
@@ -161,8 +163,29 @@ pub fn write_window(
         .unwrap_or_else(|| "window".into());
     let graph_file = format!("{name}.graph.json");
     let graph = output.parent().unwrap_or(Path::new("")).join(&graph_file);
-    let scenario =
+    let mut scenario =
         window_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
+    // refused before anything is written: the source's step cannot insert this demand
+    let flows: Vec<crate::bounds::FlowDemand> = scenario
+        .flows
+        .iter()
+        .map(|f| crate::bounds::FlowDemand {
+            id: &f.id,
+            entry: f.from.clone(),
+            vehs_per_hour: f.vehs_per_hour,
+        })
+        .collect();
+    crate::bounds::check_demand(&flows, scenario.step_s).map_err(|r| {
+        CompileError::Demand(format!(
+            "--main-vph / --merge-vph: {} (nothing written)",
+            r.message
+        ))
+    })?;
+    let timing = crate::timing::fit_to_corridor(
+        &mut scenario,
+        &cut.graph,
+        &[cut.main_entry, cut.merge_entry],
+    );
     cut.graph
         .save(&graph)
         .map_err(|source| CompileError::Graph {
@@ -181,6 +204,7 @@ pub fn write_window(
         shape,
         scenario: output.to_path_buf(),
         graph,
+        timing,
     })
 }
 
@@ -209,6 +233,7 @@ impl WrittenWindow {
             "scenario": self.scenario.display().to_string(),
             "graph": self.graph.display().to_string(),
             "render": render.map(|r| r.display().to_string()),
+            "timing": self.timing,
         })
     }
 }

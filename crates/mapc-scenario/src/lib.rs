@@ -10,16 +10,18 @@
 //! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's.
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
 
+pub mod bounds;
 pub mod compile;
 pub mod generator;
 pub mod model;
 pub mod simplify;
+pub mod timing;
 pub mod transform;
 pub mod window;
 
 pub use model::*;
 
-use mapc_graph::{LaneGraph, RoadId};
+use mapc_graph::{JunctionId, LaneGraph, RoadId};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
@@ -61,6 +63,8 @@ pub struct ResolvedScenario {
     pub flow_roads: Vec<(RoadId, Option<RoadId>)>,
     /// The control region's roads (empty: the whole network).
     pub region_roads: Vec<RoadId>,
+    /// The merges whose flow every run measures (`measure.merges`, or the region's merges).
+    pub measure_junctions: Vec<JunctionId>,
 }
 
 impl Scenario {
@@ -99,6 +103,7 @@ impl Scenario {
             ],
             initial_vehicles: Some(InitialVehicles { count: 5, vehicle_type: "human".to_string(), speed_mps: 0.0 }),
             control: Some(Control { n_av: 5, region: vec![], window: None }),
+            measure: None,
         }
     }
 
@@ -278,6 +283,25 @@ impl ResolvedScenario {
             };
             flow_roads.push((from, to));
         }
+        let demand: Vec<bounds::FlowDemand> = scenario
+            .flows
+            .iter()
+            .zip(&flow_roads)
+            .map(|(f, (from, _))| bounds::FlowDemand {
+                id: &f.id,
+                entry: from.to_string(),
+                vehs_per_hour: f.vehs_per_hour,
+            })
+            .collect();
+        bounds::check_demand(&demand, scenario.step_s)
+            .and_then(|()| {
+                bounds::check_horizon(
+                    scenario.warmup_steps as u64,
+                    scenario.horizon_steps as u64,
+                    scenario.step_s,
+                )
+            })
+            .map_err(|r| invalid(r.key, r.message))?;
         if let Some(iv) = &scenario.initial_vehicles
             && !scenario.vehicle_types.contains_key(&iv.vehicle_type)
         {
@@ -297,12 +321,26 @@ impl ResolvedScenario {
             region_roads.sort();
             region_roads.dedup();
         }
+        let measure_junctions = match scenario.measure.as_ref().filter(|m| !m.merges.is_empty()) {
+            Some(m) => m
+                .merges
+                .iter()
+                .enumerate()
+                .map(|(i, j)| {
+                    graph
+                        .find_junction(j)
+                        .map_err(|e| invalid(format!("measure.merges[{i}]"), e.to_string()))
+                })
+                .collect::<Result<Vec<_>, _>>()?,
+            None => timing::region_merges(&graph, &region_roads),
+        };
         Ok(ResolvedScenario {
             scenario,
             graph,
             origin: origin.to_string(),
             flow_roads,
             region_roads,
+            measure_junctions,
         })
     }
 }

@@ -449,6 +449,7 @@ pub fn window_scenario(
                 downstream_m: cut.downstream_m,
             }),
         }),
+        measure: None,
     })
 }
 

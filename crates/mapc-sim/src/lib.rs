@@ -47,17 +47,25 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod idm;
+pub mod measure;
 pub mod metrics;
 pub mod network;
+pub mod regime;
 pub mod replay;
 pub mod scenario;
 pub mod sim;
 pub mod spec;
 pub mod trace;
+mod vehicle_table;
+mod waiting;
 
 pub use idm::IdmParams;
-pub use metrics::{BaselineReport, MeanCi, RunMetrics, Summary, run_baseline_spec, t_quantile_975};
+pub use measure::MeasurePoint;
+pub use metrics::{
+    BaselineReport, MeanCi, MergeFlow, RunMetrics, Summary, run_baseline_spec, t_quantile_975,
+};
 pub use network::Network;
+pub use regime::{RegimeReport, merge_regimes};
 pub use scenario::{run_baseline, spec_from_scenario};
 pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleView};
 pub use spec::{FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};

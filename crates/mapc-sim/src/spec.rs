@@ -55,6 +55,8 @@ impl VehicleTypeSpec {
 /// while before `end_s`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlowSpec {
+    /// The flow's name in errors (the scenario's flow id).
+    pub id: String,
     pub from: RoadId,
     pub to: Option<RoadId>,
     pub vehs_per_hour: f64,
@@ -93,9 +95,16 @@ pub struct SimSpec {
     pub n_av: usize,
     /// The corridor's main line, upstream first (for corridor positions in traces); empty: derived.
     pub main_line: Vec<RoadId>,
+    /// Where flow is measured besides the outflow (the controlled region's merges).
+    pub measure_points: Vec<crate::measure::MeasurePoint>,
 }
 
 impl SimSpec {
+    /// The measured merges' names, in the order of [`crate::RunMetrics::merge_flows_veh_h`].
+    pub fn measure_names(&self) -> Vec<String> {
+        self.measure_points.iter().map(|p| p.name.clone()).collect()
+    }
+
     /// Check the numbers a run relies on; errors name the item.
     pub fn validate(&self) -> Result<(), SimError> {
         if !(self.step_s > 0.0 && self.step_s <= 10.0) {
@@ -159,6 +168,24 @@ impl SimSpec {
                 )));
             }
         }
+        let demand: Vec<mapc_scenario::bounds::FlowDemand> = self
+            .flows
+            .iter()
+            .map(|f| mapc_scenario::bounds::FlowDemand {
+                id: &f.id,
+                entry: f.from.to_string(),
+                vehs_per_hour: f.vehs_per_hour,
+            })
+            .collect();
+        mapc_scenario::bounds::check_demand(&demand, self.step_s)
+            .and_then(|()| {
+                mapc_scenario::bounds::check_horizon(
+                    self.warmup_steps,
+                    self.horizon_steps,
+                    self.step_s,
+                )
+            })
+            .map_err(|r| SimError::Spec(format!("{}: {}", r.key, r.message)))?;
         for (i, v) in self.initial.iter().enumerate() {
             if v.vehicle_type >= self.vehicle_types.len() {
                 return Err(SimError::Spec(format!(
