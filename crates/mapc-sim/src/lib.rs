@@ -99,3 +99,5 @@ pub enum SimError {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_bounds;

@@ -1725,7 +1725,7 @@ impl Simulation {
                         // a counted vehicle reaches the front: built now, then waits like any other
                         Some(f) => {
                             let id = self.build_flow_vehicle(f);
-                            self.pending[ei].push_built(id);
+                            self.pending[ei].push_taken(id);
                             id
                         }
                         None => break,

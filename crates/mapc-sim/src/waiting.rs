@@ -55,6 +55,12 @@ impl EntryQueue {
         self.built.pop_front();
     }
 
+    /// The vehicle built for what [`EntryQueue::take_counted`] gave: now the front of the queue.
+    pub(crate) fn push_taken(&mut self, id: VehicleId) {
+        debug_assert!(self.built.is_empty());
+        self.built.push_back(id);
+    }
+
     /// Takes the front counted vehicle's flow (to be built now); only when no built vehicle is waiting.
     pub(crate) fn take_counted(&mut self) -> Option<usize> {
         debug_assert!(self.built.is_empty());
