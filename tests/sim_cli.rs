@@ -112,6 +112,8 @@ fn bench_reports_vehicle_steps_per_second() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(v["single_core"]["vehicle_steps_per_s"].as_f64().unwrap() > 0.0);
     assert_eq!(v["baseline"]["seeds"], 2);
+    let peak = v["peak_rss_mib"].as_f64().unwrap();
+    assert!(peak > 1.0 && peak < 4096.0, "{peak}");
 }
 
 /// The shipped Simple Merge with `edit` applied to its text, written to a scratch file.

@@ -115,7 +115,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         row("past end", &s.end_flow, "veh/h");
         for m in &s.merges {
-            row(&format!("past {}", m.name), &m.flow, "veh/h");
+            println!(
+                "  past {:<26} {:>10.2} ± {:<7.2} veh/h  (sd {:.2})",
+                m.name, m.flow.mean, m.flow.ci95, m.flow.std
+            );
         }
         print_regime(&regime);
         if let Some(p) = &args.trace {

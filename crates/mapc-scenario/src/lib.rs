@@ -9,6 +9,10 @@
 //! - **corridor**: a single-lane main road with the roads merging into it (what `simplify` makes of a highway).
 //! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's.
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
+//! - **entry capacity**: one vehicle per step per entry road (`bounds.rs`); demand above it is refused, like a
+//!   horizon past 48 h.
+//! - **fill time**: the free-flow travel time of the longest route (`timing.rs`); a horizon that leaves too little
+//!   after it is warned about, and `mapc window` picks a warm-up for it.
 
 pub mod bounds;
 pub mod compile;

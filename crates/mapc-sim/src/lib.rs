@@ -12,7 +12,14 @@
 //! - **impatience**: base impatience + waiting time / 300 s; it shifts the foe arrival time a minor driver
 //!   assumes towards the foe's arrival when braking, so waiting drivers take smaller gaps.
 //! - **flow**: periodic departures (SUMO's vehsPerHour); a vehicle that cannot be inserted safely waits at its
-//!   entry road and only counts once inserted.
+//!   entry road and only counts once inserted. Past 1024 waiting at an entry, further ones are only counted and
+//!   built when they reach the front (`waiting.rs`); records of vehicles long gone are dropped in long runs
+//!   (`vehicle_table.rs`), so memory follows the road, not the demand or the horizon.
+//! - **measure point**: a merge whose flow (vehicles entering the road after it) is counted per hour of measured
+//!   time, like the flow past the corridor's end; both besides the paper's whole-horizon outflow.
+//! - **regime**: per merge, the major road, the humans' speed near it against free flow and the queue before it
+//!   ([`merge_regimes`]).
+//! - **warm-up**: steps simulated before the horizon; every metric ignores them.
 //! - **vehicle-step**: one vehicle simulated for one step (the unit of the speed figures).
 //!
 //! ## Using it (for the environment and evaluation code)

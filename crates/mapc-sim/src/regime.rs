@@ -138,7 +138,8 @@ impl RegimeReport {
         }
         if self.waiting_to_enter >= 1.0 {
             out.push(format!(
-                "{:.0} vehicles on average still wait to enter at the end: the demand exceeds what the entries take",
+                "{:.0} vehicles on average were still waiting to enter at the end of a run (many: demand above \
+                 what the entries take)",
                 self.waiting_to_enter
             ));
         }
