@@ -72,3 +72,17 @@ fn flows_past_the_merge_and_the_end_are_counted_after_the_warmup() {
     assert!((merge - m.outflow_veh_h).abs() < 100.0, "{m:?}");
     assert!(merge > 1000.0, "{m:?}");
 }
+
+#[test]
+fn initial_vehicles_that_do_not_fit_are_refused_with_the_count_that_would() {
+    let mut rs = mapc_scenario::ResolvedScenario::load("simple_merge").unwrap();
+    // 900 m of roads (the junctions' inner lanes aside): at 7.5 m a vehicle (length + min gap), at most 120
+    rs.scenario.initial_vehicles.as_mut().unwrap().count = 200;
+    let err = spec_from_scenario(&rs).err().unwrap().to_string();
+    assert!(
+        err.contains("initial_vehicles.count = 200") && err.contains("at most 120 fit"),
+        "{err}"
+    );
+    rs.scenario.initial_vehicles.as_mut().unwrap().count = 100;
+    assert!(spec_from_scenario(&rs).is_ok());
+}
