@@ -112,4 +112,231 @@ fn bench_reports_vehicle_steps_per_second() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(v["single_core"]["vehicle_steps_per_s"].as_f64().unwrap() > 0.0);
     assert_eq!(v["baseline"]["seeds"], 2);
+    let peak = v["peak_rss_mib"].as_f64().unwrap();
+    assert!(peak > 1.0 && peak < 4096.0, "{peak}");
+}
+
+/// The shipped Simple Merge with `edit` applied to its text, written to a scratch file.
+fn edited_simple_merge(name: &str, edit: impl Fn(String) -> String) -> std::path::PathBuf {
+    let dir = common::scratch_dir(name);
+    let text = std::fs::read_to_string(common::root().join("scenarios/simple_merge.toml")).unwrap();
+    let edited = edit(text.clone());
+    assert_ne!(edited, text, "the edit changed nothing");
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, edited).unwrap();
+    path
+}
+
+/// `mapc ARGS` with its address space limited to 1 GiB (a machine has 24 GB: a run that grows with its demand
+/// reaches the limit within a few dozen steps and aborts instead of finishing).
+fn mapc_within_1_gib(args: &[&str]) -> std::process::Output {
+    std::process::Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 1048576 && exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_mapc"))
+        .args(args)
+        .current_dir(common::root())
+        // one malloc arena per thread would reserve 64 MiB of address space each
+        .env("MALLOC_ARENA_MAX", "2")
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn an_absurd_demand_is_refused_within_a_small_memory_budget() {
+    let path = edited_simple_merge("huge-demand", |t| {
+        t.replace("vehs_per_hour = 1800.0", "vehs_per_hour = 1e9")
+    });
+    let p = path.to_str().unwrap();
+    let out = mapc_within_1_gib(&["sim", "--scenario", p, "--seeds", "4", "--threads", "2"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(p) && err.contains("`main_human`") && err.contains("7200 veh/h"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn an_entry_loaded_to_its_limit_runs_long_within_a_small_memory_budget() {
+    // 7000 + 200 veh/h into a road that passes about 2000, for 4 h: thousands wait, the run stays small
+    let path = edited_simple_merge("full-entry", |t| {
+        t.replace("vehs_per_hour = 1800.0", "vehs_per_hour = 7000.0")
+            .replace("horizon_steps = 2000", "horizon_steps = 28800")
+    });
+    let out = mapc_within_1_gib(&[
+        "sim",
+        "--scenario",
+        path.to_str().unwrap(),
+        "--seeds",
+        "2",
+        "--threads",
+        "2",
+        "--json",
+    ]);
+    common::assert_success(&out);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let inflow = v["inflow"]["mean"].as_f64().unwrap();
+    assert!(inflow > 1500.0 && inflow < 2500.0, "{inflow}");
+    // the regime report sees the backlog
+    assert!(
+        v["regime"]["waiting_to_enter"].as_f64().unwrap() > 10_000.0,
+        "{}",
+        v["regime"]
+    );
+}
+
+#[test]
+fn an_absurd_horizon_is_refused_with_the_limit_named() {
+    let path = edited_simple_merge("huge-horizon", |t| {
+        t.replace("horizon_steps = 2000", "horizon_steps = 4000000000")
+    });
+    let out = mapc_within_1_gib(&["sim", "--scenario", path.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("horizon_steps") && err.contains("48 h"),
+        "{err}"
+    );
+}
+
+#[test]
+fn sim_reports_flows_past_points_the_regime_and_warns_on_a_short_horizon() {
+    let out = mapc()
+        .args([
+            "sim",
+            "--scenario",
+            "simple_merge",
+            "--seeds",
+            "3",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["end_flow"]["mean"], v["outflow"]["mean"]);
+    assert!(
+        v["merges"][0]["name"]
+            .as_str()
+            .unwrap()
+            .starts_with("merge J")
+    );
+    assert!(v["merges"][0]["flow"]["mean"].as_f64().unwrap() > 1000.0);
+    let m = &v["regime"]["merges"][0];
+    assert_eq!(m["approaches"].as_array().unwrap().len(), 2, "{m}");
+    // the paper's merge: the ramp has priority and the main road is congested
+    let main = m["approaches"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["main_line"] == true)
+        .unwrap();
+    assert_eq!(main["major"], false);
+    assert_eq!(main["congestion"], "congested");
+
+    // 20 s of horizon on an 800 m corridor: no vehicle can reach the end, and the user is told
+    let path = edited_simple_merge("short-horizon", |t| {
+        t.replace("horizon_steps = 2000", "horizon_steps = 40")
+    });
+    let out = mapc()
+        .args(["sim", "--seeds", "2", "--scenario", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning") && err.contains("no vehicle can reach the end"),
+        "{err}"
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("regime") && text.contains("has priority"),
+        "{text}"
+    );
+}
+
+#[test]
+fn window_refuses_an_absurd_demand_and_writes_nothing() {
+    let dir = common::scratch_dir("window-demand");
+    let scenario = dir.join("w.toml");
+    let out = mapc()
+        .args([
+            "window",
+            "maps/i696.osm",
+            "--junction",
+            "osm:61862553",
+            "--via",
+            "osm-way:59440544",
+            "--via",
+            "osm-way:8667198",
+            "--via",
+            "osm-way:8708084",
+            "--main-vph",
+            "1e9",
+            "-o",
+        ])
+        .arg(&scenario)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--main-vph") && err.contains("7200 veh/h") && err.contains("nothing written"),
+        "{err}"
+    );
+    assert!(!scenario.exists() && !dir.join("w.graph.json").exists());
+}
+
+#[test]
+fn window_picks_a_warmup_when_the_corridor_is_long_for_the_source_horizon() {
+    // a source of 200 s horizon: the paper's I-696 corridor (about 275 s at free flow) is too long for it
+    let source = edited_simple_merge("short-source", |t| {
+        t.replace("horizon_steps = 2000", "horizon_steps = 400")
+    });
+    let dir = common::scratch_dir("window-timing");
+    let scenario = dir.join("w.toml");
+    let out = mapc()
+        .args([
+            "window",
+            "maps/i696.osm",
+            "--junction",
+            "osm:61862553",
+            "--via",
+            "osm-way:59440544",
+            "--via",
+            "osm-way:8667198",
+            "--via",
+            "osm-way:8708084",
+            "--match",
+        ])
+        .arg(&source)
+        .arg("-o")
+        .arg(&scenario)
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("picked a warm-up of 400 s"), "{text}");
+    assert!(
+        text.contains("regime") && text.contains("has priority"),
+        "{text}"
+    );
+    let written = mapc_scenario::Scenario::load(&scenario).unwrap();
+    assert_eq!((written.warmup_steps, written.horizon_steps), (800, 400));
+    // and the scenario it wrote runs without a warning
+    let out = mapc()
+        .args([
+            "sim",
+            "--seeds",
+            "1",
+            "--scenario",
+            scenario.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
 }

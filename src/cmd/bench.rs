@@ -62,6 +62,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .collect::<Result<Vec<_>, _>>()
     })?;
     let baseline_s = start.elapsed().as_secs_f64();
+    let peak_mib = peak_rss_mib();
     let mean_vehicles = vehicle_steps as f64 / steps as f64;
     if args.json {
         let out = serde_json::json!({
@@ -70,6 +71,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                             "vehicle_steps_per_s": vs_per_s, "steps_per_s": steps as f64 / single_s,
                             "mean_vehicles": mean_vehicles},
             "baseline": {"seeds": args.seeds, "threads": args.threads, "wall_s": baseline_s, "runs": runs.len()},
+            "peak_rss_mib": peak_mib,
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
@@ -83,9 +85,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             mean_vehicles
         );
         println!(
-            "  baseline: {} seeds on {} threads in {:.3} s",
-            args.seeds, args.threads, baseline_s
+            "  baseline: {} seeds on {} threads in {:.3} s; peak memory of the process {:.1} MiB",
+            args.seeds, args.threads, baseline_s, peak_mib
         );
     }
     Ok(())
+}
+
+/// The process's peak resident memory so far (MiB), as the kernel counts it.
+fn peak_rss_mib() -> f64 {
+    // SAFETY: getrusage only writes the struct it is given
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) } != 0 {
+        return f64::NAN;
+    }
+    usage.ru_maxrss as f64 / 1024.0 // KiB on Linux
 }

@@ -54,6 +54,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = policy_file(&args.policy);
     let ck = Checkpoint::load(&file)?;
     let sc = super::train::load_scenario(&args.scenario)?;
+    if let Some(w) = &sc.horizon_warning {
+        eprintln!("warning: {}: {w}", args.scenario);
+    }
     let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
     let mode = if args.sample {
         ActionMode::Sample
@@ -147,18 +150,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             p.display()
         );
     }
+    // one seed: means only, no interval and no test
+    let one_seed = report.seeds < 2;
+    let flow = |mean: f64, ci: f64| {
+        if one_seed {
+            format!("{mean:8.2} (n = 1, no CI)")
+        } else {
+            format!("{mean:8.2} ± {ci:5.2}")
+        }
+    };
     for m in report.merges.iter().flatten() {
         let human = m
             .baseline
-            .map(|b| format!("   human {:8.2} ± {:5.2} veh/h", b.mean, b.ci95))
+            .map(|b| format!("   human {} veh/h", flow(b.mean, b.ci95)))
             .unwrap_or_default();
         let welch = m
             .welch
+            .filter(|_| !one_seed)
             .map(|w| format!("   Welch t = {:.2}", w.t))
             .unwrap_or_default();
         println!(
-            "  past merge {:>4} (window {}): policy {:8.2} ± {:5.2} veh/h{human}{welch}",
-            m.merge, m.window, m.flow.mean, m.flow.ci95
+            "  past merge {:>4} (window {}): policy {} veh/h{human}{welch}",
+            m.merge,
+            m.window,
+            flow(m.flow.mean, m.flow.ci95)
         );
     }
     println!("  {:.1} s wall", report.wall_s);

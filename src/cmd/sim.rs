@@ -52,6 +52,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.seeds >= 1, "--seeds must be at least 1");
     let rs = load_scenario(&args.scenario)?;
     let spec = spec_from_scenario(&rs).with_context(|| format!("scenario `{}`", rs.origin))?;
+    let fit = mapc_scenario::timing::HorizonFit::of_resolved(&rs);
+    if let Some(w) = fit.warning() {
+        eprintln!("warning: {}: {w}", rs.origin);
+    }
     let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
@@ -73,9 +77,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(path) = &args.trace {
         write_trace(&spec, seeds[0], path)?;
     }
-    let s = BaselineReport::of(&rs.origin, args.first_seed, runs, wall_s);
+    let s = BaselineReport::of(
+        &rs.origin,
+        args.first_seed,
+        runs,
+        wall_s,
+        &spec.measure_names(),
+    );
+    // the merges' regime from a few of the same seeds (a second, observed pass: the baseline stays unobserved)
+    let regime = mapc_sim::merge_regimes(&spec, &seeds[..seeds.len().min(REGIME_SEEDS)])
+        .with_context(|| format!("scenario `{}`: the merges' regime", rs.origin))?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&s)?);
+        let mut json = serde_json::to_value(&s)?;
+        json["horizon_fit"] = serde_json::to_value(&fit)?;
+        json["horizon_warning"] = serde_json::to_value(fit.warning())?;
+        json["regime"] = serde_json::to_value(&regime)?;
+        println!("{}", serde_json::to_string_pretty(&json)?);
     } else {
         println!(
             "{} — all-human baseline, {} seeds ({:.2} s)",
@@ -97,11 +114,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         row("avg speed", &s.speed, "m/s");
         row("travel time", &s.travel_time, "s");
         row("delay", &s.delay, "s");
+        println!(
+            "  per hour of the {:.0} s measured (after a {:.0} s warm-up):",
+            fit.horizon_s, fit.warmup_s
+        );
+        row("past end", &s.end_flow, "veh/h");
+        for m in &s.merges {
+            row(&format!("past {}", m.name), &m.flow, "veh/h");
+        }
+        print_regime(&regime);
         if let Some(p) = &args.trace {
             println!("  trace of seed {} written to {}", seeds[0], p.display());
         }
     }
     Ok(())
+}
+
+/// Seeds of the observed pass that reports the merges' regime.
+pub const REGIME_SEEDS: usize = 3;
+
+/// The merges' regime, a line each.
+pub fn print_regime(regime: &mapc_sim::RegimeReport) {
+    if regime.merges.is_empty() && regime.lines().is_empty() {
+        return;
+    }
+    println!("  regime ({} seeds):", regime.seeds);
+    for line in regime.lines() {
+        println!("    {line}");
+    }
 }
 
 fn progress_bar(n: u64, quiet: bool) -> ProgressBar {

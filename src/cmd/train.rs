@@ -172,6 +172,8 @@ pub struct LoadedScenario {
     pub spec: mapc_sim::SimSpec,
     pub name: String,
     pub n_av: Option<usize>,
+    /// Set when the horizon is too short for the network (`mapc_scenario::timing`).
+    pub horizon_warning: Option<String>,
 }
 
 /// A merge distribution file, if `arg` names one (recognised by its content).
@@ -211,6 +213,7 @@ fn load_training_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
         spec,
         name: d.file.name.clone(),
         n_av: resolved.scenario.control.as_ref().map(|c| c.n_av as usize),
+        horizon_warning: None,
     })
 }
 
@@ -224,6 +227,7 @@ pub fn load_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
         spec,
         name: resolved.scenario.name.clone(),
         n_av,
+        horizon_warning: mapc_scenario::timing::HorizonFit::of_resolved(&resolved).warning(),
     })
 }
 

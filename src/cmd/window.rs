@@ -121,8 +121,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         None => None,
     };
+    // a short human run of what was written: which regime each merge is in under this demand
+    let resolved = mapc_scenario::ResolvedScenario::load(&written.scenario.display().to_string())?;
+    let spec = mapc_sim::spec_from_scenario(&resolved)?;
+    let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
+    let regime = mapc_sim::merge_regimes(&spec, &seeds)?;
     if args.json {
-        let report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
+        let mut report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
+        report["regime"] = serde_json::to_value(&regime)?;
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
@@ -137,6 +143,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for n in &cut.notes {
         println!("  {n}");
     }
+    if let Some(t) = &written.timing {
+        println!("  {}", t.note);
+    }
     println!(
         "wrote {} and {}",
         written.scenario.display(),
@@ -145,6 +154,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(r) = render {
         println!("drew {}", r.path.display());
     }
+    super::sim::print_regime(&regime);
     Ok(())
 }
 

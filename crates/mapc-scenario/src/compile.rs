@@ -165,6 +165,8 @@ pub struct WrittenWindow {
     pub shape: SourceShape,
     pub scenario: PathBuf,
     pub graph: PathBuf,
+    /// The warm-up picked for a corridor longer than the source's timing allows (`None`: the source's kept).
+    pub timing: Option<crate::timing::PickedTiming>,
 }
 
 /// Cut the window of `corridor` (read from `map`) around `junction` matched to the scenario `source` (a built-in
@@ -187,14 +189,20 @@ pub fn write_window(
     };
     let cut = cut_window(corridor, junction, &shape).map_err(transform)?;
     let (name, graph_file, graph) = output_names(output);
-    let scenario =
+    let mut scenario =
         window_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
+    let timing = bounded(
+        &mut scenario,
+        &cut.graph,
+        &[cut.main_entry, cut.merge_entry],
+    )?;
     save_checked(&cut.graph, &graph, &scenario, output)?;
     Ok(WrittenWindow {
         cut,
         shape,
         scenario: output.to_path_buf(),
         graph,
+        timing,
     })
 }
 
@@ -248,6 +256,31 @@ fn output_names(output: &Path) -> (String, String, PathBuf) {
     (name, graph_file, graph)
 }
 
+/// Refuses demand the source's step cannot insert (before anything is written) and picks a warm-up when the
+/// corridor is longer than the source's timing allows.
+fn bounded(
+    scenario: &mut crate::Scenario,
+    g: &LaneGraph,
+    entries: &[mapc_graph::RoadId],
+) -> Result<Option<crate::timing::PickedTiming>, CompileError> {
+    let flows: Vec<crate::bounds::FlowDemand> = scenario
+        .flows
+        .iter()
+        .map(|f| crate::bounds::FlowDemand {
+            id: &f.id,
+            entry: f.from.clone(),
+            vehs_per_hour: f.vehs_per_hour,
+        })
+        .collect();
+    crate::bounds::check_demand(&flows, scenario.step_s).map_err(|r| {
+        CompileError::Demand(format!(
+            "--main-vph / --merge-vph / --ramp-vph: {} (nothing written)",
+            r.message
+        ))
+    })?;
+    Ok(crate::timing::fit_to_corridor(scenario, g, entries))
+}
+
 /// Writes the graph and the scenario and loads the scenario back.
 fn save_checked(
     g: &LaneGraph,
@@ -276,6 +309,8 @@ pub struct WrittenWindows {
     pub shape: SourceShape,
     pub scenario: PathBuf,
     pub graph: PathBuf,
+    /// The warm-up picked for a corridor longer than the source's timing allows (`None`: the source's kept).
+    pub timing: Option<crate::timing::PickedTiming>,
 }
 
 /// Cut the windows of `requests` (or, with `all`, of every merge of the corridor whose window fits, the first of
@@ -323,14 +358,16 @@ pub fn write_windows(
     };
     let cut = cut_windows(corridor, &requests, &shape, overlap).map_err(transform)?;
     let (name, graph_file, graph) = output_names(output);
-    let scenario =
+    let mut scenario =
         windows_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
+    let timing = bounded(&mut scenario, &cut.graph, &[cut.main_entry])?;
     save_checked(&cut.graph, &graph, &scenario, output)?;
     Ok(WrittenWindows {
         cut,
         shape,
         scenario: output.to_path_buf(),
         graph,
+        timing,
     })
 }
 
@@ -402,6 +439,7 @@ impl WrittenWindow {
             "scenario": self.scenario.display().to_string(),
             "graph": self.graph.display().to_string(),
             "render": render.map(|r| r.display().to_string()),
+            "timing": self.timing,
         })
     }
 }

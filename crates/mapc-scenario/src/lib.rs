@@ -13,12 +13,18 @@
 //!   have several (`[[control.windows]]`), each its own controlled region, or a **joined** region spanning
 //!   merges whose windows overlap.
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
+//! - **entry capacity**: one vehicle per step per entry road (`bounds.rs`); demand above it is refused, like a
+//!   horizon past 48 h.
+//! - **fill time**: the free-flow travel time of the longest route (`timing.rs`); a horizon that leaves too little
+//!   after it is warned about, and `mapc window` picks a warm-up for it.
 
+pub mod bounds;
 pub mod compile;
 pub mod distribution;
 pub mod generator;
 pub mod model;
 pub mod simplify;
+pub mod timing;
 pub mod transform;
 pub mod window;
 
@@ -68,6 +74,8 @@ pub struct ResolvedScenario {
     pub region_roads: Vec<RoadId>,
     /// The windows of a several-window scenario (`control.windows`), in the file's order; empty otherwise.
     pub windows: Vec<ResolvedWindow>,
+    /// The merges whose flow every run measures (`measure.merges`, or the region's merges).
+    pub measure_junctions: Vec<JunctionId>,
 }
 
 /// One controlled region of a several-window scenario, its references checked.
@@ -117,6 +125,7 @@ impl Scenario {
             ],
             initial_vehicles: Some(InitialVehicles { count: 5, vehicle_type: "human".to_string(), speed_mps: 0.0 }),
             control: Some(Control { n_av: 5, region: vec![], window: None, windows: vec![] }),
+            measure: None,
         }
     }
 
@@ -305,6 +314,25 @@ impl ResolvedScenario {
             };
             flow_roads.push((from, to));
         }
+        let demand: Vec<bounds::FlowDemand> = scenario
+            .flows
+            .iter()
+            .zip(&flow_roads)
+            .map(|(f, (from, _))| bounds::FlowDemand {
+                id: &f.id,
+                entry: from.to_string(),
+                vehs_per_hour: f.vehs_per_hour,
+            })
+            .collect();
+        bounds::check_demand(&demand, scenario.step_s)
+            .and_then(|()| {
+                bounds::check_horizon(
+                    scenario.warmup_steps as u64,
+                    scenario.horizon_steps as u64,
+                    scenario.step_s,
+                )
+            })
+            .map_err(|r| invalid(r.key, r.message))?;
         if let Some(iv) = &scenario.initial_vehicles
             && !scenario.vehicle_types.contains_key(&iv.vehicle_type)
         {
@@ -339,6 +367,19 @@ impl ResolvedScenario {
             }
             _ => Vec::new(),
         };
+        let measure_junctions = match scenario.measure.as_ref().filter(|m| !m.merges.is_empty()) {
+            Some(m) => m
+                .merges
+                .iter()
+                .enumerate()
+                .map(|(i, j)| {
+                    graph
+                        .find_junction(j)
+                        .map_err(|e| invalid(format!("measure.merges[{i}]"), e.to_string()))
+                })
+                .collect::<Result<Vec<_>, _>>()?,
+            None => timing::region_merges(&graph, &region_roads),
+        };
         Ok(ResolvedScenario {
             scenario,
             graph,
@@ -346,6 +387,7 @@ impl ResolvedScenario {
             flow_roads,
             region_roads,
             windows,
+            measure_junctions,
         })
     }
 }

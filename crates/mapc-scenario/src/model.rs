@@ -30,6 +30,22 @@ pub struct Scenario {
     pub initial_vehicles: Option<InitialVehicles>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub control: Option<Control>,
+    /// Where flows are measured besides the paper's whole-horizon outflow (optional: files without it read as
+    /// before, with the default points).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measure: Option<Measure>,
+}
+
+/// Measurement points. Every run reports, per hour of measured time (the horizon after the warm-up), the
+/// vehicles past each merge listed here and past the corridor's end, besides the paper's outflow (vehicles that
+/// left the network, over the whole horizon), which stays the headline figure.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Measure {
+    /// Merge junctions (`J12`, `osm:NODE`, SUMO ids) whose flow is measured: the vehicles entering the road after
+    /// the merge. Default: the merges of the controlled region (of the whole network without one).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub merges: Vec<String>,
 }
 
 fn current_version() -> u32 {

@@ -12,7 +12,14 @@
 //! - **impatience**: base impatience + waiting time / 300 s; it shifts the foe arrival time a minor driver
 //!   assumes towards the foe's arrival when braking, so waiting drivers take smaller gaps.
 //! - **flow**: periodic departures (SUMO's vehsPerHour); a vehicle that cannot be inserted safely waits at its
-//!   entry road and only counts once inserted.
+//!   entry road and only counts once inserted. Past 1024 waiting at an entry, further ones are only counted and
+//!   built when they reach the front (`waiting.rs`); records of vehicles long gone are dropped in long runs
+//!   (`vehicle_table.rs`), so memory follows the road, not the demand or the horizon.
+//! - **measure point**: a merge whose flow (vehicles entering the road after it) is counted per hour of measured
+//!   time, like the flow past the corridor's end; both besides the paper's whole-horizon outflow.
+//! - **regime**: per merge, the major road, the humans' speed near it against free flow and the queue before it
+//!   ([`merge_regimes`]).
+//! - **warm-up**: steps simulated before the horizon; every metric ignores them.
 //! - **vehicle-step**: one vehicle simulated for one step (the unit of the speed figures).
 //!
 //! ## Using it (for the environment and evaluation code)
@@ -47,17 +54,25 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod idm;
+pub mod measure;
 pub mod metrics;
 pub mod network;
+pub mod regime;
 pub mod replay;
 pub mod scenario;
 pub mod sim;
 pub mod spec;
 pub mod trace;
+mod vehicle_table;
+mod waiting;
 
 pub use idm::IdmParams;
-pub use metrics::{BaselineReport, MeanCi, RunMetrics, Summary, run_baseline_spec, t_quantile_975};
+pub use measure::MeasurePoint;
+pub use metrics::{
+    BaselineReport, MeanCi, MergeFlow, RunMetrics, Summary, run_baseline_spec, t_quantile_975,
+};
 pub use network::Network;
+pub use regime::{RegimeReport, merge_regimes};
 pub use scenario::{run_baseline, spec_from_scenario};
 pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleView};
 pub use spec::{ControlWindowSpec, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
@@ -91,3 +106,5 @@ pub enum SimError {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_bounds;

@@ -25,6 +25,12 @@ pub struct RunMetrics {
     pub steps: u64,
     /// Sum over steps of the vehicles in the network (work done, for speed figures).
     pub vehicle_steps: u64,
+    /// 3600 x vehicles past the corridor's end (the main line's last road) during the horizon / horizon seconds.
+    #[serde(default)]
+    pub end_flow_veh_h: f64,
+    /// The same past each measured merge (the spec's `measure_points`, in order).
+    #[serde(default)]
+    pub merge_flows_veh_h: Vec<f64>,
 }
 
 /// Mean and half-width of the 95% confidence interval (Student t with n - 1 degrees of freedom).
@@ -37,6 +43,11 @@ pub struct MeanCi {
 }
 
 impl MeanCi {
+    /// The summary of no values (NaN), for records written before a figure existed.
+    pub fn none() -> MeanCi {
+        MeanCi::of(&[])
+    }
+
     /// Summary of `xs`; one value gives a zero interval, none gives NaN.
     pub fn of(xs: &[f64]) -> MeanCi {
         let n = xs.len();
@@ -86,6 +97,12 @@ pub struct Summary {
     pub speed: MeanCi,
     pub travel_time: MeanCi,
     pub delay: MeanCi,
+    /// Past the corridor's end, per hour of measured time.
+    #[serde(default = "MeanCi::none")]
+    pub end_flow: MeanCi,
+    /// Past each measured merge, per hour of measured time.
+    #[serde(default)]
+    pub merge_flows: Vec<MeanCi>,
     pub seeds: usize,
 }
 
@@ -98,6 +115,21 @@ impl Summary {
             speed: col(|r| r.avg_speed_mps),
             travel_time: col(|r| r.mean_travel_time_s),
             delay: col(|r| r.mean_delay_s),
+            end_flow: col(|r| r.end_flow_veh_h),
+            merge_flows: (0..runs
+                .iter()
+                .map(|r| r.merge_flows_veh_h.len())
+                .max()
+                .unwrap_or(0))
+                .map(|i| {
+                    MeanCi::of(
+                        &runs
+                            .iter()
+                            .map(|r| r.merge_flows_veh_h.get(i).copied().unwrap_or(f64::NAN))
+                            .collect::<Vec<_>>(),
+                    )
+                })
+                .collect(),
             seeds: runs.len(),
         }
     }
@@ -115,8 +147,20 @@ pub struct BaselineReport {
     pub speed: MeanCi,
     pub travel_time: MeanCi,
     pub delay: MeanCi,
+    /// Vehicles past the corridor's end per hour of measured time.
+    pub end_flow: MeanCi,
+    /// Vehicles past each measured merge per hour of measured time.
+    pub merges: Vec<MergeFlow>,
     pub wall_s: f64,
     pub runs: Vec<RunMetrics>,
+}
+
+/// The flow past one measured merge over seeds.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MergeFlow {
+    /// `merge J3 (osm:123)`.
+    pub name: String,
+    pub flow: MeanCi,
 }
 
 impl BaselineReport {
@@ -125,8 +169,21 @@ impl BaselineReport {
         first_seed: u64,
         runs: Vec<RunMetrics>,
         wall_s: f64,
+        merge_names: &[String],
     ) -> BaselineReport {
         let s = Summary::of(&runs);
+        let merges = s
+            .merge_flows
+            .iter()
+            .enumerate()
+            .map(|(i, &flow)| MergeFlow {
+                name: merge_names
+                    .get(i)
+                    .cloned()
+                    .unwrap_or_else(|| format!("merge {i}")),
+                flow,
+            })
+            .collect();
         BaselineReport {
             scenario: scenario.to_string(),
             seeds: s.seeds,
@@ -136,6 +193,8 @@ impl BaselineReport {
             speed: s.speed,
             travel_time: s.travel_time,
             delay: s.delay,
+            end_flow: s.end_flow,
+            merges,
             wall_s,
             runs,
         }

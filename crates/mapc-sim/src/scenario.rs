@@ -1,6 +1,7 @@
 //! From a resolved scenario to a [`SimSpec`], and the scenario-level entry points.
 
 use crate::SimError;
+use crate::measure::MeasurePoint;
 use crate::metrics::{RunMetrics, run_baseline_spec};
 use crate::network::Network;
 use crate::sim::Simulation;
@@ -52,6 +53,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             SimError::Spec(format!("{}: flows[{i}] has no resolved roads", rs.origin))
         })?;
         flows.push(FlowSpec {
+            id: f.id.clone(),
             from,
             to,
             vehs_per_hour: f.vehs_per_hour,
@@ -78,6 +80,20 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
     let mut initial = Vec::new();
     if let Some(iv) = &sc.initial_vehicles {
         let vt = type_index(&iv.vehicle_type, "initial_vehicles.vehicle_type")?;
+        let t = &vehicle_types[vt];
+        let total: f64 = rs.graph.roads.iter().map(|r| r.length_m).sum();
+        let room = t.length + t.min_gap;
+        if iv.count > 0 && total / (iv.count as f64) < room {
+            return Err(SimError::Spec(format!(
+                "{}: initial_vehicles.count = {}: spaced evenly over the roads' {total:.1} m they would stand \
+                 {:.2} m apart, less than a `{}` vehicle's length plus minimum gap ({room} m); at most {} fit",
+                rs.origin,
+                iv.count,
+                total / iv.count as f64,
+                t.name,
+                (total / room).floor()
+            )));
+        }
         initial = initial_placement(
             &rs.graph,
             &net,
@@ -111,6 +127,26 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
                 name: w.name.clone(),
                 merges: w.merges.clone(),
                 roads: w.roads.clone(),
+            })
+            .collect(),
+        measure_points: rs
+            .measure_junctions
+            .iter()
+            .map(|&j| {
+                let junction = rs.graph.junction(j);
+                let known_as = junction
+                    .and_then(|j| {
+                        j.provenance
+                            .osm_nodes
+                            .first()
+                            .map(|n| format!(" (osm:{n})"))
+                            .or_else(|| j.provenance.sumo_ids.first().map(|s| format!(" ({s})")))
+                    })
+                    .unwrap_or_default();
+                MeasurePoint {
+                    name: format!("merge {j}{known_as}"),
+                    roads: junction.map(|j| j.outgoing.clone()).unwrap_or_default(),
+                }
             })
             .collect(),
     })

@@ -4,14 +4,16 @@
 
 use crate::SimError;
 use crate::idm::{FastMinMax, IdmParams, NUMERICAL_EPS};
+use crate::measure::MeasureAcc;
 use crate::metrics::RunMetrics;
 use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network, SimLane, SimLink};
 use crate::spec::SimSpec;
+use crate::vehicle_table::VehicleTable;
+use crate::waiting::EntryQueue;
 use mapc_graph::RoadId;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Normal};
-use std::collections::VecDeque;
 
 /// Index of a vehicle, stable for the whole run (vehicles are numbered in creation order).
 pub type VehicleId = u32;
@@ -151,7 +153,7 @@ pub struct Simulation {
     spec: SimSpec,
     types: Table<IdmParams>,
     routes: Table<Route>,
-    veh: Table<Veh>,
+    veh: VehicleTable<Veh>,
     /// Vehicles per lane, front first (a plain vector: lanes are short and indexing is on the hot path).
     lane_veh: Table<Table<VehicleId>>,
     lane_order: Vec<LaneIdx>,
@@ -161,7 +163,7 @@ pub struct Simulation {
     approaches: Table<Vec<Approach>>,
     link_has_minor_foe: Table<bool>,
     /// Per entry lane, the vehicles waiting to be inserted, in departure order.
-    pending: Vec<VecDeque<VehicleId>>,
+    pending: Vec<EntryQueue>,
     entry_lanes: Vec<LaneIdx>,
     flow_next: Vec<u64>,
     flow_route: Vec<u32>,
@@ -174,6 +176,7 @@ pub struct Simulation {
     departed_last: Vec<VehicleId>,
     main_line: Vec<(LaneIdx, f64)>,
     metrics: MetricsAcc,
+    measure: MeasureAcc,
     check_invariants: bool,
     /// Longest vehicle of any type (m).
     max_length: f64,
@@ -258,7 +261,7 @@ impl Simulation {
             flow_route: Vec::new(),
             in_region: Table(vec![true; net.lanes.len()]),
             routes: Table(Vec::new()),
-            veh: Table(Vec::new()),
+            veh: VehicleTable::default(),
             plans: Table(Vec::new()),
             plan_order: Vec::new(),
             rng: StdRng::seed_from_u64(seed),
@@ -269,6 +272,7 @@ impl Simulation {
             departed_last: Vec::new(),
             main_line: Vec::new(),
             metrics: MetricsAcc::default(),
+            measure: MeasureAcc::new(&net, &spec.measure_points, None),
             check_invariants: cfg!(debug_assertions),
             max_length: spec
                 .vehicle_types
@@ -323,10 +327,15 @@ impl Simulation {
             let entry = sim.routes[r as usize].lanes[0];
             if !sim.entry_lanes.contains(&entry) {
                 sim.entry_lanes.push(entry);
-                sim.pending.push(VecDeque::new());
+                sim.pending.push(EntryQueue::default());
             }
         }
         sim.main_line = sim.derive_main_line()?;
+        sim.measure = MeasureAcc::new(
+            &sim.net,
+            &sim.spec.measure_points,
+            sim.main_line.last().map(|&(l, _)| l),
+        );
         // Initial vehicles: standing where the spec puts them, before the first step.
         for i in 0..sim.spec.initial.len() {
             let iv = sim.spec.initial[i].clone();
@@ -557,6 +566,11 @@ impl Simulation {
     /// Every vehicle created so far (pending, active, arrived).
     pub fn vehicle_count(&self) -> usize {
         self.veh.len()
+    }
+    /// Vehicle records held now: those on the road, built and waiting to enter, and those that left recently
+    /// (older ones are forgotten in long runs, so memory follows the road, not the horizon).
+    pub fn vehicle_records(&self) -> usize {
+        self.veh.held()
     }
     /// Ids of vehicles that left the network in the last step.
     pub fn arrived_last_step(&self) -> &[VehicleId] {
@@ -831,6 +845,13 @@ impl Simulation {
             departed: m.departed,
             steps: m.steps,
             vehicle_steps: m.veh_steps,
+            end_flow_veh_h: 3600.0 * self.measure.end_count as f64 / secs,
+            merge_flows_veh_h: self
+                .measure
+                .counts
+                .iter()
+                .map(|&c| 3600.0 * c as f64 / secs)
+                .collect(),
         }
     }
 
@@ -853,10 +874,15 @@ impl Simulation {
 
     /// Advance one step.
     pub fn step(&mut self) -> Result<(), SimError> {
+        // records of vehicles that left before the last step may go (their ids were reported then)
+        let now = self.time_s;
+        self.veh
+            .forget_finished(|v| v.status == VehicleStatus::Arrived && v.arrive_s < now);
         self.arrived_last.clear();
         self.departed_last.clear();
         if self.step == self.spec.warmup_steps {
             self.metrics = MetricsAcc::default();
+            self.measure.reset();
         }
         // Metrics see the network as it is before the step (as the original rollouts did).
         let mut n = 0u64;
@@ -1623,6 +1649,7 @@ impl Simulation {
                 while v_pos > self.lane_at(r.lanes[rp] as usize).length {
                     v_pos -= self.lane_at(r.lanes[rp] as usize).length;
                     rp += 1;
+                    self.measure.entered(r.lanes[rp]);
                     if rp + 1 >= r.lanes.len()
                         && v_pos > self.lane_at(r.lanes[rp] as usize).length - POSITION_EPS
                     {
@@ -1654,6 +1681,9 @@ impl Simulation {
         let v = &mut self.veh[id as usize];
         v.status = VehicleStatus::Arrived;
         v.arrive_s = self.time_s + self.spec.step_s;
+        if let Some(&last) = self.routes[v.route as usize].lanes.last() {
+            self.measure.arrived(last);
+        }
         self.metrics.arrived += 1;
         let tt = v.arrive_s - v.depart_s;
         self.metrics.travel_time_sum += tt;
@@ -1676,23 +1706,45 @@ impl Simulation {
                 if depart > now + 1e-9 || depart >= flow.end_s {
                     break;
                 }
-                let (vt, route, speed) = (flow.vehicle_type, self.flow_route[f], flow.depart_speed);
-                let id = self.create_vehicle(vt, route, speed);
-                self.flow_next[f] += 1;
-                let entry = self.routes[route as usize].lanes[0];
+                let entry = self.routes[self.flow_route[f] as usize].lanes[0];
                 let ei = self.entry_lanes.iter().position(|&l| l == entry).unwrap();
-                self.pending[ei].push_back(id);
+                if self.pending[ei].builds_next() {
+                    let id = self.build_flow_vehicle(f);
+                    self.pending[ei].push_built(id);
+                } else {
+                    self.pending[ei].push_counted(f);
+                }
+                self.flow_next[f] += 1;
             }
         }
         for ei in 0..self.entry_lanes.len() {
-            while let Some(&id) = self.pending[ei].front() {
+            loop {
+                let id = match self.pending[ei].front_built() {
+                    Some(id) => id,
+                    None => match self.pending[ei].take_counted() {
+                        // a counted vehicle reaches the front: built now, then waits like any other
+                        Some(f) => {
+                            let id = self.build_flow_vehicle(f);
+                            self.pending[ei].push_taken(id);
+                            id
+                        }
+                        None => break,
+                    },
+                };
                 if self.try_insert(id) {
-                    self.pending[ei].pop_front();
+                    self.pending[ei].pop_built();
                 } else {
                     break;
                 }
             }
         }
+    }
+
+    /// A new vehicle of flow `f` (pending until inserted).
+    fn build_flow_vehicle(&mut self, f: usize) -> VehicleId {
+        let flow = &self.spec.flows[f];
+        let (vt, speed) = (flow.vehicle_type, flow.depart_speed);
+        self.create_vehicle(vt, self.flow_route[f], speed)
     }
 
     /// SUMO's insertion check at the start of the entry road: front at length + POSITION_EPS, the depart speed
@@ -1861,7 +1913,7 @@ impl Simulation {
 
     /// Vehicles waiting at their entry roads.
     pub fn waiting_to_enter(&self) -> usize {
-        self.pending.iter().map(|q| q.len()).sum()
+        self.pending.iter().map(|q| q.len() as usize).sum()
     }
 }
 

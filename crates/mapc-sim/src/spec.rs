@@ -55,6 +55,8 @@ impl VehicleTypeSpec {
 /// while before `end_s`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlowSpec {
+    /// The flow's name in errors (the scenario's flow id).
+    pub id: String,
     pub from: RoadId,
     pub to: Option<RoadId>,
     pub vehs_per_hour: f64,
@@ -97,6 +99,8 @@ pub struct SimSpec {
     /// `control_region`); the simulator does not use them, the environment keeps one FIFO of `n_av` per window.
     /// Empty for a scenario with one region.
     pub control_windows: Vec<ControlWindowSpec>,
+    /// Where flow is measured besides the outflow (the controlled region's merges).
+    pub measure_points: Vec<crate::measure::MeasurePoint>,
 }
 
 /// One window of a several-window scenario.
@@ -111,6 +115,11 @@ pub struct ControlWindowSpec {
 }
 
 impl SimSpec {
+    /// The measured merges' names, in the order of [`crate::RunMetrics::merge_flows_veh_h`].
+    pub fn measure_names(&self) -> Vec<String> {
+        self.measure_points.iter().map(|p| p.name.clone()).collect()
+    }
+
     /// Check the numbers a run relies on; errors name the item.
     pub fn validate(&self) -> Result<(), SimError> {
         if !(self.step_s > 0.0 && self.step_s <= 10.0) {
@@ -174,6 +183,24 @@ impl SimSpec {
                 )));
             }
         }
+        let demand: Vec<mapc_scenario::bounds::FlowDemand> = self
+            .flows
+            .iter()
+            .map(|f| mapc_scenario::bounds::FlowDemand {
+                id: &f.id,
+                entry: f.from.to_string(),
+                vehs_per_hour: f.vehs_per_hour,
+            })
+            .collect();
+        mapc_scenario::bounds::check_demand(&demand, self.step_s)
+            .and_then(|()| {
+                mapc_scenario::bounds::check_horizon(
+                    self.warmup_steps,
+                    self.horizon_steps,
+                    self.step_s,
+                )
+            })
+            .map_err(|r| SimError::Spec(format!("{}: {}", r.key, r.message)))?;
         for (i, v) in self.initial.iter().enumerate() {
             if v.vehicle_type >= self.vehicle_types.len() {
                 return Err(SimError::Spec(format!(

@@ -216,6 +216,7 @@ pub fn window_scenario(
             }),
             windows: vec![],
         }),
+        measure: None,
     })
 }
 
@@ -289,5 +290,6 @@ pub fn windows_scenario(
             window: None,
             windows,
         }),
+        measure: None,
     })
 }

@@ -1,0 +1,124 @@
+//! What a scenario may ask of the simulator: demand that its entry roads can take and a horizon of sane length.
+//! Both bound a run's work and memory, so an absurd number (a typo such as `vehs_per_hour = 1e9`) is refused
+//! with the flow or key named instead of running until the machine runs out of memory.
+
+use std::collections::BTreeMap;
+
+/// The longest simulated time a scenario may ask for (warm-up plus horizon): two days.
+pub const MAX_SIMULATED_S: f64 = 48.0 * 3600.0;
+
+/// The most vehicles per hour one entry road can take: the simulator drives every road as one lane and inserts at
+/// most one vehicle per entry lane and step (SUMO's insertion), so demand above this can only pile up.
+pub fn entry_capacity_vph(step_s: f64) -> f64 {
+    3600.0 / step_s
+}
+
+/// One flow as the demand check sees it.
+pub struct FlowDemand<'a> {
+    pub id: &'a str,
+    /// What identifies the entry road (flows with the same key share its one insertion per step).
+    pub entry: String,
+    pub vehs_per_hour: f64,
+}
+
+/// A refused demand: the key to name and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refusal {
+    pub key: String,
+    pub message: String,
+}
+
+/// Flows entering at the same road must together stay within one insertion per step.
+pub fn check_demand(flows: &[FlowDemand], step_s: f64) -> Result<(), Refusal> {
+    let capacity = entry_capacity_vph(step_s);
+    let mut per_entry: BTreeMap<&str, (f64, Vec<&str>)> = BTreeMap::new();
+    for f in flows {
+        let e = per_entry.entry(&f.entry).or_default();
+        e.0 += f.vehs_per_hour;
+        e.1.push(f.id);
+    }
+    for (entry, (total, ids)) in per_entry {
+        // a relative tolerance: 7200 veh/h split over several flows may sum a hair above 7200
+        if total > capacity * (1.0 + 1e-9) {
+            let names = ids
+                .iter()
+                .map(|id| format!("`{id}`"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let what = if ids.len() == 1 {
+                format!("flow {names} asks for {total} veh/h")
+            } else {
+                format!("flows {names} ask for {total} veh/h in all")
+            };
+            return Err(Refusal {
+                key: "flows".into(),
+                message: format!(
+                    "{what} at entry road {entry}, which takes at most one vehicle per {step_s} s step \
+                     ({capacity} veh/h); the rest could only wait to enter"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Warm-up plus horizon must stay within [`MAX_SIMULATED_S`].
+pub fn check_horizon(warmup_steps: u64, horizon_steps: u64, step_s: f64) -> Result<(), Refusal> {
+    let total_s = (warmup_steps + horizon_steps) as f64 * step_s;
+    if total_s > MAX_SIMULATED_S {
+        return Err(Refusal {
+            key: "horizon_steps".into(),
+            message: format!(
+                "warm-up and horizon ({warmup_steps} + {horizon_steps} steps of {step_s} s = {:.1} h) exceed the \
+                 limit of {:.0} h of simulated time",
+                total_s / 3600.0,
+                MAX_SIMULATED_S / 3600.0
+            ),
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flow<'a>(id: &'a str, entry: &str, vph: f64) -> FlowDemand<'a> {
+        FlowDemand {
+            id,
+            entry: entry.into(),
+            vehs_per_hour: vph,
+        }
+    }
+
+    #[test]
+    fn demand_within_one_insertion_per_step_passes() {
+        let flows = [flow("a", "R1", 3600.0), flow("b", "R1", 3600.0)];
+        assert!(check_demand(&flows, 0.5).is_ok());
+        let flows = [flow("a", "R1", 7200.0), flow("b", "R2", 7200.0)];
+        assert!(check_demand(&flows, 0.5).is_ok());
+    }
+
+    #[test]
+    fn demand_above_it_names_the_flows_and_the_limit() {
+        let err = check_demand(&[flow("main", "R1", 1e9)], 0.5).unwrap_err();
+        assert!(
+            err.message.contains("`main`") && err.message.contains("7200 veh/h"),
+            "{err:?}"
+        );
+        let err =
+            check_demand(&[flow("a", "R1", 4000.0), flow("b", "R1", 4000.0)], 0.5).unwrap_err();
+        assert!(
+            err.message.contains("`a`, `b`") && err.message.contains("8000"),
+            "{err:?}"
+        );
+    }
+
+    #[test]
+    fn horizon_beyond_two_days_is_refused_with_the_limit() {
+        assert!(check_horizon(0, 2000, 0.5).is_ok());
+        assert!(check_horizon(0, 345_600, 0.5).is_ok());
+        let err = check_horizon(10, 345_600, 0.5).unwrap_err();
+        assert!(err.message.contains("48 h"), "{err:?}");
+    }
+}

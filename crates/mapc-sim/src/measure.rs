@@ -1,0 +1,73 @@
+//! Measurement points: vehicles past each measured merge (entering a road that starts at it) and past the
+//! corridor's end (arriving at the end of the main line), counted over the measured time (after the warm-up).
+//! Counting only reads the moves, so every other result stays as it was.
+
+use crate::network::{LaneIdx, LaneKind, Network};
+use mapc_graph::RoadId;
+use serde::{Deserialize, Serialize};
+
+/// A point where flow is measured: vehicles entering any of `roads` pass it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeasurePoint {
+    /// For reports: `merge J3 (osm:123)`.
+    pub name: String,
+    pub roads: Vec<RoadId>,
+}
+
+/// No point on this lane.
+const NO_POINT: u32 = u32::MAX;
+
+#[derive(Clone, Debug)]
+pub(crate) struct MeasureAcc {
+    /// Per lane, the point a vehicle passes when it enters the lane.
+    lane_point: Vec<u32>,
+    /// Vehicles past each point since the warm-up.
+    pub(crate) counts: Vec<u64>,
+    /// The main line's last lane (arrivals from it are past the corridor's end).
+    end_lane: Option<LaneIdx>,
+    pub(crate) end_count: u64,
+}
+
+impl MeasureAcc {
+    pub(crate) fn new(net: &Network, points: &[MeasurePoint], end_lane: Option<LaneIdx>) -> Self {
+        let mut lane_point = vec![NO_POINT; net.lanes.len()];
+        for (p, point) in points.iter().enumerate() {
+            for (l, lane) in net.lanes.iter().enumerate() {
+                if let LaneKind::Road(r) = lane.kind
+                    && point.roads.contains(&net.road_ids[r])
+                {
+                    lane_point[l] = p as u32;
+                }
+            }
+        }
+        MeasureAcc {
+            lane_point,
+            counts: vec![0; points.len()],
+            end_lane,
+            end_count: 0,
+        }
+    }
+
+    /// A vehicle entered `lane`.
+    #[inline]
+    pub(crate) fn entered(&mut self, lane: LaneIdx) {
+        let p = self.lane_point[lane as usize];
+        if p != NO_POINT {
+            self.counts[p as usize] += 1;
+        }
+    }
+
+    /// A vehicle whose route ends on `last_lane` arrived.
+    #[inline]
+    pub(crate) fn arrived(&mut self, last_lane: LaneIdx) {
+        if self.end_lane == Some(last_lane) {
+            self.end_count += 1;
+        }
+    }
+
+    /// The warm-up ended: count from zero.
+    pub(crate) fn reset(&mut self) {
+        self.counts.iter_mut().for_each(|c| *c = 0);
+        self.end_count = 0;
+    }
+}

@@ -1,0 +1,88 @@
+//! Tests of what bounds a run (demand, horizon, waiting vehicles, records) and of the measurement points.
+
+use crate::tests::simple_merge_spec;
+use crate::*;
+
+fn human_spec() -> SimSpec {
+    let mut s = simple_merge_spec();
+    for t in &mut s.vehicle_types {
+        t.controlled = false;
+    }
+    s
+}
+
+#[test]
+fn demand_above_one_insertion_per_step_and_absurd_horizons_are_refused() {
+    let mut spec = human_spec();
+    spec.flows[0].vehs_per_hour = 1e9;
+    let err = Simulation::from_spec(spec, 0).err().unwrap().to_string();
+    assert!(
+        err.contains("`main_human`") && err.contains("7200 veh/h"),
+        "{err}"
+    );
+    let mut spec = human_spec();
+    spec.horizon_steps = 10_000_000;
+    let err = Simulation::from_spec(spec, 0).err().unwrap().to_string();
+    assert!(err.contains("48 h"), "{err}");
+}
+
+#[test]
+fn an_overloaded_entry_counts_its_queue_and_forgets_old_records() {
+    // 7200 veh/h at an entry that passes about 2000: the queue grows by thousands, the road stays as it is
+    let mut spec = human_spec();
+    spec.flows[0].vehs_per_hour = 7000.0;
+    spec.horizon_steps = 24_000; // 12 000 s
+    let mut sim = Simulation::from_spec(spec, 3).unwrap();
+    sim.set_invariant_checks(false);
+    let m = sim.run().unwrap();
+    let due = (7200.0 * 11_999.0 / 3600.0) as usize;
+    assert!(
+        sim.waiting_to_enter() > due / 2,
+        "{}",
+        sim.waiting_to_enter()
+    );
+    // built: the inserted ones and at most the cap of waiting ones, not every due vehicle
+    assert!(sim.vehicle_count() < m.departed as usize + 1100 + 5);
+    // held: a bounded window, not every vehicle of the run
+    assert!(sim.vehicle_count() > 5000, "{}", sim.vehicle_count());
+    assert!(
+        sim.vehicle_records() < 3 * 1024 + 200,
+        "{} of {}",
+        sim.vehicle_records(),
+        sim.vehicle_count()
+    );
+    // the queue still drains in order: departures kept coming all along
+    assert!(m.inflow_veh_h > 1500.0, "{m:?}");
+}
+
+#[test]
+fn flows_past_the_merge_and_the_end_are_counted_after_the_warmup() {
+    let mut spec = human_spec();
+    spec.warmup_steps = 400;
+    let m = Simulation::from_spec(spec.clone(), 0)
+        .unwrap()
+        .run()
+        .unwrap();
+    assert_eq!(m.steps, spec.horizon_steps);
+    assert_eq!(spec.measure_points.len(), 1, "{:?}", spec.measure_points);
+    // on the Simple Merge every vehicle leaves at the corridor's end
+    assert_eq!(m.end_flow_veh_h, m.outflow_veh_h);
+    let merge = m.merge_flows_veh_h[0];
+    // all traffic crosses the merge: about the outflow, give or take the vehicles between merge and end
+    assert!((merge - m.outflow_veh_h).abs() < 100.0, "{m:?}");
+    assert!(merge > 1000.0, "{m:?}");
+}
+
+#[test]
+fn initial_vehicles_that_do_not_fit_are_refused_with_the_count_that_would() {
+    let mut rs = mapc_scenario::ResolvedScenario::load("simple_merge").unwrap();
+    // 900 m of roads (the junctions' inner lanes aside): at 7.5 m a vehicle (length + min gap), at most 120
+    rs.scenario.initial_vehicles.as_mut().unwrap().count = 200;
+    let err = spec_from_scenario(&rs).err().unwrap().to_string();
+    assert!(
+        err.contains("initial_vehicles.count = 200") && err.contains("at most 120 fit"),
+        "{err}"
+    );
+    rs.scenario.initial_vehicles.as_mut().unwrap().count = 100;
+    assert!(spec_from_scenario(&rs).is_ok());
+}
