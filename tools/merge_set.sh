@@ -44,15 +44,28 @@ mark = "disjoint" if c["outflow_ci_disjoint"] else "overlap"
 print("%.1f ± %.1f (%+.1f %%, %s)" % (o["mean"], o["ci95"], c["outflow_change_pct"], mark), end="")'
 }
 
+# the merge's regime under humans (mapc sim's report over 3 seeds): who has priority, the main road's speed
+# against free flow, the merging road's queue
+regime_cell() {
+  python3 -c '
+import json, sys
+r = json.load(sys.stdin)["regime"]["merges"]
+m = r[0] if len(r) == 1 else next(x for x in r if x["name"].startswith("merge"))
+main = next(a for a in m["approaches"] if a["main_line"])
+ramp = next(a for a in m["approaches"] if not a["main_line"])
+who = "both" if main["major"] and ramp["major"] else ("main road" if main["major"] else "merging road")
+print("%s; main road at %.0f %%, queue %.0f m" % (who, 100 * main["speed_ratio"], ramp["mean_queue_m"]), end="")'
+}
+
 evaluate() {
   local scenarios=(simple_merge scenarios/i696_window.toml)
   for m in "${MERGES[@]}"; do
     read -r name _ _ <<<"$m"
     scenarios+=("$DIR/$name.toml")
   done
-  printf '| merge | humans (veh/h) |'
+  printf '| merge | priority; humans near the merge | humans (veh/h) |'
   for p in "$@"; do printf ' %s |' "$(basename "$p" .json)"; done
-  printf '\n|---|---|'
+  printf '\n|---|---|---|'
   for _ in "$@"; do printf -- '---|'; done
   printf '\n'
   for s in "${scenarios[@]}"; do
@@ -61,7 +74,8 @@ evaluate() {
       json=$("$MAPC" eval --policy "$p" --scenario "$s" --seeds "$SEEDS" --json)
       if [ $first = 1 ]; then
         human=$(python3 -c 'import json,sys; b=json.load(sys.stdin)["baseline"]["outflow"]; print("%.1f ± %.1f" % (b["mean"], b["ci95"]))' <<<"$json")
-        printf '| %s | %s |' "$(basename "$s" .toml)" "$human"
+        regime=$("$MAPC" sim --scenario "$s" --seeds 3 --json | regime_cell)
+        printf '| %s | %s | %s |' "$(basename "$s" .toml)" "$regime" "$human"
         first=0
       fi
       printf ' %s |' "$(row_cell <<<"$json")"

@@ -14,7 +14,8 @@
 //! main_vph = [1000.0, 2400.0]    # main road demand, humans and AVs together (uniform)
 //! ramp_vph = [100.0, 500.0]
 //! av_share = [0.05, 0.15]        # of the main road's demand
-//! ramp_major = 0.5               # probability that the ramp has the right of way
+//! ramp_major = 0.5               # probability that the ramp has the right of way (when not both have)
+//! both_major = 0.25              # probability that neither yields
 //! speed_limit_mps = [22.0, 30.0]
 //! pre_merge_m = [300.0, 600.0]
 //! merge_m = [60.0, 200.0]
@@ -58,8 +59,11 @@ pub struct Draws {
     pub main_vph: [f64; 2],
     pub ramp_vph: [f64; 2],
     pub av_share: [f64; 2],
-    /// Probability that the ramp is the major road.
+    /// Probability that the ramp is the major road (when not both are).
     pub ramp_major: f64,
+    /// Probability that both roads are major (neither yields).
+    #[serde(default)]
+    pub both_major: f64,
     pub speed_limit_mps: [f64; 2],
     pub pre_merge_m: [f64; 2],
     pub merge_m: [f64; 2],
@@ -166,7 +170,12 @@ impl LoadedDistribution {
         let main_vph = uniform(d.main_vph);
         let ramp_vph = uniform(d.ramp_vph);
         let av_share = uniform(d.av_share);
-        let major = if uniform([0.0, 1.0]) < d.ramp_major {
+        // one draw decides: both major with `both_major`, else the ramp with `ramp_major` (so a file without
+        // `both_major` draws what it drew before the key existed)
+        let u = uniform([0.0, 1.0]);
+        let major = if u < d.both_major {
+            MajorRoad::Both
+        } else if (u - d.both_major) / (1.0 - d.both_major) < d.ramp_major {
             MajorRoad::Ramp
         } else {
             MajorRoad::Main
@@ -347,6 +356,25 @@ post_merge_m = [60.0, 300.0]
         // both regimes are drawn
         assert!((60..140).contains(&ramp_major), "{ramp_major}");
         assert_ne!(d.draw(1), d.draw(2));
+        // with `both_major`, a quarter of the draws has no yielding road, and the rest keep their odds
+        let both = LoadedDistribution::load(&write(
+            &dir,
+            &MIX.replace("ramp_major = 0.5", "ramp_major = 0.5\nboth_major = 0.25"),
+        ))
+        .unwrap();
+        let majors: Vec<MajorRoad> = (0..400).map(|s| both.draw(s).major).collect();
+        let count = |m: MajorRoad| majors.iter().filter(|&&x| x == m).count();
+        assert!(
+            (70..130).contains(&count(MajorRoad::Both)),
+            "{}",
+            count(MajorRoad::Both)
+        );
+        assert!(
+            (110..190).contains(&count(MajorRoad::Ramp)),
+            "{}",
+            count(MajorRoad::Ramp)
+        );
+        both.resolve(0).unwrap();
         std::fs::remove_dir_all(&dir).ok();
     }
 

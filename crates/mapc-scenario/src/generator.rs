@@ -94,6 +94,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     let (main_priority, ramp_priority) = match p.major {
         MajorRoad::Ramp => (-1, 1),
         MajorRoad::Main => (1, -1),
+        MajorRoad::Both => (1, 1),
     };
     let edges: [(&str, &str, &str, f64, &str, i32); 5] = [
         (
@@ -165,6 +166,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     let (main_row, ramp_row) = match p.major {
         MajorRoad::Ramp => (RightOfWay::Minor, RightOfWay::Major),
         MajorRoad::Main => (RightOfWay::Major, RightOfWay::Minor),
+        MajorRoad::Both => (RightOfWay::Major, RightOfWay::Major),
     };
     for lane in 0..p.lanes {
         g.connections.push(Connection {

@@ -103,6 +103,8 @@ pub struct SimpleMergeParams {
 pub enum MajorRoad {
     Main,
     Ramp,
+    /// Neither yields (as in SUMO nets whose two approaches have the same priority).
+    Both,
 }
 
 impl Default for SimpleMergeParams {
