@@ -195,7 +195,7 @@ fn training_source(arg: &str, horizon_steps: u64) -> anyhow::Result<SpecSource> 
         None => {
             let mut spec = load_scenario(arg)?.spec;
             spec.horizon_steps = horizon_steps;
-            SpecSource::Fixed(spec)
+            SpecSource::Fixed(Box::new(spec))
         }
     })
 }

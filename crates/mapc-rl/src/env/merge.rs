@@ -93,7 +93,7 @@ impl MergeEnvConfig {
 #[derive(Clone, Debug)]
 pub enum SpecSource {
     /// One scenario for every episode.
-    Fixed(SimSpec),
+    Fixed(Box<SimSpec>),
     /// A merge drawn from the episode's seed, simulated for `horizon_steps`.
     Drawn {
         distribution: Arc<LoadedDistribution>,
@@ -105,7 +105,7 @@ impl SpecSource {
     /// The scenario of the episode with seed `seed`.
     pub fn spec_for(&self, seed: u64) -> Result<Cow<'_, SimSpec>, RlError> {
         match self {
-            SpecSource::Fixed(spec) => Ok(Cow::Borrowed(spec)),
+            SpecSource::Fixed(spec) => Ok(Cow::Borrowed(spec.as_ref())),
             SpecSource::Drawn {
                 distribution,
                 horizon_steps,
@@ -146,7 +146,7 @@ impl MergeEnv {
     /// An environment over `spec` (the control region, if any, is the spec's).
     pub fn new(spec: SimSpec, cfg: MergeEnvConfig) -> Result<Self, RlError> {
         super::validate_spec(&spec)?;
-        Self::with_source(SpecSource::Fixed(spec), cfg)
+        Self::with_source(SpecSource::Fixed(Box::new(spec)), cfg)
     }
 
     /// An environment whose episodes draw their scenario from `source` (each draw checked when it is built).
