@@ -340,3 +340,38 @@ fn every_listed_merge_windows_under_its_id() {
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A merge of reversible express lanes (I-5 in Seattle, osm2streets' test input): the importer drops the reversible
+/// ways (a counted warning), so the junction is gone, and `mapc window` says so naming `--junction`, not the
+/// `--via` it routes through.
+#[test]
+fn a_junction_the_import_dropped_is_named_as_the_window_asked() {
+    let out = scratch_dir("dropped-junction");
+    let scenario = out.join("w.toml");
+    let msg = refused(
+        &[
+            "window",
+            "maps/i5_exit_ramp.osm",
+            "--junction",
+            "osm:29545445",
+            "-o",
+            s(&scenario),
+        ],
+        &[
+            "maps/i5_exit_ramp.osm",
+            "--junction osm:29545445",
+            "no junction",
+        ],
+    );
+    assert!(!msg.contains("--via"), "{msg}");
+    assert!(!scenario.exists());
+    let import = run_mapc(&[
+        "import",
+        "maps/i5_exit_ramp.osm",
+        "-o",
+        s(&out.join("i5.graph.json")),
+    ]);
+    assert_success(&import);
+    assert!(String::from_utf8_lossy(&import.stdout).contains("oneway_reversible_dropped"));
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -43,6 +43,12 @@ pub enum CompileError {
     },
     #[error("{0}")]
     Demand(String),
+    #[error("{path}: --junction {junction}: {error}")]
+    Junction {
+        path: PathBuf,
+        junction: String,
+        error: mapc_graph::LookupError,
+    },
     #[error("the written scenario {path} does not load back: {error}")]
     ReadBack { path: PathBuf, error: ScenarioError },
 }
@@ -114,48 +120,49 @@ pub fn corridor_of(
     if !options.via.is_empty() {
         return simplify(&g, options).map(|s| s.graph).map_err(transform);
     }
+    // the map's junction, named as `--junction` (not as the `--via` it becomes below)
+    let j = g
+        .find_junction(junction)
+        .map_err(|error| CompileError::Junction {
+            path: map.to_path_buf(),
+            junction: junction.to_string(),
+            error,
+        })?;
     let mut attempts = vec![junction.to_string()];
-    if let Ok(j) = g.find_junction(junction) {
-        let mut incoming: Vec<&mapc_graph::Road> = g
-            .junction(j)
-            .map(|x| x.incoming.iter().filter_map(|r| g.road(*r)).collect())
-            .unwrap_or_default();
-        incoming.sort_by(|a, b| {
-            b.priority
-                .cmp(&a.priority)
-                .then(b.length_m.total_cmp(&a.length_m))
-                .then(a.id.cmp(&b.id))
-        });
-        attempts.extend(incoming.iter().map(|r| r.id.to_string()));
-        let mut first = None;
-        for via in attempts {
-            let opts = SimplifyOptions {
-                via: vec![via],
-                ..options.clone()
-            };
-            match simplify(&g, &opts) {
-                Ok(s) => {
-                    let merge = j.to_string();
-                    if corridor_merges(&s.graph, &s.roles)
-                        .iter()
-                        .any(|m| m.junction == merge)
-                    {
-                        return Ok(s.graph);
-                    }
-                    first.get_or_insert(Ok(s.graph));
+    let mut incoming: Vec<&mapc_graph::Road> = g
+        .junction(j)
+        .map(|x| x.incoming.iter().filter_map(|r| g.road(*r)).collect())
+        .unwrap_or_default();
+    incoming.sort_by(|a, b| {
+        b.priority
+            .cmp(&a.priority)
+            .then(b.length_m.total_cmp(&a.length_m))
+            .then(a.id.cmp(&b.id))
+    });
+    attempts.extend(incoming.iter().map(|r| r.id.to_string()));
+    let mut first = None;
+    for via in attempts {
+        let opts = SimplifyOptions {
+            via: vec![via],
+            ..options.clone()
+        };
+        match simplify(&g, &opts) {
+            Ok(s) => {
+                let merge = j.to_string();
+                if corridor_merges(&s.graph, &s.roles)
+                    .iter()
+                    .any(|m| m.junction == merge)
+                {
+                    return Ok(s.graph);
                 }
-                Err(e) => {
-                    first.get_or_insert(Err(e));
-                }
+                first.get_or_insert(Ok(s.graph));
+            }
+            Err(e) => {
+                first.get_or_insert(Err(e));
             }
         }
-        return first.expect("one attempt at least").map_err(transform);
     }
-    let opts = SimplifyOptions {
-        via: attempts,
-        ..options.clone()
-    };
-    simplify(&g, &opts).map(|s| s.graph).map_err(transform)
+    first.expect("one attempt at least").map_err(transform)
 }
 
 /// A window cut from a corridor and written: the scenario file and its cut corridor graph beside it.
