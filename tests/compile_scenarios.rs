@@ -5,18 +5,9 @@
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-const PAPER_VIA: [&str; 6] = [
-    "--via",
-    "osm-way:59440544",
-    "--via",
-    "osm-way:8667198",
-    "--via",
-    "osm-way:8708084",
-];
-
 mod common;
 
-use common::{check_golden, root, run_mapc};
+use common::{PAPER_VIA, check_golden, root, run_mapc};
 
 fn scratch(name: &str) -> PathBuf {
     common::scratch_dir(&format!("compile-{name}"))
@@ -172,21 +163,18 @@ fn i696_window_matches_the_simple_merge() {
     golden("i696", "window", report);
 
     // A raw map is simplified first; the result is the same window.
-    let raw = mapc_json(&[
+    let raw_toml = dir.join("raw.toml");
+    let mut args = vec![
         "window",
         "maps/i696.osm",
         "--junction",
         "osm:61862553",
         "-o",
-        dir.join("raw.toml").to_str().unwrap(),
+        raw_toml.to_str().unwrap(),
         "--json",
-        "--via",
-        "osm-way:59440544",
-        "--via",
-        "osm-way:8667198",
-        "--via",
-        "osm-way:8708084",
-    ]);
+    ];
+    args.extend(PAPER_VIA);
+    let raw = mapc_json(&args);
     assert_eq!(raw["upstream_m"], 600.0);
     std::fs::remove_dir_all(dir).unwrap();
 }

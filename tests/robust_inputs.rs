@@ -193,18 +193,10 @@ fn a_junction_id_from_the_map_holds_through_simplify_and_window() {
 fn a_joined_junction_is_named_and_a_via_off_the_corridor_is_refused() {
     let dir = scratch_dir("joined");
     let corridor = dir.join("c.graph.json");
-    assert_success(&run_mapc(&[
-        "simplify",
-        "maps/i696.osm",
-        "--via",
-        "osm-way:59440544",
-        "--via",
-        "osm-way:8667198",
-        "--via",
-        "osm-way:8708084",
-        "-o",
-        s(&corridor),
-    ]));
+    let mut args = vec!["simplify", "maps/i696.osm"];
+    args.extend(common::PAPER_VIA);
+    args.extend(["-o", s(&corridor)]);
+    assert_success(&run_mapc(&args));
     let g = mapc_graph::LaneGraph::load(&corridor).unwrap();
     // a joint of the raw map is a road of the corridor now: every lookup says which
     let (road, joint) = g

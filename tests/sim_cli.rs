@@ -263,21 +263,9 @@ fn window_refuses_an_absurd_demand_and_writes_nothing() {
     let dir = common::scratch_dir("window-demand");
     let scenario = dir.join("w.toml");
     let out = mapc()
-        .args([
-            "window",
-            "maps/i696.osm",
-            "--junction",
-            "osm:61862553",
-            "--via",
-            "osm-way:59440544",
-            "--via",
-            "osm-way:8667198",
-            "--via",
-            "osm-way:8708084",
-            "--main-vph",
-            "1e9",
-            "-o",
-        ])
+        .args(["window", "maps/i696.osm", "--junction", "osm:61862553"])
+        .args(common::PAPER_VIA)
+        .args(["--main-vph", "1e9", "-o"])
         .arg(&scenario)
         .output()
         .unwrap();
@@ -299,19 +287,9 @@ fn window_picks_a_warmup_when_the_corridor_is_long_for_the_source_horizon() {
     let dir = common::scratch_dir("window-timing");
     let scenario = dir.join("w.toml");
     let out = mapc()
-        .args([
-            "window",
-            "maps/i696.osm",
-            "--junction",
-            "osm:61862553",
-            "--via",
-            "osm-way:59440544",
-            "--via",
-            "osm-way:8667198",
-            "--via",
-            "osm-way:8708084",
-            "--match",
-        ])
+        .args(["window", "maps/i696.osm", "--junction", "osm:61862553"])
+        .args(common::PAPER_VIA)
+        .args(["--match"])
         .arg(&source)
         .arg("-o")
         .arg(&scenario)

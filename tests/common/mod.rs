@@ -6,6 +6,16 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// The `--via` flags that route `maps/i696.osm` along the paper's I-696 corridor (the three ways of its main road).
+pub const PAPER_VIA: [&str; 6] = [
+    "--via",
+    "osm-way:59440544",
+    "--via",
+    "osm-way:8667198",
+    "--via",
+    "osm-way:8708084",
+];
+
 /// The repository root (where `maps/` and `scenarios/` are).
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -120,6 +120,8 @@ impl SpecSource {
                 let mut spec = mapc_sim::spec_from_scenario(&resolved)
                     .map_err(|e| scenario_error(format!("draw {seed}: {e}")))?;
                 spec.horizon_steps = *horizon_steps;
+                // every draw is a new network and demand: checked as a fixed scenario is at construction
+                super::validate_spec(&spec)?;
                 Ok(Cow::Owned(spec))
             }
         }
@@ -152,7 +154,8 @@ impl MergeEnv {
     /// An environment whose episodes draw their scenario from `source` (each draw checked when it is built).
     pub fn with_source(source: SpecSource, cfg: MergeEnvConfig) -> Result<Self, RlError> {
         if let SpecSource::Drawn { .. } = &source {
-            super::validate_spec(source.spec_for(0)?.as_ref())?;
+            // a distribution whose draws cannot be simulated fails here, not in the first iteration
+            source.spec_for(0)?;
         }
         if cfg.n_av == 0 {
             return Err(RlError::Config("N_AV must be at least 1".into()));

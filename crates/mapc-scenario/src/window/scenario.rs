@@ -183,41 +183,34 @@ pub fn window_scenario(
         shape,
         demand,
     )?;
-    let n_av = demand
-        .n_av
-        .or(s.control.as_ref().map(|c| c.n_av))
-        .unwrap_or(0);
+    let n_av = controlled_avs(source, demand);
     let junction_name = junction_name(&cut.graph, cut.junction);
     let matched_to = matched_to(source);
-    Ok(Scenario {
-        version: SCENARIO_VERSION,
-        name: name.to_string(),
-        description: format!(
-            "The corridor of {} with a window around merge {} ({junction_name}) matched to {matched_to}: \
-             {:.1} m of main road before the merge, {:.1} m of merging road, {:.1} m after.",
-            cut.graph.source.file, cut.junction, cut.upstream_m, cut.merge_m, cut.downstream_m
-        ),
-        step_s: s.step_s,
-        horizon_steps: s.horizon_steps,
-        warmup_steps: s.warmup_steps,
-        network: NetworkSpec::Graph(graph_file.into()),
-        vehicle_types: s.vehicle_types.clone(),
-        flows,
-        initial_vehicles: s.initial_vehicles.clone(),
-        control: Some(Control {
-            n_av,
-            region: cut.region().iter().map(|r| r.to_string()).collect(),
-            window: Some(WindowInfo {
-                junction: junction_name,
-                matched_to,
-                upstream_m: cut.upstream_m,
-                merge_m: cut.merge_m,
-                downstream_m: cut.downstream_m,
-            }),
-            windows: vec![],
+    let description = format!(
+        "The corridor of {} with a window around merge {} ({junction_name}) matched to {matched_to}: \
+         {:.1} m of main road before the merge, {:.1} m of merging road, {:.1} m after.",
+        cut.graph.source.file, cut.junction, cut.upstream_m, cut.merge_m, cut.downstream_m
+    );
+    let control = Control {
+        n_av,
+        region: cut.region().iter().map(|r| r.to_string()).collect(),
+        window: Some(WindowInfo {
+            junction: junction_name,
+            matched_to,
+            upstream_m: cut.upstream_m,
+            merge_m: cut.merge_m,
+            downstream_m: cut.downstream_m,
         }),
-        measure: None,
-    })
+        windows: vec![],
+    };
+    Ok(corridor_scenario(
+        s,
+        name,
+        description,
+        graph_file,
+        flows,
+        control,
+    ))
 }
 
 /// The scenario of a corridor cut for several windows: as [`window_scenario`], with a flow on every merging road
@@ -234,10 +227,7 @@ pub fn windows_scenario(
     let g = &cut.graph;
     let ramps = ramp_entries(g, &cut.roles);
     let flows = corridor_flows(g, &cut.roles, cut.main_entry, &ramps, source, shape, demand)?;
-    let n_av = demand
-        .n_av
-        .or(s.control.as_ref().map(|c| c.n_av))
-        .unwrap_or(0);
+    let n_av = controlled_avs(source, demand);
     let matched_to = matched_to(source);
     let windows: Vec<ControlWindow> = cut
         .regions
@@ -267,16 +257,50 @@ pub fn windows_scenario(
             )
         })
         .collect();
-    Ok(Scenario {
+    let description = format!(
+        "The corridor of {} with {} controlled windows matched to {matched_to} (upstream / merging road / \
+         downstream): {}; the source's demand on the main road and on every merging road.",
+        g.source.file,
+        windows.len(),
+        listed.join(", ")
+    );
+    let control = Control {
+        n_av,
+        region: vec![],
+        window: None,
+        windows,
+    };
+    Ok(corridor_scenario(
+        s,
+        name,
+        description,
+        graph_file,
+        flows,
+        control,
+    ))
+}
+
+/// N_AV: the flag's, else the source's.
+fn controlled_avs(source: &ResolvedScenario, demand: &DemandOverride) -> u32 {
+    demand
+        .n_av
+        .or(source.scenario.control.as_ref().map(|c| c.n_av))
+        .unwrap_or(0)
+}
+
+/// A corridor scenario on `graph_file` with the source's step, horizon, vehicle types and initial vehicles.
+fn corridor_scenario(
+    s: &Scenario,
+    name: &str,
+    description: String,
+    graph_file: &str,
+    flows: Vec<Flow>,
+    control: Control,
+) -> Scenario {
+    Scenario {
         version: SCENARIO_VERSION,
         name: name.to_string(),
-        description: format!(
-            "The corridor of {} with {} controlled windows matched to {matched_to} (upstream / merging road / \
-             downstream): {}; the source's demand on the main road and on every merging road.",
-            g.source.file,
-            windows.len(),
-            listed.join(", ")
-        ),
+        description,
         step_s: s.step_s,
         horizon_steps: s.horizon_steps,
         warmup_steps: s.warmup_steps,
@@ -284,12 +308,7 @@ pub fn windows_scenario(
         vehicle_types: s.vehicle_types.clone(),
         flows,
         initial_vehicles: s.initial_vehicles.clone(),
-        control: Some(Control {
-            n_av,
-            region: vec![],
-            window: None,
-            windows,
-        }),
+        control: Some(control),
         measure: None,
-    })
+    }
 }
