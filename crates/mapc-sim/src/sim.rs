@@ -1061,17 +1061,26 @@ impl Simulation {
         let ego_in_junction = self.veh[id as usize].lane == via;
         // only a moving check or an ego inside the junction looks at foes still before their stop line
         let check_from = guard || ego_in_junction;
-        for &foe in &self.link_at(link as usize).foes {
+        let own = self.link_at(link as usize);
+        let own_len = self.lane_at(via as usize).length;
+        for &foe in &own.foes {
             let fl = self.link_at(foe as usize);
             let flen = self.lane_at(fl.via_lane as usize).length;
+            // a minor-road vehicle beside ego and short of the conflict point yields to ego
+            // (`yield_inside_junction`): it does not lead, or both would wait for each other
+            let beside_yields = ego_in_junction && own.major && !fl.major;
+            let conflict_d = CONFLICT_POINT_SHARE * own_len.fmin(flen);
             for &o in self.lane_veh[fl.via_lane as usize].iter() {
                 let ov = &self.veh[o as usize];
                 let d = flen - ov.pos;
-                if d < dist_to_merge {
-                    f(o, dist_to_merge - d - ov.length);
+                let gap = dist_to_merge - d - ov.length;
+                if d < dist_to_merge && !(beside_yields && gap < 0.0 && d > conflict_d) {
+                    f(o, gap);
                 }
             }
-            if !check_from {
+            // a minor-road vehicle at its stop line enters only when its link opens: an ego with right of way
+            // does not brake for it
+            if !check_from || beside_yields {
                 continue;
             }
             if let Some(&o) = self.lane_veh[fl.from_lane as usize].first() {
@@ -1809,7 +1818,8 @@ impl Simulation {
     }
 
     /// Every pair of consecutive vehicles keeps a non-negative gap, on lanes, from connections into roads, and
-    /// between vehicles on merging connections ordered by their distance to the merge point.
+    /// between vehicles on merging connections ordered by their distance to the merge point once the follower has
+    /// reached the conflict point (before it the connections run side by side).
     pub fn check_no_overlap(&self) -> Result<(), SimError> {
         const EPS: f64 = 1e-6;
         let err = |a: VehicleId, b: VehicleId, gap: f64| SimError::Collision {
@@ -1871,7 +1881,9 @@ impl Simulation {
                         } else {
                             (b, a, da - db - bv.length)
                         };
-                        if gap < -EPS {
+                        // the connections run side by side up to the conflict point
+                        let beside = da.fmax(db) > CONFLICT_POINT_SHARE * a_len.fmin(b_len);
+                        if gap < -EPS && !beside {
                             return Err(err(lead, fol, gap));
                         }
                     }
