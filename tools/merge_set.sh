@@ -41,6 +41,8 @@ import json, sys
 r = json.load(sys.stdin)
 o, c = r["outflow"], r["comparison"]
 mark = "disjoint" if c["outflow_ci_disjoint"] else "overlap"
+if r.get("withheld"):
+    mark = "not deployed: humans drive"
 print("%.1f ± %.1f (%+.1f %%, %s)" % (o["mean"], o["ci95"], c["outflow_change_pct"], mark), end="")'
 }
 

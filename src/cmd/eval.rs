@@ -39,6 +39,11 @@ pub struct Args {
     /// them with `mapc plot timespace`).
     #[arg(long)]
     pub trace: Option<PathBuf>,
+    /// Which windows the policy controls, overriding its own rule: `everywhere`, or `main-road-yields` (only
+    /// windows whose merge makes the main road yield, the Simple Merge's regime; the others are left to the
+    /// humans). Default: the policy file's rule, else everywhere.
+    #[arg(long)]
+    pub deploy: Option<mapc_rl::deploy::Deploy>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -52,7 +57,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         anyhow::bail!("--seeds must be at least 1");
     }
     let file = policy_file(&args.policy);
-    let ck = Checkpoint::load(&file)?;
+    let mut ck = Checkpoint::load(&file)?;
+    if let Some(rule) = args.deploy {
+        ck.spec.deploy = Some(rule);
+    }
     let sc = super::train::load_scenario(&args.scenario)?;
     if let Some(w) = &sc.horizon_warning {
         eprintln!("warning: {}: {w}", args.scenario);
@@ -112,6 +120,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )
     };
     row("policy", &figs);
+    if let Some(rule) = report.deploy {
+        println!("  deployed: {rule}");
+    }
+    for w in &report.withheld {
+        println!(
+            "  window {} left to the humans (its AVs drive as humans): {}",
+            w.window, w.reason
+        );
+    }
     if let (Some(b), Some(c)) = (&report.baseline, &report.comparison) {
         row("human", b);
         let p = |t: &Option<mapc_rl::stats::WelchTest>| {

@@ -121,6 +121,10 @@ pub struct Args {
     /// Start a new centralized run from this policy's weights (a fresh optimiser; the architectures must agree).
     #[arg(long, conflicts_with_all = ["resume", "distributed"])]
     pub init: Option<PathBuf>,
+    /// The windows the policy is meant for, written into its files (`mapc eval` follows it): `everywhere`, or
+    /// `main-road-yields` (only merges where the main road yields, the Simple Merge's regime).
+    #[arg(long, conflicts_with_all = ["resume", "distributed"])]
+    pub deploy: Option<mapc_rl::deploy::Deploy>,
     /// Also keep every checkpoint written, as RUN/checkpoints/iteration-NNNNN.json (`mapc eval --policy` reads
     /// them), to evaluate earlier policies of the run.
     #[arg(long)]
@@ -388,6 +392,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .out
             .clone()
             .unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, spec.reward)));
+        spec.deploy = args.deploy;
         let mut run = TrainRun::create(&out, spec, config, args.checkpoint_every)?;
         if let Some(init) = &args.init {
             start_from_policy(&mut run, init)?;

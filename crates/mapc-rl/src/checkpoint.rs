@@ -35,6 +35,10 @@ pub struct PolicySpec {
     /// and `reward` then do not apply); absent for a centralized one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub distributed: Option<DistributedSpec>,
+    /// The merges the policy is meant for: windows whose merge is not among them are left to the humans
+    /// ([`crate::deploy`]); absent: every window.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deploy: Option<crate::deploy::Deploy>,
 }
 
 /// What a distributed policy was trained with.
@@ -61,6 +65,7 @@ impl PolicySpec {
             accel_min: ACCEL_MIN,
             accel_max: ACCEL_MAX,
             distributed: None,
+            deploy: None,
         }
     }
 

@@ -6,6 +6,7 @@ use mapc_sim::{MeanCi, SimSpec, Summary, VehicleId};
 use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::Checkpoint;
+use crate::deploy::{Deploy, Deployment, Withheld};
 use crate::env::distributed::{DistributedConfig, DistributedEnv};
 use crate::env::merge::{MergeEnv, MergeEnvConfig};
 use crate::env::obs::{ObsNorm, PER_AV};
@@ -95,6 +96,44 @@ pub struct EvalReport {
     /// With several windows and a centralized policy: the flow past every window's merge.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub merges: Option<Vec<crate::eval_windows::MergeFlowReport>>,
+    /// The policy's deployment rule, if it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deploy: Option<Deploy>,
+    /// The windows its rule left to the humans (their AVs drove as humans), and why.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub withheld: Vec<Withheld>,
+}
+
+/// The scenario as `ck`'s policy drives it under its deployment rule ([`crate::deploy`]). Distributed policies
+/// drive every AV and take no rule.
+pub fn deployed_spec(
+    ck: &Checkpoint,
+    driver: &PolicyDriver,
+    spec: &SimSpec,
+) -> Result<Deployment, RlError> {
+    let rule = ck.spec.deploy.unwrap_or(Deploy::Everywhere);
+    if matches!(driver, PolicyDriver::Distributed(_)) && rule != Deploy::Everywhere {
+        return Err(RlError::Config(format!(
+            "a distributed policy drives every AV; its deployment rule `{rule}` applies to centralized policies only"
+        )));
+    }
+    crate::deploy::deploy(spec, rule)
+}
+
+/// The human episode of `seed` written as trace rows (what a policy whose rule withholds every window drives).
+fn trace_human(
+    spec: &SimSpec,
+    seed: u64,
+    out: &mut impl std::io::Write,
+) -> Result<EpisodeMetrics, RlError> {
+    let mut sim = mapc_sim::Simulation::from_spec(human_spec(spec), seed)
+        .map_err(|e| crate::env::scenario_error(spec, e))?;
+    while !sim.is_done() {
+        write_sim_rows(Some(&sim), out)?;
+        sim.step()
+            .map_err(|e| crate::env::scenario_error(spec, e))?;
+    }
+    Ok(EpisodeMetrics::from(&sim.metrics()))
 }
 
 /// A policy evaluated on a scenario over `seeds` (in parallel, results in seed order), with the human baseline on
@@ -114,12 +153,21 @@ pub fn evaluate(
     let start = std::time::Instant::now();
     let driver =
         PolicyDriver::for_scenario(ck, policy_file, scenario, Some(scenario_n_av.unwrap_or(5)))?;
+    let deployment = deployed_spec(ck, &driver, spec)?;
     let (runs, human, merges) = match &driver {
         PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
             // Several windows: the corridor's figures and the flow past every merge, policy and humans.
             let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
-            let eps =
-                crate::eval_windows::run_windows_policy(&ck.state.model, spec, cfg, &pairs, mode)?;
+            let eps = match &deployment.spec {
+                Some(deployed) => crate::eval_windows::run_windows_policy(
+                    &ck.state.model,
+                    deployed,
+                    cfg,
+                    &pairs,
+                    mode,
+                )?,
+                None => crate::eval_windows::run_human_windows(spec, seeds)?,
+            };
             let human = if baseline {
                 Some(crate::eval_windows::run_human_windows(spec, seeds)?)
             } else {
@@ -162,6 +210,8 @@ pub fn evaluate(
         comparison,
         wall_s: start.elapsed().as_secs_f64(),
         merges,
+        deploy: ck.spec.deploy,
+        withheld: deployment.withheld,
     };
     Ok((report, driver))
 }
@@ -208,6 +258,10 @@ impl PolicyDriver {
         seeds: &[u64],
         mode: ActionMode,
     ) -> Result<Vec<EpisodeMetrics>, RlError> {
+        let deployed = deployed_spec(ck, self, spec)?;
+        let Some(spec) = deployed.spec.as_ref() else {
+            return run_human(spec, seeds);
+        };
         match self {
             PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
                 let pairs: Vec<(u64, u64)> =
@@ -235,6 +289,10 @@ impl PolicyDriver {
         mode: ActionMode,
         out: &mut impl std::io::Write,
     ) -> Result<EpisodeMetrics, RlError> {
+        let deployed = deployed_spec(ck, self, spec)?;
+        let Some(spec) = deployed.spec.as_ref() else {
+            return trace_human(spec, seed, out);
+        };
         match self {
             PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
                 trace_windows_policy(ck, spec, cfg, seed, mode, out)

@@ -28,6 +28,7 @@
 //! its several-window form (one FIFO per window, the flow past every merge).
 
 pub mod checkpoint;
+pub mod deploy;
 pub mod env;
 pub mod error;
 pub mod eval;

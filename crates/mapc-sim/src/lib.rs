@@ -72,7 +72,7 @@ pub use metrics::{
     BaselineReport, MeanCi, MergeFlow, RunMetrics, Summary, run_baseline_spec, t_quantile_975,
 };
 pub use network::Network;
-pub use regime::{RegimeReport, merge_regimes};
+pub use regime::{MergePriority, RegimeReport, merge_priorities, merge_regimes};
 pub use scenario::{run_baseline, spec_from_scenario};
 pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleView};
 pub use spec::{ControlWindowSpec, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};

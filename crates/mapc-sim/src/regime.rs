@@ -237,6 +237,59 @@ pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimE
     })
 }
 
+/// Who has the right of way at a merge, read from the network alone (no run).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct MergePriority {
+    /// The measure point's name (`merge J3 (osm:123)`).
+    pub name: String,
+    pub junction: JunctionId,
+    /// The main line's approach has priority.
+    pub main_major: bool,
+    /// A merging road's approach has priority.
+    pub merging_major: bool,
+}
+
+impl MergePriority {
+    /// The Simple Merge's case: the main road yields to the merging road.
+    pub fn main_road_yields(&self) -> bool {
+        self.merging_major && !self.main_major
+    }
+
+    /// In words, as the regime report says it.
+    pub fn label(&self) -> &'static str {
+        match (self.main_major, self.merging_major) {
+            (true, true) => "no road yields",
+            (true, false) => "the main road has priority",
+            (false, true) => "the merging road has priority",
+            (false, false) => "every road yields",
+        }
+    }
+}
+
+/// Per measured merge of `spec`, in order, who has the right of way.
+pub fn merge_priorities(spec: &SimSpec) -> Result<Vec<MergePriority>, SimError> {
+    let sim = Simulation::from_spec(spec.clone(), 0)?;
+    let shape = approaches(&sim);
+    Ok(spec
+        .measure_points
+        .iter()
+        .zip(&shape)
+        .map(|(point, roads)| {
+            let major = |main: bool| {
+                roads
+                    .iter()
+                    .any(|&(r, _, m)| m && spec.main_line.contains(&r) == main)
+            };
+            MergePriority {
+                name: point.name.clone(),
+                junction: junction_of(spec, point).unwrap_or(JunctionId(0)),
+                main_major: major(true),
+                merging_major: major(false),
+            }
+        })
+        .collect())
+}
+
 /// The junction a measure point's roads start at.
 fn junction_of(spec: &SimSpec, point: &crate::measure::MeasurePoint) -> Option<JunctionId> {
     let r = spec.graph.road(*point.roads.first()?)?;
