@@ -712,6 +712,10 @@ fn the_robust_policy_is_deployed_only_where_the_main_road_yields() {
         .iter()
         .map(|w| w["window"].as_str().unwrap())
         .collect();
-    assert_eq!(withheld, ["osm:62339771", "osm:61860453"], "{three}");
+    assert_eq!(
+        withheld,
+        ["window osm:62339771", "window osm:61860453"],
+        "{three}"
+    );
     assert_eq!(three["merges"].as_array().unwrap().len(), 3, "{three}");
 }

@@ -39,9 +39,9 @@ pub struct Args {
     /// them with `mapc plot timespace`).
     #[arg(long)]
     pub trace: Option<PathBuf>,
-    /// Which windows the policy controls, overriding its own rule: `everywhere`, or `main-road-yields` (only
-    /// windows whose merge makes the main road yield, the Simple Merge's regime; the others are left to the
-    /// humans). Default: the policy file's rule, else everywhere.
+    /// Where the policy drives, overriding its own rule: `everywhere`, or `main-road-yields` (only windows whose
+    /// merge makes the main road yield, the Simple Merge's regime, or for a distributed policy only AVs whose next
+    /// merge is one; the others are left to the humans). Default: the policy file's rule, else everywhere.
     #[arg(long)]
     pub deploy: Option<mapc_rl::deploy::Deploy>,
 }
@@ -125,7 +125,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     for w in &report.withheld {
         println!(
-            "  window {} left to the humans (its AVs drive as humans): {}",
+            "  {} left to the humans (its AVs drive as humans): {}",
             w.window, w.reason
         );
     }

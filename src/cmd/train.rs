@@ -121,9 +121,10 @@ pub struct Args {
     /// Start a new centralized run from this policy's weights (a fresh optimiser; the architectures must agree).
     #[arg(long, conflicts_with_all = ["resume", "distributed"])]
     pub init: Option<PathBuf>,
-    /// The windows the policy is meant for, written into its files (`mapc eval` follows it): `everywhere`, or
-    /// `main-road-yields` (only merges where the main road yields, the Simple Merge's regime).
-    #[arg(long, conflicts_with_all = ["resume", "distributed"])]
+    /// The merges the policy is meant for, written into its files (`mapc eval` follows it): `everywhere`, or
+    /// `main-road-yields` (only merges where the main road yields, the Simple Merge's regime; a centralized policy
+    /// then drives only such windows, a distributed one only AVs whose next merge is one).
+    #[arg(long, conflicts_with = "resume")]
     pub deploy: Option<mapc_rl::deploy::Deploy>,
     /// Also keep every checkpoint written, as RUN/checkpoints/iteration-NNNNN.json (`mapc eval --policy` reads
     /// them), to evaluate earlier policies of the run.

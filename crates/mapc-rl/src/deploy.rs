@@ -6,6 +6,7 @@
 use std::fmt;
 use std::str::FromStr;
 
+use mapc_graph::RoadId;
 use mapc_sim::{MergePriority, SimSpec, merge_priorities};
 use serde::{Deserialize, Serialize};
 
@@ -59,7 +60,8 @@ impl FromStr for Deploy {
 /// A window the rule leaves to the humans, and why.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Withheld {
-    /// The window's merge as the scenario names it.
+    /// The window's merge as the scenario names it (for a distributed policy: the merge whose approaches are
+    /// left to the humans).
     pub window: String,
     /// `the main road has priority at merge J3 (osm:123)`.
     pub reason: String,
@@ -72,6 +74,65 @@ pub struct Deployment {
     /// drive as humans everywhere: the human baseline).
     pub spec: Option<SimSpec>,
     pub withheld: Vec<Withheld>,
+}
+
+/// For a distributed policy, every AV of the control region is an agent: the rule keeps the roads whose next merge
+/// downstream admits it, and an AV on any other road drives as a human. A merge the scenario does not measure has
+/// no known right of way and admits nothing.
+pub fn deploy_by_road(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlError> {
+    if rule == Deploy::Everywhere {
+        return deploy(spec, rule);
+    }
+    let merges = merge_priorities(spec).map_err(|e| RlError::Config(e.to_string()))?;
+    let graph = &spec.graph;
+    let roads: Vec<RoadId> = match &spec.control_region {
+        Some(region) => region.clone(),
+        None => graph.roads.iter().map(|r| r.id).collect(),
+    };
+    let next_merge = |mut road: RoadId| -> Option<&MergePriority> {
+        // a bound on the walk, for safety against a cycle
+        for _ in 0..graph.roads.len() {
+            let to = graph.road(road)?.to;
+            if let Some(m) = merges.iter().find(|m| m.junction == to) {
+                return Some(m);
+            }
+            let mut next = graph.connections_from(road).map(|c| c.to_road);
+            road = match (next.next(), next.next()) {
+                (Some(only), None) => only,
+                _ => return None,
+            };
+        }
+        None
+    };
+    let mut region = Vec::new();
+    let mut withheld: Vec<Withheld> = Vec::new();
+    for road in roads {
+        match next_merge(road) {
+            Some(m) if rule.admits(m) => region.push(road),
+            Some(m) => {
+                if !withheld.iter().any(|w| w.window == m.name) {
+                    withheld.push(Withheld {
+                        window: m.name.clone(),
+                        reason: format!("{} at {}", m.label(), m.name),
+                    });
+                }
+            }
+            None => {}
+        }
+    }
+    if region.is_empty() {
+        return Ok(Deployment {
+            spec: None,
+            withheld,
+        });
+    }
+    region.sort();
+    let mut kept = spec.clone();
+    kept.control_region = Some(region);
+    Ok(Deployment {
+        spec: Some(kept),
+        withheld,
+    })
 }
 
 /// The windows of `spec` that `rule` admits. A scenario with one controlled region is one window made of its
@@ -114,7 +175,7 @@ pub fn deploy(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlError> {
     for w in &spec.control_windows {
         match refusal(merges.iter(), Some(&w.merges)) {
             Some(reason) => withheld.push(Withheld {
-                window: w.name.clone(),
+                window: format!("window {}", w.name),
                 reason,
             }),
             None => region.extend(w.roads.iter().copied()),
@@ -134,4 +195,60 @@ pub fn deploy(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlError> {
         spec: Some(kept),
         withheld,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn corridor() -> SimSpec {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenarios/i696_whole_corridor.toml");
+        let rs = mapc_scenario::ResolvedScenario::load(path.to_str().unwrap()).unwrap();
+        mapc_sim::spec_from_scenario(&rs).unwrap()
+    }
+
+    /// The whole I-696 corridor has six merges; at two of them the main road yields (mapc sim's regime report):
+    /// a distributed policy keeps exactly the roads that lead to those two.
+    #[test]
+    fn by_road_a_distributed_policy_keeps_the_approaches_of_merges_where_the_main_road_yields() {
+        let spec = corridor();
+        let merges = merge_priorities(&spec).unwrap();
+        assert_eq!(merges.len(), 6);
+        let yielding: Vec<_> = merges
+            .iter()
+            .filter(|m| m.main_road_yields())
+            .map(|m| m.junction)
+            .collect();
+        assert_eq!(yielding.len(), 2, "{merges:?}");
+        let d = deploy_by_road(&spec, Deploy::MainRoadYields).unwrap();
+        assert_eq!(d.withheld.len(), 4, "{:?}", d.withheld);
+        let region = d.spec.unwrap().control_region.unwrap();
+        for road in &spec.graph.roads {
+            let kept = region.contains(&road.id);
+            if yielding.contains(&road.to) {
+                assert!(kept, "{:?} leads to a yielding merge", road.id);
+            }
+            if merges
+                .iter()
+                .any(|m| m.junction == road.to && !m.main_road_yields())
+            {
+                assert!(
+                    !kept,
+                    "{:?} leads to a merge where the main road has priority",
+                    road.id
+                );
+            }
+        }
+        // everywhere: the scenario as it is
+        let all = deploy_by_road(&spec, Deploy::Everywhere).unwrap();
+        assert_eq!(all.spec.unwrap().control_region, spec.control_region);
+        assert!(all.withheld.is_empty());
+        assert!(
+            "anywhere"
+                .parse::<Deploy>()
+                .unwrap_err()
+                .contains("main-road-yields")
+        );
+    }
 }

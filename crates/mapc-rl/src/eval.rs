@@ -104,20 +104,18 @@ pub struct EvalReport {
     pub withheld: Vec<Withheld>,
 }
 
-/// The scenario as `ck`'s policy drives it under its deployment rule ([`crate::deploy`]). Distributed policies
-/// drive every AV and take no rule.
+/// The scenario as `ck`'s policy drives it under its deployment rule ([`crate::deploy`]): windows for a
+/// centralized policy, roads for a distributed one.
 pub fn deployed_spec(
     ck: &Checkpoint,
     driver: &PolicyDriver,
     spec: &SimSpec,
 ) -> Result<Deployment, RlError> {
     let rule = ck.spec.deploy.unwrap_or(Deploy::Everywhere);
-    if matches!(driver, PolicyDriver::Distributed(_)) && rule != Deploy::Everywhere {
-        return Err(RlError::Config(format!(
-            "a distributed policy drives every AV; its deployment rule `{rule}` applies to centralized policies only"
-        )));
+    match driver {
+        PolicyDriver::Distributed(_) => crate::deploy::deploy_by_road(spec, rule),
+        PolicyDriver::Centralized(_) => crate::deploy::deploy(spec, rule),
     }
-    crate::deploy::deploy(spec, rule)
 }
 
 /// The human episode of `seed` written as trace rows (what a policy whose rule withholds every window drives).

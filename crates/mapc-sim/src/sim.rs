@@ -658,6 +658,27 @@ impl Simulation {
         None
     }
 
+    /// Distance from the vehicle's front to the next merge on its route (a connection with foes; diverges are
+    /// passed), and that junction; `None` if no merge lies ahead.
+    pub fn distance_to_next_merge(&self, id: VehicleId) -> Option<(f64, mapc_graph::JunctionId)> {
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
+        let r = &self.routes[v.route as usize];
+        let mut seen = self.lane_at(v.lane as usize).length - v.pos;
+        for k in (v.route_pos as usize + 1)..r.lanes.len() {
+            let lane = self.lane_at(r.lanes[k] as usize);
+            if let LaneKind::Via(link) = lane.kind
+                && !self.link_at(link as usize).foes.is_empty()
+            {
+                return Some((seen, self.link_at(link as usize).junction));
+            }
+            seen += lane.length;
+        }
+        None
+    }
+
     /// Distance from the vehicle's front to the network's end along its route position's main line
     /// (`corridor_x_m` of traces): `Some` only on main-line roads and their connections.
     pub fn corridor_x(&self, id: VehicleId) -> Option<f64> {

@@ -1,6 +1,6 @@
 //! The distributed (decentralised) merge-control setting of the paper's section 4.3: every AV in the control
 //! region is an agent that sees only what its own sensors give (its leader and follower, optionally the distance
-//! to the next junction, the congestion ahead of it and the nearest vehicle about to merge) and runs the same
+//! to the next merge, the congestion ahead of it and the nearest vehicle about to merge) and runs the same
 //! shared policy; each agent gets its own reward, a mix of a selfish time penalty and the collaborative average
 //! speed (0.1 (-eta1 + eta2 * mean speed / V) per step), and a bonus in the step it leaves (optionally mixed with
 //! the step's mean over the agents, [`AgentReward::share`]).
@@ -16,9 +16,9 @@ use crate::rollout::EpisodeMetrics;
 /// Which of the paper's state augmentations the agents see (its Table 4 ablation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Features {
-    /// Distance to the next junction ("Dist").
+    /// Distance to the next merge ("Dist").
     pub dist: bool,
-    /// Mean speed of the vehicles between the agent and the next junction ("Congestion").
+    /// Mean speed of the vehicles between the agent and the next merge ("Congestion").
     pub congestion: bool,
     /// Distance to the junction and speed of the nearest vehicle about to merge from another road
     /// ("MergeInfo").
@@ -151,7 +151,7 @@ pub const SIMPLE_MERGE_DIST_NORM: DistNorm = DistNorm {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AgentView {
     pub av: AvView,
-    /// Distance to the next junction (m); `None` past the last one.
+    /// Distance to the next merge (m); `None` past the last one.
     pub junction_dist: Option<f64>,
     /// Mean speed of the vehicles between the agent and that junction (m/s); `None` when there is none.
     pub congestion_speed: Option<f64>,
@@ -159,9 +159,13 @@ pub struct AgentView {
     pub merge_foe: Option<(f64, f64)>,
 }
 
+/// Merging vehicles count up to this many `DistNorm::merge` from the merge point (1.5: the Simple Merge's 200 m ramp
+/// and its 23 m connection fit, so its observations are unchanged).
+pub const MERGE_FOE_RANGE: f64 = 1.5;
+
 /// One agent's observation: the centralized observation's five values for the agent (not clipped), then the
-/// augmentations in the order dist, congestion, merge distance, merge speed. No junction ahead counts as one
-/// `DistNorm::junction` away, no vehicle ahead of it as speed V, no merging vehicle as one at the merging road's
+/// augmentations in the order dist, congestion, merge distance, merge speed. The distance is to the next merge on
+/// the agent's route, at most `DistNorm::junction`; no merge ahead counts as that far, no vehicle ahead of it as speed V, no merging vehicle as one at the merging road's
 /// start, standing.
 pub fn agent_obs(
     view: &AgentView,
@@ -185,7 +189,13 @@ pub fn agent_obs(
         out.push(x as f32);
     }
     if features.dist {
-        out.push((view.junction_dist.unwrap_or(dist_norm.junction) / dist_norm.junction) as f32);
+        // farther than the training network's entry reads as its entry (on a corridor the next merge may lie
+        // kilometres ahead)
+        let d = view
+            .junction_dist
+            .unwrap_or(dist_norm.junction)
+            .min(dist_norm.junction);
+        out.push((d / dist_norm.junction) as f32);
     }
     if features.congestion {
         out.push((view.congestion_speed.unwrap_or(vmax) / vmax) as f32);
@@ -304,7 +314,7 @@ impl DistributedEnv {
         let speed = sim.vehicle(id).map_or(0.0, |v| v.speed);
         let f = self.cfg.features;
         let junction_dist = if f.dist || f.congestion {
-            sim.distance_to_next_junction(id).map(|(d, _)| d)
+            sim.distance_to_next_merge(id).map(|(d, _)| d)
         } else {
             None
         };
@@ -314,7 +324,9 @@ impl DistributedEnv {
             None
         };
         let merge_foe = if f.merge_info {
-            sim.nearest_merge_foe(id, f64::INFINITY)
+            // a vehicle farther up its road than the training network's merging road (and its connection) is not
+            // about to merge: on a corridor the merging road may be kilometres long
+            sim.nearest_merge_foe(id, MERGE_FOE_RANGE * self.cfg.dist_norm.merge)
                 .map(|f| (f.dist_to_merge_m, f.speed))
         } else {
             None
@@ -407,7 +419,7 @@ impl DistributedEnv {
     }
 }
 
-/// Mean speed of the vehicles ahead of `id` whose backs are within `dist` (the distance to the next junction),
+/// Mean speed of the vehicles ahead of `id` whose backs are within `dist` (the distance to the next merge),
 /// following the chain of leaders.
 fn congestion_ahead(sim: &Simulation, id: VehicleId, dist: f64) -> Option<f64> {
     let mut covered = 0.0;
@@ -467,6 +479,13 @@ mod tests {
         };
         agent_obs(&bare, Features::FULL, NORM, SIMPLE_MERGE_DIST_NORM, &mut o);
         assert_eq!(&o[5..], &[1.0, 1.0, 1.0, 0.0]);
+        // on a corridor the next merge may lie kilometres ahead: it reads as the training network's entry
+        let far = AgentView {
+            junction_dist: Some(2500.0),
+            ..view
+        };
+        agent_obs(&far, Features::FULL, NORM, SIMPLE_MERGE_DIST_NORM, &mut o);
+        assert_eq!(o[5], 1.0);
     }
 
     #[test]
