@@ -109,15 +109,11 @@ pub fn deploy_by_road(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlErro
     for road in roads {
         match next_merge(road) {
             Some(m) if rule.admits(m) => region.push(road),
-            Some(m) => {
-                if !withheld.iter().any(|w| w.window == m.name) {
-                    withheld.push(Withheld {
-                        window: m.name.clone(),
-                        reason: format!("{} at {}", m.label(), m.name),
-                    });
-                }
-            }
-            None => {}
+            Some(m) if !withheld.iter().any(|w| w.window == m.name) => withheld.push(Withheld {
+                window: m.name.clone(),
+                reason: format!("{} at {}", m.label(), m.name),
+            }),
+            _ => {}
         }
     }
     if region.is_empty() {
