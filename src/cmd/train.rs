@@ -123,7 +123,7 @@ pub struct Args {
     pub init: Option<PathBuf>,
     /// The merges the policy is meant for, written into its files (`mapc eval` follows it): `everywhere`, or
     /// `main-road-yields` (only merges where the main road yields, the Simple Merge's regime; a centralized policy
-    /// then drives only such windows, a distributed one only AVs whose next merge is one).
+    /// then drives only such windows; a distributed one trains and drives only AVs whose next merge is one).
     #[arg(long, conflicts_with = "resume")]
     pub deploy: Option<mapc_rl::deploy::Deploy>,
     /// Also keep every checkpoint written, as RUN/checkpoints/iteration-NNNNN.json (`mapc eval --policy` reads
@@ -408,6 +408,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut spec = sc.spec.clone();
     spec.horizon_steps = run.state.config.horizon as u64;
     if let Some(dcfg) = run.spec.distributed_config() {
+        // a distributed policy trains where its rule lets it drive: only the AVs whose next merge admits it are
+        // agents (the others drive as humans)
+        if let Some(rule) = run.spec.deploy {
+            spec = mapc_rl::deploy::deploy_by_road(&spec, rule)?
+                .spec
+                .with_context(|| {
+                    format!(
+                        "{}: no road leads to a merge where `--deploy {rule}` lets the policy drive",
+                        run.spec.scenario
+                    )
+                })?;
+        }
         // (the sizes agree: `Checkpoint::load` checks a resumed run's, a new run derives them from the features)
         DistributedEnv::new(spec.clone(), dcfg)?;
         let factory = move || DistributedEnv::new(spec.clone(), dcfg).expect("validated above");
