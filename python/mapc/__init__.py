@@ -109,10 +109,12 @@ def evaluate(
     first_seed: int = 0,
     sample: bool = False,
     baseline: bool = True,
+    deploy: Optional[str] = None,
 ) -> Dict[str, Any]:
-    """A policy against the humans on the same seeds: what ``mapc eval --json`` prints."""
+    """A policy against the humans on the same seeds: what ``mapc eval --json`` prints. ``deploy`` overrides
+    where the policy drives (``"everywhere"`` or ``"main-road-yields"``, as ``mapc eval --deploy``)."""
     return json.loads(
-        _evaluate(os.fspath(policy), os.fspath(scenario), seeds, first_seed, sample, baseline)
+        _evaluate(os.fspath(policy), os.fspath(scenario), seeds, first_seed, sample, baseline, deploy)
     )
 
 

@@ -252,3 +252,17 @@ def test_a_distributed_policy_written_from_its_layers_is_the_same_policy_to_mapc
     ours = mapc.evaluate(out, "simple_merge", seeds=2, baseline=False)
     theirs = mapc.evaluate(shipped, "simple_merge", seeds=2, baseline=False)
     assert (ours["outflow"], ours["speed"]) == (theirs["outflow"], theirs["speed"])
+
+
+def test_a_deployment_rule_from_python_is_mapc_evals(tmp_path):
+    robust = str(ROOT / "policies" / "merge_robust.json")
+    arizona = str(ROOT / "scenarios" / "merges" / "arizona_5134463770.toml")
+    py = mapc.evaluate(robust, arizona, seeds=2)
+    assert py["outflow"] == py["baseline"]["outflow"]
+    assert "the main road has priority" in py["withheld"][0]["reason"]
+    lifted = mapc.evaluate(robust, arizona, seeds=2, deploy="everywhere")
+    cli = binary_json("eval", "--policy", robust, "--scenario", arizona, "--seeds", "2", "--deploy", "everywhere")
+    assert lifted["outflow"] == cli["outflow"]
+    assert "withheld" not in lifted
+    with pytest.raises(mapc.MapcError, match="unknown deployment rule"):
+        mapc.evaluate(robust, arizona, seeds=1, deploy="anywhere")

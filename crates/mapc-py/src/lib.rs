@@ -80,7 +80,8 @@ fn simulate(py: Python<'_>, scenario: &str, seeds: u64, first_seed: u64) -> PyRe
 
 /// A policy (checkpoint file or run directory) against the humans on `scenario`, as JSON (`mapc eval --json`).
 #[pyfunction]
-#[pyo3(signature = (policy, scenario = "simple_merge", seeds = 100, first_seed = 0, sample = false, baseline = true))]
+#[pyo3(signature = (policy, scenario = "simple_merge", seeds = 100, first_seed = 0, sample = false, baseline = true, deploy = None))]
+#[allow(clippy::too_many_arguments)]
 fn evaluate(
     py: Python<'_>,
     policy: PathBuf,
@@ -89,9 +90,13 @@ fn evaluate(
     first_seed: u64,
     sample: bool,
     baseline: bool,
+    deploy: Option<&str>,
 ) -> PyResult<String> {
     let file = mapc_rl::checkpoint::policy_file(&policy);
-    let ck = Checkpoint::load(&file).map_err(mapc_error)?;
+    let mut ck = Checkpoint::load(&file).map_err(mapc_error)?;
+    if let Some(rule) = deploy {
+        ck.spec.deploy = Some(rule.parse().map_err(mapc_error)?);
+    }
     let (resolved, spec) = load_scenario(scenario)?;
     let list = seed_list(seeds, first_seed)?;
     let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
