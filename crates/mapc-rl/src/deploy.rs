@@ -116,19 +116,7 @@ pub fn deploy_by_road(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlErro
             _ => {}
         }
     }
-    if region.is_empty() {
-        return Ok(Deployment {
-            spec: None,
-            withheld,
-        });
-    }
-    region.sort();
-    let mut kept = spec.clone();
-    kept.control_region = Some(region);
-    Ok(Deployment {
-        spec: Some(kept),
-        withheld,
-    })
+    Ok(restricted(spec, region, withheld))
 }
 
 /// The windows of `spec` that `rule` admits. A scenario with one controlled region is one window made of its
@@ -177,20 +165,25 @@ pub fn deploy(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlError> {
             None => region.extend(w.roads.iter().copied()),
         }
     }
+    Ok(restricted(spec, region, withheld))
+}
+
+/// `spec` controlled on `region` only; no road left: the human baseline.
+fn restricted(spec: &SimSpec, mut region: Vec<RoadId>, withheld: Vec<Withheld>) -> Deployment {
     if region.is_empty() {
-        return Ok(Deployment {
+        return Deployment {
             spec: None,
             withheld,
-        });
+        };
     }
     region.sort();
     region.dedup();
     let mut kept = spec.clone();
     kept.control_region = Some(region);
-    Ok(Deployment {
+    Deployment {
         spec: Some(kept),
         withheld,
-    })
+    }
 }
 
 #[cfg(test)]

@@ -638,29 +638,23 @@ impl Simulation {
         &self,
         id: VehicleId,
     ) -> Option<(f64, mapc_graph::JunctionId)> {
-        let v = self
-            .veh
-            .get(id as usize)
-            .filter(|v| v.status == VehicleStatus::Active)?;
-        let r = &self.routes[v.route as usize];
-        let mut seen = self.lane_at(v.lane as usize).length - v.pos;
-        for k in (v.route_pos as usize + 1)..r.lanes.len() {
-            let lane = self.lane_at(r.lanes[k] as usize);
-            if let LaneKind::Via(link) = lane.kind {
-                let l = self.link_at(link as usize);
-                let branches = self.lane_at(l.from_lane as usize).out_links.len() > 1;
-                if (!l.foes.is_empty() || branches) && k > v.route_pos as usize {
-                    return Some((seen, l.junction));
-                }
-            }
-            seen += lane.length;
-        }
-        None
+        self.distance_to_next_link(id, |l| {
+            !l.foes.is_empty() || self.lane_at(l.from_lane as usize).out_links.len() > 1
+        })
     }
 
     /// Distance from the vehicle's front to the next merge on its route (a connection with foes; diverges are
     /// passed), and that junction; `None` if no merge lies ahead.
     pub fn distance_to_next_merge(&self, id: VehicleId) -> Option<(f64, mapc_graph::JunctionId)> {
+        self.distance_to_next_link(id, |l| !l.foes.is_empty())
+    }
+
+    /// Distance from the vehicle's front to the next connection on its route that `wanted` picks, and its junction.
+    fn distance_to_next_link(
+        &self,
+        id: VehicleId,
+        wanted: impl Fn(&SimLink) -> bool,
+    ) -> Option<(f64, mapc_graph::JunctionId)> {
         let v = self
             .veh
             .get(id as usize)
@@ -670,7 +664,7 @@ impl Simulation {
         for k in (v.route_pos as usize + 1)..r.lanes.len() {
             let lane = self.lane_at(r.lanes[k] as usize);
             if let LaneKind::Via(link) = lane.kind
-                && !self.link_at(link as usize).foes.is_empty()
+                && wanted(self.link_at(link as usize))
             {
                 return Some((seen, self.link_at(link as usize).junction));
             }
