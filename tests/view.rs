@@ -167,6 +167,32 @@ fn compare_plays_the_humans_and_the_policy_as_mapc_eval_scores_them() {
     );
 }
 
+/// A policy whose deployment rule leaves the merge to the humans (the main road has priority there): its pane is the
+/// humans' run, and the page says why.
+#[test]
+fn a_withheld_window_plays_the_humans_and_says_why() {
+    let dir = scratch_dir("view-withheld");
+    let page = dir.join("arizona.html");
+    let summary = json_of(&mapc(&[
+        "view",
+        "scenarios/merges/arizona_5134463770.toml",
+        "--policy",
+        "policies/merge_robust.json",
+        "--compare",
+        "-o",
+        s(&page),
+        "--json",
+    ]));
+    assert_eq!(pane(&summary, 0), pane(&summary, 1));
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(
+        html.contains(
+            "left to the humans (the main road has priority at merge J15 (osm:5134463770))"
+        ),
+        "the page names the withheld merge"
+    );
+}
+
 #[test]
 fn a_bare_map_shows_its_roads_and_junctions_with_provenance() {
     let dir = scratch_dir("view-map");

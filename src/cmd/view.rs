@@ -180,15 +180,25 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
             .with_context(|| format!("running {} on seed {seed}", file.display()))?;
             let label = format!("policy {}, seed {seed}", file.display());
             page.replays.push(read(rows, clock, &label)?);
+            // where the policy's deployment rule leaves the AVs to drive as humans, the page says so
+            let withheld: Vec<String> = mapc_rl::eval::deployed_spec(&ck, &driver, &spec)?
+                .withheld
+                .into_iter()
+                .map(|w| format!("{} left to the humans ({})", w.window, w.reason))
+                .collect();
             page.subtitle = format!(
-                "{}; AVs driven by {} (mean actions){}",
+                "{}; AVs driven by {} (mean actions){}{}",
                 resolved.origin,
                 file.display(),
                 if args.compare {
                     "; above, the same seed with humans only"
                 } else {
                     ""
-                }
+                },
+                withheld
+                    .iter()
+                    .map(|w| format!("; {w}"))
+                    .collect::<String>()
             );
         }
     }

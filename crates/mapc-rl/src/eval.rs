@@ -124,14 +124,11 @@ fn trace_human(
     seed: u64,
     out: &mut impl std::io::Write,
 ) -> Result<EpisodeMetrics, RlError> {
-    let mut sim = mapc_sim::Simulation::from_spec(human_spec(spec), seed)
-        .map_err(|e| crate::env::scenario_error(spec, e))?;
-    while !sim.is_done() {
-        write_sim_rows(Some(&sim), out)?;
-        sim.step()
-            .map_err(|e| crate::env::scenario_error(spec, e))?;
-    }
-    Ok(EpisodeMetrics::from(&sim.metrics()))
+    let metrics = mapc_sim::trace_run(&human_spec(spec), seed, out).map_err(|e| RlError::Io {
+        path: "trace".into(),
+        source: e,
+    })?;
+    Ok(EpisodeMetrics::from(&metrics))
 }
 
 /// A policy evaluated on a scenario over `seeds` (in parallel, results in seed order), with the human baseline on
