@@ -175,7 +175,7 @@ pub fn evaluate(
             (metrics(&eps), human.as_deref().map(metrics), Some(merges))
         }
         _ => {
-            let runs = driver.run(ck, spec, seeds, mode)?;
+            let runs = driver.run_deployed(ck, spec, &deployment, seeds, mode)?;
             let human = if baseline {
                 Some(run_human(spec, seeds)?)
             } else {
@@ -253,8 +253,21 @@ impl PolicyDriver {
         seeds: &[u64],
         mode: ActionMode,
     ) -> Result<Vec<EpisodeMetrics>, RlError> {
-        let deployed = deployed_spec(ck, self, spec)?;
-        let Some(spec) = deployed.spec.as_ref() else {
+        let deployment = deployed_spec(ck, self, spec)?;
+        self.run_deployed(ck, spec, &deployment, seeds, mode)
+    }
+
+    /// [`Self::run`] with the deployment already worked out: `spec` as the policy's rule leaves it, or the
+    /// humans where it leaves no AV to the policy.
+    fn run_deployed(
+        &self,
+        ck: &Checkpoint,
+        spec: &SimSpec,
+        deployment: &Deployment,
+        seeds: &[u64],
+        mode: ActionMode,
+    ) -> Result<Vec<EpisodeMetrics>, RlError> {
+        let Some(spec) = deployment.spec.as_ref() else {
             return run_human(spec, seeds);
         };
         match self {

@@ -1077,21 +1077,27 @@ impl Simulation {
         // only a moving check or an ego inside the junction looks at foes still before their stop line
         let check_from = guard || ego_in_junction;
         let own = self.link_at(link as usize);
-        let own_len = self.lane_at(via as usize).length;
+        let ego_has_priority_inside = ego_in_junction && own.major;
         for &foe in &own.foes {
             let fl = self.link_at(foe as usize);
             let flen = self.lane_at(fl.via_lane as usize).length;
             // a minor-road vehicle beside ego and short of the conflict point yields to ego
             // (`yield_inside_junction`): it does not lead, or both would wait for each other
-            let beside_yields = ego_in_junction && own.major && !fl.major;
-            let conflict_d = CONFLICT_POINT_SHARE * own_len.fmin(flen);
+            let beside_yields = ego_has_priority_inside && !fl.major;
             for &o in self.lane_veh[fl.via_lane as usize].iter() {
                 let ov = &self.veh[o as usize];
                 let d = flen - ov.pos;
-                let gap = dist_to_merge - d - ov.length;
-                if d < dist_to_merge && !(beside_yields && gap < 0.0 && d > conflict_d) {
-                    f(o, gap);
+                if d >= dist_to_merge {
+                    continue;
                 }
+                let gap = dist_to_merge - d - ov.length;
+                if beside_yields
+                    && gap < 0.0
+                    && d > CONFLICT_POINT_SHARE * self.lane_at(via as usize).length.fmin(flen)
+                {
+                    continue;
+                }
+                f(o, gap);
             }
             // a minor-road vehicle at its stop line enters only when its link opens: an ego with right of way
             // does not brake for it

@@ -367,12 +367,7 @@ impl DistributedEnv {
         let (lo, hi) = (self.cfg.accel_min, self.cfg.accel_max);
         let sim = self.sim.as_mut().expect("reset before step");
         for &(id, a) in actions {
-            let a = if a.is_finite() {
-                (a as f64).clamp(lo, hi)
-            } else {
-                0.0
-            };
-            sim.set_acceleration(id, a).map_err(super::sim_error)?;
+            super::apply_action(sim, id, a, (lo, hi))?;
         }
         if !sim.is_done() {
             sim.step().map_err(super::sim_error)?;

@@ -247,12 +247,7 @@ impl MergeEnv {
         let sim = self.sim.as_mut().expect("reset before step");
         for (k, &id) in self.controlled.iter().enumerate() {
             if let Some(&a) = action.get(k) {
-                let a = if a.is_finite() {
-                    (a as f64).clamp(lo, hi)
-                } else {
-                    0.0
-                };
-                sim.set_acceleration(id, a).map_err(super::sim_error)?;
+                super::apply_action(sim, id, a, (lo, hi))?;
             }
         }
         if !sim.is_done() {

@@ -3,7 +3,7 @@ pub mod merge;
 pub mod obs;
 pub mod windows;
 
-use mapc_sim::{SimSpec, Simulation};
+use mapc_sim::{SimSpec, Simulation, VehicleId};
 
 use crate::error::RlError;
 
@@ -33,4 +33,20 @@ pub(crate) fn episode_simulation(spec: &SimSpec, seed: u64) -> Result<Simulation
     let mut sim = Simulation::from_spec(spec.clone(), seed).map_err(|e| scenario_error(spec, e))?;
     sim.set_invariant_checks(false);
     Ok(sim)
+}
+
+/// Give AV `id` a policy's acceleration for the next step, clamped to `[lo, hi]` (a non-finite one is 0: the
+/// network's output is never trusted to be a number).
+pub(crate) fn apply_action(
+    sim: &mut Simulation,
+    id: VehicleId,
+    a: f32,
+    (lo, hi): (f64, f64),
+) -> Result<(), RlError> {
+    let a = if a.is_finite() {
+        (a as f64).clamp(lo, hi)
+    } else {
+        0.0
+    };
+    sim.set_acceleration(id, a).map_err(sim_error)
 }

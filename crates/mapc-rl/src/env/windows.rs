@@ -254,12 +254,7 @@ impl WindowsEnv {
         for (w, action) in self.windows.iter().zip(actions) {
             let Some(action) = action else { continue };
             for (&id, &a) in w.controlled.iter().zip(action) {
-                let a = if a.is_finite() {
-                    (a as f64).clamp(lo, hi)
-                } else {
-                    0.0
-                };
-                sim.set_acceleration(id, a).map_err(super::sim_error)?;
+                super::apply_action(sim, id, a, (lo, hi))?;
             }
         }
         if !sim.is_done() {
