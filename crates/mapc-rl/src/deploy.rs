@@ -6,7 +6,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use mapc_graph::RoadId;
+use mapc_graph::{JunctionId, RoadId};
 use mapc_sim::{MergePriority, SimSpec, merge_priorities};
 use serde::{Deserialize, Serialize};
 
@@ -129,14 +129,25 @@ pub fn deploy(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlError> {
         });
     }
     let merges = merge_priorities(spec).map_err(|e| RlError::Config(e.to_string()))?;
-    let refusal = |mut merges: std::slice::Iter<'_, MergePriority>,
-                   junctions: Option<&[mapc_graph::JunctionId]>| {
-        merges
-            .find(|m| junctions.is_none_or(|js| js.contains(&m.junction)) && !rule.admits(m))
-            .map(|m| format!("{} at {}", m.label(), m.name))
+    // why `rule` refuses a window made of `junctions`: a merge outside the rule, or one whose right of way is not
+    // known (the scenario does not measure it), or no merge at all
+    let refusal = |junctions: &[JunctionId]| -> Option<String> {
+        if junctions.is_empty() {
+            return Some("it has no measured merge, so its right of way is unknown".into());
+        }
+        junctions
+            .iter()
+            .find_map(|j| match merges.iter().find(|m| m.junction == *j) {
+                Some(m) if rule.admits(m) => None,
+                Some(m) => Some(format!("{} at {}", m.label(), m.name)),
+                None => Some(format!(
+                    "the right of way at {j} is unknown (not a measured merge)"
+                )),
+            })
     };
     if spec.control_windows.is_empty() {
-        return Ok(match refusal(merges.iter(), None) {
+        let region: Vec<JunctionId> = merges.iter().map(|m| m.junction).collect();
+        return Ok(match refusal(&region) {
             Some(reason) => Deployment {
                 spec: None,
                 withheld: vec![Withheld {
@@ -157,7 +168,7 @@ pub fn deploy(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlError> {
     let mut withheld = Vec::new();
     let mut region = Vec::new();
     for w in &spec.control_windows {
-        match refusal(merges.iter(), Some(&w.merges)) {
+        match refusal(&w.merges) {
             Some(reason) => withheld.push(Withheld {
                 window: format!("window {}", w.name),
                 reason,
@@ -238,6 +249,31 @@ mod tests {
                 .parse::<Deploy>()
                 .unwrap_err()
                 .contains("main-road-yields")
+        );
+    }
+
+    /// A merge whose right of way the scenario does not measure admits nothing: the rule cannot be checked there.
+    #[test]
+    fn an_unmeasured_merge_is_left_to_the_humans() {
+        let mut spec = corridor();
+        spec.measure_points.clear();
+        let d = deploy(&spec, Deploy::MainRoadYields).unwrap();
+        assert!(d.spec.is_none());
+        assert!(d.withheld[0].reason.contains("unknown"), "{:?}", d.withheld);
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenarios/i696_3merge.toml");
+        let rs = mapc_scenario::ResolvedScenario::load(path.to_str().unwrap()).unwrap();
+        let mut three = mapc_sim::spec_from_scenario(&rs).unwrap();
+        // keep J43's point only: the other two windows' merges are then unknown
+        three
+            .measure_points
+            .retain(|p| p.name.contains("osm:61862553"));
+        let d = deploy(&three, Deploy::MainRoadYields).unwrap();
+        assert_eq!(d.withheld.len(), 2, "{:?}", d.withheld);
+        assert!(d.withheld.iter().all(|w| w.reason.contains("unknown")));
+        assert!(
+            d.spec.is_some(),
+            "J43 makes the main road yield: its window stays"
         );
     }
 }
