@@ -21,6 +21,8 @@
 //!   ([`merge_regimes`]).
 //! - **warm-up**: steps simulated before the horizon; every metric ignores them.
 //! - **vehicle-step**: one vehicle simulated for one step (the unit of the speed figures).
+//! - **lane-change model**: [`lcmodels`] holds SUMO 1.8's LC2013 behind a small interface, tested on its own;
+//!   the step does not use it yet (roads are single-lane).
 //!
 //! ## Using it (for the environment and evaluation code)
 //! ```ignore
@@ -54,6 +56,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod idm;
+pub mod lcmodels;
 pub mod measure;
 pub mod metrics;
 pub mod network;

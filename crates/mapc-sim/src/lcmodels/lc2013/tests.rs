@@ -1,0 +1,382 @@
+//! Hand-worked cases of each motivation. Vehicles are the paper's human type (IDM a = 2.6, b = 4.5, T = 1 s,
+//! s0 = 2.5 m, length 5 m) with a 0.5 s step, on 30 m/s lanes; 2 sqrt(a b) = 6.841053. Expected values are worked
+//! from SUMO 1.8's formulas in the comments; where a car-following speed enters, it is the crate's IDM.
+
+use super::speed::maximum_safe_stop_speed;
+use super::*;
+use crate::idm::IdmParams;
+use crate::lcmodels::NeighbourLane;
+
+const DT: f64 = 0.5;
+
+fn human() -> IdmParams {
+    IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, DT)
+}
+
+fn ego(lane_index: usize, pos: f64, speed: f64) -> Ego {
+    Ego {
+        speed,
+        params: human(),
+        length: 5.0,
+        pos,
+        lane_index,
+        lane_length: 1000.0,
+        lane_speed_limit: 30.0,
+        max_speed: 30.0,
+    }
+}
+
+fn other(id: u64, gap: f64, speed: f64) -> Other {
+    Other {
+        id,
+        gap,
+        speed,
+        accel: 0.0,
+        params: human(),
+        length: 5.0,
+        max_speed: 30.0,
+        stopped: false,
+        lc_state: 0,
+    }
+}
+
+/// A lane whose route goes on for `length` m from its start (none on it), `best_lane_offset` lanes from the best.
+fn lane(length: f64, best_lane_offset: i32) -> LaneQ {
+    LaneQ {
+        length,
+        occupation: 0.0,
+        best_lane_offset,
+        leads_elsewhere: false,
+    }
+}
+
+fn free() -> Option<NeighbourLane> {
+    Some(NeighbourLane::default())
+}
+
+fn around<'a>(ego: Ego, best_lanes: &'a [LaneQ]) -> Surroundings<'a> {
+    let n = best_lanes.len();
+    Surroundings {
+        ego,
+        leader: None,
+        right: (ego.lane_index > 0).then(NeighbourLane::default),
+        left: (ego.lane_index + 1 < n).then(NeighbourLane::default),
+        best_lanes,
+        blocked_ahead: BlockedAhead::default(),
+        road_has_lane_changer: n > 1,
+    }
+}
+
+#[test]
+fn default_thresholds_are_sumos() {
+    let m = Lc2013::default();
+    // (0.2 / lcSpeedGainRight) / lcSpeedGain and 0.2 / lcSpeedGain
+    assert_eq!(m.change_prob_threshold_right, 2.0);
+    assert_eq!(m.change_prob_threshold_left, 0.2);
+    assert_eq!(m.safety_factor(), 1.0);
+}
+
+#[test]
+fn safe_stop_speed_matches_the_hand_computed_value() {
+    // gap 50 m behind a leader at 20 m/s: its brake gap at 4.5 m/s^2 in 0.5 s steps is 8 steps of 2.25 m/s,
+    // 0.5 (8 * 20 - 2.25 * 8 * 9 / 2) = 39.5 m; g = 89.5 - 0.001. n = floor(0.5 + (sqrt(0.25 + 4 (0.5 (2 g / 2.25
+    // - 1) + 1)) / 2 - 1) / 0.5) = 11; h = 0.5 * 11 * 10 * 2.25 * 0.5 + 11 * 2.25 = 86.625;
+    // r = (89.499 - 86.625) / 6.5 = 0.442154; v = 11 * 2.25 + r = 25.192154.
+    let p = human();
+    assert_eq!(p.brake_gap(20.0, 4.5, 0.0), 39.5);
+    let v = maximum_safe_stop_speed(&p, 89.5, 1.0);
+    assert!((v - 25.192_153_846).abs() < 1e-8, "{v}");
+    assert_eq!(maximum_safe_stop_speed(&p, 0.0005, 1.0), 0.0);
+}
+
+#[test]
+fn an_ending_lane_is_left_once_the_distance_is_below_the_look_ahead() {
+    // Lane 0 (an acceleration lane) ends; lane 1 goes on. At 25 m/s the look-ahead to the left is
+    // 25 * 10 * lcLookaheadLeft 2 + 2 * (5 + 2.5) = 515 m. The usable distance is the lane's length from its
+    // start minus the position (50 m).
+    let model = Lc2013::default();
+    for (usable, changes) in [(514.9, true), (515.1, false)] {
+        let lanes = [lane(50.0 + usable, 1), lane(5000.0, 0)];
+        let s = around(ego(0, 50.0, 25.0), &lanes);
+        let mut mem = Lc2013Memory::default();
+        let d = model.decide(&mut mem, &s);
+        if changes {
+            assert_eq!(d.change, Some(Side::Left), "usable {usable}: {d:?}");
+            assert_eq!(d.reason, Some(Reason::Strategic));
+            assert_ne!(d.state_left & lca::URGENT, 0);
+            // a change resets the memory (SUMO's `changed`)
+            assert_eq!(mem, Lc2013Memory::default());
+        } else {
+            // not urgent; both lanes equally fast, no gain probability: no wish yet
+            assert_eq!(d.change, None, "usable {usable}: {d:?}");
+            assert_eq!(d.state_left, 0);
+            assert_eq!(mem.look_ahead_speed, 25.0);
+        }
+    }
+}
+
+#[test]
+fn a_lane_dropped_on_the_left_is_left_to_the_right_with_half_the_look_ahead() {
+    // To the right the look-ahead is 25 * 10 + 15 = 265 m.
+    let model = Lc2013::default();
+    for (usable, changes) in [(264.0, true), (266.0, false)] {
+        let lanes = [lane(5000.0, 0), lane(50.0 + usable, -1)];
+        let s = around(ego(1, 50.0, 25.0), &lanes);
+        let d = model.decide(&mut Lc2013Memory::default(), &s);
+        assert_eq!(
+            d.change,
+            changes.then_some(Side::Right),
+            "usable {usable}: {d:?}"
+        );
+    }
+}
+
+#[test]
+fn a_vehicle_on_the_best_lane_does_not_enter_an_ending_lane() {
+    // Lane 0 ends 100 m ahead of the ego on lane 1: its room left, 150 - 50 = 100 m, over the lanes to come back
+    // (|bestLaneOffset| 0 + 2) is below the 265 m look-ahead: stay (strategic).
+    let model = Lc2013::default();
+    let lanes = [lane(150.0, 1), lane(5000.0, 0)];
+    let s = around(ego(1, 50.0, 25.0), &lanes);
+    let d = model.decide(&mut Lc2013Memory::default(), &s);
+    assert_eq!(d.change, None);
+    assert_eq!(d.state_right, lca::STAY | lca::STRATEGIC);
+    // a long acceleration lane on a road above 80 km/h is not entered either (the on-ramp guard)
+    let lanes = [lane(5000.0, 1), lane(6000.0, 0)];
+    let s = around(ego(1, 50.0, 25.0), &lanes);
+    let d = model.decide(&mut Lc2013Memory::default(), &s);
+    assert_eq!(d.state_right, lca::STAY | lca::STRATEGIC);
+}
+
+#[test]
+fn speed_gain_to_the_left_after_the_probability_accumulates() {
+    // Ego at 20 m/s on lane 0, 50 m behind a leader at 20 m/s; lane 1 free. Anticipated speed on its lane: the
+    // safe speed behind the leader, 25.192154 (see `safe_stop_speed_matches_the_hand_computed_value`); on the free
+    // lane: min(30, safe stop speed within 5000 m) = 30. Relative gain (30 - 25.192154) / 30 = 0.160262, added
+    // times 0.5 s each step, rounded up to 1e-5 after each step: 0.08014, 0.16028, 0.24041 > 0.2 at the third.
+    let model = Lc2013::default();
+    let lanes = [lane(5000.0, 0), lane(5000.0, 0)];
+    let mut s = around(ego(0, 50.0, 20.0), &lanes);
+    s.leader = Some(other(7, 50.0, 20.0));
+    let mut mem = Lc2013Memory::default();
+    let mut probs = vec![];
+    for step in 1..=3 {
+        let d = model.decide(&mut mem, &s);
+        if step < 3 {
+            assert_eq!(d.change, None, "step {step}: {d:?}");
+            mem.prepare_step();
+            probs.push(mem.speed_gain_probability);
+        } else {
+            assert_eq!(d.change, Some(Side::Left), "step {step}: {d:?}");
+            assert_eq!(d.reason, Some(Reason::SpeedGain));
+        }
+    }
+    assert!(
+        (probs[0] - 0.08014).abs() < 1e-12 && (probs[1] - 0.16028).abs() < 1e-12,
+        "{probs:?}"
+    );
+}
+
+#[test]
+fn keep_right_after_about_five_seconds_of_a_free_right_lane() {
+    // Ego at 30 m/s (= its maximum and the limit) on lane 1 of 2, lane 0 free for 6000 m. Acceptance time
+    // 7 * 30 * max(1, 30) / 30 = 210 s; full-speed gap 6000 - brakeGap(30) (13 steps: 0.5 (13 * 30 - 2.25 * 13 * 14
+    // / 2) + 30 * 1 = 122.625) = 5877.375 m, i.e. 195.9125 s at 30 m/s. Per step the wish grows by
+    // 0.5 * 2.0 * (195.9125 / 210) / 5 = 0.186583; it passes -2.0 at the 11th step (5.5 s).
+    let model = Lc2013::default();
+    let lanes = [lane(6000.0, 0), lane(6000.0, 0)];
+    let s = around(ego(1, 0.0, 30.0), &lanes);
+    let mut mem = Lc2013Memory::default();
+    for step in 1..=11 {
+        let d = model.decide(&mut mem, &s);
+        if step < 11 {
+            assert_eq!(d.change, None, "step {step}: {d:?}");
+            assert!((mem.keep_right_probability + 0.186_583_33 * step as f64).abs() < 1e-4);
+            mem.prepare_step();
+        } else {
+            assert_eq!(d.change, Some(Side::Right), "step {step}: {d:?}");
+            assert_eq!(d.reason, Some(Reason::KeepRight));
+        }
+    }
+}
+
+#[test]
+fn an_unsafe_follower_gap_blocks_at_the_exact_secure_gap() {
+    // Urgent change left (lane 0 ends in 100 m) at 25 m/s with a follower at 30 m/s on lane 1. Its secure gap
+    // behind the ego: 30 * 1 + 30 (30 - 25) / 6.841053 = 51.926450 m.
+    let model = Lc2013::default();
+    let lanes = [lane(150.0, 1), lane(5000.0, 0)];
+    for (gap, blocked) in [(51.9264, true), (51.9265, false)] {
+        let mut s = around(ego(0, 50.0, 25.0), &lanes);
+        s.left = Some(NeighbourLane {
+            leader: None,
+            follower: Some(other(3, gap, 30.0)),
+        });
+        let d = model.decide(&mut Lc2013Memory::default(), &s);
+        if blocked {
+            assert_eq!(d.change, None, "gap {gap}");
+            assert_ne!(d.state_left & lca::BLOCKED_BY_LEFT_FOLLOWER, 0);
+            assert_eq!(d.urgent_blocked, vec![Side::Left]);
+        } else {
+            assert_eq!(d.change, Some(Side::Left), "gap {gap}");
+        }
+    }
+    // and the new leader: the ego's secure gap behind a leader at 20 m/s is 25 + 25 * 5 / 6.841053 = 43.272042 m
+    for (gap, blocked) in [(43.272, true), (43.2721, false)] {
+        let mut s = around(ego(0, 50.0, 25.0), &lanes);
+        s.left = Some(NeighbourLane {
+            leader: Some(other(4, gap, 20.0)),
+            follower: None,
+        });
+        let d = model.decide(&mut Lc2013Memory::default(), &s);
+        assert_eq!(
+            d.state_left & lca::BLOCKED_BY_LEFT_LEADER != 0,
+            blocked,
+            "gap {gap}"
+        );
+    }
+}
+
+#[test]
+fn a_blocking_follower_is_asked_to_slow_and_makes_room() {
+    // Ego at 20 m/s on lane 0 of 3, which ends 100 m ahead (urgent: look-ahead 20 * 20 + 15 = 415 m). Follower
+    // on lane 1 at 22 m/s, gap 4 m: its secure gap 22 + 22 * 2 / 6.841053 = 28.43 m blocks.
+    // informFollower: planned speed 20 (the stop speed within 100 m is above 20); braking 1 s at 4.5 m/s^2 the
+    // follower would drive 17.5 m/s, gap 4 + (20 - 17.5) = 6.5 m, below its secure gap then,
+    // 17.5 + 17.5 (17.5 - 20) / 6.841053 = 11.105 m; but in the time left, 100 m / 20 m/s / 1 lane / URGENCY 2 =
+    // 2.5 s, the gap grows by 2.5 * 2.5 = 6.25 > 11.105 - 6.5 + 0.1: the follower is asked for the speed after one
+    // braking step, 22 - 2.25 = 19.75 m/s.
+    let model = Lc2013::default();
+    let lanes = [lane(100.0, 1), lane(5000.0, 0), lane(5000.0, 0)];
+    let p = human();
+    assert!(p.stop_speed(100.0, 20.0, 30.0) >= 20.0);
+    let mut s = around(ego(0, 0.0, 20.0), &lanes);
+    let follower = other(9, 4.0, 22.0);
+    s.left = Some(NeighbourLane {
+        leader: None,
+        follower: Some(follower),
+    });
+    let mut mem = Lc2013Memory::default();
+    let d = model.decide(&mut mem, &s);
+    assert_eq!(d.change, None);
+    assert_eq!(d.urgent_blocked, vec![Side::Left]);
+    assert_eq!(
+        d.messages,
+        vec![Message::SpeedAdvice {
+            to: 9,
+            speed: 19.75,
+            state: lca::MLEFT | lca::AMBLOCKINGFOLLOWER,
+        }]
+    );
+    // a blocked strategic wish with no advice of its own drives between wanted and max to find a gap
+    assert_eq!(
+        mem.patch_speed(&model, 20.0, &p, 30.0, true, 1, 17.75, 21.0, 21.3),
+        21.15
+    );
+
+    // The follower receives the advice: it drives 19.75 m/s next step (within its braking bound 22 - 2.25).
+    let mut fmem = Lc2013Memory::default();
+    let Message::SpeedAdvice { speed, state, .. } = d.messages[0] else {
+        unreachable!()
+    };
+    fmem.inform(speed, state, 22.0, DT);
+    // In its own turn (later in the pass) it moves left out of the way, to lane 2: cooperative, urgent.
+    let mut fs = around(ego(1, 9.5, 22.0), &lanes);
+    fs.right = None;
+    let fd = model.decide(&mut fmem, &fs);
+    assert_eq!(fd.change, Some(Side::Left), "{fd:?}");
+    assert_eq!(fd.reason, Some(Reason::Cooperative));
+    // had it stayed, its speed would be the advice
+    let mut stay = Lc2013Memory::default();
+    stay.inform(speed, state, 22.0, DT);
+    assert_eq!(
+        stay.patch_speed(&model, 22.0, &p, 30.0, true, 0, 19.75, 23.0, 23.3),
+        19.75
+    );
+}
+
+#[test]
+fn a_leader_that_cannot_be_overtaken_is_fallen_behind() {
+    // Urgent change left at 25 m/s (lane 0 ends 400 m ahead; look-ahead 515 m) with a leader on lane 1 at 25 m/s,
+    // 10 m ahead: the secure gap is 25 m, blocked. Overtaking on the right is not allowed above 60 km/h, so
+    // the leader is told (AMBLOCKINGLEADER, no speed limit) and the ego falls behind: the leader's speed next
+    // step is taken as 25 - 0.5 * 1 = 24.5, the gap 10 + 0.5 (24.5 - 25) = 9.75 m, where IDM brakes below the
+    // comfortable bound 25 - 2.25 = 22.75; the time left is 400 / 25 / 2 = 8 s, so the ego brakes at
+    // max(MIN_FALLBEHIND 7 / 3.6, 2.25 / 8) = 1.944 m/s^2: 25 - 0.972222 = 24.027778 m/s.
+    let model = Lc2013::default();
+    let p = human();
+    assert!(p.stop_speed(400.0, 25.0, 30.0) >= 25.0);
+    assert!(p.follow_speed(9.75, 25.0, 24.5, 30.0) < 22.75);
+    let lanes = [lane(400.0, 1), lane(5000.0, 0)];
+    let mut s = around(ego(0, 0.0, 25.0), &lanes);
+    s.left = Some(NeighbourLane {
+        leader: Some(other(5, 10.0, 25.0)),
+        follower: None,
+    });
+    let mut mem = Lc2013Memory::default();
+    let d = model.decide(&mut mem, &s);
+    assert_eq!(d.change, None);
+    assert_eq!(
+        d.messages,
+        vec![Message::SpeedAdvice {
+            to: 5,
+            speed: f64::MAX,
+            state: lca::MLEFT | lca::AMBLOCKINGLEADER,
+        }]
+    );
+    let advised: Vec<f64> = mem.speed_advices(25.0, DT).collect();
+    assert_eq!(advised.len(), 1);
+    assert!(
+        (advised[0] - (25.0 - 0.5 * 7.0 / 3.6)).abs() < 1e-12,
+        "{advised:?}"
+    );
+    let v = mem.patch_speed(&model, 25.0, &p, 30.0, true, 1, 22.75, 25.5, 26.3);
+    assert!((v - 24.027_777_78).abs() < 1e-8, "{v}");
+    // the leader, told it blocks, drives between wanted and max to let the ego in behind it
+    let mut lmem = Lc2013Memory::default();
+    lmem.inform(f64::MAX, lca::MLEFT | lca::AMBLOCKINGLEADER, 25.0, DT);
+    assert_eq!(
+        lmem.patch_speed(&model, 25.0, &p, 30.0, true, 0, 22.75, 25.5, 26.5),
+        26.0
+    );
+}
+
+#[test]
+fn prepare_step_keeps_only_a_strategic_wish_and_rounds_the_probabilities_up() {
+    let mut mem = Lc2013Memory {
+        own_state: lca::LEFT | lca::STRATEGIC | lca::URGENT | lca::AMBLOCKINGFOLLOWER,
+        speed_gain_probability: 0.123_456_789,
+        keep_right_probability: -0.123_456_789,
+        ..Default::default()
+    };
+    mem.prepare_step();
+    assert_eq!(mem.own_state, lca::LEFT);
+    assert!((mem.speed_gain_probability - 0.12346).abs() < 1e-15);
+    assert!((mem.keep_right_probability + 0.12345).abs() < 1e-15);
+    let mut mem = Lc2013Memory {
+        own_state: lca::RIGHT | lca::SPEEDGAIN,
+        ..Default::default()
+    };
+    mem.prepare_step();
+    assert_eq!(mem.own_state, 0);
+}
+
+#[test]
+fn the_same_inputs_give_the_same_decisions() {
+    let model = Lc2013::default();
+    let lanes = [lane(5000.0, 0), lane(5000.0, 0)];
+    let mut s = around(ego(0, 50.0, 20.0), &lanes);
+    s.leader = Some(other(7, 50.0, 20.0));
+    s.left = free();
+    let run = || {
+        let mut mem = Lc2013Memory::default();
+        (0..3)
+            .map(|_| {
+                let d = model.decide(&mut mem, &s);
+                mem.prepare_step();
+                (d, mem.speed_gain_probability.to_bits())
+            })
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(run(), run());
+}
