@@ -350,8 +350,9 @@ impl Lc2013 {
                 self.save_blocker_length(mem, ego, Some(first), counter_wish, msgs);
             }
             let remaining_lanes = best_lane_offset.abs().max(1) as f64;
+            // SUMO bounds this by STEPS2TIME(TS), a thousandth of the step (TS is already in seconds): kept
             let remaining_seconds = max2(
-                dt,
+                dt / 1000.0,
                 mem.left_space
                     / max2(mem.look_ahead_speed, NUMERICAL_EPS)
                     / remaining_lanes

@@ -380,3 +380,126 @@ fn the_same_inputs_give_the_same_decisions() {
     };
     assert_eq!(run(), run());
 }
+
+#[test]
+fn a_neighbour_changing_the_other_way_is_given_room_or_asked_for_it() {
+    // Urgent change left, lane 0 ending 30 m ahead; the leader on lane 1, 2 m ahead at 5 m/s, wants right (into
+    // lane 0): SUMO's counter-lane-change. The ego can brake within its left space, 30 m, minus its brake gap
+    // at 10 m/s (4 steps: 0.5 (4 * 10 - 2.25 * 4 * 5 / 2) = 8.75 m) = 21.25 m >= the blocker's 7.5 m: it keeps
+    // 7.5 m free before the lane's end; its speed is then at most the stop speed within
+    // 30 - 7.5 - 1 - 2.5 (min gap) = 19 m.
+    let model = Lc2013::default();
+    let p = human();
+    let lanes = [lane(30.0, 1), lane(5000.0, 0)];
+    let mut blocker = other(6, 2.0, 5.0);
+    blocker.lc_state = lca::RIGHT | lca::STRATEGIC | lca::URGENT;
+    let mut s = around(ego(0, 0.0, 10.0), &lanes);
+    s.left = Some(NeighbourLane {
+        leader: Some(blocker),
+        follower: None,
+    });
+    let mut mem = Lc2013Memory::default();
+    let d = model.decide(&mut mem, &s);
+    assert_eq!(d.change, None);
+    assert_eq!(mem.leading_blocker_length, 7.5);
+    assert_eq!(mem.left_space, 30.0);
+    assert!(
+        !d.messages
+            .iter()
+            .any(|m| matches!(m, Message::KeepRoom { .. }))
+    );
+    let v = mem.patch_speed(&model, 10.0, &p, 30.0, true, 1, 7.75, 11.0, 11.3);
+    assert!(v <= p.stop_speed(19.0, 10.0, 30.0).max(7.75), "{v}");
+
+    // At 25 m/s its brake gap (11 steps: 0.5 (11 * 25 - 2.25 * 11 * 12 / 2) = 63.25 m) exceeds the 30 m: the
+    // blocker is asked to keep the ego's 7.5 m instead.
+    let mut s = around(ego(0, 0.0, 25.0), &lanes);
+    s.left = Some(NeighbourLane {
+        leader: Some(blocker),
+        follower: None,
+    });
+    let mut mem = Lc2013Memory::default();
+    let d = model.decide(&mut mem, &s);
+    assert!(
+        d.messages
+            .contains(&Message::KeepRoom { to: 6, length: 7.5 }),
+        "{d:?}"
+    );
+    assert_eq!(mem.leading_blocker_length, 0.0);
+    let mut bmem = Lc2013Memory::default();
+    bmem.keep_room(7.5);
+    assert_eq!(bmem.leading_blocker_length, 7.5);
+}
+
+#[test]
+fn a_faster_right_lane_does_not_pull_left_and_a_slower_one_decays_the_wish() {
+    // Ego at 20 m/s on lane 1 of 2 behind a leader at 20 m/s 50 m ahead (anticipated 25.192 m/s); the free right
+    // lane anticipates 30: relative gain (30 - 25.192) / 30 = 0.160262, taken off the probability each step
+    // (0.08013 per step); the right threshold is -2.0, so no speed-gain change within a few steps.
+    let model = Lc2013::default();
+    let lanes = [lane(5000.0, 0), lane(5000.0, 0)];
+    let mut s = around(ego(1, 50.0, 20.0), &lanes);
+    s.leader = Some(other(7, 50.0, 20.0));
+    let mut mem = Lc2013Memory::default();
+    let d = model.decide(&mut mem, &s);
+    assert_eq!(d.state_right & lca::SPEEDGAIN, 0);
+    assert!(
+        (mem.speed_gain_probability + 0.5 * 0.160_261_538).abs() < 1e-8,
+        "{mem:?}"
+    );
+    // At 15 m/s (congested: a slower left leader may be passed on the right) on lane 0 with a free road ahead
+    // (anticipated 30) and a leader at 15 m/s 30 m ahead on lane 1 (anticipated: the safe speed within
+    // 30 + 21.375 m, 18.375): the own lane is faster, the left wish is halved per second, 0.1 * 0.5^0.5.
+    let mut s = around(ego(0, 50.0, 15.0), &lanes);
+    let mut mem = Lc2013Memory {
+        speed_gain_probability: 0.1,
+        ..Default::default()
+    };
+    s.left = Some(NeighbourLane {
+        leader: Some(other(8, 30.0, 15.0)),
+        follower: None,
+    });
+    model.decide(&mut mem, &s);
+    assert!(
+        (mem.speed_gain_probability - 0.1 * 0.5f64.sqrt()).abs() < 1e-12,
+        "{mem:?}"
+    );
+}
+
+#[test]
+fn a_slower_left_leader_is_not_passed_on_the_right_above_60_kmh() {
+    // Ego at 20 m/s on lane 0, a leader on lane 1 at 15 m/s 30 m ahead: dv = max(30 - 30, 20 - 15) = 5 > 0. The
+    // ego is advised the IDM speed behind that leader, or when that brakes harder than one comfortable step
+    // (20 - 2.25 = 17.75), max(17.75, 15 - 10 / 3.6); as the left wish is below 0.2, at least the leader's 15.
+    // Eight seconds of closing (40 m) would need braking, so the left wish grows by 0.5 * 5 / 30.
+    let model = Lc2013::default();
+    let p = human();
+    let lanes = [lane(5000.0, 0), lane(5000.0, 0)];
+    let mut s = around(ego(0, 50.0, 20.0), &lanes);
+    s.left = Some(NeighbourLane {
+        leader: Some(other(8, 30.0, 15.0)),
+        follower: None,
+    });
+    let mut mem = Lc2013Memory::default();
+    model.decide(&mut mem, &s);
+    let follow = p.follow_speed(30.0, 20.0, 15.0, 30.0);
+    let v_safe = if follow >= 17.75 {
+        follow
+    } else {
+        17.75f64.max(15.0 - 10.0 / 3.6)
+    }
+    .max(15.0);
+    let advised: Vec<f64> = mem.speed_advices(20.0, DT).collect();
+    assert_eq!(advised.len(), 1);
+    assert!((advised[0] - v_safe).abs() < 1e-12, "{advised:?} {v_safe}");
+    assert!(mem.speed_gain_probability >= 0.5 * 5.0 / 30.0 * 0.5f64.sqrt() - 1e-12);
+    // below 60 km/h (congested) the right may pass: no advice
+    let mut s = around(ego(0, 50.0, 16.0), &lanes);
+    s.left = Some(NeighbourLane {
+        leader: Some(other(8, 30.0, 15.0)),
+        follower: None,
+    });
+    let mut mem = Lc2013Memory::default();
+    model.decide(&mut mem, &s);
+    assert_eq!(mem.speed_advices(16.0, DT).count(), 0);
+}
