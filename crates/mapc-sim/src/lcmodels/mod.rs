@@ -216,19 +216,21 @@ pub struct NeighbourLane {
     pub follower: Option<Other>,
 }
 
-/// One lane of the ego's road as the route sees it (SUMO's `MSVehicle::LaneQ`).
+/// One lane of the ego's road as the route sees it (SUMO's `MSVehicle::LaneQ`, from `updateBestLanes`, which
+/// looks ahead at least 4 roads and 3000 m, or the brake distance at full speed).
 #[derive(Clone, Copy, Debug)]
 pub struct LaneQ {
     /// Distance (m) from this lane's start that the route can be followed on it and its best continuations
-    /// without a lane change.
+    /// without a lane change (SUMO's `length`).
     pub length: f64,
-    /// Summed length with gap (m) of the vehicles on it and its continuations ahead (SUMO's `occupation`,
-    /// including those that changed onto it earlier in this step's pass: `adaptBestLanesOccupation`).
+    /// Summed length with min gap (m) of the vehicles on its best continuations after this road
+    /// (`nextOccupation`) plus those on this lane already visited in this step's pass, i.e. ahead of the ego or
+    /// changed onto it (the lane changer's `dens`; SUMO's `occupation` = `dens + nextOccupation`).
     pub occupation: f64,
-    /// Lanes to move (negative: right) to reach the nearest lane that goes furthest.
+    /// Lanes to move (negative: right) to reach the nearest lane that goes furthest (`bestLaneOffset`).
     pub best_lane_offset: i32,
-    /// Its best continuation ends in a lane with outgoing links, i.e. it leads somewhere else than the route, rather
-    /// than ending (SUMO: `bestContinuations.back()->getLinkCont().size() != 0`).
+    /// The last lane of its best continuation has outgoing links: it is no dead end, so with a short `length` it
+    /// is a lane that turns off the route (SUMO: `bestContinuations.back()->getLinkCont().size() != 0`).
     pub leads_elsewhere: bool,
 }
 
