@@ -3,7 +3,7 @@
 //! - **strategic**: reach a lane that continues on the route before the current one ends; urgent once the
 //!   usable distance per lane to cross is below the look-ahead distance (10 s at the remembered speed, twice that
 //!   to the left, plus two vehicle lengths). An urgent, blocked change asks the blocking leader and follower for
-//!   help and slows the ego to fall behind or to let a blocker in ([`inform`]).
+//!   help and slows the ego to fall behind or to let a blocker in (`inform.rs`).
 //! - **cooperative**: a vehicle that was told it blocks a follower's urgent change moves out of the way in the
 //!   same direction when that costs it no speed.
 //! - **speed gain**: the anticipated speeds of both lanes are compared each step and the relative gain summed in

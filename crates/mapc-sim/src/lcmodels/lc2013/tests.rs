@@ -503,3 +503,152 @@ fn a_slower_left_leader_is_not_passed_on_the_right_above_60_kmh() {
     model.decide(&mut mem, &s);
     assert_eq!(mem.speed_advices(16.0, DT).count(), 0);
 }
+
+/// A vehicle of the small merge loop below.
+struct Car {
+    id: u64,
+    lane: usize,
+    pos: f64,
+    speed: f64,
+    mem: Lc2013Memory,
+}
+
+#[test]
+fn an_acceleration_lane_merge_is_negotiated_through_messages() {
+    // A two-lane road: lane 0 is an acceleration lane ending at 300 m, lane 1 goes on. Car 1 on lane 0 at 100 m,
+    // 20 m/s; car 2 on lane 1 just behind it (95 m, 25 m/s): car 1's change is urgent (200 m < 415 m) and blocked
+    // by car 2. Driven the way a simulator would (move with patch_speed, then the pass front to back, messages
+    // delivered at once), car 1 must get in before the lane's end without any gap below the secure gaps.
+    let model = Lc2013::default();
+    let p = human();
+    let lanes = [lane(300.0, 1), lane(5000.0, 0)];
+    let mut cars = vec![
+        Car {
+            id: 1,
+            lane: 0,
+            pos: 100.0,
+            speed: 20.0,
+            mem: Lc2013Memory::default(),
+        },
+        Car {
+            id: 2,
+            lane: 1,
+            pos: 95.0,
+            speed: 25.0,
+            mem: Lc2013Memory::default(),
+        },
+    ];
+    let view = |c: &Car, other_car: &Car, ahead: bool| -> Other {
+        let gap = if ahead {
+            other_car.pos - 5.0 - c.pos - p.min_gap
+        } else {
+            c.pos - 5.0 - other_car.pos - p.min_gap
+        };
+        Other {
+            gap,
+            speed: other_car.speed,
+            lc_state: other_car.mem.own_state,
+            ..other(other_car.id, gap, other_car.speed)
+        }
+    };
+    let mut advised_car_2 = false;
+    let mut merged_at = None;
+    for step in 0..60 {
+        // move: the car-following speed (the leader on the same lane, or the end of lane 0), then the lane-change
+        // model's patch
+        for i in 0..cars.len() {
+            let c = &cars[i];
+            let leader = cars
+                .iter()
+                .filter(|o| o.lane == c.lane && o.pos > c.pos)
+                .min_by(|a, b| a.pos.total_cmp(&b.pos));
+            let mut wanted = p.free_speed_below_limit(c.speed, 30.0, 30.0);
+            if let Some(l) = leader {
+                wanted = wanted.min(p.follow_speed(
+                    l.pos - 5.0 - c.pos - p.min_gap,
+                    c.speed,
+                    l.speed,
+                    30.0,
+                ));
+            }
+            if c.lane == 0 {
+                wanted = wanted.min(p.stop_speed(300.0 - c.pos, c.speed, 30.0));
+            }
+            let min = (c.speed - p.decel * DT).max(0.0);
+            let max = (c.speed + p.accel * DT).min(30.0);
+            let wanted = wanted.clamp(min, max);
+            let speed = c.speed;
+            let best = lanes[c.lane].best_lane_offset;
+            let c = &mut cars[i];
+            c.speed = c
+                .mem
+                .patch_speed(&model, speed, &p, 30.0, true, best, min, wanted, max);
+            c.pos += c.speed * DT;
+            c.mem.prepare_step();
+        }
+        // the lane-change pass, front to back
+        let mut order: Vec<usize> = (0..cars.len()).collect();
+        order.sort_by(|&a, &b| cars[b].pos.total_cmp(&cars[a].pos));
+        for &i in &order {
+            let c = &cars[i];
+            let mut s = around(ego(c.lane, c.pos, c.speed), &lanes);
+            for o in cars.iter().filter(|o| o.id != c.id) {
+                let nl = if o.lane + 1 == c.lane {
+                    s.right.as_mut()
+                } else if o.lane == c.lane + 1 {
+                    s.left.as_mut()
+                } else {
+                    None
+                };
+                let ahead = o.pos - 5.0 > c.pos - 5.0;
+                match nl {
+                    Some(nl) if ahead => nl.leader = Some(view(c, o, true)),
+                    Some(nl) => nl.follower = Some(view(c, o, false)),
+                    None if o.lane == c.lane && ahead => s.leader = Some(view(c, o, true)),
+                    None => {}
+                }
+            }
+            let mut mem = std::mem::take(&mut cars[i].mem);
+            let d = model.decide(&mut mem, &s);
+            cars[i].mem = mem;
+            if let Some(side) = d.change {
+                // the gap check passed: no neighbour closer than its secure gap
+                let lane = if side == Side::Left {
+                    s.left.unwrap()
+                } else {
+                    s.right.unwrap()
+                };
+                if let Some(f) = lane.follower {
+                    assert!(
+                        f.gap >= p.secure_gap(f.speed, s.ego.speed),
+                        "step {step}: {f:?}"
+                    );
+                }
+                cars[i].lane = (cars[i].lane as i64 + side.offset() as i64) as usize;
+                if cars[i].id == 1 {
+                    merged_at = Some((step, cars[i].pos));
+                }
+            }
+            for m in d.messages {
+                if let Message::SpeedAdvice { to, speed, state } = m {
+                    let target = cars.iter_mut().find(|o| o.id == to).unwrap();
+                    advised_car_2 |= to == 2 && speed < target.speed;
+                    let own = target.speed;
+                    target.mem.inform(speed, state, own, DT);
+                }
+            }
+        }
+        if merged_at.is_some() {
+            break;
+        }
+    }
+    let (step, pos) = merged_at.expect("car 1 never merged");
+    assert!(pos < 300.0, "merged at {pos} m (step {step})");
+    // car 2, faster, is asked to slow to car 1's speed + 10 km/h (22.78 m/s) and so passes: car 1 gets in behind
+    assert!(
+        pos < cars[1].pos,
+        "car 1 at {pos} m, car 2 at {} m",
+        cars[1].pos
+    );
+    assert!(advised_car_2, "car 2 was never asked to slow down");
+}
