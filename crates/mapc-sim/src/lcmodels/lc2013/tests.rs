@@ -522,7 +522,7 @@ fn an_acceleration_lane_merge_is_negotiated_through_messages() {
     let model = Lc2013::default();
     let p = human();
     let lanes = [lane(300.0, 1), lane(5000.0, 0)];
-    let mut cars = vec![
+    let mut cars = [
         Car {
             id: 1,
             lane: 0,
