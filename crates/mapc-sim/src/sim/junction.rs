@@ -1,0 +1,170 @@
+//! Right of way at merges: the requests vehicles register for links (arrival and leave times and speeds) and
+//! SUMO's `MSLink::opened` with impatience.
+
+use super::*;
+
+/// Waiting time after which impatience has grown by 1 (SUMO's default time to impatience).
+pub(super) const TIME_TO_IMPATIENCE_S: f64 = 300.0;
+
+/// A foe must arrive this much later than ego leaves for ego to go first (SUMO's link lookahead).
+pub(super) const LINK_LOOKAHEAD_S: f64 = 1.0;
+
+/// The arrival time of a foe that could stop is this much later than its normal arrival.
+pub(super) const BRAKING_ARRIVAL_DELAY_S: f64 = 30.0;
+
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct LinkItem {
+    pub(super) link: LinkIdx,
+    pub(super) dist: f64,
+    pub(super) v_link_pass: f64,
+    /// Where the vehicle would stop for this link (the speed to do so is computed only when it must wait).
+    pub(super) stop_dist: f64,
+    pub(super) desired_speed: f64,
+    pub(super) arrival_time: f64,
+    pub(super) arrival_speed: f64,
+    pub(super) leave_time: f64,
+    pub(super) leave_speed: f64,
+    pub(super) arrival_time_braking: f64,
+    pub(super) arrival_speed_braking: f64,
+    pub(super) will_pass: bool,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Approach {
+    pub(super) veh: VehicleId,
+    pub(super) arrival_time: f64,
+    pub(super) leave_time: f64,
+    pub(super) leave_speed: f64,
+    pub(super) arrival_time_braking: f64,
+    pub(super) arrival_speed_braking: f64,
+    pub(super) will_pass: bool,
+    pub(super) decel: f64,
+}
+
+/// Whether a follower behind a leader at the merge could not brake in time: it can only when the leader's
+/// braking distance (v^2 / b) is the longer one (SUMO's `MSLink::unsafeMergeSpeeds`).
+pub(super) fn unsafe_merge_speeds(
+    leader_speed: f64,
+    follower_speed: f64,
+    leader_decel: f64,
+    follower_decel: f64,
+) -> bool {
+    leader_speed * leader_speed / leader_decel <= follower_speed * follower_speed / follower_decel
+}
+
+impl Simulation {
+    /// The request for entering the connection `link` at distance `seen` (SUMO's `DriveProcessItem`): arrival time
+    /// and speed (a driver approaching a minor link slows so it could still stop once it sees the foes), the
+    /// arrival when braking now, and the leave speed (lowered later by constraints beyond the link).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn link_request(
+        &self,
+        v: &Veh,
+        p: &IdmParams,
+        tc: &TypeConsts,
+        link: LinkIdx,
+        seen: f64,
+        vv: f64,
+        v_link_pass: f64,
+        des_cur: f64,
+        plan: &mut Plan,
+    ) -> usize {
+        let lk = self.link_at(link as usize);
+        let via = lk.via_lane;
+        let via_lane = self.lane_at(via as usize);
+        let speed = v.speed;
+        let stop_dist = (seen - if lk.major { 0.0 } else { POSITION_EPS }).fmax(0.0);
+        let mut arrival_speed = v_link_pass;
+        if !lk.major && seen >= FOE_VISIBILITY_M && {
+            if seen > tc.brake_gap_above(speed, 0.0) {
+                true
+            } else {
+                if plan.stop_brake_gap.is_nan() {
+                    plan.stop_brake_gap = p.brake_gap(speed, p.decel, 0.0);
+                }
+                plan.stop_brake_gap < seen
+            }
+        } {
+            arrival_speed = arrival_speed.fmin(tc.max_arrival_from_visibility);
+        }
+        let arrival_time = self.time_s + p.minimal_arrival_time(seen, vv, arrival_speed);
+        let mut arrival_speed_braking = 0.0;
+        let mut arrival_time_braking = arrival_time + BRAKING_ARRIVAL_DELAY_S;
+        // the bound decides the far case without the exact gap
+        if seen < tc.brake_gap_above(vv, p.tau) && seen < p.brake_gap(vv, p.decel, p.tau) {
+            arrival_speed_braking = p.minimal_arrival_speed_euler(seen, vv).fmin(arrival_speed);
+            arrival_time_braking = arrival_time.fmax(
+                self.time_s + seen / ((vv + arrival_speed_braking) * 0.5).fmax(NUMERICAL_EPS),
+            );
+        }
+        let leave_speed = self
+            .desired_speed(v, via)
+            .fmin(IdmParams::speed_after_distance(
+                via_lane.length,
+                arrival_speed,
+                p.accel,
+            ));
+        let i = plan.n_items as usize;
+        plan.items[i] = LinkItem {
+            link,
+            dist: seen,
+            v_link_pass: vv,
+            stop_dist,
+            desired_speed: des_cur,
+            arrival_time,
+            arrival_speed,
+            leave_time: f64::NAN,
+            leave_speed,
+            arrival_time_braking,
+            arrival_speed_braking,
+            will_pass: vv > 0.0,
+        };
+        plan.n_items += 1;
+        i
+    }
+
+    /// SUMO's `MSLink::opened` for a minor link at a merge: blocked by any foe approach that conflicts in time.
+    pub(super) fn link_opened(&self, id: VehicleId, it: &LinkItem, can_brake: bool) -> bool {
+        let lk = self.link_at(it.link as usize);
+        if lk.major {
+            return true;
+        }
+        let v = &self.veh[id as usize];
+        let tc = &self.type_consts[v.vtype as usize];
+        // a driver who can no longer stop takes any gap
+        let impatience = if can_brake {
+            (tc.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        // the spec's deceleration, which the IDM parameters carry unchanged
+        let decel = self.types[v.vtype as usize].decel;
+        for &foe in &lk.foes {
+            for a in &self.approaches[foe as usize] {
+                if a.veh == id || !a.will_pass {
+                    continue;
+                }
+                if a.leave_time < it.arrival_time {
+                    // ego would follow the foe
+                    if it.arrival_time - a.leave_time < LINK_LOOKAHEAD_S
+                        || unsafe_merge_speeds(a.leave_speed, it.arrival_speed, a.decel, decel)
+                    {
+                        return false;
+                    }
+                } else if (1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking
+                    > it.leave_time + LINK_LOOKAHEAD_S
+                {
+                    // (the left side is the foe's arrival as an impatient driver expects it)
+                    // ego would lead the foe
+                    if unsafe_merge_speeds(it.leave_speed, a.arrival_speed_braking, decel, a.decel)
+                    {
+                        return false;
+                    }
+                } else {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}

@@ -1,0 +1,342 @@
+//! The stepping simulator: plan every vehicle's safe speed from the state at the start of the step (leaders
+//! across lanes and junctions, speed limits ahead, minor-link requests), register junction approaches, decide
+//! links (right of way with impatience), then move every vehicle, front to back, never into its leader.
+
+mod accounting;
+mod insertion;
+mod junction;
+mod lookahead;
+mod moves;
+mod planning;
+mod queries;
+mod table;
+#[cfg(test)]
+mod tests;
+mod vehicle;
+
+use crate::SimError;
+use crate::idm::{FastMinMax, IdmParams, NUMERICAL_EPS};
+use crate::measure::MeasureAcc;
+use crate::metrics::RunMetrics;
+use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network, SimLane, SimLink};
+use crate::spec::SimSpec;
+use crate::vehicle_table::VehicleTable;
+use crate::waiting::EntryQueue;
+use accounting::MetricsAcc;
+use junction::Approach;
+use junction::LinkItem;
+use mapc_graph::RoadId;
+use planning::Plan;
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+use rand_distr::{Distribution, Normal};
+use table::Table;
+use vehicle::{Route, TypeConsts, Veh};
+
+pub use queries::{MergeFoe, Neighbor, VehicleView};
+pub use vehicle::VehicleStatus;
+
+/// Index of a vehicle, stable for the whole run (vehicles are numbered in creation order).
+pub type VehicleId = u32;
+
+/// How far the stop point lies before a minor link's stop line (SUMO's POSITION_EPS).
+const POSITION_EPS: f64 = 0.1;
+
+/// Where merging connections start to conflict, as a share of the shorter one's length before its end
+/// (netconvert's internal lanes come within a lane width of each other about a third of the way from the end).
+const CONFLICT_POINT_SHARE: f64 = 0.35;
+
+/// A running simulation of one seed.
+pub struct Simulation {
+    net: Network,
+    spec: SimSpec,
+    types: Table<IdmParams>,
+    routes: Table<Route>,
+    veh: VehicleTable<Veh>,
+    /// Vehicles per lane, front first (a plain vector: lanes are short and indexing is on the hot path).
+    lane_veh: Table<Table<VehicleId>>,
+    lane_order: Vec<LaneIdx>,
+    plans: Table<Plan>,
+    /// This step's (vehicle, index in its lane) in planning order (kept to reuse its allocation).
+    plan_order: Vec<(VehicleId, u32)>,
+    approaches: Table<Vec<Approach>>,
+    link_has_minor_foe: Table<bool>,
+    /// Per entry lane, the vehicles waiting to be inserted, in departure order.
+    pending: Vec<EntryQueue>,
+    entry_lanes: Vec<LaneIdx>,
+    flow_next: Vec<u64>,
+    flow_route: Vec<u32>,
+    in_region: Table<bool>,
+    rng: StdRng,
+    step: u64,
+    time_s: f64,
+    next_entry: u64,
+    arrived_last: Vec<VehicleId>,
+    departed_last: Vec<VehicleId>,
+    main_line: Vec<(LaneIdx, f64)>,
+    metrics: MetricsAcc,
+    measure: MeasureAcc,
+    check_invariants: bool,
+    /// Longest vehicle of any type (m).
+    max_length: f64,
+    /// Per vehicle type, what the hot loop reads (cached from the spec and the IDM parameters).
+    type_consts: Table<TypeConsts>,
+}
+
+impl Simulation {
+    /// A simulation of `spec` with every random draw from `seed`.
+    pub fn from_spec(spec: SimSpec, seed: u64) -> Result<Simulation, SimError> {
+        spec.validate()?;
+        let net = Network::from_graph(&spec.graph)?;
+        let dt = spec.step_s;
+        let types: Vec<IdmParams> = spec
+            .vehicle_types
+            .iter()
+            .map(|t| {
+                IdmParams::with_stepping(
+                    t.accel,
+                    t.decel,
+                    t.emergency_decel,
+                    t.tau,
+                    t.min_gap,
+                    t.delta,
+                    dt,
+                    t.idm_stepping_s,
+                )
+            })
+            .collect();
+        let mut sim = Simulation {
+            lane_veh: Table(vec![Table(Vec::new()); net.lanes.len()]),
+            approaches: Table(vec![Vec::new(); net.links.len()]),
+            link_has_minor_foe: net
+                .links
+                .iter()
+                .map(|l| l.foes.iter().any(|&f| !net.links[f as usize].major))
+                .collect(),
+            pending: Vec::new(),
+            entry_lanes: Vec::new(),
+            lane_order: Vec::new(),
+            flow_next: vec![0; spec.flows.len()],
+            flow_route: Vec::new(),
+            in_region: Table(vec![true; net.lanes.len()]),
+            routes: Table(Vec::new()),
+            veh: VehicleTable::default(),
+            plans: Table(Vec::new()),
+            plan_order: Vec::new(),
+            rng: StdRng::seed_from_u64(seed),
+            step: 0,
+            time_s: spec.start_time_s,
+            next_entry: 0,
+            arrived_last: Vec::new(),
+            departed_last: Vec::new(),
+            main_line: Vec::new(),
+            metrics: MetricsAcc::default(),
+            measure: MeasureAcc::new(&net, &spec.measure_points, None),
+            check_invariants: cfg!(debug_assertions),
+            max_length: spec
+                .vehicle_types
+                .iter()
+                .map(|t| t.length)
+                .fold(0.0, f64::max),
+            type_consts: spec
+                .vehicle_types
+                .iter()
+                .zip(&types)
+                .map(|(t, p)| TypeConsts {
+                    max_speed: t.max_speed,
+                    impatience: t.impatience,
+                    inv_two_decel: Some(0.5 / p.decel).filter(|x| *x > 0.0 && x.is_finite()),
+                    max_arrival_from_visibility: IdmParams::speed_after_distance(
+                        FOE_VISIBILITY_M,
+                        p.maximum_safe_stop_speed(FOE_VISIBILITY_M, 0.0),
+                        p.accel,
+                    ),
+                })
+                .collect(),
+            types: Table(types),
+            net,
+            spec,
+        };
+        // Downstream lanes first, so a leader has moved before its follower.
+        let mut order: Vec<LaneIdx> = (0..sim.net.lanes.len() as LaneIdx).collect();
+        order.sort_by(|&a, &b| {
+            sim.net.lanes[a as usize]
+                .downstream_m
+                .total_cmp(&sim.net.lanes[b as usize].downstream_m)
+                .then(a.cmp(&b))
+        });
+        sim.lane_order = order;
+        if let Some(region) = &sim.spec.control_region {
+            for (i, lane) in sim.net.lanes.iter().enumerate() {
+                sim.in_region[i] = match lane.kind {
+                    LaneKind::Road(r) => region.contains(&sim.net.road_ids[r]),
+                    LaneKind::Via(k) => {
+                        let l = &sim.net.links[k as usize];
+                        let from = sim.net.road_ids[sim.net.road_of(l.from_lane).unwrap()];
+                        let to = sim.net.road_ids[sim.net.road_of(l.to_lane).unwrap()];
+                        region.contains(&from) && region.contains(&to)
+                    }
+                };
+            }
+        }
+        for f in 0..sim.spec.flows.len() {
+            let flow = sim.spec.flows[f].clone();
+            let r = sim.add_route(flow.from, flow.to)?;
+            sim.flow_route.push(r);
+            let entry = sim.routes[r as usize].lanes[0];
+            if !sim.entry_lanes.contains(&entry) {
+                sim.entry_lanes.push(entry);
+                sim.pending.push(EntryQueue::default());
+            }
+        }
+        sim.main_line = sim.derive_main_line()?;
+        sim.measure = MeasureAcc::new(
+            &sim.net,
+            &sim.spec.measure_points,
+            sim.main_line.last().map(|&(l, _)| l),
+        );
+        // Initial vehicles: standing where the spec puts them, before the first step.
+        for i in 0..sim.spec.initial.len() {
+            let iv = sim.spec.initial[i].clone();
+            let r = sim.add_route(iv.road, None)?;
+            let lane = sim.routes[r as usize].lanes[0];
+            let len = sim.net.lanes[lane as usize].length;
+            if !(iv.pos_m >= 0.0 && iv.pos_m <= len) {
+                return Err(SimError::Spec(format!(
+                    "initial vehicle {i}: position {} m is off road {} (length {len} m)",
+                    iv.pos_m, iv.road
+                )));
+            }
+            let id = sim.create_vehicle(iv.vehicle_type, r, iv.speed);
+            sim.place(id, lane, iv.pos_m, iv.speed, false)?;
+        }
+        Ok(sim)
+    }
+
+    pub(super) fn derive_main_line(&mut self) -> Result<Vec<(LaneIdx, f64)>, SimError> {
+        let roads: Vec<RoadId> = if !self.spec.main_line.is_empty() {
+            self.spec.main_line.clone()
+        } else if let Some(f) = self.spec.flows.iter().max_by(|a, b| {
+            a.vehs_per_hour
+                .total_cmp(&b.vehs_per_hour)
+                .then(b.from.cmp(&a.from))
+        }) {
+            let lanes = self.net.route(&self.spec.graph, f.from, None)?;
+            lanes
+                .iter()
+                .filter_map(|&l| self.net.road_of(l))
+                .map(|r| self.net.road_ids[r])
+                .collect()
+        } else {
+            return Ok(Vec::new());
+        };
+        let lanes = self
+            .net
+            .route(&self.spec.graph, roads[0], roads.last().copied())?;
+        let mut acc = 0.0;
+        let mut out = Vec::with_capacity(lanes.len());
+        for l in lanes {
+            out.push((l, acc));
+            acc += self.lane_at(l as usize).length;
+        }
+        Ok(out)
+    }
+
+    /// Turn the per-step collision check on or off (on by default in debug builds).
+    pub fn set_invariant_checks(&mut self, on: bool) {
+        self.check_invariants = on;
+    }
+
+    /// Run to the horizon.
+    pub fn run(&mut self) -> Result<RunMetrics, SimError> {
+        while !self.is_done() {
+            self.step()?;
+        }
+        Ok(self.metrics())
+    }
+
+    /// Advance one step.
+    pub fn step(&mut self) -> Result<(), SimError> {
+        // records of vehicles that left before the last step may go (their ids were reported then)
+        let now = self.time_s;
+        self.veh
+            .forget_finished(|v| v.status == VehicleStatus::Arrived && v.arrive_s < now);
+        self.arrived_last.clear();
+        self.departed_last.clear();
+        if self.step == self.spec.warmup_steps {
+            self.metrics = MetricsAcc::default();
+            self.measure.reset();
+        }
+        // Metrics see the network as it is before the step (as the original rollouts did).
+        let mut n = 0u64;
+        let mut sum = 0.0;
+        for q in self.lane_veh.iter() {
+            for &id in q {
+                n += 1;
+                sum += self.veh[id as usize].speed;
+            }
+        }
+        if n > 0 && sum / n as f64 > 0.0 {
+            self.metrics.speed_sum += sum / n as f64;
+            self.metrics.speed_steps += 1;
+        }
+        self.metrics.veh_steps += n;
+
+        for a in &mut self.approaches {
+            a.clear();
+        }
+        // plans are stored in visiting order (lane order, front to back), which the moves visit again unchanged
+        let mut plans = std::mem::take(&mut self.plans);
+        if plans.len() < n as usize {
+            plans.resize(n as usize, Plan::default());
+        }
+        // visiting order: lane order, front to back
+        let mut order = std::mem::take(&mut self.plan_order);
+        order.clear();
+        for &lane in &self.lane_order {
+            for (qi, &id) in self.lane_veh[lane as usize].iter().enumerate() {
+                order.push((id, qi as u32));
+            }
+        }
+        // each vehicle's IDM batch is started one plan ahead, so that its division chains run while the vehicle
+        // before it is planned (planning changes no position or speed, so the batch's arguments stay valid)
+        let mut pre_next = order
+            .first()
+            .map_or([0.0; 4], |&(id, qi)| self.plan_idm_batch(id, qi as usize));
+        for pi in 0..order.len() {
+            let pre = pre_next;
+            if let Some(&(id, qi)) = order.get(pi + 1) {
+                pre_next = self.plan_idm_batch(id, qi as usize);
+            }
+            let (id, qi) = order[pi];
+            self.plan(id, qi as usize, pre, &mut plans[pi]);
+        }
+        self.plan_order = order;
+        self.plans = plans;
+        self.execute_moves();
+        self.time_s += self.spec.step_s;
+        self.step += 1;
+        self.metrics.steps += 1;
+        self.insert_departures();
+        if self.check_invariants {
+            self.check_no_overlap()?;
+        }
+        Ok(())
+    }
+
+    /// The network's lane `i` (indices come from the network itself; checked in debug builds).
+    #[inline(always)]
+    pub(super) fn lane_at(&self, i: usize) -> &SimLane {
+        debug_assert!(i < self.net.lanes.len());
+        // SAFETY: lane indices are created by `Network::from_graph` and never exceed its lanes
+        unsafe { self.net.lanes.get_unchecked(i) }
+    }
+
+    /// The network's link `i` (indices come from the network itself; checked in debug builds).
+    #[inline(always)]
+    pub(super) fn link_at(&self, i: usize) -> &SimLink {
+        debug_assert!(i < self.net.links.len());
+        // SAFETY: link indices are created by `Network::from_graph` and never exceed its links
+        unsafe { self.net.links.get_unchecked(i) }
+    }
+}

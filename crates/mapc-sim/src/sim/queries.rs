@@ -1,0 +1,399 @@
+//! What callers read of a running simulation: clock, vehicles, neighbours, distances to junctions, the
+//! controlled vehicles' commands and traces.
+
+use super::*;
+
+/// A vehicle that is ahead of or behind another, with the bumper-to-bumper gap in metres (without min gap).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Neighbor {
+    pub id: VehicleId,
+    pub gap_m: f64,
+    pub speed: f64,
+}
+
+/// A vehicle on another road approaching the same merge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergeFoe {
+    pub id: VehicleId,
+    /// Its front's distance to the merge point (end of its junction connection).
+    pub dist_to_merge_m: f64,
+    pub speed: f64,
+}
+
+/// Read-only view of one vehicle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VehicleView<'a> {
+    pub id: VehicleId,
+    pub vehicle_type: &'a str,
+    pub controlled: bool,
+    pub status: VehicleStatus,
+    /// The road the vehicle is on; for a vehicle inside a junction, the road it came from.
+    pub road: RoadId,
+    /// True while inside a junction (on the connection from `road` to the next road).
+    pub in_junction: bool,
+    pub pos_m: f64,
+    pub speed: f64,
+    pub length: f64,
+    pub entry_order: u64,
+    pub depart_s: f64,
+}
+
+impl Simulation {
+    pub fn step_s(&self) -> f64 {
+        self.spec.step_s
+    }
+
+    /// Simulation time in seconds (SUMO's clock: step 0 starts at `start_time_s`).
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// Steps done so far.
+    pub fn step_index(&self) -> u64 {
+        self.step
+    }
+
+    pub fn horizon_steps(&self) -> u64 {
+        self.spec.horizon_steps
+    }
+
+    /// True once the warm-up and the horizon have been simulated.
+    pub fn is_done(&self) -> bool {
+        self.step >= self.spec.warmup_steps + self.spec.horizon_steps
+    }
+
+    /// True while in the warm-up (metrics are not collected).
+    pub fn in_warmup(&self) -> bool {
+        self.step < self.spec.warmup_steps
+    }
+
+    pub fn network(&self) -> &Network {
+        &self.net
+    }
+
+    pub fn spec(&self) -> &SimSpec {
+        &self.spec
+    }
+
+    /// Vehicles in the network now, in lane order (downstream lanes first, front first).
+    pub fn active_ids(&self) -> impl Iterator<Item = VehicleId> + '_ {
+        self.lane_order
+            .iter()
+            .flat_map(move |&l| self.lane_veh[l as usize].iter().copied())
+    }
+
+    /// Number of vehicles in the network.
+    pub fn active_count(&self) -> usize {
+        self.lane_veh.iter().map(|q| q.len()).sum()
+    }
+
+    /// Every vehicle created so far (pending, active, arrived).
+    pub fn vehicle_count(&self) -> usize {
+        self.veh.len()
+    }
+
+    /// Vehicle records held now: those on the road, built and waiting to enter, and those that left recently
+    /// (older ones are forgotten in long runs, so memory follows the road, not the horizon).
+    pub fn vehicle_records(&self) -> usize {
+        self.veh.held()
+    }
+
+    /// Ids of vehicles that left the network in the last step.
+    pub fn arrived_last_step(&self) -> &[VehicleId] {
+        &self.arrived_last
+    }
+
+    /// Ids of vehicles that entered the network in the last step.
+    pub fn departed_last_step(&self) -> &[VehicleId] {
+        &self.departed_last
+    }
+
+    pub fn vehicle(&self, id: VehicleId) -> Option<VehicleView<'_>> {
+        let v = self.veh.get(id as usize)?;
+        let (road, in_junction) = self.road_of_lane(v.lane);
+        Some(VehicleView {
+            id,
+            vehicle_type: &self.spec.vehicle_types[v.vtype as usize].name,
+            controlled: v.controlled,
+            status: v.status,
+            road,
+            in_junction,
+            pos_m: v.pos,
+            speed: v.speed,
+            length: v.length,
+            entry_order: v.entry_order,
+            depart_s: v.depart_s,
+        })
+    }
+
+    pub(super) fn road_of_lane(&self, lane: LaneIdx) -> (RoadId, bool) {
+        match self.lane_at(lane as usize).kind {
+            LaneKind::Road(r) => (self.net.road_ids[r], false),
+            LaneKind::Via(k) => {
+                let from = self.link_at(k as usize).from_lane;
+                (self.net.road_ids[self.net.road_of(from).unwrap()], true)
+            }
+        }
+    }
+
+    /// Whether the vehicle is in the scenario's control region (everywhere when the scenario has none).
+    pub fn in_control_region(&self, id: VehicleId) -> bool {
+        self.veh
+            .get(id as usize)
+            .is_some_and(|v| v.status == VehicleStatus::Active && self.in_region[v.lane as usize])
+    }
+
+    /// Distance travelled along the route so far and the route's total length.
+    pub fn route_progress(&self, id: VehicleId) -> Option<(f64, f64)> {
+        let v = self.veh.get(id as usize)?;
+        let r = &self.routes[v.route as usize];
+        let total = r.start_m.last().copied().unwrap_or(0.0)
+            + r.lanes
+                .last()
+                .map_or(0.0, |&l| self.lane_at(l as usize).length);
+        let done = match v.status {
+            VehicleStatus::Pending => 0.0,
+            VehicleStatus::Arrived => total,
+            VehicleStatus::Active => r.start_m[v.route_pos as usize] + v.pos,
+        };
+        Some((done, total))
+    }
+
+    /// Distance from the vehicle's front to the next junction where roads merge or split (a link with foes or a
+    /// road with several exits), and that junction; `None` if no such junction lies ahead on its route.
+    pub fn distance_to_next_junction(
+        &self,
+        id: VehicleId,
+    ) -> Option<(f64, mapc_graph::JunctionId)> {
+        self.distance_to_next_link(id, |l| {
+            !l.foes.is_empty() || self.lane_at(l.from_lane as usize).out_links.len() > 1
+        })
+    }
+
+    /// Distance from the vehicle's front to the next merge on its route (a connection with foes; diverges are
+    /// passed), and that junction; `None` if no merge lies ahead.
+    pub fn distance_to_next_merge(&self, id: VehicleId) -> Option<(f64, mapc_graph::JunctionId)> {
+        self.distance_to_next_link(id, |l| !l.foes.is_empty())
+    }
+
+    /// Distance from the vehicle's front to the next connection on its route that `wanted` picks, and its junction.
+    pub(super) fn distance_to_next_link(
+        &self,
+        id: VehicleId,
+        wanted: impl Fn(&SimLink) -> bool,
+    ) -> Option<(f64, mapc_graph::JunctionId)> {
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
+        let r = &self.routes[v.route as usize];
+        let mut seen = self.lane_at(v.lane as usize).length - v.pos;
+        for k in (v.route_pos as usize + 1)..r.lanes.len() {
+            let lane = self.lane_at(r.lanes[k] as usize);
+            if let LaneKind::Via(link) = lane.kind
+                && wanted(self.link_at(link as usize))
+            {
+                return Some((seen, self.link_at(link as usize).junction));
+            }
+            seen += lane.length;
+        }
+        None
+    }
+
+    /// Distance from the vehicle's front to the network's end along its route position's main line
+    /// (`corridor_x_m` of traces): `Some` only on main-line roads and their connections.
+    pub fn corridor_x(&self, id: VehicleId) -> Option<f64> {
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
+        self.main_line
+            .iter()
+            .find(|(l, _)| *l == v.lane)
+            .map(|(_, start)| start + v.pos)
+    }
+
+    /// The nearest vehicle ahead on the route (across lanes and junctions, including vehicles on a merging
+    /// connection that are closer to the merge point), within `max_dist` metres.
+    pub fn leader(&self, id: VehicleId, max_dist: f64) -> Option<Neighbor> {
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
+        let mut best: Option<Neighbor> = None;
+        self.for_each_leader(id, max_dist, |l, gap| {
+            if best.is_none_or(|b| gap < b.gap_m) {
+                best = Some(Neighbor {
+                    id: l,
+                    gap_m: gap,
+                    speed: self.veh[l as usize].speed,
+                });
+            }
+        });
+        let _ = v;
+        best
+    }
+
+    /// The nearest vehicle behind (on this road, the connections into it, and the roads before them, the merging
+    /// road included), within `max_dist` metres.
+    pub fn follower(&self, id: VehicleId, max_dist: f64) -> Option<Neighbor> {
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
+        let q = &self.lane_veh[v.lane as usize];
+        let idx = q.iter().position(|&o| o == id)?;
+        if idx + 1 < q.len() {
+            let f = q[idx + 1];
+            let fv = &self.veh[f as usize];
+            let gap = v.pos - v.length - fv.pos;
+            return (gap <= max_dist).then_some(Neighbor {
+                id: f,
+                gap_m: gap,
+                speed: fv.speed,
+            });
+        }
+        // Search upstream: distance from the start of a lane to ego's back.
+        let mut best: Option<Neighbor> = None;
+        let mut stack: Vec<(LaneIdx, f64)> = vec![(v.lane, v.pos - v.length)];
+        let mut visited = 0;
+        while let Some((lane, back_from_start)) = stack.pop() {
+            visited += 1;
+            if visited > 64 {
+                break;
+            }
+            for (up, len) in self.upstream_lanes(lane) {
+                if let Some(&f) = self.lane_veh[up as usize].first() {
+                    let fv = &self.veh[f as usize];
+                    let gap = back_from_start + (len - fv.pos);
+                    if f != id && gap <= max_dist && best.is_none_or(|b| gap < b.gap_m) {
+                        best = Some(Neighbor {
+                            id: f,
+                            gap_m: gap,
+                            speed: fv.speed,
+                        });
+                    }
+                } else if back_from_start + len <= max_dist {
+                    stack.push((up, back_from_start + len));
+                }
+            }
+        }
+        best
+    }
+
+    pub(super) fn upstream_lanes(&self, lane: LaneIdx) -> Vec<(LaneIdx, f64)> {
+        match self.lane_at(lane as usize).kind {
+            LaneKind::Via(k) => {
+                let from = self.link_at(k as usize).from_lane;
+                vec![(from, self.lane_at(from as usize).length)]
+            }
+            LaneKind::Road(_) => self
+                .net
+                .links
+                .iter()
+                .filter(|l| l.to_lane == lane)
+                .map(|l| (l.via_lane, self.lane_at(l.via_lane as usize).length))
+                .collect(),
+        }
+    }
+
+    /// The vehicle on another road nearest to the merge point that this vehicle's route reaches next, among those
+    /// approaching it (on the merging road within `max_dist` of the merge, or inside the junction).
+    pub fn nearest_merge_foe(&self, id: VehicleId, max_dist: f64) -> Option<MergeFoe> {
+        let v = self
+            .veh
+            .get(id as usize)
+            .filter(|v| v.status == VehicleStatus::Active)?;
+        let r = &self.routes[v.route as usize];
+        // find the next via lane on the route with foes
+        let mut k = v.route_pos as usize;
+        if !matches!(self.lane_at(v.lane as usize).kind, LaneKind::Via(_)) {
+            k += 1;
+        }
+        while k < r.lanes.len() {
+            if let LaneKind::Via(link) = self.lane_at(r.lanes[k] as usize).kind {
+                let foes = &self.link_at(link as usize).foes;
+                if !foes.is_empty() {
+                    let mut best: Option<MergeFoe> = None;
+                    for &f in foes {
+                        let fl = self.link_at(f as usize);
+                        let via_len = self.lane_at(fl.via_lane as usize).length;
+                        let mut consider = |o: VehicleId, d: f64| {
+                            if o != id
+                                && d <= max_dist
+                                && best.is_none_or(|b| d < b.dist_to_merge_m)
+                            {
+                                best = Some(MergeFoe {
+                                    id: o,
+                                    dist_to_merge_m: d,
+                                    speed: self.veh[o as usize].speed,
+                                });
+                            }
+                        };
+                        for &o in &self.lane_veh[fl.via_lane as usize] {
+                            consider(o, via_len - self.veh[o as usize].pos);
+                        }
+                        let from_len = self.lane_at(fl.from_lane as usize).length;
+                        for &o in &self.lane_veh[fl.from_lane as usize] {
+                            consider(o, via_len + from_len - self.veh[o as usize].pos);
+                        }
+                    }
+                    return best;
+                }
+            }
+            k += 1;
+        }
+        None
+    }
+
+    /// Set the acceleration a controlled vehicle applies in the next step (clamped to [-decel, accel], then
+    /// capped by the safe speed). Ignored for vehicles that are not controlled or not in the network.
+    pub fn set_acceleration(&mut self, id: VehicleId, accel: f64) -> Result<(), SimError> {
+        let v = self
+            .veh
+            .get_mut(id as usize)
+            .ok_or(SimError::UnknownVehicle(id))?;
+        if !v.controlled {
+            return Err(SimError::NotControlled(id));
+        }
+        if accel.is_finite() {
+            v.accel_cmd = accel;
+        }
+        Ok(())
+    }
+
+    /// Draw a uniform number from the run's generator (for callers that need run-bound randomness).
+    pub fn random_unit(&mut self) -> f64 {
+        self.rng.random::<f64>()
+    }
+
+    /// Vehicles waiting at their entry roads.
+    pub fn waiting_to_enter(&self) -> usize {
+        self.pending.iter().map(|q| q.len() as usize).sum()
+    }
+
+    /// Append this step's rows to a trace (`time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,
+    /// speed_mps,controlled`).
+    pub fn write_trace_rows(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
+        for id in self.active_ids() {
+            let v = &self.veh[id as usize];
+            let x = self
+                .corridor_x(id)
+                .map(|x| format!("{x:.3}"))
+                .unwrap_or_default();
+            writeln!(
+                out,
+                "{:.2},{},{},{},{:.3},{},{:.3},{}",
+                self.time_s,
+                id,
+                self.spec.vehicle_types[v.vtype as usize].name,
+                self.net.lane_names[v.lane as usize],
+                v.pos,
+                x,
+                v.speed,
+                v.controlled
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,221 @@
+//! A vehicle's state and its life: created from a flow or placed, with its route and speed factor.
+
+use super::*;
+
+/// Where a vehicle is in its life.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VehicleStatus {
+    /// Scheduled or waiting at its entry: not yet in the network.
+    Pending,
+    Active,
+    Arrived,
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct Veh {
+    pub(super) vtype: u16,
+    pub(super) controlled: bool,
+    pub(super) status: VehicleStatus,
+    pub(super) lane: LaneIdx,
+    pub(super) pos: f64,
+    pub(super) speed: f64,
+    pub(super) length: f64,
+    pub(super) speed_factor: f64,
+    pub(super) route: u32,
+    pub(super) route_pos: u32,
+    pub(super) waiting_s: f64,
+    pub(super) depart_s: f64,
+    pub(super) arrive_s: f64,
+    /// Order of entering the network (0-based); `u64::MAX` while pending.
+    pub(super) entry_order: u64,
+    /// Acceleration for the next step (controlled vehicles), NaN when none was set.
+    pub(super) accel_cmd: f64,
+    pub(super) depart_speed: f64,
+    pub(super) distance_m: f64,
+    pub(super) free_flow_s: f64,
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct Route {
+    pub(super) lanes: Table<LaneIdx>,
+    /// Distance from the route's start to the start of each lane.
+    pub(super) start_m: Table<f64>,
+}
+
+/// Values of one vehicle type that do not change during a run.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TypeConsts {
+    pub(super) max_speed: f64,
+    pub(super) impatience: f64,
+    /// Highest arrival speed at a minor link from the foe visibility point (a function of the type only).
+    pub(super) max_arrival_from_visibility: f64,
+    /// 1 / (2 decel), for [`TypeConsts::brake_gap_above`]; `None` where it is not positive and finite (the
+    /// bound does not apply).
+    pub(super) inv_two_decel: Option<f64>,
+}
+
+impl TypeConsts {
+    /// A bound strictly above `IdmParams::brake_gap(speed, decel, headway)` as computed in floating point: the
+    /// Euler sum is a right Riemann sum of the continuous stop, so it never exceeds v^2 / 2b + v headway; the
+    /// margin lies far above rounding. Infinite (no shortcut) where that does not apply. Comparisons against it
+    /// decide the far cases without the exact gap, which is computed only when the bound cannot decide.
+    #[inline]
+    pub(super) fn brake_gap_above(&self, speed: f64, headway: f64) -> f64 {
+        match self.inv_two_decel {
+            Some(inv) if speed >= 0.0 && headway >= 0.0 => {
+                (speed * speed * inv + speed * headway) * (1.0 + 1e-9) + 1e-6
+            }
+            _ => f64::INFINITY,
+        }
+    }
+}
+
+impl Simulation {
+    pub(super) fn create_vehicle(
+        &mut self,
+        vtype: usize,
+        route: u32,
+        depart_speed: f64,
+    ) -> VehicleId {
+        let t = &self.spec.vehicle_types[vtype];
+        let factor = if t.speed_dev > 0.0 {
+            // SUMO redraws until the factor lies in [0.2, 2] (at most 10 tries, then the mean).
+            let normal = Normal::new(t.speed_factor, t.speed_dev).expect("validated deviation");
+            let mut f = t.speed_factor;
+            for _ in 0..10 {
+                let x: f64 = normal.sample(&mut self.rng);
+                if (0.2..=2.0).contains(&x) {
+                    f = x;
+                    break;
+                }
+            }
+            f
+        } else {
+            t.speed_factor
+        };
+        let route_lanes = &self.routes[route as usize].lanes;
+        let free_flow_s: f64 = route_lanes
+            .iter()
+            .map(|&l| {
+                let lane = self.lane_at(l as usize);
+                lane.length / (lane.speed_limit * factor).fmin(t.max_speed)
+            })
+            .sum();
+        let id = self.veh.len() as VehicleId;
+        self.veh.push(Veh {
+            vtype: vtype as u16,
+            controlled: t.controlled,
+            status: VehicleStatus::Pending,
+            lane: route_lanes[0],
+            pos: 0.0,
+            speed: 0.0,
+            length: t.length,
+            speed_factor: factor,
+            route,
+            route_pos: 0,
+            waiting_s: 0.0,
+            depart_s: f64::NAN,
+            arrive_s: f64::NAN,
+            entry_order: u64::MAX,
+            accel_cmd: f64::NAN,
+            depart_speed,
+            distance_m: 0.0,
+            free_flow_s,
+        });
+        id
+    }
+
+    /// Put a vehicle into the network at the back of `lane`.
+    pub(super) fn place(
+        &mut self,
+        id: VehicleId,
+        lane: LaneIdx,
+        pos: f64,
+        speed: f64,
+        counted: bool,
+    ) -> Result<(), SimError> {
+        let q = &mut self.lane_veh[lane as usize];
+        // keep the lane sorted front-first
+        let at = q
+            .iter()
+            .position(|&o| self.veh[o as usize].pos < pos)
+            .unwrap_or(q.len());
+        q.insert(at, id);
+        let v = &mut self.veh[id as usize];
+        v.status = VehicleStatus::Active;
+        v.lane = lane;
+        v.pos = pos;
+        v.speed = speed;
+        v.depart_s = self.time_s;
+        v.entry_order = self.next_entry;
+        self.next_entry += 1;
+        if counted {
+            self.metrics.departed += 1;
+            self.departed_last.push(id);
+        }
+        Ok(())
+    }
+
+    /// Puts a vehicle into the network as another simulator saw it: on the route that starts at road `from`,
+    /// `lane_in_route` lanes along it (roads and connections alternate), front at `pos` m on that lane, with its
+    /// speed, speed factor and time spent halting. For vehicle-by-vehicle comparisons (docs/calibration.md):
+    /// replay a SUMO state, take one step, compare every vehicle's next speed.
+    #[allow(clippy::too_many_arguments)]
+    pub fn place_replica(
+        &mut self,
+        vtype: usize,
+        from: RoadId,
+        lane_in_route: usize,
+        pos: f64,
+        speed: f64,
+        speed_factor: f64,
+        waiting_s: f64,
+    ) -> Result<VehicleId, SimError> {
+        if vtype >= self.spec.vehicle_types.len() {
+            return Err(SimError::Spec(format!("no vehicle type {vtype}")));
+        }
+        let r = self.add_route(from, None)?;
+        let Some(&lane) = self.routes[r as usize].lanes.get(lane_in_route) else {
+            return Err(SimError::Spec(format!(
+                "the route from {from} has no lane {lane_in_route}"
+            )));
+        };
+        let len = self.lane_at(lane as usize).length;
+        if !(0.0..=len).contains(&pos) || !(speed >= 0.0) || !(speed_factor > 0.0) {
+            return Err(SimError::Spec(format!(
+                "replica on lane {lane_in_route} of the route from {from}: position {pos} m (lane {len} m), \
+                 speed {speed}, speed factor {speed_factor}"
+            )));
+        }
+        let id = self.create_vehicle(vtype, r, speed);
+        let v = &mut self.veh[id as usize];
+        v.speed_factor = speed_factor;
+        v.route_pos = lane_in_route as u32;
+        v.waiting_s = waiting_s;
+        self.place(id, lane, pos, speed, false)?;
+        Ok(id)
+    }
+
+    pub(super) fn desired_speed(&self, v: &Veh, lane: LaneIdx) -> f64 {
+        (self.lane_at(lane as usize).speed_limit * v.speed_factor)
+            .fmin(self.type_consts[v.vtype as usize].max_speed)
+    }
+
+    pub(super) fn add_route(&mut self, from: RoadId, to: Option<RoadId>) -> Result<u32, SimError> {
+        let lanes = self.net.route(&self.spec.graph, from, to)?;
+        if let Some(i) = self.routes.iter().position(|r| r.lanes == lanes) {
+            return Ok(i as u32);
+        }
+        let mut start_m = Vec::with_capacity(lanes.len());
+        let mut acc = 0.0;
+        for &l in &lanes {
+            start_m.push(acc);
+            acc += self.lane_at(l as usize).length;
+        }
+        self.routes.push(Route {
+            lanes: Table(lanes),
+            start_m: Table(start_m),
+        });
+        Ok(self.routes.len() as u32 - 1)
+    }
+}
