@@ -374,3 +374,109 @@ fn i696_three_merges_as_several_windows() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// I-210's merge at osm:1686590993 has only 530.1 m of main road before it on the map: the Simple Merge's 600 m
+/// window is refused, naming `--fit`; with `--fit` the window takes the 530.1 m there are, says so against the
+/// source's lengths and what it does to the observation (not rescaled: the policy's L is kept; the controlled
+/// region is shorter), and the scenario written is the fitted window.
+#[test]
+fn i210_merge_short_of_600_m_is_fitted() {
+    let dir = scratch("fit");
+    let scenario = dir.join("f.toml");
+    let base = [
+        "window",
+        "maps/i210.net.xml",
+        "--junction",
+        "osm:1686590993",
+        "-o",
+        scenario.to_str().unwrap(),
+    ];
+    let (code, _, stderr) = mapc(&base);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains(
+            "the main road before J19 (osm:1686590993) is 530.1 m long; the window needs 600.0 m (69.9 m short; \
+             `--fit` cuts what the map has down to 300.0 m)"
+        ),
+        "{stderr}"
+    );
+    assert!(!scenario.exists());
+    let report = mapc_json(&[&base[..], &["--fit", "--json"]].concat());
+    assert!(
+        (report["upstream_m"].as_f64().unwrap() - 530.1).abs() < 0.05,
+        "{report}"
+    );
+    assert_eq!(report["merge_m"], 200.0);
+    assert_eq!(report["downstream_m"], 100.0);
+    let fitted = report["fitted"].as_array().unwrap();
+    assert_eq!(fitted.len(), 1, "{report}");
+    assert_eq!(fitted[0]["part"], "upstream");
+    assert_eq!(fitted[0]["junction"], "osm:1686590993");
+    assert!((fitted[0]["short_by_m"].as_f64().unwrap() - 69.9).abs() < 0.05);
+    let lengths = report["lengths"].as_array().unwrap();
+    assert_eq!(lengths[0]["source_m"], 600.0);
+    assert_eq!(lengths[0]["fitted"], true);
+    assert!(
+        (lengths[0]["ratio"].as_f64().unwrap() - 0.8835).abs() < 1e-3,
+        "{report}"
+    );
+    assert_eq!(lengths[1]["ratio"], 1.0);
+    let obs = &report["observation"];
+    assert_eq!(obs["rescaled"], false);
+    assert_eq!(obs["centralized_norm"]["length_m"], 947.68);
+    assert!(
+        (obs["control_region_m"].as_f64().unwrap() - 830.1).abs() < 0.05,
+        "{obs}"
+    );
+    assert_eq!(obs["source_control_region_m"], 900.0);
+    // The scenario is the fitted window: its recorded lengths and its region's roads.
+    let resolved = mapc_scenario::ResolvedScenario::load(scenario.to_str().unwrap()).unwrap();
+    let control = resolved.scenario.control.as_ref().unwrap();
+    let window = control.window.as_ref().unwrap();
+    assert_eq!(window.upstream_m, report["upstream_m"].as_f64().unwrap());
+    let region_m: f64 = resolved
+        .region_roads
+        .iter()
+        .map(|r| resolved.graph.road(*r).unwrap().length_m)
+        .sum();
+    assert!((region_m - 830.1).abs() < 0.05, "{region_m}");
+    assert!(
+        resolved
+            .scenario
+            .description
+            .contains("Fitted to the map: upstream 530.1 m of 600.0 m")
+    );
+    // The text report says it too.
+    let (code, stdout, stderr) = mapc(&[&base[..], &["--fit"]].concat());
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stdout.contains("against simple_merge's: upstream 530.1 m of 600.0 m (0.88, fitted)")
+            && stdout.contains("fitted (--fit): upstream 69.9 m short, the map has no more")
+            && stdout.contains("observation: not rescaled"),
+        "{stdout}"
+    );
+    // Below the floor: I-210's osm:1842086610 has 13.6 m after the merge, 0.14 of 100 m.
+    let (code, _, stderr) = mapc(&[
+        "window",
+        "maps/i210.net.xml",
+        "--junction",
+        "osm:1842086610",
+        "--fit",
+        "-o",
+        dir.join("g.toml").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains(
+            "below the --fit floor of 50.0 m, 0.5 of it; `--fit-floor 0.13` would cut it"
+        ),
+        "{stderr}"
+    );
+    // --fit-floor outside (0, 1] is refused; without --fit it is a usage error.
+    let (code, _, stderr) = mapc(&[&base[..], &["--fit", "--fit-floor", "1.5"]].concat());
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("--fit-floor"), "{stderr}");
+    let (code, _, _) = mapc(&[&base[..], &["--fit-floor", "0.5"]].concat());
+    assert_eq!(code, 2);
+    std::fs::remove_dir_all(dir).unwrap();
+}

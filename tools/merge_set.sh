@@ -5,6 +5,9 @@
 #
 #   tools/merge_set.sh cut                  # (re)write scenarios/merges/*.toml and their graphs
 #   tools/merge_set.sh eval POLICY...       # one markdown row per merge: humans, then each policy (100 seeds)
+#   tools/merge_set.sh fit-cut              # (re)write scenarios/fitted/*.toml: merges refused at the Simple
+#                                           # Merge's lengths, cut with --fit, and two that fit cut at 530 m too
+#   tools/merge_set.sh fit-eval POLICY...   # the same rows for scenarios/fitted/
 #
 # MAPC (default target/release/mapc), SEEDS (default 100).
 set -euo pipefail
@@ -24,6 +27,43 @@ MERGES=(
   "i210_300944436 maps/i210.net.xml osm:300944436"
   "arizona_5134463770 maps/arizona_highways.osm osm:5134463770"
 )
+
+# Merges whose Simple Merge window is refused (a length short on the map), cut with --fit: name, map, merge,
+# --fit-floor. The last two are far below the default floor of 0.5.
+FITTED=(
+  "i210_1686590993 maps/i210.net.xml osm:1686590993 0.5"
+  "i696_61855155 maps/i696.osm osm:61855155 0.5"
+  "i210_300944703 maps/i210.net.xml osm:300944703 0.5"
+  "i5_1864943558 maps/i5_exit_ramp.osm osm:1864943558 0.18"
+  "i210_1842086610 maps/i210.net.xml osm:1842086610 0.13"
+)
+# Merges that fit, cut again matched to a Simple Merge with 530 m before the merge (as I-210's osm:1686590993
+# has): the same merge and demand, the window alone shorter. name, map, merge, its full-length scenario.
+SHORTENED=(
+  "i696_window_530 scenarios/i696.corridor.graph.json osm:61862553 scenarios/i696_window.toml"
+  "i210_300944436_530 maps/i210.net.xml osm:300944436 scenarios/merges/i210_300944436.toml"
+)
+FIT_DIR=scenarios/fitted
+
+fit_cut() {
+  mkdir -p "$FIT_DIR"
+  for m in "${FITTED[@]}"; do
+    read -r name map junction floor <<<"$m"
+    "$MAPC" window "$map" --junction "$junction" --match simple_merge --fit --fit-floor "$floor" \
+      -o "$FIT_DIR/$name.toml" >/dev/null
+    echo "wrote $FIT_DIR/$name.toml"
+  done
+  # The Simple Merge with 430 m between the main road's entry road and the merge: 530 m before it.
+  sed -e 's/^pre_merge_m = 500.0$/pre_merge_m = 430.0/' -e 's/^name = "simple_merge"$/name = "simple_merge_530"/' \
+    scenarios/simple_merge.toml >"$FIT_DIR/simple_merge_530.toml"
+  grep -q '^pre_merge_m = 430.0$' "$FIT_DIR/simple_merge_530.toml"
+  for m in "${SHORTENED[@]}"; do
+    read -r name map junction _ <<<"$m"
+    "$MAPC" window "$map" --junction "$junction" --match "$FIT_DIR/simple_merge_530.toml" \
+      -o "$FIT_DIR/$name.toml" >/dev/null
+    echo "wrote $FIT_DIR/$name.toml"
+  done
+}
 
 cut() {
   mkdir -p "$DIR"
@@ -65,6 +105,24 @@ evaluate() {
     read -r name _ _ <<<"$m"
     scenarios+=("$DIR/$name.toml")
   done
+  evaluate_on "$@"
+}
+
+fit_evaluate() {
+  local scenarios=()
+  for m in "${FITTED[@]}"; do
+    read -r name _ <<<"$m"
+    scenarios+=("$FIT_DIR/$name.toml")
+  done
+  for m in "${SHORTENED[@]}"; do
+    read -r name _ _ full <<<"$m"
+    scenarios+=("$full" "$FIT_DIR/$name.toml")
+  done
+  evaluate_on "$@"
+}
+
+# one row per scenario of the caller's `scenarios`
+evaluate_on() {
   printf '| merge | priority; humans near the merge | humans (veh/h) |'
   for p in "$@"; do printf ' %s |' "$(basename "$p" .json)"; done
   printf '\n|---|---|---|'
@@ -89,5 +147,7 @@ evaluate() {
 case "${1:-}" in
   cut) cut ;;
   eval) shift; [ $# -ge 1 ] || { echo "usage: $0 eval POLICY..." >&2; exit 2; }; evaluate "$@" ;;
-  *) echo "usage: $0 cut | eval POLICY..." >&2; exit 2 ;;
+  fit-cut) fit_cut ;;
+  fit-eval) shift; [ $# -ge 1 ] || { echo "usage: $0 fit-eval POLICY..." >&2; exit 2; }; fit_evaluate "$@" ;;
+  *) echo "usage: $0 cut | eval POLICY... | fit-cut | fit-eval POLICY..." >&2; exit 2 ;;
 esac

@@ -14,3 +14,4 @@ pub mod simplify;
 pub mod train;
 pub mod view;
 pub mod window;
+pub mod window_fit;

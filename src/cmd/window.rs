@@ -3,10 +3,13 @@
 //! region, the source's demand on every entry).
 
 use super::simplify::{RouteArgs, map_stem};
+use super::window_fit::{WindowLengths, corridor_before_m};
 use anyhow::Context;
 use mapc_graph::LaneGraph;
-use mapc_scenario::compile::{WrittenWindows, corridor_of, write_window, write_windows};
-use mapc_scenario::window::{DemandOverride, WindowRequest};
+use mapc_scenario::compile::{
+    WindowsOptions, WrittenWindows, corridor_of, write_window, write_windows,
+};
+use mapc_scenario::window::{CutRegion, DemandOverride, Fit, Lengths, WindowRequest};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -24,6 +27,14 @@ pub struct Args {
     /// Join overlapping windows into one controlled region (one FIFO) instead of refusing them.
     #[arg(long)]
     pub join: bool,
+    /// Cut a window shorter than the source's where the map has less (a ramp of 194 m, 513 m before the merge),
+    /// each length down to --fit-floor of the source's; with --all, every merge that fits above the floor gets a
+    /// window. The report says which lengths were fitted and what that does to a policy's observation.
+    #[arg(long)]
+    pub fit: bool,
+    /// With --fit: the shortest a fitted length may be, as a fraction of the source's (default 0.5).
+    #[arg(long, value_name = "FRACTION", requires = "fit")]
+    pub fit_floor: Option<f64>,
     /// Main road before merge J in its window, if not the source's (`J=METRES`, repeatable): windows cut
     /// shorter upstream to fit between close merges.
     #[arg(long = "upstream-m", value_name = "J=M", value_parser = parse_pair)]
@@ -80,6 +91,11 @@ fn parse_pair(s: &str) -> Result<(String, f64), String> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let fit = if args.fit {
+        Some(Fit::new(args.fit_floor.unwrap_or(Fit::DEFAULT_FLOOR))?)
+    } else {
+        None
+    };
     let first = args.junction.first().cloned().unwrap_or_default();
     let corridor = corridor_of(&args.map, &first, &args.route.options())?;
     let output = args
@@ -94,12 +110,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         every_ramp: args.every_ramp,
     };
     if args.junction.len() != 1 || args.all || args.join || !args.upstream_m.is_empty() {
-        return run_several(&args, &corridor, &output, &demand);
+        return run_several(&args, &corridor, &output, &demand, fit);
     }
     let written = write_window(
         &corridor,
         &args.map,
-        &args.junction[0],
+        WindowRequest::at(&args.junction[0]).fitted(fit),
         &args.match_,
         &output,
         &demand,
@@ -126,9 +142,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let spec = mapc_sim::spec_from_scenario(&resolved)?;
     let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
     let regime = mapc_sim::merge_regimes(&spec, &seeds)?;
+    let lengths = WindowLengths {
+        lengths: Lengths {
+            upstream_m: cut.upstream_m,
+            merge_m: cut.merge_m,
+            downstream_m: cut.downstream_m,
+        },
+        between_m: 0.0,
+        corridor_before_m: corridor_before_m(&cut.graph, &cut.roles, cut.junction),
+        fitted: &cut.fitted,
+    };
     if args.json {
         let mut report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
         report["regime"] = serde_json::to_value(&regime)?;
+        report["observation"] = super::window_fit::observation(&written.shape, &lengths);
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
@@ -140,6 +167,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         cut.merge_m,
         cut.downstream_m
     );
+    for line in super::window_fit::lines(&written.shape, &args.match_, &lengths) {
+        println!("  {line}");
+    }
     for n in &cut.notes {
         println!("  {n}");
     }
@@ -164,6 +194,7 @@ fn run_several(
     corridor: &LaneGraph,
     output: &std::path::Path,
     demand: &DemandOverride,
+    fit: Option<Fit>,
 ) -> anyhow::Result<()> {
     let mut requests: Vec<WindowRequest> =
         args.junction.iter().map(|j| WindowRequest::at(j)).collect();
@@ -183,8 +214,11 @@ fn run_several(
         corridor,
         &args.map,
         &requests,
-        args.all,
-        args.join,
+        WindowsOptions {
+            all: args.all,
+            join: args.join,
+            fit,
+        },
         &args.match_,
         output,
         demand,
@@ -193,12 +227,21 @@ fn run_several(
         Some(_) => Some(render_several(&written, args)?),
         None => None,
     };
+    let g = &written.cut.graph;
+    let lengths_of = |r| region_lengths(g, r);
     if args.json {
-        let report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
+        let mut report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
+        for (w, r) in report["windows"]
+            .as_array_mut()
+            .expect("a list of windows")
+            .iter_mut()
+            .zip(&written.cut.regions)
+        {
+            w["observation"] = super::window_fit::observation(&written.shape, &lengths_of(r));
+        }
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
-    let g = &written.cut.graph;
     for r in &written.cut.regions {
         let merges: Vec<String> = r.merges.iter().map(|j| describe(g, *j)).collect();
         println!(
@@ -212,6 +255,11 @@ fn run_several(
             r.start_m(),
             r.end_m()
         );
+        if r.merges.len() == 1 {
+            for line in super::window_fit::lines(&written.shape, &args.match_, &lengths_of(r)) {
+                println!("  {line}");
+            }
+        }
     }
     for n in &written.cut.notes {
         println!("  {n}");
@@ -263,6 +311,24 @@ fn render_several(
         &h,
         args.render.as_ref().unwrap(),
     )?)
+}
+
+/// A region's lengths for the report (a joined region: its merging roads together, the main road between).
+fn region_lengths<'a>(g: &LaneGraph, r: &'a CutRegion) -> WindowLengths<'a> {
+    WindowLengths {
+        lengths: Lengths {
+            upstream_m: r.upstream_m,
+            merge_m: r.merge_m.iter().sum(),
+            downstream_m: r.downstream_m,
+        },
+        between_m: r
+            .between_roads
+            .iter()
+            .map(|x| g.road(*x).unwrap().length_m)
+            .sum(),
+        corridor_before_m: r.merge_at_m[0],
+        fitted: &r.fitted,
+    }
 }
 
 fn describe(g: &LaneGraph, j: mapc_graph::JunctionId) -> String {

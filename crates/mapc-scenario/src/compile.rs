@@ -8,8 +8,8 @@ use crate::simplify::{
 use crate::transform::pick_route::describe_junction;
 use crate::transform::{Corridor, CorridorRoles, SimplifyOptions, TransformError};
 use crate::window::{
-    DemandOverride, Overlap, SourceShape, WindowCut, WindowRequest, WindowsCut, cut_window,
-    cut_windows, junction_name, window_scenario, windows_scenario,
+    DemandOverride, Fit, FittedLength, Overlap, SourceShape, WindowCut, WindowRequest, WindowsCut,
+    cut_window, cut_windows, junction_name, window_scenario, windows_scenario,
 };
 use crate::{ResolvedScenario, ScenarioError};
 use mapc_graph::LaneGraph;
@@ -176,14 +176,14 @@ pub struct WrittenWindow {
     pub timing: Option<crate::timing::PickedTiming>,
 }
 
-/// Cut the window of `corridor` (read from `map`) around `junction` matched to the scenario `source` (a built-in
-/// name or a file), and write it to `output` (a `.toml`; the graph goes beside it as `<name>.graph.json`). What
-/// is written must load back as a sound scenario. Demand overrides must be zero or positive rates
-/// (`--main-vph`, `--merge-vph`).
+/// Cut the window of `corridor` (read from `map`) around one merge (a junction id, or a [`WindowRequest`] to fit
+/// it to what the map has) matched to the scenario `source` (a built-in name or a file), and write it to
+/// `output` (a `.toml`; the graph goes beside it as `<name>.graph.json`). What is written must load back as a
+/// sound scenario. Demand overrides must be zero or positive rates (`--main-vph`, `--merge-vph`).
 pub fn write_window(
     corridor: &LaneGraph,
     map: &Path,
-    junction: &str,
+    request: impl Into<WindowRequest>,
     source: &str,
     output: &Path,
     demand: &DemandOverride,
@@ -194,7 +194,7 @@ pub fn write_window(
         path: map.to_path_buf(),
         error,
     };
-    let cut = cut_window(corridor, junction, &shape).map_err(transform)?;
+    let cut = cut_window(corridor, request, &shape).map_err(transform)?;
     let (name, graph_file, graph) = output_names(output);
     let mut scenario =
         window_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
@@ -320,16 +320,25 @@ pub struct WrittenWindows {
     pub timing: Option<crate::timing::PickedTiming>,
 }
 
-/// Cut the windows of `requests` (or, with `all`, of every merge of the corridor whose window fits, the first of
-/// two overlapping ones kept) matched to `source`, and write them as one scenario with one controlled region per
-/// window (`join`: overlapping windows become one region instead of an error).
-#[allow(clippy::too_many_arguments)]
+/// Which windows [`write_windows`] cuts besides those asked for, and how.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WindowsOptions {
+    /// A window at every merge of the corridor whose window fits, the first of two overlapping ones kept.
+    pub all: bool,
+    /// Overlapping windows become one region instead of an error.
+    pub join: bool,
+    /// Every window without a fit of its own is fitted to what the map has (`--fit`); with `all`, merges that
+    /// fit only above the floor are skipped and say why.
+    pub fit: Option<Fit>,
+}
+
+/// Cut the windows of `requests` (and more, as `options` says) matched to `source`, and write them as one
+/// scenario with one controlled region per window.
 pub fn write_windows(
     corridor: &LaneGraph,
     map: &Path,
     requests: &[WindowRequest],
-    all: bool,
-    join: bool,
+    options: WindowsOptions,
     source: &str,
     output: &Path,
     demand: &DemandOverride,
@@ -340,7 +349,14 @@ pub fn write_windows(
         path: map.to_path_buf(),
         error,
     };
-    let mut requests = requests.to_vec();
+    let WindowsOptions { all, join, fit } = options;
+    let mut requests: Vec<WindowRequest> = requests
+        .iter()
+        .map(|r| WindowRequest {
+            fit: r.fit.or(fit),
+            ..r.clone()
+        })
+        .collect();
     if all {
         let roles = CorridorRoles::of(corridor).map_err(transform)?;
         for m in corridor_merges(corridor, &roles) {
@@ -352,7 +368,7 @@ pub fn write_windows(
                 .iter()
                 .any(|r| corridor.find_junction(&r.junction) == Ok(j))
             {
-                requests.push(WindowRequest::at(&m.junction));
+                requests.push(WindowRequest::at(&m.junction).fitted(fit));
             }
         }
     }
@@ -400,6 +416,14 @@ impl WrittenWindows {
                     "downstream_m": r.downstream_m,
                     "region": r.roads().iter().map(|x| x.to_string()).collect::<Vec<_>>(),
                     "merge_entries": r.merge_entries.iter().map(|x| x.to_string()).collect::<Vec<_>>(),
+                    "lengths": lengths_against_source(
+                        &self.shape,
+                        r.upstream_m,
+                        r.merge_m[0],
+                        r.downstream_m,
+                        &r.fitted,
+                    ),
+                    "fitted": fitted_report(g, &r.fitted),
                 })
             })
             .collect();
@@ -439,6 +463,14 @@ impl WrittenWindow {
             "upstream_m": cut.upstream_m,
             "merge_m": cut.merge_m,
             "downstream_m": cut.downstream_m,
+            "lengths": lengths_against_source(
+                &self.shape,
+                cut.upstream_m,
+                cut.merge_m,
+                cut.downstream_m,
+                &cut.fitted,
+            ),
+            "fitted": fitted_report(&cut.graph, &cut.fitted),
             "region": cut.region().iter().map(|r| r.to_string()).collect::<Vec<_>>(),
             "main_entry": cut.main_entry.to_string(),
             "merge_entry": cut.merge_entry.to_string(),
@@ -449,4 +481,47 @@ impl WrittenWindow {
             "timing": self.timing,
         })
     }
+}
+
+/// Each of a window's lengths against the source's: `part`, `source_m`, `window_m`, `ratio` (window / source)
+/// and `fitted` (cut shorter by `--fit`).
+pub fn lengths_against_source(
+    shape: &SourceShape,
+    upstream_m: f64,
+    merge_m: f64,
+    downstream_m: f64,
+    fitted: &[FittedLength],
+) -> Value {
+    use crate::window::Part;
+    let row = |part: Part, source: f64, window: f64| {
+        json!({
+            "part": part,
+            "source_m": source,
+            "window_m": window,
+            "ratio": window / source,
+            "fitted": fitted.iter().any(|f| f.part == part),
+        })
+    };
+    json!([
+        row(Part::Upstream, shape.upstream_m, upstream_m),
+        row(Part::MergingRoad, shape.merge_m, merge_m),
+        row(Part::Downstream, shape.downstream_m, downstream_m),
+    ])
+}
+
+/// The lengths `--fit` cut shorter: the merge (as a scenario names it), which length, asked, fitted, why.
+fn fitted_report(g: &LaneGraph, fitted: &[FittedLength]) -> Value {
+    fitted
+        .iter()
+        .map(|f| {
+            json!({
+                "junction": junction_name(g, f.junction),
+                "part": f.part,
+                "asked_m": f.asked_m,
+                "fitted_m": f.fitted_m,
+                "short_by_m": f.short_by_m(),
+                "reason": f.reason,
+            })
+        })
+        .collect()
 }

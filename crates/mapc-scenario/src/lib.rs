@@ -12,6 +12,8 @@
 //! - **window**: a piece of a corridor around one merge whose lengths match a source scenario's; a scenario may
 //!   have several (`[[control.windows]]`), each its own controlled region, or a **joined** region spanning
 //!   merges whose windows overlap.
+//! - **fitted window** (`--fit`): a window cut shorter than its source where the map has less (a 194 m ramp,
+//!   530 m before the merge), each length down to a floor (half the source's by default).
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
 //! - **entry capacity**: one vehicle per step per entry road (`bounds.rs`); demand above it is refused, like a
 //!   horizon past 48 h.

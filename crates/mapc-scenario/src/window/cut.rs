@@ -5,9 +5,8 @@
 //! window alone is cut exactly as before several existed. Two windows whose intervals overlap by more than
 //! [`SNAP_M`] are refused, the later one skipped, or both joined into one region ([`Overlap`]).
 
-use super::{
-    Boundary, SNAP_M, SourceShape, boundary_downstream, boundary_upstream, merge_list, sum,
-};
+use super::fit::{Fit, FittedLength, Lengths, Part, fit_lengths, locate};
+use super::{Boundary, SNAP_M, SourceShape, boundary_downstream, boundary_upstream, sum};
 use crate::transform::{self, CorridorRoles, TransformError, pick_route::describe_junction};
 use mapc_graph::{JunctionId, LaneGraph, RoadId};
 
@@ -29,6 +28,8 @@ pub struct WindowCut {
     pub merge_entry: RoadId,
     /// One line per boundary: where it fell and whether a road was cut.
     pub notes: Vec<String>,
+    /// The lengths `--fit` cut shorter than asked (empty without it).
+    pub fitted: Vec<FittedLength>,
 }
 
 impl WindowCut {
@@ -45,12 +46,13 @@ impl WindowCut {
     }
 }
 
-/// One window asked for: its merge (any id `find_junction` takes) and, if not the source's, how much main road
-/// before the merge it spans.
+/// One window asked for: its merge (any id `find_junction` takes), if not the source's, how much main road
+/// before the merge it spans, and whether it may be cut shorter where the map has less ([`Fit`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct WindowRequest {
     pub junction: String,
     pub upstream_m: Option<f64>,
+    pub fit: Option<Fit>,
 }
 
 impl WindowRequest {
@@ -58,7 +60,19 @@ impl WindowRequest {
         WindowRequest {
             junction: junction.to_string(),
             upstream_m: None,
+            fit: None,
         }
+    }
+
+    /// The same window, fitted to what the map has.
+    pub fn fitted(self, fit: Option<Fit>) -> WindowRequest {
+        WindowRequest { fit, ..self }
+    }
+}
+
+impl From<&str> for WindowRequest {
+    fn from(junction: &str) -> WindowRequest {
+        WindowRequest::at(junction)
     }
 }
 
@@ -92,6 +106,8 @@ pub struct CutRegion {
     pub downstream_m: f64,
     /// Where each merge's merging-road traffic enters the corridor.
     pub merge_entries: Vec<RoadId>,
+    /// The lengths `--fit` cut shorter than asked, by merge (empty without it).
+    pub fitted: Vec<FittedLength>,
 }
 
 impl CutRegion {
@@ -131,72 +147,25 @@ pub struct WindowsCut {
     pub skipped: Vec<String>,
 }
 
-/// A merge located on the corridor before any cut.
+/// A merge located on the corridor before any cut, with the lengths of its window.
 struct Located {
     junction: JunctionId,
     name: String,
     at_m: f64,
-    upstream_m: f64,
+    lengths: Lengths,
+    /// The upstream length asked for (the source's or `--upstream-m`) and the request's fit.
+    asked_upstream_m: f64,
+    fit: Option<Fit>,
+    fitted: Vec<FittedLength>,
 }
 
-/// Where merge `j` sits: the index of the main road leaving it and its merging road; errors list the merges.
-fn locate(
-    g: &LaneGraph,
-    roles: &CorridorRoles,
-    j: JunctionId,
-) -> Result<(usize, Vec<RoadId>), TransformError> {
-    let name = describe_junction(g, j);
-    let Some(i) = roles
-        .main
-        .iter()
-        .position(|r| g.road(*r).unwrap().from == j)
-        .filter(|i| *i > 0)
-    else {
-        return Err(TransformError::NotACorridor(format!(
-            "{name} is not inside the corridor's main road; merges on this corridor: {}",
-            merge_list(g, roles)
-        )));
-    };
-    let feeders: Vec<&Vec<RoadId>> = roles
-        .feeders
-        .iter()
-        .filter(|f| g.road(*f.last().unwrap()).unwrap().to == j)
-        .collect();
-    if feeders.len() != 1 {
-        let kind = g.junction(j).unwrap().kind;
-        return Err(TransformError::NotACorridor(format!(
-            "{name} is a {kind:?} junction with {} merging roads, not a merge; merges on this corridor: {}",
-            feeders.len(),
-            merge_list(g, roles)
-        )));
+impl Located {
+    fn start_m(&self) -> f64 {
+        self.at_m - self.lengths.upstream_m
     }
-    Ok((i, feeders[0].clone()))
-}
-
-/// Checks that the window of `j` fits (upstream `up` m, the shape's merging road and downstream).
-fn check_fits(
-    g: &LaneGraph,
-    roles: &CorridorRoles,
-    j: JunctionId,
-    up: f64,
-    shape: &SourceShape,
-) -> Result<(), TransformError> {
-    let (i, feeder) = locate(g, roles, j)?;
-    let name = describe_junction(g, j);
-    let short = |what: &str, have: f64, need: f64| {
-        TransformError::Cut(format!(
-            "{what} {name} is {have:.1} m long; the window needs {need:.1} m ({:.1} m short)",
-            need - have
-        ))
-    };
-    let (before, after) = (&roles.main[..i], &roles.main[i..]);
-    boundary_upstream(g, before, up)
-        .ok_or_else(|| short("the main road before", sum(g, before), up))?;
-    boundary_upstream(g, &feeder, shape.merge_m)
-        .ok_or_else(|| short("the merging road into", sum(g, &feeder), shape.merge_m))?;
-    boundary_downstream(g, after, shape.downstream_m)
-        .ok_or_else(|| short("the main road after", sum(g, after), shape.downstream_m))?;
-    Ok(())
+    fn end_m(&self) -> f64 {
+        self.at_m + self.lengths.downstream_m
+    }
 }
 
 /// Cuts `chain` at boundary `b` (or notes the junction it falls on).
@@ -237,8 +206,7 @@ fn apply_boundary(
 /// downstream of its last merge (in that order, so that a lone window is cut as it always was).
 fn cut_region(
     g: &mut LaneGraph,
-    merges: &[(JunctionId, f64)],
-    shape: &SourceShape,
+    merges: &[&Located],
     notes: &mut Vec<String>,
 ) -> Result<(), TransformError> {
     let prefix = |what: &str| {
@@ -249,31 +217,33 @@ fn cut_region(
                 "{what} ({})",
                 merges
                     .iter()
-                    .map(|m| m.0.to_string())
+                    .map(|m| m.junction.to_string())
                     .collect::<Vec<_>>()
                     .join("+")
             )
         }
     };
-    let (first, up) = merges[0];
+    let (first, last) = (merges[0], *merges.last().unwrap());
     let roles = CorridorRoles::of(g)?;
-    let (i, feeder) = locate(g, &roles, first)?;
+    let (i, feeder) = locate(g, &roles, first.junction)?;
     let before: Vec<RoadId> = roles.main[..i].to_vec();
-    let b_up = boundary_upstream(g, &before, up).expect("checked before cutting");
-    let b_merge = boundary_upstream(g, &feeder, shape.merge_m).expect("checked before cutting");
-    let (last, _) = *merges.last().unwrap();
-    let (i_last, _) = locate(g, &roles, last)?;
+    let b_up =
+        boundary_upstream(g, &before, first.lengths.upstream_m).expect("checked before cutting");
+    let b_merge =
+        boundary_upstream(g, &feeder, first.lengths.merge_m).expect("checked before cutting");
+    let (i_last, _) = locate(g, &roles, last.junction)?;
     let after: Vec<RoadId> = roles.main[i_last..].to_vec();
     let b_down =
-        boundary_downstream(g, &after, shape.downstream_m).expect("checked before cutting");
+        boundary_downstream(g, &after, last.lengths.downstream_m).expect("checked before cutting");
     apply_boundary(g, &prefix("upstream"), &before, b_up, notes)?;
     apply_boundary(g, &prefix("merging road"), &feeder, b_merge, notes)?;
     // The further merges' merging roads (a joined region), each on the graph as the previous cuts left it.
-    for &(j, _) in &merges[1..] {
+    for m in &merges[1..] {
         let roles = CorridorRoles::of(g)?;
-        let (_, feeder) = locate(g, &roles, j)?;
-        let b = boundary_upstream(g, &feeder, shape.merge_m).expect("checked before cutting");
-        apply_boundary(g, &format!("merging road into {j}"), &feeder, b, notes)?;
+        let (_, feeder) = locate(g, &roles, m.junction)?;
+        let b = boundary_upstream(g, &feeder, m.lengths.merge_m).expect("checked before cutting");
+        let what = format!("merging road into {}", m.junction);
+        apply_boundary(g, &what, &feeder, b, notes)?;
     }
     apply_boundary(g, &prefix("downstream"), &after, b_down, notes)?;
     Ok(())
@@ -310,27 +280,24 @@ fn take_forward(g: &LaneGraph, chain: &[RoadId], limit: f64) -> Vec<RoadId> {
 }
 
 /// The roads of a region once every cut is made.
-fn collect_region(
-    g: &LaneGraph,
-    roles: &CorridorRoles,
-    merges: &[(JunctionId, f64)],
-    shape: &SourceShape,
-) -> CutRegion {
+fn collect_region(g: &LaneGraph, roles: &CorridorRoles, merges: &[&Located]) -> CutRegion {
     let mut at = Vec::new();
     let mut merge_roads = Vec::new();
     let mut index = Vec::new();
-    for &(j, _) in merges {
-        let (i, feeder) = locate(g, roles, j).expect("located before cutting");
+    for m in merges {
+        let (i, feeder) = locate(g, roles, m.junction).expect("located before cutting");
         at.push(sum(g, &roles.main[..i]));
         index.push(i);
-        merge_roads.push((take_back(g, &feeder, shape.merge_m), feeder[0]));
+        merge_roads.push((take_back(g, &feeder, m.lengths.merge_m), feeder[0]));
     }
     let (first, last) = (index[0], *index.last().unwrap());
-    let upstream_roads = take_back(g, &roles.main[..first], merges[0].1);
+    let upstream_roads = take_back(g, &roles.main[..first], merges[0].lengths.upstream_m);
     let between_roads = roles.main[first..last].to_vec();
-    let downstream_roads = take_forward(g, &roles.main[last..], shape.downstream_m);
+    let downstream_m = merges.last().unwrap().lengths.downstream_m;
+    let downstream_roads = take_forward(g, &roles.main[last..], downstream_m);
     CutRegion {
-        merges: merges.iter().map(|m| m.0).collect(),
+        merges: merges.iter().map(|m| m.junction).collect(),
+        fitted: merges.iter().flat_map(|m| m.fitted.clone()).collect(),
         merge_at_m: at,
         upstream_m: sum(g, &upstream_roads),
         downstream_m: sum(g, &downstream_roads),
@@ -343,9 +310,80 @@ fn collect_region(
     }
 }
 
-/// Cut the windows of `requests` (each matched to `shape`, its upstream length possibly shortened) out of a
-/// corridor. Merges that do not fit are errors, or skipped with [`Overlap::SkipLater`]; overlaps are handled
-/// as `overlap` says.
+/// Groups windows (sorted along the corridor) into regions: one window each, or overlapping ones joined. A
+/// window that overlaps the one before is refused, skipped or joined as `overlap` says, unless it asked for a
+/// [`Fit`] (and is not joined): then it starts where the one before ends, if that leaves at least the floor.
+fn group_windows(
+    located: &mut [Located],
+    overlap: Overlap,
+    skipped: &mut Vec<String>,
+) -> Result<Vec<Vec<usize>>, TransformError> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for k in 0..located.len() {
+        let Some(group) = groups.last_mut() else {
+            groups.push(vec![k]);
+            continue;
+        };
+        let (prev, l) = (&located[*group.last().unwrap()], &located[k]);
+        let gap_overlap = prev.end_m() - l.start_m();
+        if gap_overlap <= SNAP_M {
+            groups.push(vec![k]);
+            continue;
+        }
+        // What is left of the main road between the window before and this merge.
+        let room = l.at_m - prev.end_m();
+        let fit = l.fit.filter(|_| overlap != Overlap::Join);
+        if let Some(fit) = fit
+            && room >= fit.floor_m(l.asked_upstream_m)
+        {
+            let reason = format!("the window at {} ends there", prev.name);
+            let l = &mut located[k];
+            l.fitted.retain(|f| f.part != Part::Upstream);
+            l.fitted.insert(
+                0,
+                FittedLength {
+                    junction: l.junction,
+                    part: Part::Upstream,
+                    asked_m: l.asked_upstream_m,
+                    fitted_m: room,
+                    reason,
+                },
+            );
+            l.lengths.upstream_m = room;
+            groups.push(vec![k]);
+            continue;
+        }
+        let hint = match fit {
+            Some(fit) if room > 0.0 => format!(
+                "; --fit would leave it {room:.1} m, below its floor of {:.1} m",
+                fit.floor_m(l.asked_upstream_m)
+            ),
+            None if room >= Fit::default().floor_m(l.asked_upstream_m) => format!(
+                "; `--fit` starts the second where the first ends, {room:.1} m before its merge"
+            ),
+            _ => String::new(),
+        };
+        let message = format!(
+            "the windows at {} and {} overlap by {gap_overlap:.1} m: the first ends {:.1} m along the main \
+             road, the second starts at {:.1} m ({:.1} m before its merge){hint}",
+            prev.name,
+            l.name,
+            prev.end_m(),
+            l.start_m(),
+            l.lengths.upstream_m
+        );
+        match overlap {
+            Overlap::Refuse => return Err(TransformError::Cut(message)),
+            Overlap::SkipLater => skipped.push(format!("{}: {message}", l.name)),
+            Overlap::Join => group.push(k),
+        }
+    }
+    Ok(groups)
+}
+
+/// Cut the windows of `requests` (each matched to `shape`, its upstream length possibly shortened, each
+/// possibly fitted to what the map has) out of a corridor. Merges that do not fit are errors, or skipped with
+/// [`Overlap::SkipLater`]; overlaps are handled as `overlap` says.
 pub fn cut_windows(
     corridor: &LaneGraph,
     requests: &[WindowRequest],
@@ -372,19 +410,23 @@ pub fn cut_windows(
                 "{name}: the upstream length must be a positive number of metres, not {up}"
             )));
         }
-        if let Err(e) = check_fits(&g, &roles, j, up, shape) {
-            if overlap == Overlap::SkipLater {
+        let (lengths, fitted) = match fit_lengths(&g, &roles, j, up, shape, r.fit) {
+            Ok(fitted) => fitted,
+            Err(e) if overlap == Overlap::SkipLater => {
                 skipped.push(format!("{name}: {e}"));
                 continue;
             }
-            return Err(e);
-        }
+            Err(e) => return Err(e),
+        };
         let (i, _) = locate(&g, &roles, j)?;
         located.push(Located {
             junction: j,
             name,
             at_m: sum(&g, &roles.main[..i]),
-            upstream_m: up,
+            lengths,
+            asked_upstream_m: up,
+            fit: r.fit,
+            fitted,
         });
     }
     if located.is_empty() {
@@ -394,43 +436,14 @@ pub fn cut_windows(
         )));
     }
     located.sort_by(|a, b| a.at_m.total_cmp(&b.at_m));
-    // Group the windows: each group is one region (one window, or overlapping ones joined).
-    let mut groups: Vec<Vec<&Located>> = Vec::new();
-    for l in &located {
-        if let Some(group) = groups.last_mut() {
-            let prev = group.last().unwrap();
-            let gap_overlap = (prev.at_m + shape.downstream_m) - (l.at_m - l.upstream_m);
-            if gap_overlap > SNAP_M {
-                let message = format!(
-                    "the windows at {} and {} overlap by {gap_overlap:.1} m: the first ends {:.1} m along the main \
-                     road, the second starts at {:.1} m ({:.1} m before its merge)",
-                    prev.name,
-                    l.name,
-                    prev.at_m + shape.downstream_m,
-                    l.at_m - l.upstream_m,
-                    l.upstream_m
-                );
-                match overlap {
-                    Overlap::Refuse => return Err(TransformError::Cut(message)),
-                    Overlap::SkipLater => {
-                        skipped.push(format!("{}: {message}", l.name));
-                        continue;
-                    }
-                    Overlap::Join => {
-                        group.push(l);
-                        continue;
-                    }
-                }
-            }
-        }
-        groups.push(vec![l]);
-    }
-    let merges_of = |group: &Vec<&Located>| -> Vec<(JunctionId, f64)> {
-        group.iter().map(|l| (l.junction, l.upstream_m)).collect()
-    };
+    let groups = group_windows(&mut located, overlap, &mut skipped)?;
+    let groups: Vec<Vec<&Located>> = groups
+        .iter()
+        .map(|group| group.iter().map(|&k| &located[k]).collect())
+        .collect();
     let mut notes = Vec::new();
     for group in &groups {
-        cut_region(&mut g, &merges_of(group), shape, &mut notes)?;
+        cut_region(&mut g, group, &mut notes)?;
     }
     let problems = g.invariant_violations();
     if !problems.is_empty() {
@@ -443,7 +456,7 @@ pub fn cut_windows(
     let roles = CorridorRoles::of(&g)?;
     let regions: Vec<CutRegion> = groups
         .iter()
-        .map(|group| collect_region(&g, &roles, &merges_of(group), shape))
+        .map(|group| collect_region(&g, &roles, group))
         .collect();
     let pieces = mapc_graph::Topology::new(&g).component_count();
     if pieces != 1 {
@@ -462,18 +475,13 @@ pub fn cut_windows(
     })
 }
 
-/// Cut the window around merge `junction` (any id `find_junction` takes) of a corridor graph.
+/// Cut the window around one merge (a request, or any junction id `find_junction` takes) of a corridor graph.
 pub fn cut_window(
     corridor: &LaneGraph,
-    junction: &str,
+    request: impl Into<WindowRequest>,
     shape: &SourceShape,
 ) -> Result<WindowCut, TransformError> {
-    let cut = cut_windows(
-        corridor,
-        &[WindowRequest::at(junction)],
-        shape,
-        Overlap::Refuse,
-    )?;
+    let cut = cut_windows(corridor, &[request.into()], shape, Overlap::Refuse)?;
     let region = cut
         .regions
         .into_iter()
@@ -489,6 +497,7 @@ pub fn cut_window(
         upstream_roads: region.upstream_roads,
         merge_roads: region.merge_roads.into_iter().next().unwrap(),
         downstream_roads: region.downstream_roads,
+        fitted: region.fitted,
         roles: cut.roles,
         graph: cut.graph,
         notes: cut.notes,

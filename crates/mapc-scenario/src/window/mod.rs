@@ -6,14 +6,17 @@
 //! ([`crate::transform::cut_road`]) unless an existing junction lies within [`SNAP_M`] of the point.
 //!
 //! - [`cut`]: where the boundaries fall, the overlap rules, the roads of each region;
+//! - [`fit`]: how much of each length a window needs, and cutting shorter where the map has less (`--fit`);
 //! - [`scenario`]: the scenario written around the cut corridor (flows on its entries, the control regions).
 
 pub mod cut;
+pub mod fit;
 pub mod scenario;
 #[cfg(test)]
 mod tests;
 
 pub use cut::{CutRegion, Overlap, WindowCut, WindowRequest, WindowsCut, cut_window, cut_windows};
+pub use fit::{Fit, FittedLength, Lengths, Part};
 pub use scenario::{DemandOverride, junction_name, window_scenario, windows_scenario};
 
 use crate::ResolvedScenario;

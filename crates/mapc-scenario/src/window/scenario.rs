@@ -4,6 +4,7 @@
 
 use super::SourceShape;
 use super::cut::{WindowCut, WindowsCut};
+use super::fit::FittedLength;
 use crate::transform::{CorridorRoles, TransformError};
 use crate::{
     Control, ControlWindow, Flow, NetworkSpec, ResolvedScenario, SCENARIO_VERSION, Scenario,
@@ -188,8 +189,13 @@ pub fn window_scenario(
     let matched_to = matched_to(source);
     let description = format!(
         "The corridor of {} with a window around merge {} ({junction_name}) matched to {matched_to}: \
-         {:.1} m of main road before the merge, {:.1} m of merging road, {:.1} m after.",
-        cut.graph.source.file, cut.junction, cut.upstream_m, cut.merge_m, cut.downstream_m
+         {:.1} m of main road before the merge, {:.1} m of merging road, {:.1} m after.{}",
+        cut.graph.source.file,
+        cut.junction,
+        cut.upstream_m,
+        cut.merge_m,
+        cut.downstream_m,
+        fitted_list(&cut.fitted).map_or(String::new(), |l| format!(" Fitted to the map: {l}."))
     );
     let control = Control {
         n_av,
@@ -248,12 +254,14 @@ pub fn windows_scenario(
         .map(|(w, r)| {
             let merges: Vec<String> = w.merges().cloned().collect();
             format!(
-                "{} ({:.1} / {:.1} / {:.1} m, {:.1} m of main road)",
+                "{} ({:.1} / {:.1} / {:.1} m, {:.1} m of main road{})",
                 merges.join(" + "),
                 w.upstream_m,
                 w.merge_m,
                 w.downstream_m,
-                r.end_m() - r.start_m()
+                r.end_m() - r.start_m(),
+                fitted_list(&r.fitted)
+                    .map_or(String::new(), |l| format!("; fitted to the map: {l}"))
             )
         })
         .collect();
@@ -278,6 +286,25 @@ pub fn windows_scenario(
         flows,
         control,
     ))
+}
+
+/// `merging road 194.4 m of 200.0 m` for each fitted length (`None` when nothing was fitted).
+fn fitted_list(fitted: &[FittedLength]) -> Option<String> {
+    if fitted.is_empty() {
+        return None;
+    }
+    let parts: Vec<String> = fitted
+        .iter()
+        .map(|f| {
+            format!(
+                "{} {:.1} m of {:.1} m",
+                f.part.name(),
+                f.fitted_m,
+                f.asked_m
+            )
+        })
+        .collect();
+    Some(parts.join(", "))
 }
 
 /// N_AV: the flag's, else the source's.

@@ -163,6 +163,7 @@ fn requests(junctions: &[(&str, Option<f64>)]) -> Vec<WindowRequest> {
         .map(|&(j, up)| WindowRequest {
             junction: j.to_string(),
             upstream_m: up,
+            fit: None,
         })
         .collect()
 }
@@ -302,4 +303,231 @@ fn joined_windows_make_one_region_over_three_merges() {
     let many = cut_windows(&g, &[WindowRequest::at("J43")], &shape, Overlap::Refuse).unwrap();
     assert_eq!(one.region(), many.regions[0].roads());
     assert_eq!(one.graph, many.graph);
+}
+
+/// The test highway's merge J2 has 1500 m of main road before it, a 723.6 m merging road and 1523.1 m after.
+fn fit_to(floor: f64) -> Option<Fit> {
+    Some(Fit::new(floor).unwrap())
+}
+
+#[test]
+fn a_short_length_is_refused_naming_fit_and_fitted_with_it() {
+    let g = corridor();
+    let mut shape = simple_merge_shape();
+    shape.upstream_m = 1600.0;
+    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    assert!(
+        err.contains(
+            "the main road before J2 (osm:1002) is 1500.0 m long; the window needs 1600.0 m (100.0 m short; \
+             `--fit` cuts what the map has down to 800.0 m)"
+        ),
+        "{err}"
+    );
+    let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
+    assert_eq!(cut.upstream_m, 1500.0);
+    assert!((cut.merge_m - 200.0).abs() < 1e-9 && (cut.downstream_m - 100.0).abs() < 1e-9);
+    assert_eq!(cut.fitted.len(), 1, "{:?}", cut.fitted);
+    let f = &cut.fitted[0];
+    assert_eq!(
+        (f.part, f.asked_m, f.fitted_m),
+        (Part::Upstream, 1600.0, 1500.0)
+    );
+    assert_eq!(f.short_by_m(), 100.0);
+    // The window starts at the corridor's entry: its first road is the main road's first.
+    assert!(cut.upstream_roads.contains(&cut.main_entry), "{cut:?}");
+    assert!(
+        cut.notes[0].contains("boundary at junction J0"),
+        "{:?}",
+        cut.notes
+    );
+    assert!(cut.graph.invariant_violations().is_empty());
+}
+
+#[test]
+fn a_fit_stops_at_its_floor() {
+    let g = corridor();
+    let mut shape = simple_merge_shape();
+    // 1500 m is 0.48 of 3100 m: below the default floor.
+    shape.upstream_m = 3100.0;
+    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    assert!(
+        err.contains("(1600.0 m short; `--fit` cuts what the map has down to 1550.0 m, `--fit-floor 0.48` down to 1500.0 m)"),
+        "{err}"
+    );
+    let err = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains(
+            "below the --fit floor of 1550.0 m, 0.5 of it; `--fit-floor 0.48` would cut it"
+        ),
+        "{err}"
+    );
+    let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.48)), &shape).unwrap();
+    assert_eq!(cut.upstream_m, 1500.0);
+    for bad in [0.0, -0.5, 1.5, f64::NAN] {
+        let err = Fit::new(bad).unwrap_err().to_string();
+        assert!(err.contains("--fit-floor"), "{err}");
+    }
+    assert_eq!(Fit::default().floor, 0.5);
+}
+
+#[test]
+fn a_fit_takes_the_whole_merging_road_and_the_rest_of_the_corridor() {
+    let g = corridor();
+    let mut shape = simple_merge_shape();
+    shape.merge_m = 800.0;
+    shape.downstream_m = 1600.0;
+    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    assert!(
+        err.contains("merging road into J2") && err.contains("76.4 m short"),
+        "{err}"
+    );
+    let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
+    let parts: Vec<Part> = cut.fitted.iter().map(|f| f.part).collect();
+    assert_eq!(parts, [Part::MergingRoad, Part::Downstream]);
+    // Upstream fits as asked; the merging road is all of it, the main road after runs to the corridor's end.
+    assert!((cut.upstream_m - 600.0).abs() < 1e-9);
+    let roles = CorridorRoles::of(&g).unwrap();
+    let feeder: f64 = roles.feeders[0]
+        .iter()
+        .map(|r| g.road(*r).unwrap().length_m)
+        .sum();
+    assert!(
+        (cut.merge_m - feeder).abs() < 1e-9 && (feeder - 723.6).abs() < 0.1,
+        "{feeder}"
+    );
+    let j2 = g.find_junction("J2").unwrap();
+    let after: f64 = roles
+        .main
+        .iter()
+        .skip_while(|r| g.road(**r).unwrap().from != j2)
+        .map(|r| g.road(*r).unwrap().length_m)
+        .sum();
+    assert!(after < 1600.0 && after > 1000.0, "{after}");
+    assert_eq!(cut.downstream_m, after);
+    assert_eq!(cut.merge_roads[0], cut.merge_entry);
+    assert_eq!(
+        cut.downstream_roads.last(),
+        cut.roles.main.last(),
+        "{cut:?}"
+    );
+    // Only the upstream boundary cuts a road: the others fall on the corridor's ends.
+    assert_eq!(cut.graph.roads.len(), g.roads.len() + 1, "{:?}", cut.notes);
+}
+
+#[test]
+fn a_fit_changes_nothing_where_the_map_has_the_lengths() {
+    let g = corridor();
+    let shape = simple_merge_shape();
+    let plain = cut_window(&g, "J2", &shape).unwrap();
+    let fitted = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
+    assert!(fitted.fitted.is_empty());
+    assert_eq!(plain.graph, fitted.graph);
+    assert_eq!(plain.region(), fitted.region());
+}
+
+#[test]
+fn the_scenario_records_the_fitted_lengths() {
+    let g = corridor();
+    let source = ResolvedScenario::load("simple_merge").unwrap();
+    let mut shape = SourceShape::of(&source).unwrap();
+    shape.upstream_m = 1600.0;
+    let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
+    let scenario = window_scenario(
+        &cut,
+        &source,
+        &shape,
+        "w",
+        "w.graph.json",
+        &DemandOverride::default(),
+    )
+    .unwrap();
+    let control = scenario.control.as_ref().unwrap();
+    let window = control.window.as_ref().unwrap();
+    assert_eq!(window.upstream_m, 1500.0);
+    assert_eq!(control.region.len(), cut.region().len());
+    assert!(
+        scenario
+            .description
+            .contains("Fitted to the map: upstream 1500.0 m of 1600.0 m."),
+        "{}",
+        scenario.description
+    );
+}
+
+#[test]
+fn a_fitted_window_starts_where_the_one_before_ends() {
+    let g = i696();
+    let shape = simple_merge_shape();
+    let asked = [("osm:61862553", None), ("osm:62339771", None)];
+    // Without --fit the overlap is refused, and the refusal says what --fit does: J59 lies 446.0 m after J43,
+    // whose window ends 100 m after it.
+    let err = cut_windows(&g, &requests(&asked), &shape, Overlap::Refuse)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("`--fit` starts the second where the first ends, 346.0 m before its merge"),
+        "{err}"
+    );
+    let fitted: Vec<WindowRequest> = requests(&asked)
+        .into_iter()
+        .map(|r| r.fitted(fit_to(0.5)))
+        .collect();
+    let cut = cut_windows(&g, &fitted, &shape, Overlap::Refuse).unwrap();
+    check_regions(&cut, &[600.0, 346.0], &shape);
+    assert!(cut.regions[0].fitted.is_empty());
+    let f = &cut.regions[1].fitted;
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].part, Part::Upstream);
+    assert!((f[0].fitted_m - 346.0).abs() < 0.05, "{f:?}");
+    assert!(f[0].reason.contains("J43 (osm:61862553)"), "{f:?}");
+    // The two regions touch: the first's end is the second's start.
+    assert!((cut.regions[0].end_m() - cut.regions[1].start_m()).abs() < 1e-6);
+    // Joined, a fit does not shorten: the two become one region from 600 m before J43.
+    let joined = cut_windows(&g, &fitted, &shape, Overlap::Join).unwrap();
+    assert_eq!(joined.regions.len(), 1);
+    assert!(joined.regions[0].fitted.is_empty());
+}
+
+#[test]
+fn all_with_fit_keeps_every_merge_that_fits_above_the_floor() {
+    let g = i696();
+    let shape = simple_merge_shape();
+    let all: Vec<WindowRequest> =
+        crate::simplify::corridor_merges(&g, &CorridorRoles::of(&g).unwrap())
+            .iter()
+            .map(|m| WindowRequest::at(&m.junction).fitted(fit_to(0.5)))
+            .collect();
+    let cut = cut_windows(&g, &all, &shape, Overlap::SkipLater).unwrap();
+    let merges: Vec<String> = cut
+        .regions
+        .iter()
+        .map(|r| r.merges[0].to_string())
+        .collect();
+    // J59 now fits after J43 (346.0 m before it); J37 would keep only 245.7 m after J59's window, below the
+    // 300 m floor: skipped, saying so.
+    assert!(
+        merges.starts_with(&["J43".to_string(), "J59".to_string()]),
+        "{merges:?}"
+    );
+    assert!(!merges.contains(&"J37".to_string()), "{merges:?}");
+    let j37 = cut.skipped.iter().find(|s| s.starts_with("J37")).unwrap();
+    assert!(
+        j37.contains("--fit would leave it 245.7 m, below its floor of 300.0 m"),
+        "{j37}"
+    );
+    for pair in cut.regions.windows(2) {
+        assert!(pair[0].end_m() <= pair[1].start_m() + SNAP_M, "{pair:?}");
+    }
+    assert!(cut.graph.invariant_violations().is_empty());
+    // Each fitted window says by how much.
+    for r in &cut.regions {
+        for f in &r.fitted {
+            assert!(
+                f.fitted_m >= 0.5 * f.asked_m && f.short_by_m() > SNAP_M,
+                "{f:?}"
+            );
+        }
+    }
 }
