@@ -241,6 +241,21 @@ fn serve_answers_the_page_and_its_data_on_loopback() {
     let page = get("/");
     assert!(page.starts_with("HTTP/1.1 200"), "{}", &page[..40]);
     assert!(page.contains("fetch(\"data.json\")") && !page.contains("id=\"mapc-data\""));
+    // the page's Content-Security-Policy comes as a header too, the same as its <meta>; it may fetch data.json
+    let (head, body) = page.split_once("\r\n\r\n").unwrap();
+    let policy = head
+        .lines()
+        .find_map(|l| l.strip_prefix("Content-Security-Policy: "))
+        .unwrap_or_else(|| panic!("no Content-Security-Policy header: {head}"));
+    assert!(body.contains(&format!(
+        "<meta http-equiv=\"Content-Security-Policy\" content=\"{policy}\">"
+    )));
+    assert!(
+        policy.starts_with("default-src 'none'; script-src 'sha256-")
+            && policy.contains("connect-src 'self'"),
+        "{policy}"
+    );
+    assert!(head.contains("X-Content-Type-Options: nosniff"));
     let data = get("/data.json");
     assert!(data.starts_with("HTTP/1.1 200"));
     let body = &data[data.find("\r\n\r\n").unwrap() + 4..];

@@ -1,80 +1,18 @@
-//! `mapc view`'s page in a real browser: headless Chromium (Debian's package; `.ci/run` installs it) opens the
-//! page from disk, plays it to the end, and takes screenshots at two times. The page writes what it drew into
-//! `#mapc-status`, which `--dump-dom` prints.
-//!
-//! Without Chromium the test says so and passes, except in CI (`CI` set), where it fails: CI must run it.
+//! `mapc view`'s page in a real browser: headless Chromium (`common::browser`) opens the page from disk, plays it
+//! to the end, and takes screenshots at two times.
 
 use mapc_viz::pngstats::read_png;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::Command;
 
 mod common;
 
+use common::browser::{browse, chromium_or_skip, status_attr};
 use common::{assert_success, run_mapc as mapc, scratch_dir};
-
-fn chromium() -> Option<PathBuf> {
-    if let Some(p) = std::env::var_os("MAPC_CHROMIUM") {
-        return Some(PathBuf::from(p));
-    }
-    let path = std::env::var_os("PATH")?;
-    ["chromium", "chromium-browser", "google-chrome"]
-        .iter()
-        .flat_map(|name| std::env::split_paths(&path).map(move |d| d.join(name)))
-        .find(|p| p.is_file())
-}
-
-/// Run headless Chromium on `url` with `extra` arguments; its own profile folder, so parallel runs do not meet.
-fn browse(browser: &Path, profile: &Path, url: &str, extra: &[&str]) -> String {
-    let out = Command::new("timeout")
-        .arg("180")
-        .arg(browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--hide-scrollbars",
-            "--no-first-run",
-            "--window-size=1400,1000",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .args(extra)
-        .arg(url)
-        .output()
-        .expect("chromium runs");
-    assert!(
-        out.status.success(),
-        "chromium failed on {url}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-/// The `data-NAME` attribute of the page's status element in a dumped DOM.
-fn status_attr(dom: &str, name: &str) -> String {
-    let at = dom.find("id=\"mapc-status\"").unwrap_or_else(|| {
-        panic!(
-            "no #mapc-status in the page: {}",
-            &dom[..dom.len().min(400)]
-        )
-    });
-    let tag = &dom[at..at + dom[at..].find('>').unwrap()];
-    let key = format!("data-{name}=\"");
-    let start = tag
-        .find(&key)
-        .unwrap_or_else(|| panic!("the page wrote no data-{name}: {tag}"))
-        + key.len();
-    tag[start..start + tag[start..].find('"').unwrap()].to_string()
-}
 
 #[test]
 fn the_page_plays_in_chromium_and_draws_vehicles_moving() {
-    let Some(browser) = chromium() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs Chromium for the browser test (.ci/run installs Debian's chromium)"
-        );
-        eprintln!("skipped: no chromium on PATH (apt-get install chromium, or set MAPC_CHROMIUM)");
+    let Some(browser) = chromium_or_skip("the_page_plays_in_chromium_and_draws_vehicles_moving")
+    else {
         return;
     };
     let dir = scratch_dir("view-browser");

@@ -6,6 +6,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+pub mod browser;
+
 /// The `--via` flags that route `maps/i696.osm` along the paper's I-696 corridor (the three ways of its main road).
 pub const PAPER_VIA: [&str; 6] = [
     "--via",

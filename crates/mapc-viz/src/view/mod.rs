@@ -14,10 +14,12 @@
 //! vehicle-step. The page's own code is `assets/viewer.js`, plain JavaScript without a build step.
 
 mod network;
+mod page;
 mod replay;
 mod serve;
 
 pub use network::{NetworkView, WindowMark, provenance_text};
+pub use page::{Delivery, content_security_policy, embed_json, hash_source};
 pub use replay::{Clock, Replay, Track};
 pub use serve::serve;
 
@@ -34,10 +36,6 @@ use std::path::Path;
 pub const INLINE_ROW_LIMIT: usize = 1_200_000;
 /// Rows kept when the page is served (the data is fetched, not parsed from the HTML).
 pub const SERVED_ROW_LIMIT: usize = 6_000_000;
-
-const PAGE: &str = include_str!("assets/page.html");
-const SCRIPT: &str = include_str!("assets/viewer.js");
-const STYLE: &str = include_str!("assets/viewer.css");
 
 /// Everything a page shows.
 #[derive(Clone, Debug)]
@@ -165,13 +163,12 @@ impl ViewPage {
         Ok(data.to_string())
     }
 
-    /// The page with its data inline.
+    /// The page with its data inline (see [`page`] for how map text is kept from running).
     pub fn html(&self) -> Result<String, VizError> {
-        // `</` inside a script element would end it; JSON allows `<\/` for the same text.
-        let data = self.data_json()?.replace("</", "<\\/");
-        Ok(page_with(
+        Ok(page::page_html(
             &self.title,
-            &format!("<script type=\"application/json\" id=\"mapc-data\">{data}</script>"),
+            Some(&self.data_json()?),
+            Delivery::File,
         ))
     }
 
@@ -190,22 +187,9 @@ impl ViewPage {
     }
 }
 
-/// The page without data: its script fetches `data.json` from where it was served.
+/// The page without data: its script fetches `data.json` from where it was served ([`serve`]).
 pub fn page_without_data(title: &str) -> String {
-    page_with(title, "")
-}
-
-fn page_with(title: &str, data: &str) -> String {
-    PAGE.replace("{{TITLE}}", &html_escape(title))
-        .replace("{{STYLE}}", STYLE)
-        .replace("{{SCRIPT}}", SCRIPT)
-        .replace("{{DATA}}", data)
-}
-
-fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
+    page::page_html(title, None, Delivery::Served)
 }
 
 fn replay_json(

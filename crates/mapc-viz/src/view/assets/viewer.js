@@ -3,6 +3,19 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
+
+// An element with properties (`style`: an object of style properties) and children; strings become text nodes.
+// The page builds every element this way and never parses HTML: text from a map (any text its author chose) is
+// shown as text, and the page's Content-Security-Policy makes the browser refuse HTML parsed from a string.
+function element(tag, props, ...children) {
+  const node = document.createElement(tag);
+  for (const [k, v] of Object.entries(props || {})) {
+    if (k === "style") Object.assign(node.style, v); else node[k] = v;
+  }
+  node.append(...children);
+  return node;
+}
+
 const status = $("mapc-status");
 const stats = { framesDrawn: 0, vehiclesDrawn: 0, readyMs: null };
 
@@ -280,10 +293,15 @@ function drawPane(pane, frame) {
     n = drawVehicles(ctx, pane.map, pane, f);
     drawTimeSpace(pane, f);
     const m = pane.replay.metrics, warm = f <= pane.replay.warmup_frames;
-    pane.metrics.innerHTML = warm && pane.replay.warmup_frames > 0
-      ? `<span class="note">warm-up: metrics start at ${fmt(pane.replay.start_s + pane.replay.warmup_frames * pane.replay.step_s, 1)} s</span>`
-      : `outflow <b>${fmt(m.outflow[f], 1)}</b> veh/h &nbsp; inflow <b>${fmt(m.inflow[f], 1)}</b> veh/h &nbsp; ` +
-        `mean speed <b>${fmt(m.speed[f], 2)}</b> m/s &nbsp; on the road <b>${m.on_road[f]}</b>`;
+    if (warm && pane.replay.warmup_frames > 0) {
+      const at = fmt(pane.replay.start_s + pane.replay.warmup_frames * pane.replay.step_s, 1);
+      pane.metrics.replaceChildren(element("span", { className: "note" }, `warm-up: metrics start at ${at} s`));
+    } else {
+      pane.metrics.replaceChildren(
+        "outflow ", element("b", null, fmt(m.outflow[f], 1)), " veh/h \u00a0 inflow ", element("b", null, fmt(m.inflow[f], 1)),
+        " veh/h \u00a0 mean speed ", element("b", null, fmt(m.speed[f], 2)), " m/s \u00a0 on the road ",
+        element("b", null, String(m.on_road[f])));
+    }
     pane.outflow = m.outflow[f];
   }
   return n;
@@ -337,7 +355,7 @@ function tick() {
 
 function setPlaying(on) {
   player.playing = on;
-  $("play").innerHTML = on ? "&#10074;&#10074;" : "&#9654;";
+  $("play").textContent = on ? "\u275a\u275a" : "\u25b6";
   if (on) {
     if (player.frame >= frameCount() - 1) player.frame = 0;
     player.simTime = player.frame * stepS(); player.last = null;
@@ -424,17 +442,20 @@ const panes = [];
 function legend() {
   const net = DATA.network, seen = new Map();
   for (const r of net.roads) if (!seen.has(r.class)) seen.set(r.class, r);
+  const swatch = (style) => element("i", { className: "swatch", style });
   const parts = [...seen.values()].sort((a, b) => a.rank - b.rank)
-    .map((r) => `<span><i class="swatch" style="background:${r.color}"></i>${r.class}</span>`);
-  if (net.windows.length) parts.push(`<span><i class="swatch" style="background:rgba(255,196,0,0.6)"></i>controlled window</span>`);
+    .map((r) => element("span", null, swatch({ background: r.color }), r.class));
+  if (net.windows.length) parts.push(element("span", null, swatch({ background: "rgba(255,196,0,0.6)" }), "controlled window"));
   if (DATA.replays.length) {
     const grad = DATA.lut.filter((_, i) => i % 32 === 0 || i === 255).map((c) => `rgb(${c.join(",")})`).join(",");
-    parts.push(`<span><i class="swatch" style="background:${vehicleColor(false, 0.7)}"></i>human</span>`);
-    parts.push(`<span><i class="swatch" style="background:${vehicleColor(true, 0.7)};outline:1px solid #000"></i>AV (darker: faster)</span>`);
-    parts.push(`<span>time-space speed 0<i class="scale" style="background:linear-gradient(90deg,${grad})"></i>${DATA.speed_scale.max_mps} m/s, AVs black</span>`);
+    parts.push(element("span", null, swatch({ background: vehicleColor(false, 0.7) }), "human"));
+    parts.push(element("span", null, swatch({ background: vehicleColor(true, 0.7), outline: "1px solid #000" }), "AV (darker: faster)"));
+    parts.push(element("span", null, "time-space speed 0",
+      element("i", { className: "scale", style: { background: `linear-gradient(90deg,${grad})` } }),
+      `${DATA.speed_scale.max_mps} m/s, AVs black`));
   }
-  parts.push(`<span>drag to pan, wheel to zoom, double-click to fit; hover for ids</span>`);
-  $("legend").innerHTML = parts.join("");
+  parts.push(element("span", null, "drag to pan, wheel to zoom, double-click to fit; hover for ids"));
+  $("legend").replaceChildren(...parts);
 }
 
 function start(data) {
@@ -447,12 +468,13 @@ function start(data) {
   const host = $("panes");
   const list = DATA.replays.length ? DATA.replays : [null];
   for (const rep of list) {
-    const el = document.createElement("section");
-    el.className = "pane" + (rep ? "" : " single");
-    el.innerHTML = `<h2></h2><div class="metrics"></div><div class="row"><canvas class="map"></canvas>${rep ? '<canvas class="ts"></canvas>' : ""}</div>`;
-    el.querySelector("h2").textContent = rep ? rep.label : DATA.network.source;
-    host.appendChild(el);
-    const pane = { replay: rep, map: el.querySelector(".map"), ts: el.querySelector(".ts"), metrics: el.querySelector(".metrics") };
+    const pane = {
+      replay: rep, map: element("canvas", { className: "map" }), ts: rep ? element("canvas", { className: "ts" }) : null,
+      metrics: element("div", { className: "metrics" }),
+    };
+    host.append(element("section", { className: "pane" + (rep ? "" : " single") },
+      element("h2", null, rep ? rep.label : DATA.network.source), pane.metrics,
+      element("div", { className: "row" }, pane.map, ...(pane.ts ? [pane.ts] : []))));
     if (!rep) pane.metrics.textContent = DATA.summary;
     panes.push(pane);
   }
