@@ -6,7 +6,7 @@
 #   tools/merge_set.sh cut                  # (re)write scenarios/merges/*.toml and their graphs
 #   tools/merge_set.sh eval POLICY...       # one markdown row per merge: humans, then each policy (100 seeds)
 #   tools/merge_set.sh fit-cut              # (re)write scenarios/fitted/*.toml: merges refused at the Simple
-#                                           # Merge's lengths, cut with --fit, and two that fit cut at 530 m too
+#                                           # Merge's lengths, cut with --fit, and merges that fit cut as short
 #   tools/merge_set.sh fit-eval POLICY...   # the same rows for scenarios/fitted/
 #
 # MAPC (default target/release/mapc), SEEDS (default 100).
@@ -37,11 +37,14 @@ FITTED=(
   "i5_1864943558 maps/i5_exit_ramp.osm osm:1864943558 0.18"
   "i210_1842086610 maps/i210.net.xml osm:1842086610 0.13"
 )
-# Merges that fit, cut again matched to a Simple Merge with 530 m before the merge (as I-210's osm:1686590993
-# has): the same merge and demand, the window alone shorter. name, map, merge, its full-length scenario.
+# Merges that fit, cut again matched to a Simple Merge as short as a fitted window (530 m before the merge, as
+# I-210's osm:1686590993 has; 112.9 m before and a 112.1 m ramp, as I-5's osm:1864943558): the same merge and
+# demand, the window alone shorter. name, map, merge, its full-length scenario, the source's pre_merge_m and
+# merge_m (each after a 100 m entry road).
 SHORTENED=(
-  "i696_window_530 scenarios/i696.corridor.graph.json osm:61862553 scenarios/i696_window.toml"
-  "i210_300944436_530 maps/i210.net.xml osm:300944436 scenarios/merges/i210_300944436.toml"
+  "i696_window_530 scenarios/i696.corridor.graph.json osm:61862553 scenarios/i696_window.toml 430.0 100.0"
+  "i696_window_i5 scenarios/i696.corridor.graph.json osm:61862553 scenarios/i696_window.toml 12.9 12.1"
+  "i210_300944436_530 maps/i210.net.xml osm:300944436 scenarios/merges/i210_300944436.toml 430.0 100.0"
 )
 FIT_DIR=scenarios/fitted
 
@@ -53,14 +56,13 @@ fit_cut() {
       -o "$FIT_DIR/$name.toml" >/dev/null
     echo "wrote $FIT_DIR/$name.toml"
   done
-  # The Simple Merge with 430 m between the main road's entry road and the merge: 530 m before it.
-  sed -e 's/^pre_merge_m = 500.0$/pre_merge_m = 430.0/' -e 's/^name = "simple_merge"$/name = "simple_merge_530"/' \
-    scenarios/simple_merge.toml >"$FIT_DIR/simple_merge_530.toml"
-  grep -q '^pre_merge_m = 430.0$' "$FIT_DIR/simple_merge_530.toml"
   for m in "${SHORTENED[@]}"; do
-    read -r name map junction _ <<<"$m"
-    "$MAPC" window "$map" --junction "$junction" --match "$FIT_DIR/simple_merge_530.toml" \
-      -o "$FIT_DIR/$name.toml" >/dev/null
+    read -r name map junction _ pre ramp <<<"$m"
+    local source="$FIT_DIR/source_$name.toml"
+    sed -e "s/^pre_merge_m = 500.0\$/pre_merge_m = $pre/" -e "s/^merge_m = 100.0\$/merge_m = $ramp/" \
+      -e "s/^name = \"simple_merge\"\$/name = \"source_$name\"/" scenarios/simple_merge.toml >"$source"
+    grep -q "^pre_merge_m = $pre\$" "$source" && grep -q "^merge_m = $ramp\$" "$source"
+    "$MAPC" window "$map" --junction "$junction" --match "$source" -o "$FIT_DIR/$name.toml" >/dev/null
     echo "wrote $FIT_DIR/$name.toml"
   done
 }
@@ -115,8 +117,9 @@ fit_evaluate() {
     scenarios+=("$FIT_DIR/$name.toml")
   done
   for m in "${SHORTENED[@]}"; do
-    read -r name _ _ full <<<"$m"
-    scenarios+=("$full" "$FIT_DIR/$name.toml")
+    read -r name _ _ full _ <<<"$m"
+    [[ " ${scenarios[*]} " == *" $full "* ]] || scenarios+=("$full")
+    scenarios+=("$FIT_DIR/$name.toml")
   done
   evaluate_on "$@"
 }
