@@ -480,3 +480,66 @@ fn i210_merge_short_of_600_m_is_fitted() {
     assert_eq!(code, 2);
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// `--all --fit` on the paper's corridor: where `--all` keeps J43, J37 and J60, fitting keeps J43, J59 (from where
+/// J43's window ends, 346.0 m before J59), J60 and J61 (27.7 m short), skips J37 (245.7 m left, below the 300 m
+/// floor) and says which windows were fitted and by how much.
+#[test]
+fn all_with_fit_on_the_i696_corridor() {
+    let dir = scratch("all-fit");
+    let scenario = dir.join("a.toml");
+    let report = mapc_json(&[
+        "window",
+        "scenarios/i696.corridor.graph.json",
+        "--all",
+        "--fit",
+        "-o",
+        scenario.to_str().unwrap(),
+        "--json",
+    ]);
+    let windows = report["windows"].as_array().unwrap();
+    let names: Vec<&str> = windows
+        .iter()
+        .map(|w| w["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "osm:61862553",
+            "osm:62339771",
+            "osm:62339791",
+            "osm:62339796"
+        ]
+    );
+    let short: Vec<Vec<f64>> = windows
+        .iter()
+        .map(|w| {
+            w["fitted"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|f| f["short_by_m"].as_f64().unwrap())
+                .collect()
+        })
+        .collect();
+    assert!(short[0].is_empty() && short[2].is_empty(), "{short:?}");
+    assert!(
+        (short[1][0] - 254.0).abs() < 0.05 && (short[3][0] - 27.7).abs() < 0.05,
+        "{short:?}"
+    );
+    assert_eq!(windows[1]["observation"]["rescaled"], false);
+    let skipped = report["skipped"].as_array().unwrap();
+    assert_eq!(skipped.len(), 1, "{skipped:?}");
+    assert!(
+        skipped[0]
+            .as_str()
+            .unwrap()
+            .contains("--fit would leave it 245.7 m, below its floor of 300.0 m"),
+        "{skipped:?}"
+    );
+    let resolved = mapc_scenario::ResolvedScenario::load(scenario.to_str().unwrap()).unwrap();
+    let control = resolved.scenario.control.as_ref().unwrap();
+    assert_eq!(control.windows.len(), 4);
+    assert!((control.windows[1].upstream_m - 346.0).abs() < 0.05);
+    std::fs::remove_dir_all(dir).unwrap();
+}
