@@ -31,6 +31,12 @@ pub struct RunMetrics {
     /// The same past each measured merge (the spec's `measure_points`, in order).
     #[serde(default)]
     pub merge_flows_veh_h: Vec<f64>,
+    /// Lane changes done after the warm-up (0 on networks of one-lane roads).
+    #[serde(default)]
+    pub lane_changes: u64,
+    /// The same per vehicle-kilometre driven after the warm-up.
+    #[serde(default)]
+    pub lane_changes_per_veh_km: f64,
 }
 
 /// Mean and half-width of the 95% confidence interval (Student t with n - 1 degrees of freedom).
