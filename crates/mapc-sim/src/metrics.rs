@@ -157,6 +157,9 @@ pub struct BaselineReport {
     pub end_flow: MeanCi,
     /// Vehicles past each measured merge per hour of measured time.
     pub merges: Vec<MergeFlow>,
+    /// Lane changes per run and per vehicle-km (0 on networks of one-lane roads).
+    pub lane_changes: MeanCi,
+    pub lane_changes_per_veh_km: MeanCi,
     pub wall_s: f64,
     pub runs: Vec<RunMetrics>,
 }
@@ -190,6 +193,9 @@ impl BaselineReport {
                 flow,
             })
             .collect();
+        let col = |f: fn(&RunMetrics) -> f64| MeanCi::of(&runs.iter().map(f).collect::<Vec<_>>());
+        let lane_changes = col(|r| r.lane_changes as f64);
+        let lane_changes_per_veh_km = col(|r| r.lane_changes_per_veh_km);
         BaselineReport {
             scenario: scenario.to_string(),
             seeds: s.seeds,
@@ -201,6 +207,8 @@ impl BaselineReport {
             delay: s.delay,
             end_flow: s.end_flow,
             merges,
+            lane_changes,
+            lane_changes_per_veh_km,
             wall_s,
             runs,
         }
