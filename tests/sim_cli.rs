@@ -318,3 +318,43 @@ fn window_picks_a_warmup_when_the_corridor_is_long_for_the_source_horizon() {
     common::assert_success(&out);
     assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
 }
+
+#[test]
+fn two_lane_merge_changes_lanes_and_reports_them() {
+    let out = mapc()
+        .args([
+            "sim",
+            "--scenario",
+            "two_lane_merge",
+            "--seeds",
+            "3",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // the figures the simulator's golden test pins for seeds 0-2
+    let runs = v["runs"].as_array().unwrap();
+    let changes: Vec<u64> = runs
+        .iter()
+        .map(|r| r["lane_changes"].as_u64().unwrap())
+        .collect();
+    assert_eq!(changes, vec![144, 137, 145], "{v}");
+    assert_eq!(v["lane_changes"]["mean"].as_f64().unwrap(), 142.0);
+    assert!(v["lane_changes_per_veh_km"]["mean"].as_f64().unwrap() > 0.1);
+    // one-lane roads change no lanes
+    let one = mapc()
+        .args([
+            "sim",
+            "--scenario",
+            "simple_merge",
+            "--seeds",
+            "1",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    let w: serde_json::Value = serde_json::from_slice(&one.stdout).unwrap();
+    assert_eq!(w["runs"][0]["lane_changes"], 0);
+}

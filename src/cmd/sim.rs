@@ -114,6 +114,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         row("avg speed", &s.speed, "m/s");
         row("travel time", &s.travel_time, "s");
         row("delay", &s.delay, "s");
+        if s.runs.iter().any(|r| r.lane_changes > 0) {
+            row("lane changes", &s.lane_changes, "per run");
+            row("  per veh-km", &s.lane_changes_per_veh_km, "");
+        }
         println!(
             "  per hour of the {:.0} s measured (after a {:.0} s warm-up):",
             fit.horizon_s, fit.warmup_s

@@ -14,6 +14,11 @@ pub const MAIN_PRE_MERGE: &str = "left";
 pub const RAMP_ENTRY: &str = "inflow_merge";
 pub const RAMP_PRE_MERGE: &str = "bottom";
 pub const POST_MERGE: &str = "center";
+/// With an acceleration lane: where it ends, and the main road after that.
+pub const ACCELERATION_LANE_END: &str = "accel_end";
+pub const AFTER_LANE_DROP: &str = "after_lane_drop";
+/// The Simple Merge with a two-lane main road and the ramp joining through an acceleration lane.
+pub const TWO_LANE_MERGE: &str = "two_lane_merge";
 const LANE_WIDTH_M: f64 = 3.2;
 
 pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
@@ -60,17 +65,28 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     let x_merge = p.pre_merge_m;
     let ramp_total = p.merge_m + l;
     // Junctions, in the original's names.
-    let nodes: [(&str, [f64; 2]); 6] = [
+    if !(p.acceleration_lane_m.is_finite() && p.acceleration_lane_m >= 0.0) {
+        return Err(format!(
+            "network.simple_merge.acceleration_lane_m must be zero or positive, not {}",
+            p.acceleration_lane_m
+        ));
+    }
+    let accel = p.acceleration_lane_m > 0.0;
+    let x_end = x_merge + p.acceleration_lane_m;
+    let mut nodes: Vec<(&str, [f64; 2])> = vec![
         ("inflow_highway", [-l, 0.0]),
         ("left", [0.0, 0.0]),
         ("center", [x_merge, 0.0]),
-        ("right", [x_merge + p.post_merge_m, 0.0]),
+        ("right", [x_end + p.post_merge_m, 0.0]),
         (
             "inflow_merge",
             [x_merge - ramp_total * cos, -ramp_total * sin],
         ),
         ("bottom", [x_merge - p.merge_m * cos, -p.merge_m * sin]),
     ];
+    if accel {
+        nodes.push((ACCELERATION_LANE_END, [x_end, 0.0]));
+    }
     let mut g = LaneGraph::new(
         Source {
             file: SIMPLE_MERGE.to_string(),
@@ -96,7 +112,8 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
         MajorRoad::Main => (1, -1),
         MajorRoad::Both => (1, 1),
     };
-    let edges: [(&str, &str, &str, f64, &str, i32); 5] = [
+    let (main_lanes, ramp_lanes) = (p.lanes, if accel { 1 } else { p.lanes });
+    let mut edges: Vec<(&str, &str, &str, f64, &str, i32, u8)> = vec![
         (
             MAIN_ENTRY,
             "inflow_highway",
@@ -104,6 +121,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
             l,
             "highway",
             main_priority,
+            main_lanes,
         ),
         (
             MAIN_PRE_MERGE,
@@ -112,6 +130,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
             p.pre_merge_m,
             "highway",
             main_priority,
+            main_lanes,
         ),
         (
             RAMP_ENTRY,
@@ -120,6 +139,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
             l,
             "merge",
             ramp_priority,
+            ramp_lanes,
         ),
         (
             RAMP_PRE_MERGE,
@@ -128,39 +148,64 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
             p.merge_m,
             "merge",
             ramp_priority,
+            ramp_lanes,
         ),
-        (
+    ];
+    if accel {
+        edges.push((
+            POST_MERGE,
+            "center",
+            ACCELERATION_LANE_END,
+            p.acceleration_lane_m,
+            "highway",
+            main_priority,
+            main_lanes + 1,
+        ));
+        edges.push((
+            AFTER_LANE_DROP,
+            ACCELERATION_LANE_END,
+            "right",
+            p.post_merge_m,
+            "highway",
+            main_priority,
+            main_lanes,
+        ));
+    } else {
+        edges.push((
             POST_MERGE,
             "center",
             "right",
             p.post_merge_m,
             "highway",
             main_priority,
-        ),
-    ];
+            main_lanes,
+        ));
+    }
     g.roads = edges
         .iter()
         .enumerate()
-        .map(|(i, &(name, from, to, length_m, class, priority))| Road {
-            id: RoadId(i as u32),
-            from: jid(from),
-            to: jid(to),
-            class: class.to_string(),
-            name: Some(name.to_string()),
-            ref_: None,
-            priority,
-            lanes: (0..p.lanes)
-                .map(|index| Lane {
-                    index,
-                    speed_mps: p.speed_limit_mps,
-                    width_m: LANE_WIDTH_M,
-                    length_m,
-                })
-                .collect(),
-            geometry: vec![nodes[jid(from).0 as usize].1, nodes[jid(to).0 as usize].1],
-            length_m,
-            provenance: with_sumo(name),
-        })
+        .map(
+            |(i, &(name, from, to, length_m, class, priority, lanes))| Road {
+                id: RoadId(i as u32),
+                from: jid(from),
+                to: jid(to),
+                class: class.to_string(),
+                name: Some(name.to_string()),
+                ref_: None,
+                priority,
+                lanes: (0..lanes)
+                    .map(|index| Lane {
+                        index,
+                        speed_mps: p.speed_limit_mps,
+                        width_m: LANE_WIDTH_M,
+                        length_m,
+                    })
+                    .collect(),
+                geometry: vec![nodes[jid(from).0 as usize].1, nodes[jid(to).0 as usize].1],
+                length_m,
+                provenance: with_sumo(name),
+            },
+        )
         .collect();
     let rid = |name: &str| RoadId(edges.iter().position(|e| e.0 == name).unwrap() as u32);
     let (main_row, ramp_row) = match p.major {
@@ -168,45 +213,72 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
         MajorRoad::Main => (RightOfWay::Major, RightOfWay::Minor),
         MajorRoad::Both => (RightOfWay::Major, RightOfWay::Major),
     };
-    for lane in 0..p.lanes {
-        g.connections.push(Connection {
-            junction: jid("center"),
-            from_road: rid(MAIN_PRE_MERGE),
-            from_lane: lane,
-            to_road: rid(POST_MERGE),
-            to_lane: lane,
-            via_length_m: p.main_internal_m,
-            via_speed_mps: Some(p.speed_limit_mps),
-            right_of_way: main_row,
+    let connection =
+        |from: &str, from_lane: u8, to: &str, to_lane: u8, via: f64, speed: f64, row| Connection {
+            junction: jid(edges.iter().find(|e| e.0 == from).unwrap().2),
+            from_road: rid(from),
+            from_lane,
+            to_road: rid(to),
+            to_lane,
+            via_length_m: via,
+            via_speed_mps: Some(speed),
+            right_of_way: row,
             right_of_way_overridden: false,
             provenance: made_by(),
-        });
-        g.connections.push(Connection {
-            junction: jid("center"),
-            from_road: rid(RAMP_PRE_MERGE),
-            from_lane: lane,
-            to_road: rid(POST_MERGE),
-            to_lane: lane,
-            via_length_m: p.ramp_internal_m,
-            via_speed_mps: Some(p.ramp_internal_speed_mps),
-            right_of_way: ramp_row,
-            right_of_way_overridden: false,
-            provenance: made_by(),
-        });
-        for (from, to) in [(MAIN_ENTRY, MAIN_PRE_MERGE), (RAMP_ENTRY, RAMP_PRE_MERGE)] {
-            g.connections.push(Connection {
-                junction: g.road(rid(from)).unwrap().to,
-                from_road: rid(from),
-                from_lane: lane,
-                to_road: rid(to),
-                to_lane: lane,
-                via_length_m: p.through_internal_m,
-                via_speed_mps: Some(p.speed_limit_mps),
-                right_of_way: RightOfWay::Major,
-                right_of_way_overridden: false,
-                provenance: made_by(),
-            });
+        };
+    let (v, through) = (p.speed_limit_mps, p.through_internal_m);
+    // with an acceleration lane, the main road's lanes shift one to the left at the merge
+    let shift = u8::from(accel);
+    for lane in 0..main_lanes {
+        g.connections.push(connection(
+            MAIN_PRE_MERGE,
+            lane,
+            POST_MERGE,
+            lane + shift,
+            p.main_internal_m,
+            v,
+            main_row,
+        ));
+        g.connections.push(connection(
+            MAIN_ENTRY,
+            lane,
+            MAIN_PRE_MERGE,
+            lane,
+            through,
+            v,
+            RightOfWay::Major,
+        ));
+        if accel {
+            g.connections.push(connection(
+                POST_MERGE,
+                lane + 1,
+                AFTER_LANE_DROP,
+                lane,
+                through,
+                v,
+                RightOfWay::Major,
+            ));
         }
+    }
+    for lane in 0..ramp_lanes {
+        g.connections.push(connection(
+            RAMP_PRE_MERGE,
+            lane,
+            POST_MERGE,
+            lane,
+            p.ramp_internal_m,
+            p.ramp_internal_speed_mps,
+            ramp_row,
+        ));
+        g.connections.push(connection(
+            RAMP_ENTRY,
+            lane,
+            RAMP_PRE_MERGE,
+            lane,
+            through,
+            v,
+            RightOfWay::Major,
+        ));
     }
     g.connections
         .sort_by_key(|c| (c.junction, c.from_road, c.from_lane, c.to_road, c.to_lane));

@@ -58,7 +58,7 @@ pub enum ScenarioError {
     #[error("{path}: network: {message}")]
     Network { path: PathBuf, message: String },
     #[error(
-        "no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge)"
+        "no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge, two_lane_merge)"
     )]
     Unknown(String),
 }
@@ -108,6 +108,7 @@ impl Scenario {
             depart_speed_mps: speed,
             begin_s: 1.0,
             end_s: None,
+            depart_lane: None,
         };
         Scenario {
             version: SCENARIO_VERSION,
@@ -131,9 +132,53 @@ impl Scenario {
         }
     }
 
+    /// The Simple Merge's geometry with a two-lane main road; the one-lane ramp joins through a 200 m
+    /// acceleration lane that ends before the last 100 m (SUMO nets' motorway on-ramp). Humans only, demand on
+    /// both main lanes.
+    pub fn two_lane_merge() -> Scenario {
+        let base = Scenario::simple_merge();
+        let flow = |id: &str, from: &str, vph: f64, speed: f64, lane: Option<&str>| Flow {
+            id: id.to_string(),
+            from: from.to_string(),
+            to: None,
+            vehs_per_hour: vph,
+            vehicle_type: "human".to_string(),
+            depart_speed_mps: speed,
+            begin_s: 1.0,
+            end_s: None,
+            depart_lane: lane.map(str::to_string),
+        };
+        Scenario {
+            name: generator::TWO_LANE_MERGE.to_string(),
+            description: "The Simple Merge with a two-lane main road: the one-lane ramp joins through a 200 m \
+                          acceleration lane that then ends; 1200 veh/h on each main lane, 400 veh/h on the ramp, \
+                          humans only."
+                .to_string(),
+            network: NetworkSpec::SimpleMerge(SimpleMergeParams {
+                lanes: 2,
+                acceleration_lane_m: 200.0,
+                ..SimpleMergeParams::default()
+            }),
+            vehicle_types: base
+                .vehicle_types
+                .into_iter()
+                .filter(|(name, _)| name == "human")
+                .collect(),
+            flows: vec![
+                flow("main_right", generator::MAIN_ENTRY, 1200.0, 10.0, Some("0")),
+                flow("main_left", generator::MAIN_ENTRY, 1200.0, 10.0, Some("1")),
+                flow("ramp", generator::RAMP_ENTRY, 400.0, 7.5, None),
+            ],
+            initial_vehicles: None,
+            control: None,
+            ..base
+        }
+    }
+
     pub fn builtin(name: &str) -> Option<Scenario> {
         match name {
             generator::SIMPLE_MERGE => Some(Scenario::simple_merge()),
+            generator::TWO_LANE_MERGE => Some(Scenario::two_lane_merge()),
             _ => None,
         }
     }

@@ -96,6 +96,15 @@ pub struct SimpleMergeParams {
     pub through_internal_m: f64,
     /// Which road has the right of way at the merge.
     pub major: MajorRoad,
+    /// When positive, the ramp (one lane) joins an acceleration lane: an extra rightmost lane of this length on
+    /// the road after the merge, which then ends (a lane drop) before `post_merge_m` more of the main road's
+    /// lanes. 0 (the default): the ramp joins the main road's lanes at the merge.
+    #[serde(skip_serializing_if = "is_zero_m")]
+    pub acceleration_lane_m: f64,
+}
+
+fn is_zero_m(x: &f64) -> bool {
+    *x == 0.0
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -123,6 +132,7 @@ impl Default for SimpleMergeParams {
             through_internal_m: 0.10,
             // The original code gives the merge edges priority 1 and the highway -1: the ramp is major.
             major: MajorRoad::Ramp,
+            acceleration_lane_m: 0.0,
         }
     }
 }
@@ -191,6 +201,9 @@ pub struct Flow {
     pub begin_s: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub end_s: Option<f64>,
+    /// SUMO's `departLane`: `first` (the rightmost lane, the default), `best` or a lane index.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depart_lane: Option<String>,
 }
 
 /// Vehicles on the network at t = 0, evenly spaced along the network's roads.

@@ -78,7 +78,9 @@ pub use network::Network;
 pub use regime::{MergePriority, RegimeReport, merge_priorities, merge_regimes};
 pub use scenario::{run_baseline, spec_from_scenario};
 pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleView};
-pub use spec::{ControlWindowSpec, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
+pub use spec::{
+    ControlWindowSpec, DepartLane, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec,
+};
 pub use trace::trace_run;
 
 /// Header of trace CSV files.

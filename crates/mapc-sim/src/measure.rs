@@ -23,8 +23,8 @@ pub(crate) struct MeasureAcc {
     lane_point: Vec<u32>,
     /// Vehicles past each point since the warm-up.
     pub(crate) counts: Vec<u64>,
-    /// The main line's last lane (arrivals from it are past the corridor's end).
-    end_lane: Option<LaneIdx>,
+    /// Per lane, whether it is a lane of the main line's last road (arrivals from it are past the corridor's end).
+    end_lanes: Vec<bool>,
     pub(crate) end_count: u64,
 }
 
@@ -40,10 +40,14 @@ impl MeasureAcc {
                 }
             }
         }
+        let end_road = end_lane.and_then(|l| net.road_of(l));
+        let end_lanes = (0..net.lanes.len() as LaneIdx)
+            .map(|l| Some(l) == end_lane || (end_road.is_some() && net.road_of(l) == end_road))
+            .collect();
         MeasureAcc {
             lane_point,
             counts: vec![0; points.len()],
-            end_lane,
+            end_lanes,
             end_count: 0,
         }
     }
@@ -60,7 +64,7 @@ impl MeasureAcc {
     /// A vehicle whose route ends on `last_lane` arrived.
     #[inline]
     pub(crate) fn arrived(&mut self, last_lane: LaneIdx) {
-        if self.end_lane == Some(last_lane) {
+        if self.end_lanes[last_lane as usize] {
             self.end_count += 1;
         }
     }

@@ -31,6 +31,12 @@ pub struct RunMetrics {
     /// The same past each measured merge (the spec's `measure_points`, in order).
     #[serde(default)]
     pub merge_flows_veh_h: Vec<f64>,
+    /// Lane changes done after the warm-up (0 on networks of one-lane roads).
+    #[serde(default)]
+    pub lane_changes: u64,
+    /// The same per vehicle-kilometre driven after the warm-up.
+    #[serde(default)]
+    pub lane_changes_per_veh_km: f64,
 }
 
 /// Mean and half-width of the 95% confidence interval (Student t with n - 1 degrees of freedom).
@@ -151,6 +157,9 @@ pub struct BaselineReport {
     pub end_flow: MeanCi,
     /// Vehicles past each measured merge per hour of measured time.
     pub merges: Vec<MergeFlow>,
+    /// Lane changes per run and per vehicle-km (0 on networks of one-lane roads).
+    pub lane_changes: MeanCi,
+    pub lane_changes_per_veh_km: MeanCi,
     pub wall_s: f64,
     pub runs: Vec<RunMetrics>,
 }
@@ -184,6 +193,9 @@ impl BaselineReport {
                 flow,
             })
             .collect();
+        let col = |f: fn(&RunMetrics) -> f64| MeanCi::of(&runs.iter().map(f).collect::<Vec<_>>());
+        let lane_changes = col(|r| r.lane_changes as f64);
+        let lane_changes_per_veh_km = col(|r| r.lane_changes_per_veh_km);
         BaselineReport {
             scenario: scenario.to_string(),
             seeds: s.seeds,
@@ -195,6 +207,8 @@ impl BaselineReport {
             delay: s.delay,
             end_flow: s.end_flow,
             merges,
+            lane_changes,
+            lane_changes_per_veh_km,
             wall_s,
             runs,
         }

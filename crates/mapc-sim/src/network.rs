@@ -1,5 +1,10 @@
-//! The simulator's own view of a lane graph: one lane per road, one internal lane per connection, links with
-//! their right of way and merge foes, and routes as lane sequences.
+//! The simulator's own view of a lane graph: one simulator lane per graph lane (with its road, index and
+//! neighbours), one internal lane per lane-level connection, links with their right of way and merge foes, and
+//! routes as lane sequences over a sequence of roads.
+//!
+//! Lane numbering: lane 0 of every road first (simulator lane `i` is lane 0 of graph road `i`), then the other
+//! lanes of each road, then the internal lanes. On a graph with one lane per road this is exactly the
+//! one-lane-per-road network (same indices, same links, same order).
 
 use crate::SimError;
 use mapc_graph::{LaneGraph, RightOfWay, RoadId};
@@ -16,7 +21,7 @@ pub type LinkIdx = u32;
 /// What a simulator lane stands for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LaneKind {
-    /// Lane 0 of the road at this index of `LaneGraph::roads`.
+    /// A lane of the road at this index of `LaneGraph::roads` (its index on the road is `SimLane::index`).
     Road(usize),
     /// The internal lane of a link (the connection inside its junction).
     Via(LinkIdx),
@@ -33,6 +38,13 @@ pub struct SimLane {
     pub via_target: Option<LaneIdx>,
     /// Longest distance from the start of this lane to the end of the network.
     pub downstream_m: f64,
+    /// Index on its road (0 = rightmost); 0 for via lanes.
+    pub index: u8,
+    /// The road's lane to the right (index - 1) and to the left (index + 1); none for via lanes.
+    pub right: Option<LaneIdx>,
+    pub left: Option<LaneIdx>,
+    /// Links ending on this road lane (for followers behind its start).
+    pub in_links: Vec<LinkIdx>,
 }
 
 #[derive(Clone, Debug)]
@@ -42,7 +54,7 @@ pub struct SimLink {
     pub via_lane: LaneIdx,
     pub to_lane: LaneIdx,
     pub major: bool,
-    /// Links of the same junction into the same road from another road: they merge with this one.
+    /// Links into the same lane from another lane: they merge with this one.
     pub foes: Vec<LinkIdx>,
 }
 
@@ -51,17 +63,31 @@ pub struct Network {
     pub lanes: Vec<SimLane>,
     pub links: Vec<SimLink>,
     pub road_ids: Vec<RoadId>,
+    /// Lane 0 of each road.
     pub road_lane: HashMap<RoadId, LaneIdx>,
+    /// Per graph road, its simulator lanes by index (right to left).
+    pub road_lanes: Vec<Vec<LaneIdx>>,
+    /// Some road has more than one lane (lane changing runs only then).
+    pub multi_lane: bool,
     /// Road labels for traces: `R3`; via lanes `R1>R2`.
     pub lane_names: Vec<String>,
 }
 
 impl Network {
-    /// Build from a lane graph, treating every road as one lane (lane 0).
+    /// Build from a lane graph: every graph lane a simulator lane, every lane-level connection a link.
     pub fn from_graph(g: &LaneGraph) -> Result<Network, SimError> {
+        let multi_lane = g.roads.iter().any(|r| r.lanes.len() > 1);
         let mut lanes = Vec::with_capacity(g.roads.len() + g.connections.len());
         let mut road_lane = HashMap::new();
         let mut lane_names = Vec::new();
+        let mut road_lanes: Vec<Vec<LaneIdx>> = Vec::with_capacity(g.roads.len());
+        let lane_name = |r: &mapc_graph::Road, i: usize| {
+            if multi_lane {
+                format!("{}_{i}", r.id)
+            } else {
+                r.id.to_string()
+            }
+        };
         for (i, r) in g.roads.iter().enumerate() {
             if !(r.length_m > 0.0) || !r.length_m.is_finite() {
                 return Err(SimError::Network(format!(
@@ -76,48 +102,79 @@ impl Network {
                     r.id, speed
                 )));
             }
+            if r.lanes.is_empty() || r.lanes.len() > u8::MAX as usize {
+                return Err(SimError::Network(format!(
+                    "road {} has {} lanes",
+                    r.id,
+                    r.lanes.len()
+                )));
+            }
             road_lane.insert(r.id, i as LaneIdx);
-            lanes.push(SimLane {
-                kind: LaneKind::Road(i),
-                length: r.length_m,
-                speed_limit: speed,
-                out_links: Vec::new(),
-                via_target: None,
-                downstream_m: 0.0,
-            });
-            lane_names.push(r.id.to_string());
+            road_lanes.push(vec![i as LaneIdx]);
+            lanes.push(road_sim_lane(i, 0, r.length_m, speed));
+            lane_names.push(lane_name(r, 0));
         }
-        // One link per (from road, to road): several lane-level connections collapse into one.
+        // the other lanes of each road after every road's lane 0 (so one-lane graphs keep their indices)
+        for (i, r) in g.roads.iter().enumerate() {
+            for (k, lane) in r.lanes.iter().enumerate().skip(1) {
+                let speed = if lane.speed_mps > 0.0 {
+                    lane.speed_mps
+                } else {
+                    r.speed_mps()
+                };
+                road_lanes[i].push(lanes.len() as LaneIdx);
+                lanes.push(road_sim_lane(i, k as u8, r.length_m, speed));
+                lane_names.push(lane_name(r, k));
+            }
+            for k in 0..road_lanes[i].len() {
+                let l = road_lanes[i][k] as usize;
+                lanes[l].right = k.checked_sub(1).map(|j| road_lanes[i][j]);
+                lanes[l].left = road_lanes[i].get(k + 1).copied();
+            }
+        }
+        let road_index: HashMap<RoadId, usize> =
+            g.roads.iter().enumerate().map(|(i, r)| (r.id, i)).collect();
+        // One link per lane-level connection (repeated connections collapse into one).
         let mut links: Vec<SimLink> = Vec::new();
-        let mut seen: HashMap<(RoadId, RoadId), LinkIdx> = HashMap::new();
+        let mut seen: HashMap<(RoadId, u8, RoadId, u8), LinkIdx> = HashMap::new();
         for c in &g.connections {
-            if seen.contains_key(&(c.from_road, c.to_road)) {
+            if seen.contains_key(&(c.from_road, c.from_lane, c.to_road, c.to_lane)) {
                 continue;
             }
-            let (Some(&from), Some(&to)) = (road_lane.get(&c.from_road), road_lane.get(&c.to_road))
+            let (Some(&fr), Some(&tr)) = (road_index.get(&c.from_road), road_index.get(&c.to_road))
             else {
                 return Err(SimError::Network(format!(
                     "connection {} -> {} at {} names a missing road",
                     c.from_road, c.to_road, c.junction
                 )));
             };
+            let (Some(&from), Some(&to)) = (
+                road_lanes[fr].get(c.from_lane as usize),
+                road_lanes[tr].get(c.to_lane as usize),
+            ) else {
+                return Err(SimError::Network(format!(
+                    "connection {} lane {} -> {} lane {} at {} names a missing lane",
+                    c.from_road, c.from_lane, c.to_road, c.to_lane, c.junction
+                )));
+            };
             let link_idx = links.len() as LinkIdx;
             let via = lanes.len() as LaneIdx;
             let from_speed = lanes[from as usize].speed_limit;
             let to_speed = lanes[to as usize].speed_limit;
-            lanes.push(SimLane {
-                kind: LaneKind::Via(link_idx),
-                length: c.via_length_m.max(MIN_VIA_LENGTH_M),
-                speed_limit: c
-                    .via_speed_mps
-                    .filter(|s| *s > 0.0)
-                    .unwrap_or(from_speed.min(to_speed)),
-                out_links: Vec::new(),
-                via_target: Some(to),
-                downstream_m: 0.0,
-            });
-            lane_names.push(format!("{}>{}", c.from_road, c.to_road));
+            let mut via_lane = road_sim_lane(0, 0, c.via_length_m.max(MIN_VIA_LENGTH_M), 0.0);
+            via_lane.kind = LaneKind::Via(link_idx);
+            via_lane.speed_limit = c
+                .via_speed_mps
+                .filter(|s| *s > 0.0)
+                .unwrap_or(from_speed.min(to_speed));
+            via_lane.via_target = Some(to);
+            lanes.push(via_lane);
+            lane_names.push(format!(
+                "{}>{}",
+                lane_names[from as usize], lane_names[to as usize]
+            ));
             lanes[from as usize].out_links.push(link_idx);
+            lanes[to as usize].in_links.push(link_idx);
             links.push(SimLink {
                 junction: c.junction,
                 from_lane: from,
@@ -126,7 +183,7 @@ impl Network {
                 major: c.right_of_way == RightOfWay::Major,
                 foes: Vec::new(),
             });
-            seen.insert((c.from_road, c.to_road), link_idx);
+            seen.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), link_idx);
         }
         for i in 0..links.len() {
             let foes: Vec<LinkIdx> = (0..links.len())
@@ -144,6 +201,8 @@ impl Network {
             links,
             road_ids: g.roads.iter().map(|r| r.id).collect(),
             road_lane,
+            road_lanes,
+            multi_lane,
             lane_names,
         };
         net.compute_downstream()?;
@@ -218,62 +277,83 @@ impl Network {
     }
 
     /// Route as lanes from `from` to `to` (or, without `to`, downstream to a sink taking the through road at each
-    /// diverge: highest priority, then most lanes, then the smallest turning angle).
+    /// diverge: highest priority, then most lanes, then the smallest turning angle), starting on the rightmost of
+    /// the first road's lanes that go furthest on it.
     pub fn route(
         &self,
         g: &LaneGraph,
         from: RoadId,
         to: Option<RoadId>,
     ) -> Result<Vec<LaneIdx>, SimError> {
-        let &start = self
-            .road_lane
-            .get(&from)
-            .ok_or_else(|| SimError::Network(format!("unknown road {from}")))?;
-        let roads: Vec<RoadId> = match to {
-            Some(to) => {
-                if !self.road_lane.contains_key(&to) {
-                    return Err(SimError::Network(format!("unknown road {to}")));
-                }
-                self.road_path(from, to)
-                    .ok_or_else(|| SimError::Network(format!("no route from {from} to {to}")))?
-            }
-            None => {
-                let mut path = vec![from];
-                let mut cur = start;
-                for _ in 0..self.lanes.len() {
-                    let Some(next) = self.through_link(g, cur) else {
-                        break;
-                    };
-                    let to_lane = self.links[next as usize].to_lane;
-                    path.push(self.road_ids[self.road_of(to_lane).unwrap()]);
-                    cur = to_lane;
-                }
-                path
-            }
-        };
-        let mut lanes = vec![self.road_lane[&roads[0]]];
-        for w in roads.windows(2) {
-            let a = self.road_lane[&w[0]];
-            let b = self.road_lane[&w[1]];
-            let link = self.lanes[a as usize]
-                .out_links
-                .iter()
-                .copied()
-                .find(|&k| self.links[k as usize].to_lane == b)
-                .ok_or_else(|| {
-                    SimError::Network(format!("no connection from {} to {}", w[0], w[1]))
-                })?;
-            lanes.push(self.links[link as usize].via_lane);
-            lanes.push(b);
+        let roads = self.route_roads(g, from, to)?;
+        let best = self.best_lanes(&roads);
+        let first = &best[0];
+        let top = first.iter().map(|q| q.length).fold(f64::MIN, f64::max);
+        let start = first.iter().position(|q| q.length == top).unwrap_or(0);
+        let (lanes, dead_end) = self.lane_path(self.road_lanes[roads[0]][start], &roads, &best);
+        if dead_end {
+            let k = lanes.iter().filter(|&&l| self.road_of(l).is_some()).count();
+            return Err(SimError::Network(format!(
+                "no connection from {} to {}",
+                self.road_ids[roads[k - 1]],
+                self.road_ids[roads[k]]
+            )));
         }
         Ok(lanes)
     }
 
+    /// The roads (indices into `LaneGraph::roads`) of the route from `from` to `to` (see [`Network::route`]).
+    pub fn route_roads(
+        &self,
+        g: &LaneGraph,
+        from: RoadId,
+        to: Option<RoadId>,
+    ) -> Result<Vec<usize>, SimError> {
+        let &start = self
+            .road_lane
+            .get(&from)
+            .ok_or_else(|| SimError::Network(format!("unknown road {from}")))?;
+        let start = start as usize;
+        match to {
+            Some(to) => {
+                let Some(&goal) = self.road_lane.get(&to) else {
+                    return Err(SimError::Network(format!("unknown road {to}")));
+                };
+                self.road_path(start, goal as usize)
+                    .ok_or_else(|| SimError::Network(format!("no route from {from} to {to}")))
+            }
+            None => {
+                let mut path = vec![start];
+                let mut cur = start;
+                for _ in 0..self.lanes.len() {
+                    let Some(next) = self.through_road(g, cur) else {
+                        break;
+                    };
+                    path.push(next);
+                    cur = next;
+                }
+                Ok(path)
+            }
+        }
+    }
+
+    /// Roads reached from the end of road `r` (any lane), in link order, each once.
+    fn next_roads(&self, r: usize) -> Vec<usize> {
+        let mut out = Vec::new();
+        for &l in &self.road_lanes[r] {
+            for &k in &self.lanes[l as usize].out_links {
+                let to = self.road_of(self.links[k as usize].to_lane).unwrap();
+                if !out.contains(&to) {
+                    out.push(to);
+                }
+            }
+        }
+        out
+    }
+
     /// Breadth-first road path (corridors have few alternatives; the first found is the fewest roads).
-    fn road_path(&self, from: RoadId, to: RoadId) -> Option<Vec<RoadId>> {
-        let start = self.road_lane[&from];
-        let goal = self.road_lane[&to];
-        let mut prev: HashMap<LaneIdx, LaneIdx> = HashMap::new();
+    fn road_path(&self, start: usize, goal: usize) -> Option<Vec<usize>> {
+        let mut prev: HashMap<usize, usize> = HashMap::new();
         let mut queue = std::collections::VecDeque::from([start]);
         while let Some(cur) = queue.pop_front() {
             if cur == goal {
@@ -284,14 +364,9 @@ impl Network {
                     c = p;
                 }
                 path.reverse();
-                return Some(
-                    path.into_iter()
-                        .map(|l| self.road_ids[self.road_of(l).unwrap()])
-                        .collect(),
-                );
+                return Some(path);
             }
-            for &k in &self.lanes[cur as usize].out_links {
-                let nxt = self.links[k as usize].to_lane;
+            for nxt in self.next_roads(cur) {
                 if nxt != start && !prev.contains_key(&nxt) {
                     prev.insert(nxt, cur);
                     queue.push_back(nxt);
@@ -301,19 +376,123 @@ impl Network {
         None
     }
 
-    /// The link a through driver takes at the end of road lane `lane`.
-    pub fn through_link(&self, g: &LaneGraph, lane: LaneIdx) -> Option<LinkIdx> {
-        let outs = &self.lanes[lane as usize].out_links;
-        let from_road = &g.roads[self.road_of(lane)?];
-        outs.iter().copied().min_by(|&a, &b| {
-            let ra = &g.roads[self.road_of(self.links[a as usize].to_lane).unwrap()];
-            let rb = &g.roads[self.road_of(self.links[b as usize].to_lane).unwrap()];
+    /// The road a through driver takes at the end of road `r`.
+    pub fn through_road(&self, g: &LaneGraph, r: usize) -> Option<usize> {
+        let from_road = &g.roads[r];
+        self.next_roads(r).into_iter().min_by(|&a, &b| {
+            let (ra, rb) = (&g.roads[a], &g.roads[b]);
             rb.priority
                 .cmp(&ra.priority)
                 .then(rb.lanes.len().cmp(&ra.lanes.len()))
                 .then(turn_angle(from_road, ra).total_cmp(&turn_angle(from_road, rb)))
                 .then(ra.id.cmp(&rb.id))
         })
+    }
+
+    /// SUMO's best lanes along `roads` (`MSVehicle::updateBestLanes`): per road of the route and per lane of it,
+    /// how far the route can be driven from the lane's start without changing lanes, the link its best
+    /// continuation takes, and whether a lane that stops short leads elsewhere. Computed from the route's end
+    /// backwards; every lane of the last road reaches the end.
+    pub fn best_lanes(&self, roads: &[usize]) -> Vec<Vec<BestLane>> {
+        let mut out: Vec<Vec<BestLane>> = vec![Vec::new(); roads.len()];
+        for k in (0..roads.len()).rev() {
+            let mut qs = Vec::with_capacity(self.road_lanes[roads[k]].len());
+            for &l in &self.road_lanes[roads[k]] {
+                let lane = &self.lanes[l as usize];
+                let mut q = BestLane {
+                    length: lane.length,
+                    next_link: None,
+                    leads_elsewhere: !lane.out_links.is_empty(),
+                };
+                if let Some(&next_road) = roads.get(k + 1) {
+                    for &link in &lane.out_links {
+                        let lk = &self.links[link as usize];
+                        if self.road_of(lk.to_lane) != Some(next_road) {
+                            continue;
+                        }
+                        let to = &out[k + 1][self.lanes[lk.to_lane as usize].index as usize];
+                        let len = lane.length + self.lanes[lk.via_lane as usize].length + to.length;
+                        if q.next_link.is_none() || len > q.length {
+                            q = BestLane {
+                                length: len,
+                                next_link: Some(link),
+                                leads_elsewhere: to.leads_elsewhere,
+                            };
+                        }
+                    }
+                } else {
+                    q.leads_elsewhere = false;
+                }
+                qs.push(q);
+            }
+            out[k] = qs;
+        }
+        out
+    }
+
+    /// The lanes driven from road lane `start` (on `roads[0]`) along `roads` without changing lanes, following
+    /// each lane's best continuation; `true` when the path stops at a lane that does not continue on the route.
+    pub fn lane_path(
+        &self,
+        start: LaneIdx,
+        roads: &[usize],
+        best: &[Vec<BestLane>],
+    ) -> (Vec<LaneIdx>, bool) {
+        let mut lanes = vec![start];
+        let mut cur = start;
+        for q in best.iter().take(roads.len().saturating_sub(1)) {
+            let Some(link) = q[self.lanes[cur as usize].index as usize].next_link else {
+                return (lanes, true);
+            };
+            let lk = &self.links[link as usize];
+            lanes.push(lk.via_lane);
+            lanes.push(lk.to_lane);
+            cur = lk.to_lane;
+        }
+        (lanes, false)
+    }
+}
+
+/// One lane of a road on a route (see [`Network::best_lanes`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BestLane {
+    /// Distance (m) from the lane's start the route can be followed without a lane change.
+    pub length: f64,
+    /// The link to the next road of the route on the best continuation; none at a dead end or the route's end.
+    pub next_link: Option<LinkIdx>,
+    /// The lane stops short of the route's end but has links elsewhere (it turns off the route).
+    pub leads_elsewhere: bool,
+}
+
+impl BestLane {
+    /// SUMO's `bestLaneOffset` for each lane of a road: lanes to move (negative: right) to the nearest lane
+    /// that goes furthest (the right one of two equally near).
+    pub fn offsets(qs: &[BestLane]) -> Vec<i32> {
+        let top = qs.iter().map(|q| q.length).fold(f64::MIN, f64::max);
+        (0..qs.len() as i32)
+            .map(|i| {
+                (0..qs.len() as i32)
+                    .filter(|&j| qs[j as usize].length == top)
+                    .map(|j| j - i)
+                    .min_by_key(|d| (d.abs(), *d > 0))
+                    .unwrap_or(0)
+            })
+            .collect()
+    }
+}
+
+fn road_sim_lane(road: usize, index: u8, length: f64, speed_limit: f64) -> SimLane {
+    SimLane {
+        kind: LaneKind::Road(road),
+        length,
+        speed_limit,
+        out_links: Vec::new(),
+        via_target: None,
+        downstream_m: 0.0,
+        index,
+        right: None,
+        left: None,
+        in_links: Vec::new(),
     }
 }
 

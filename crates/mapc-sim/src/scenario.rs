@@ -5,7 +5,7 @@ use crate::measure::MeasurePoint;
 use crate::metrics::{RunMetrics, run_baseline_spec};
 use crate::network::Network;
 use crate::sim::Simulation;
-use crate::spec::{FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
+use crate::spec::{DepartLane, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
 use mapc_graph::RoadId;
 use mapc_scenario::ResolvedScenario;
 
@@ -61,6 +61,11 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             depart_speed: f.depart_speed_mps,
             begin_s: f.begin_s,
             end_s: f.end_s.unwrap_or(f64::INFINITY),
+            depart_lane: match &f.depart_lane {
+                None => DepartLane::First,
+                Some(text) => DepartLane::parse(text)
+                    .map_err(|e| SimError::Spec(format!("{}: flow {}: {e}", rs.origin, f.id)))?,
+            },
         });
     }
     // Main line: the route of the busiest flow.

@@ -65,6 +65,46 @@ pub struct FlowSpec {
     pub depart_speed: f64,
     pub begin_s: f64,
     pub end_s: f64,
+    /// The lane of the entry road its vehicles depart on.
+    pub depart_lane: DepartLane,
+}
+
+/// SUMO's `departLane` of a flow (those a flow's whole demand can use one entry lane for).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum DepartLane {
+    /// The rightmost lane (SUMO 1.8's default `first`).
+    #[default]
+    First,
+    /// The rightmost of the lanes that go furthest on the route (SUMO's `best`, without its tie-break on free
+    /// space).
+    Best,
+    /// This lane (0 = rightmost).
+    Index(u8),
+}
+
+impl DepartLane {
+    /// From a scenario's text: `first`, `best` or a lane index.
+    pub fn parse(text: &str) -> Result<DepartLane, String> {
+        match text {
+            "first" => Ok(DepartLane::First),
+            "best" => Ok(DepartLane::Best),
+            _ => text.parse::<u8>().map(DepartLane::Index).map_err(|_| {
+                format!(
+                    "depart_lane `{text}` is not `first`, `best` or a lane index (`random` and `free` are not \
+                     supported yet)"
+                )
+            }),
+        }
+    }
+
+    /// The entry road's lane index, or `None` for the best lane.
+    pub fn start_lane(self) -> Option<u8> {
+        match self {
+            DepartLane::First => Some(0),
+            DepartLane::Best => None,
+            DepartLane::Index(i) => Some(i),
+        }
+    }
 }
 
 /// A vehicle present at time 0, standing on `road` with its front at `pos_m`.

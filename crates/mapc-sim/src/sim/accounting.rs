@@ -13,6 +13,9 @@ pub(super) struct MetricsAcc {
     pub(super) veh_steps: u64,
     pub(super) travel_time_sum: f64,
     pub(super) delay_sum: f64,
+    /// Lane changes done, and metres driven (for lane changes per vehicle-km).
+    pub(super) lane_changes: u64,
+    pub(super) distance_m: f64,
 }
 
 impl Simulation {
@@ -41,6 +44,12 @@ impl Simulation {
             departed: m.departed,
             steps: m.steps,
             vehicle_steps: m.veh_steps,
+            lane_changes: m.lane_changes,
+            lane_changes_per_veh_km: if m.distance_m > 0.0 {
+                m.lane_changes as f64 / (m.distance_m / 1000.0)
+            } else {
+                0.0
+            },
             end_flow_veh_h: 3600.0 * self.measure.end_count as f64 / secs,
             merge_flows_veh_h: self
                 .measure

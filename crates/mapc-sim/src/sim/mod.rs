@@ -5,6 +5,7 @@
 mod accounting;
 mod insertion;
 mod junction;
+mod lane_change;
 mod lookahead;
 mod moves;
 mod planning;
@@ -12,6 +13,8 @@ mod queries;
 mod table;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_lanes;
 mod vehicle;
 
 use crate::SimError;
@@ -52,6 +55,8 @@ pub struct Simulation {
     spec: SimSpec,
     types: Table<IdmParams>,
     routes: Table<Route>,
+    /// Routes by (lanes, roads), so vehicles that drive the same share one.
+    route_index: std::collections::HashMap<(Vec<LaneIdx>, Vec<usize>), u32>,
     veh: VehicleTable<Veh>,
     /// Vehicles per lane, front first (a plain vector: lanes are short and indexing is on the hot path).
     lane_veh: Table<Table<VehicleId>>,
@@ -81,6 +86,9 @@ pub struct Simulation {
     max_length: f64,
     /// Per vehicle type, what the hot loop reads (cached from the spec and the IDM parameters).
     type_consts: Table<TypeConsts>,
+    /// Lane changing (networks with a road of several lanes only): the model and each vehicle's record.
+    lc_model: crate::lcmodels::Lc2013,
+    lc: std::collections::HashMap<VehicleId, lane_change::LcVeh>,
 }
 
 impl Simulation {
@@ -120,6 +128,7 @@ impl Simulation {
             flow_route: Vec::new(),
             in_region: Table(vec![true; net.lanes.len()]),
             routes: Table(Vec::new()),
+            route_index: std::collections::HashMap::new(),
             veh: VehicleTable::default(),
             plans: Table(Vec::new()),
             plan_order: Vec::new(),
@@ -154,6 +163,8 @@ impl Simulation {
                 })
                 .collect(),
             types: Table(types),
+            lc_model: lane_change::default_model(),
+            lc: std::collections::HashMap::new(),
             net,
             spec,
         };
@@ -181,7 +192,16 @@ impl Simulation {
         }
         for f in 0..sim.spec.flows.len() {
             let flow = sim.spec.flows[f].clone();
-            let r = sim.add_route(flow.from, flow.to)?;
+            if let Some(lane) = flow.depart_lane.start_lane() {
+                let lanes = sim.spec.graph.road(flow.from).map_or(0, |r| r.lanes.len());
+                if lane as usize >= lanes {
+                    return Err(SimError::Spec(format!(
+                        "flow {}: depart_lane {lane}, but its entry road {} has {lanes} lane(s)",
+                        flow.id, flow.from
+                    )));
+                }
+            }
+            let r = sim.add_route(flow.from, flow.to, flow.depart_lane.start_lane())?;
             sim.flow_route.push(r);
             let entry = sim.routes[r as usize].lanes[0];
             if !sim.entry_lanes.contains(&entry) {
@@ -198,7 +218,7 @@ impl Simulation {
         // Initial vehicles: standing where the spec puts them, before the first step.
         for i in 0..sim.spec.initial.len() {
             let iv = sim.spec.initial[i].clone();
-            let r = sim.add_route(iv.road, None)?;
+            let r = sim.add_route(iv.road, None, None)?;
             let lane = sim.routes[r as usize].lanes[0];
             let len = sim.net.lanes[lane as usize].length;
             if !(iv.pos_m >= 0.0 && iv.pos_m <= len) {
@@ -314,6 +334,9 @@ impl Simulation {
         self.plan_order = order;
         self.plans = plans;
         self.execute_moves();
+        if self.net.multi_lane {
+            self.change_lanes();
+        }
         self.time_s += self.spec.step_s;
         self.step += 1;
         self.metrics.steps += 1;

@@ -59,6 +59,13 @@ impl Simulation {
                     .fmin(v_safe.fmax(v.speed - p.emergency_decel * dt))
                     .fmax(0.0);
                 let mut next = v_max.fmax(v_min);
+                if self.net.multi_lane {
+                    let (speed, vtype, lane) = (v.speed, v.vtype as usize, v.lane);
+                    let desired = self.desired_speed(v, lane);
+                    next = self.patch_lc_speed(id, speed, vtype, lane, desired, v_min, next, v_max);
+                }
+                let v = &self.veh[id as usize];
+                let p = &self.types[v.vtype as usize];
                 if v.controlled && v.accel_cmd.is_finite() && self.in_region[v.lane as usize] {
                     let a = v.accel_cmd.clamp(-p.decel, p.accel);
                     next = (v.speed + a * dt).fmax(0.0).fmin(v_safe);
@@ -100,6 +107,7 @@ impl Simulation {
                 v.speed = next;
                 v.pos += next * dt;
                 v.distance_m += next * dt;
+                self.metrics.distance_m += next * dt;
                 v.waiting_s = if next < HALTING_SPEED {
                     v.waiting_s + dt
                 } else {
@@ -116,6 +124,13 @@ impl Simulation {
                 let v = &self.veh[id as usize];
                 let r = &self.routes[v.route as usize];
                 let last = v.route_pos as usize + 1 >= r.lanes.len();
+                if last && r.dead_end {
+                    // stopped at the end of a lane that does not continue: it waits there for a gap
+                    if v.pos > len {
+                        self.veh[id as usize].pos = len;
+                    }
+                    break;
+                }
                 if last {
                     if v.pos > len - POSITION_EPS {
                         self.lane_veh[lane as usize].remove(0);
@@ -137,6 +152,7 @@ impl Simulation {
                     rp += 1;
                     self.measure.entered(r.lanes[rp]);
                     if rp + 1 >= r.lanes.len()
+                        && !r.dead_end
                         && v_pos > self.lane_at(r.lanes[rp] as usize).length - POSITION_EPS
                     {
                         arrived = true;
@@ -164,6 +180,7 @@ impl Simulation {
     }
 
     pub(super) fn arrive(&mut self, id: VehicleId) {
+        self.forget_lc(id);
         let v = &mut self.veh[id as usize];
         v.status = VehicleStatus::Arrived;
         v.arrive_s = self.time_s + self.spec.step_s;

@@ -226,6 +226,16 @@ impl Simulation {
                     }
                 }
             }
+            if k + 1 >= r.lanes.len() && r.dead_end {
+                // a lane that does not continue on the route: stop at its end (until a lane change)
+                let vs = p.stop_speed(seen - POSITION_EPS, speed, des_cur).fmax(0.0);
+                vv = vv.fmin(vs);
+                if let Some(i) = last_item {
+                    let it = &mut plan.items[i];
+                    it.leave_speed = it.leave_speed.fmin(vs);
+                }
+                break;
+            }
             if k + 1 >= r.lanes.len() {
                 // final lane: drive out at the lane's speed (SUMO's arrival handling)
                 let lane_max = self.desired_speed(v, lane);

@@ -40,6 +40,13 @@ pub(super) struct Route {
     pub(super) lanes: Table<LaneIdx>,
     /// Distance from the route's start to the start of each lane.
     pub(super) start_m: Table<f64>,
+    /// The route's roads (indices into the graph's roads), to its destination.
+    pub(super) roads: Vec<usize>,
+    /// Per lane of `lanes`, the index in `roads` of its road (a via lane: of the road it leaves).
+    pub(super) road_k: Vec<u32>,
+    /// The lanes stop at a lane that does not continue on the route: the vehicle must change lanes before its
+    /// end, or stop there.
+    pub(super) dead_end: bool,
 }
 
 /// Values of one vehicle type that do not change during a run.
@@ -174,7 +181,7 @@ impl Simulation {
         if vtype >= self.spec.vehicle_types.len() {
             return Err(SimError::Spec(format!("no vehicle type {vtype}")));
         }
-        let r = self.add_route(from, None)?;
+        let r = self.add_route(from, None, None)?;
         let Some(&lane) = self.routes[r as usize].lanes.get(lane_in_route) else {
             return Err(SimError::Spec(format!(
                 "the route from {from} has no lane {lane_in_route}"
@@ -201,21 +208,59 @@ impl Simulation {
             .fmin(self.type_consts[v.vtype as usize].max_speed)
     }
 
-    pub(super) fn add_route(&mut self, from: RoadId, to: Option<RoadId>) -> Result<u32, SimError> {
-        let lanes = self.net.route(&self.spec.graph, from, to)?;
-        if let Some(i) = self.routes.iter().position(|r| r.lanes == lanes) {
-            return Ok(i as u32);
+    /// The route from road `from` (to `to`, or the through roads), starting on the first road's lane `lane`
+    /// (none: the rightmost of the lanes that go furthest).
+    pub(super) fn add_route(
+        &mut self,
+        from: RoadId,
+        to: Option<RoadId>,
+        lane: Option<u8>,
+    ) -> Result<u32, SimError> {
+        let Some(lane) = lane else {
+            let lanes = self.net.route(&self.spec.graph, from, to)?;
+            let roads = self.net.route_roads(&self.spec.graph, from, to)?;
+            return Ok(self.add_lane_route(lanes, roads, false));
+        };
+        let roads = self.net.route_roads(&self.spec.graph, from, to)?;
+        let Some(&start) = self.net.road_lanes[roads[0]].get(lane as usize) else {
+            return Err(SimError::Spec(format!("road {from} has no lane {lane}")));
+        };
+        let best = self.net.best_lanes(&roads);
+        let (lanes, dead_end) = self.net.lane_path(start, &roads, &best);
+        Ok(self.add_lane_route(lanes, roads, dead_end))
+    }
+
+    /// The route of `lanes` over `roads` (shared with every vehicle that drives the same).
+    pub(super) fn add_lane_route(
+        &mut self,
+        lanes: Vec<LaneIdx>,
+        roads: Vec<usize>,
+        dead_end: bool,
+    ) -> u32 {
+        if let Some(&i) = self.route_index.get(&(lanes.clone(), roads.clone())) {
+            return i;
         }
         let mut start_m = Vec::with_capacity(lanes.len());
+        let mut road_k = Vec::with_capacity(lanes.len());
         let mut acc = 0.0;
-        for &l in &lanes {
+        let mut k = 0u32;
+        for (i, &l) in lanes.iter().enumerate() {
+            if i > 0 && self.net.road_of(l).is_some() {
+                k += 1;
+            }
             start_m.push(acc);
+            road_k.push(k);
             acc += self.lane_at(l as usize).length;
         }
+        let idx = self.routes.len() as u32;
+        self.route_index.insert((lanes.clone(), roads.clone()), idx);
         self.routes.push(Route {
             lanes: Table(lanes),
             start_m: Table(start_m),
+            roads,
+            road_k,
+            dead_end,
         });
-        Ok(self.routes.len() as u32 - 1)
+        idx
     }
 }

@@ -1,0 +1,365 @@
+//! The lane-change pass (SUMO's `MSLaneChanger` with LC2013, changes done in one step): after the moves, road by
+//! road, the vehicles on a road's lanes are visited front to back across its lanes; each gets its
+//! [`Surroundings`], LC2013 decides, messages are delivered at once, and a change moves the vehicle to the
+//! neighbour lane at the same position. Runs only on networks with a road of several lanes.
+
+use super::*;
+use crate::lcmodels::{
+    BlockedAhead, Ego, LaneQ, Lc2013, Lc2013Memory, Message, NeighbourLane, Other, Side,
+    Surroundings,
+};
+use crate::network::BestLane;
+
+/// How far ahead the leader of a lane is searched across its end (m).
+const LEADER_SEARCH_M: f64 = 300.0;
+
+/// A vehicle's lane-change record between steps.
+#[derive(Clone, Debug, Default)]
+pub(super) struct LcVeh {
+    pub(super) mem: Lc2013Memory,
+    /// Its speed at the last pass, for its acceleration in the next.
+    prev_speed: f64,
+    accel: f64,
+    /// Its lane's best-lane offset at the last pass (read when its speed is patched).
+    pub(super) best_lane_offset: i32,
+}
+
+impl Simulation {
+    /// LC2013's `patch_speed` for a vehicle's next speed between `min` and `max` (`wanted`: the car-following
+    /// speed); on one-lane roads the speed stays `wanted`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn patch_lc_speed(
+        &mut self,
+        id: VehicleId,
+        speed: f64,
+        vtype: usize,
+        lane: LaneIdx,
+        desired: f64,
+        min: f64,
+        wanted: f64,
+        max: f64,
+    ) -> f64 {
+        let l = self.lane_at(lane as usize);
+        if l.left.is_none() && l.right.is_none() {
+            return wanted;
+        }
+        let params = self.types[vtype];
+        let Some(rec) = self.lc.get_mut(&id) else {
+            return wanted;
+        };
+        rec.mem.patch_speed(
+            &self.lc_model,
+            speed,
+            &params,
+            desired,
+            true,
+            rec.best_lane_offset,
+            min,
+            wanted,
+            max,
+        )
+    }
+
+    /// The lane-change pass of a step (after the moves).
+    pub(super) fn change_lanes(&mut self) {
+        let dt = self.spec.step_s;
+        // after the moves, before any message of this pass: forget the last step's advices and marks (advices
+        // sent in this pass are read in the next move)
+        for q in self.lane_veh.iter() {
+            for &id in q.iter() {
+                let speed = self.veh[id as usize].speed;
+                let rec = self.lc.entry(id).or_insert_with(|| LcVeh {
+                    prev_speed: speed,
+                    ..LcVeh::default()
+                });
+                rec.accel = (speed - rec.prev_speed) / dt;
+                rec.prev_speed = speed;
+                rec.mem.prepare_step();
+            }
+        }
+        for r in 0..self.net.road_lanes.len() {
+            let lanes = self.net.road_lanes[r].clone();
+            if lanes.len() < 2 {
+                continue;
+            }
+            // SUMO's findCandidate: the largest position first; the right lane first on a tie
+            let mut cands: Vec<VehicleId> = lanes
+                .iter()
+                .flat_map(|&l| self.lane_veh[l as usize].iter().copied())
+                .collect();
+            cands.sort_by(|&a, &b| {
+                let (va, vb) = (&self.veh[a as usize], &self.veh[b as usize]);
+                vb.pos.total_cmp(&va.pos).then(
+                    self.lane_at(va.lane as usize)
+                        .index
+                        .cmp(&self.lane_at(vb.lane as usize).index),
+                )
+            });
+            let mut dens = vec![0.0; lanes.len()];
+            let mut blocked = vec![(None::<VehicleId>, None::<VehicleId>); lanes.len()];
+            for id in cands {
+                let final_index = self.change_one(id, &dens, &mut blocked);
+                let v = &self.veh[id as usize];
+                dens[final_index] += v.length + self.types[v.vtype as usize].min_gap;
+            }
+        }
+    }
+
+    /// One vehicle's turn; returns the index of the lane it ends on.
+    fn change_one(
+        &mut self,
+        id: VehicleId,
+        dens: &[f64],
+        blocked: &mut [(Option<VehicleId>, Option<VehicleId>)],
+    ) -> usize {
+        let v = &self.veh[id as usize];
+        let lane = v.lane;
+        let index = self.lane_at(lane as usize).index as usize;
+        let route = &self.routes[v.route as usize];
+        let k = route.road_k[v.route_pos as usize] as usize;
+        let best: Vec<BestLane> = self.net.best_lanes(&route.roads[k..]).swap_remove(0);
+        let offsets = BestLane::offsets(&best);
+        let best_lanes: Vec<LaneQ> = best
+            .iter()
+            .zip(&offsets)
+            .zip(dens)
+            .map(|((q, &o), &d)| LaneQ {
+                length: q.length,
+                occupation: d,
+                best_lane_offset: o,
+                leads_elsewhere: q.leads_elsewhere,
+            })
+            .collect();
+        if let Some(rec) = self.lc.get_mut(&id) {
+            rec.best_lane_offset = offsets[index];
+        }
+        let p = self.types[v.vtype as usize];
+        let l = self.lane_at(lane as usize);
+        let (l_right, l_left) = (l.right, l.left);
+        let ego = Ego {
+            speed: v.speed,
+            params: p,
+            length: v.length,
+            pos: v.pos,
+            lane_index: index,
+            lane_length: l.length,
+            lane_speed_limit: l.speed_limit,
+            max_speed: self.desired_speed(v, lane),
+        };
+        // a vehicle whose back is still in the junction behind stays on its lane
+        let may_change = v.pos >= v.length;
+        let side_lane = |n: Option<LaneIdx>| n.filter(|_| may_change);
+        let right = side_lane(l_right).map(|n| self.neighbours(id, n, &best));
+        let left = side_lane(l_left).map(|n| self.neighbours(id, n, &best));
+        let leader = self.own_leader(id);
+        let (last, first) = blocked[index];
+        let blocked_ahead = BlockedAhead {
+            last: last.map(|o| self.other(o, self.gap_ahead_same_road(id, o))),
+            first: first
+                .filter(|&f| Some(f) != last)
+                .map(|o| self.other(o, self.gap_ahead_same_road(id, o))),
+        };
+        let s = Surroundings {
+            ego,
+            leader,
+            right,
+            left,
+            best_lanes: &best_lanes,
+            blocked_ahead,
+            road_has_lane_changer: true,
+        };
+        let model = self.lc_model;
+        let mut mem = std::mem::take(&mut self.lc.get_mut(&id).expect("recorded").mem);
+        let d = model.decide(&mut mem, &s);
+        self.lc.get_mut(&id).expect("recorded").mem = mem;
+        let dt = self.spec.step_s;
+        for m in &d.messages {
+            match *m {
+                Message::SpeedAdvice { to, speed, state } => {
+                    let to = to as VehicleId;
+                    let own = self.veh[to as usize].speed;
+                    self.lc
+                        .entry(to)
+                        .or_default()
+                        .mem
+                        .inform(speed, state, own, dt);
+                }
+                Message::KeepRoom { to, length } => {
+                    self.lc
+                        .entry(to as VehicleId)
+                        .or_default()
+                        .mem
+                        .keep_room(length);
+                }
+            }
+        }
+        for side in &d.urgent_blocked {
+            let t = (index as i32 + side.offset()) as usize;
+            if let Some(b) = blocked.get_mut(t) {
+                b.0 = Some(id);
+                b.1.get_or_insert(id);
+            }
+        }
+        let Some(side) = d.change else {
+            return index;
+        };
+        let target = match side {
+            Side::Right => l_right,
+            Side::Left => l_left,
+        }
+        .expect("the model changes only to an existing lane");
+        self.move_to_lane(id, target);
+        let target_index = self.lane_at(target as usize).index as usize;
+        if let Some(rec) = self.lc.get_mut(&id) {
+            rec.best_lane_offset = offsets[target_index];
+        }
+        self.metrics.lane_changes += 1;
+        target_index
+    }
+
+    /// Moves a vehicle to `target`, a neighbour lane of its road, at the same position, and follows the route
+    /// from there.
+    pub(super) fn move_to_lane(&mut self, id: VehicleId, target: LaneIdx) {
+        let (old, pos, route, rp) = {
+            let v = &self.veh[id as usize];
+            (v.lane, v.pos, v.route, v.route_pos as usize)
+        };
+        let q = &mut self.lane_veh[old as usize];
+        if let Some(i) = q.iter().position(|&o| o == id) {
+            q.remove(i);
+        }
+        let q = &self.lane_veh[target as usize];
+        let at = q
+            .iter()
+            .position(|&o| self.veh[o as usize].pos < pos)
+            .unwrap_or(q.len());
+        self.lane_veh[target as usize].insert(at, id);
+        let r = &self.routes[route as usize];
+        let k = r.road_k[rp] as usize;
+        let roads: Vec<usize> = r.roads.clone();
+        let mut lanes: Vec<LaneIdx> = r.lanes.0[..rp].to_vec();
+        let best = self.net.best_lanes(&roads[k..]);
+        let (rest, dead_end) = self.net.lane_path(target, &roads[k..], &best);
+        lanes.extend(rest);
+        let new_route = self.add_lane_route(lanes, roads, dead_end);
+        let v = &mut self.veh[id as usize];
+        v.lane = target;
+        v.route = new_route;
+    }
+
+    /// `o` as the model sees it, at `gap`.
+    fn other(&self, o: VehicleId, gap: f64) -> Other {
+        let ov = &self.veh[o as usize];
+        let rec = self.lc.get(&o);
+        Other {
+            id: o as u64,
+            gap,
+            speed: ov.speed,
+            accel: rec.map_or(0.0, |r| r.accel),
+            params: self.types[ov.vtype as usize],
+            length: ov.length,
+            max_speed: self.desired_speed(ov, ov.lane),
+            stopped: false,
+            lc_state: rec.map_or(0, |r| r.mem.own_state),
+        }
+    }
+
+    /// The gap from `id`'s front to the back of `o`, a vehicle ahead on the same road (minus `id`'s min gap).
+    fn gap_ahead_same_road(&self, id: VehicleId, o: VehicleId) -> f64 {
+        let (v, ov) = (&self.veh[id as usize], &self.veh[o as usize]);
+        ov.pos - ov.length - v.pos - self.types[v.vtype as usize].min_gap
+    }
+
+    /// The leader on the own lane, or across its end along the route.
+    fn own_leader(&self, id: VehicleId) -> Option<Other> {
+        let v = &self.veh[id as usize];
+        let q = &self.lane_veh[v.lane as usize];
+        let qi = q.iter().position(|&o| o == id)?;
+        if qi > 0 {
+            let o = q[qi - 1];
+            return Some(self.other(o, self.gap_ahead_same_road(id, o)));
+        }
+        let r = &self.routes[v.route as usize];
+        let lanes = &r.lanes.0[v.route_pos as usize + 1..];
+        self.first_ahead(id, lanes, self.lane_at(v.lane as usize).length - v.pos)
+    }
+
+    /// The last vehicle on the first occupied lane of `lanes` (which start `seen` m ahead of `id`'s front).
+    fn first_ahead(&self, id: VehicleId, lanes: &[LaneIdx], mut seen: f64) -> Option<Other> {
+        let min_gap = self.types[self.veh[id as usize].vtype as usize].min_gap;
+        for &l in lanes {
+            if seen > LEADER_SEARCH_M {
+                break;
+            }
+            if let Some(&o) = self.lane_veh[l as usize].last() {
+                let ov = &self.veh[o as usize];
+                return Some(self.other(o, seen + ov.pos - ov.length - min_gap));
+            }
+            seen += self.lane_at(l as usize).length;
+        }
+        None
+    }
+
+    /// Leader and follower of `id` on neighbour lane `n` of its road: the nearest vehicle whose front is ahead
+    /// of `id`'s back, and the nearest behind (across the lane's end along its best continuation, and across its
+    /// start through the connections into it).
+    fn neighbours(&self, id: VehicleId, n: LaneIdx, best: &[BestLane]) -> NeighbourLane {
+        let v = &self.veh[id as usize];
+        let back = v.pos - v.length;
+        let q = &self.lane_veh[n as usize];
+        // front first: the last vehicle whose front is ahead of the back leads, the next one follows
+        let split = q
+            .iter()
+            .position(|&o| self.veh[o as usize].pos <= back)
+            .unwrap_or(q.len());
+        let leader = if split > 0 {
+            let o = q[split - 1];
+            Some(self.other(o, self.gap_ahead_same_road(id, o)))
+        } else {
+            let nl = self.lane_at(n as usize);
+            best[nl.index as usize].next_link.and_then(|link| {
+                let lk = self.link_at(link as usize);
+                self.first_ahead(id, &[lk.via_lane, lk.to_lane], nl.length - v.pos)
+            })
+        };
+        let follower = if let Some(&o) = q.get(split) {
+            let ov = &self.veh[o as usize];
+            Some(self.other(o, back - ov.pos - self.types[ov.vtype as usize].min_gap))
+        } else {
+            // behind the lane's start: the first vehicle on a connection into it, or on that connection's lane
+            let mut found: Option<Other> = None;
+            for &link in &self.lane_at(n as usize).in_links {
+                let lk = self.link_at(link as usize);
+                let via_len = self.lane_at(lk.via_lane as usize).length;
+                let from_len = self.lane_at(lk.from_lane as usize).length;
+                let cand = if let Some(&o) = self.lane_veh[lk.via_lane as usize].first() {
+                    Some((o, back + via_len - self.veh[o as usize].pos))
+                } else {
+                    self.lane_veh[lk.from_lane as usize]
+                        .first()
+                        .map(|&o| (o, back + via_len + from_len - self.veh[o as usize].pos))
+                };
+                if let Some((o, dist)) = cand {
+                    let gap = dist - self.types[self.veh[o as usize].vtype as usize].min_gap;
+                    if found.is_none_or(|f| gap < f.gap) {
+                        found = Some(self.other(o, gap));
+                    }
+                }
+            }
+            found
+        };
+        NeighbourLane { leader, follower }
+    }
+
+    /// Per-vehicle lane-change records are dropped when a vehicle leaves.
+    pub(super) fn forget_lc(&mut self, id: VehicleId) {
+        if self.net.multi_lane {
+            self.lc.remove(&id);
+        }
+    }
+}
+
+/// The model every vehicle uses (SUMO 1.8's LC2013 defaults).
+pub(super) fn default_model() -> Lc2013 {
+    Lc2013::default()
+}
