@@ -61,7 +61,11 @@ fn the_i696_window_spreads_its_initial_vehicles_over_the_feeders() {
     let spec = spec_from_scenario(&rs).unwrap();
     // Before, vehicles 3 and 4 both stood at the end of the main line's last road.
     let on_main = |r| spec.main_line.contains(r);
-    assert!(spec.initial.iter().any(|v| !on_main(&v.road)), "{:?}", spec.initial);
+    assert!(
+        spec.initial.iter().any(|v| !on_main(&v.road)),
+        "{:?}",
+        spec.initial
+    );
     for v in &spec.initial {
         let len = rs.graph.road(v.road).unwrap().length_m;
         assert!(v.pos_m < len, "{v:?} stands at the end of its road");
@@ -98,7 +102,10 @@ fn overlapping_initial_vehicles_are_refused_naming_both() {
     let mut close = first.clone();
     close.pos_m += 3.0;
     spec.initial.push(close);
-    let err = Simulation::from_spec(spec.clone(), 0).err().unwrap().to_string();
+    let err = Simulation::from_spec(spec.clone(), 0)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(
         err.contains("initial vehicles 1 and 5 overlap") && err.contains("3.00 m ahead"),
         "{err}"
@@ -112,4 +119,3 @@ fn overlapping_initial_vehicles_are_refused_naming_both() {
     let err = Simulation::from_spec(spec, 0).err().unwrap().to_string();
     assert!(err.contains("initial vehicles 0 and 1 overlap"), "{err}");
 }
-
