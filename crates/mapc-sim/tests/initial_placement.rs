@@ -1,4 +1,4 @@
-//! The initial vehicles of every shipped scenario stand apart: no two on the same spot, none inside another
+//! The initial vehicles of every shipped scenario (scenarios/, merges/, fitted/) stand apart: no two on the same spot, none inside another
 //! (its length plus the minimum gap behind the one ahead on its road); the Simple Merge's are Flow's positions.
 
 use mapc_scenario::ResolvedScenario;
@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 fn shipped_scenarios_with_initial_vehicles() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
     let mut files = Vec::new();
-    for dir in [root.clone(), root.join("merges")] {
+    for dir in [root.clone(), root.join("merges"), root.join("fitted")] {
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
             if path.extension().is_some_and(|e| e == "toml")
