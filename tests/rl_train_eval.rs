@@ -560,8 +560,8 @@ fn the_shipped_distributed_policy_beats_the_humans() {
 #[test]
 fn the_shipped_shared_reward_policy_beats_the_humans_and_transfers() {
     // policies/simple_merge_distributed_shared.json (docs/results.md, trained with --reward-share 0.5
-    // --count-waiting): +18.2 % over 100 seeds and +8.8 % zero-shot in the I-696 window; on seeds 0-4 (mean
-    // actions: the same numbers every run) 1827.36 veh/h, +17.4 %, and +5.4 % in the window
+    // --count-waiting): +18.2 % over 100 seeds and +9.0 % zero-shot in the I-696 window; on seeds 0-4 (mean
+    // actions: the same numbers every run) 1827.36 veh/h, +17.4 %, and +6.5 % in the window
     let policy = common::root().join("policies/simple_merge_distributed_shared.json");
     let eval = |scenario: &str| -> serde_json::Value {
         let out = mapc()

@@ -60,6 +60,7 @@ pub mod lcmodels;
 pub mod measure;
 pub mod metrics;
 pub mod network;
+mod placement;
 pub mod regime;
 pub mod replay;
 pub mod scenario;

@@ -256,7 +256,7 @@ impl Network {
         Ok(())
     }
 
-    fn successors(&self, lane: LaneIdx) -> Vec<LaneIdx> {
+    pub(crate) fn successors(&self, lane: LaneIdx) -> Vec<LaneIdx> {
         let l = &self.lanes[lane as usize];
         match l.kind {
             LaneKind::Road(_) => l

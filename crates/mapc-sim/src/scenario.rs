@@ -4,8 +4,9 @@ use crate::SimError;
 use crate::measure::MeasurePoint;
 use crate::metrics::{RunMetrics, run_baseline_spec};
 use crate::network::Network;
+use crate::placement::{check_initial_spacing, initial_placement};
 use crate::sim::Simulation;
-use crate::spec::{DepartLane, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec};
+use crate::spec::{DepartLane, FlowSpec, SimSpec, VehicleTypeSpec};
 use mapc_graph::RoadId;
 use mapc_scenario::ResolvedScenario;
 
@@ -106,7 +107,12 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             iv.count as usize,
             iv.speed_mps,
             vt,
-        )?;
+        )
+        .and_then(|initial| {
+            check_initial_spacing(&net, &initial, &vehicle_types)?;
+            Ok(initial)
+        })
+        .map_err(|e| SimError::Spec(format!("{}: initial_vehicles: {e}", rs.origin)))?;
     }
     let step_s = sc.step_s;
     Ok(SimSpec {
@@ -155,61 +161,6 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             })
             .collect(),
     })
-}
-
-/// Initial vehicles as the original placed them: spaced evenly by the total length of all roads divided by
-/// their count, laid out from the start of the main line (internal lanes counted as driven length); a vehicle
-/// that would land inside a junction goes to the start of the next road.
-fn initial_placement(
-    g: &mapc_graph::LaneGraph,
-    net: &Network,
-    main_line: &[RoadId],
-    count: usize,
-    speed: f64,
-    vehicle_type: usize,
-) -> Result<Vec<InitialVehicleSpec>, SimError> {
-    if count == 0 {
-        return Ok(Vec::new());
-    }
-    let Some(&first) = main_line.first() else {
-        return Err(SimError::Spec(
-            "initial vehicles need a flow to define the main line".into(),
-        ));
-    };
-    let lanes = net.route(g, first, main_line.last().copied())?;
-    let total: f64 = g.roads.iter().map(|r| r.length_m).sum();
-    let spacing = total / count as f64;
-    let mut out = Vec::with_capacity(count);
-    for i in 0..count {
-        let mut x = i as f64 * spacing;
-        let mut placed = false;
-        for (k, &l) in lanes.iter().enumerate() {
-            let len = net.lanes[l as usize].length;
-            if x < len || k + 1 == lanes.len() {
-                let (lane, pos) = match net.road_of(l) {
-                    Some(_) => (l, x.min(len)),
-                    // inside a junction: the start of the next road
-                    None => (lanes[k + 1], 0.0),
-                };
-                let road = net.road_ids[net.road_of(lane).unwrap()];
-                out.push(InitialVehicleSpec {
-                    road,
-                    pos_m: pos,
-                    speed,
-                    vehicle_type,
-                });
-                placed = true;
-                break;
-            }
-            x -= len;
-        }
-        if !placed {
-            return Err(SimError::Spec(format!(
-                "initial vehicle {i} does not fit on the main line"
-            )));
-        }
-    }
-    Ok(out)
 }
 
 impl Simulation {

@@ -215,7 +215,12 @@ impl Simulation {
             &sim.spec.measure_points,
             sim.main_line.last().map(|&(l, _)| l),
         );
-        // Initial vehicles: standing where the spec puts them, before the first step.
+        // Initial vehicles: standing where the spec puts them, before the first step, none inside another.
+        crate::placement::check_initial_spacing(
+            &sim.net,
+            &sim.spec.initial,
+            &sim.spec.vehicle_types,
+        )?;
         for i in 0..sim.spec.initial.len() {
             let iv = sim.spec.initial[i].clone();
             let r = sim.add_route(iv.road, None, None)?;
