@@ -137,11 +137,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         None => None,
     };
-    // a short human run of what was written: which regime each merge is in under this demand
-    let resolved = mapc_scenario::ResolvedScenario::load(&written.scenario.display().to_string())?;
-    let spec = mapc_sim::spec_from_scenario(&resolved)?;
-    let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
-    let regime = mapc_sim::merge_regimes(&spec, &seeds)?;
+    // a short human run of what was written: which regime each merge is in under this demand (a window that
+    // keeps several lanes a road waits for multi-lane simulation)
+    let multi_lane = cut.graph.roads.iter().any(|r| r.lanes.len() > 1);
+    let regime = if multi_lane {
+        None
+    } else {
+        let resolved =
+            mapc_scenario::ResolvedScenario::load(&written.scenario.display().to_string())?;
+        let spec = mapc_sim::spec_from_scenario(&resolved)?;
+        let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
+        Some(mapc_sim::merge_regimes(&spec, &seeds)?)
+    };
     let lengths = WindowLengths {
         lengths: Lengths {
             upstream_m: cut.upstream_m,
@@ -154,7 +161,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     if args.json {
         let mut report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
-        report["regime"] = serde_json::to_value(&regime)?;
+        if let Some(regime) = &regime {
+            report["regime"] = serde_json::to_value(regime)?;
+        }
         report["observation"] = super::window_fit::observation(&written.shape, &lengths);
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
@@ -184,7 +193,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(r) = render {
         println!("drew {}", r.path.display());
     }
-    super::sim::print_regime(&regime);
+    match &regime {
+        Some(regime) => super::sim::print_regime(regime),
+        None => {
+            super::simplify::print_lanes(&cut.graph, &cut.region());
+            println!(
+                "  not simulated: the window keeps several lanes a road, and multi-lane simulation needs lane changing"
+            );
+        }
+    }
     Ok(())
 }
 
@@ -266,6 +283,10 @@ fn run_several(
     }
     for s in &written.cut.skipped {
         println!("skipped {s}");
+    }
+    if g.roads.iter().any(|r| r.lanes.len() > 1) {
+        let roads: Vec<_> = written.cut.regions.iter().flat_map(|r| r.roads()).collect();
+        super::simplify::print_lanes(g, &roads);
     }
     println!(
         "wrote {} and {}",

@@ -57,8 +57,18 @@ pub struct Network {
 }
 
 impl Network {
-    /// Build from a lane graph, treating every road as one lane (lane 0).
+    /// Build from a lane graph of one lane a road. A graph with several lanes on a road (`simplify --keep-lanes`,
+    /// or a map as imported) is refused rather than simulated on one of its lanes.
     pub fn from_graph(g: &LaneGraph) -> Result<Network, SimError> {
+        if let Some(r) = g.roads.iter().find(|r| r.lanes.len() > 1) {
+            return Err(SimError::Network(format!(
+                "the graph of `{}`: road {} has {} lanes; multi-lane simulation needs lane changing, which mapc-sim \
+                 does not model yet (it drives one lane a road): simplify the map without --keep-lanes",
+                g.source.file,
+                r.id,
+                r.lanes.len()
+            )));
+        }
         let mut lanes = Vec::with_capacity(g.roads.len() + g.connections.len());
         let mut road_lane = HashMap::new();
         let mut lane_names = Vec::new();

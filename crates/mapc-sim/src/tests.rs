@@ -237,6 +237,28 @@ fn flows_follow_vehs_per_hour_on_an_empty_road() {
     assert!((m.inflow_veh_h - 360.0).abs() < 1e-9);
 }
 
+/// A graph with several lanes on a road is refused, never simulated on one of its lanes: the Simple Merge laid
+/// out with two lanes a road, and the same built with one lane, which runs.
+#[test]
+fn a_multi_lane_graph_is_refused_with_its_lane_count() {
+    let two = mapc_scenario::SimpleMergeParams {
+        lanes: 2,
+        ..Default::default()
+    };
+    let g = mapc_scenario::generator::simple_merge(&two).unwrap();
+    let err = Network::from_graph(&g).err().unwrap().to_string();
+    assert!(
+        err.contains("has 2 lanes; multi-lane simulation needs lane changing"),
+        "{err}"
+    );
+    let one = mapc_scenario::generator::simple_merge(&Default::default()).unwrap();
+    assert!(Network::from_graph(&one).is_ok());
+    let mut spec = human_spec();
+    spec.graph = g;
+    let err = Simulation::from_spec(spec, 0).err().unwrap().to_string();
+    assert!(err.contains("multi-lane simulation"), "{err}");
+}
+
 #[test]
 fn bad_specs_are_rejected_with_the_item_named() {
     let mut spec = human_spec();
