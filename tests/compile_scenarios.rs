@@ -544,8 +544,11 @@ fn all_with_fit_on_the_i696_corridor() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
-/// Without `--keep-lanes` the paper's outputs are what they were, byte for byte: the shipped I-696 corridor and
-/// window, and two windows of the merge set cut from the raw maps (Flow's I-210 net, the Arizona OSM map).
+/// Without `--keep-lanes` the paper's outputs are what they were: the shipped I-696 window cut from the shipped
+/// corridor is the same byte for byte; the corridor simplified from the raw map and two windows of the merge set
+/// cut from the raw maps (Flow's I-210 net, the Arizona OSM map) are the shipped scenarios byte for byte and the
+/// shipped graphs but for what the graph files written since carry in addition (`joined` ids in provenance, the
+/// importer's warnings), which the shipped files predate.
 #[test]
 fn shipped_corridors_and_windows_are_unchanged_without_keep_lanes() {
     let dir = scratch("unchanged");
@@ -554,8 +557,21 @@ fn shipped_corridors_and_windows_are_unchanged_without_keep_lanes() {
         let b = std::fs::read(root().join(shipped)).unwrap();
         assert!(a == b, "{} differs from {shipped}", written.display());
     };
+    let same_graph = |written: &Path, shipped: &str| {
+        let strip = |text: String| {
+            let mut v: Value = serde_json::from_str(&text).unwrap();
+            v.as_object_mut().unwrap().remove("warnings");
+            for r in v["roads"].as_array_mut().unwrap() {
+                r["provenance"].as_object_mut().unwrap().remove("joined");
+            }
+            v
+        };
+        let a = strip(std::fs::read_to_string(written).unwrap());
+        let b = strip(std::fs::read_to_string(root().join(shipped)).unwrap());
+        assert!(a == b, "{} differs from {shipped}", written.display());
+    };
     let corridor = paper_corridor(&dir.join("i696.corridor.graph.json"));
-    same(&corridor, "scenarios/i696.corridor.graph.json");
+    same_graph(&corridor, "scenarios/i696.corridor.graph.json");
     let window = dir.join("i696_window.toml");
     let (code, _, stderr) = mapc(&[
         "window",
@@ -594,7 +610,7 @@ fn shipped_corridors_and_windows_are_unchanged_without_keep_lanes() {
         ]);
         assert_eq!(code, 0, "{stderr}");
         same(&out, &format!("scenarios/merges/{name}.toml"));
-        same(
+        same_graph(
             &dir.join(format!("{name}.graph.json")),
             &format!("scenarios/merges/{name}.graph.json"),
         );

@@ -19,13 +19,18 @@ fn scratch(name: &str, bytes: &[u8]) -> PathBuf {
 
 /// Run `mapc import FILE`; expect exit 2 and a message with every one of `expected`.
 fn fails_with(file: &Path, expected: &[&str]) -> String {
+    command_fails_with("import", file, expected)
+}
+
+/// Run `mapc COMMAND FILE -o OUT`; expect exit 2, a message with every one of `expected`, and no OUT.
+fn command_fails_with(command: &str, file: &Path, expected: &[&str]) -> String {
     let out_file = std::env::temp_dir().join(format!(
         "mapc-import-errors-{}-never.graph.json",
         std::process::id()
     ));
     let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
         .args([
-            "import",
+            command,
             file.to_str().unwrap(),
             "-o",
             out_file.to_str().unwrap(),
@@ -329,7 +334,8 @@ fn a_sumo_edge_with_a_gap_in_its_lane_indices_is_an_error() {
 }
 
 /// A graph file whose lanes cannot be: a road listing its lanes with a gap, a connection to a lane or road the
-/// graph lacks. The message names the file, the line and the road or connection.
+/// graph lacks. Every command that reads a graph (here `simplify`) says so naming the file, the line and the road
+/// or connection.
 #[test]
 fn a_graph_file_with_bad_lanes_is_an_error_naming_the_element() {
     let good = scratch("us_merge.graph.json", b"");
@@ -356,7 +362,8 @@ fn a_graph_file_with_bad_lanes_is_an_error_naming_the_element() {
     let mut gap = graph.clone();
     gap["roads"][two_lane]["lanes"][1]["index"] = 2.into();
     let text = serde_json::to_string_pretty(&gap).unwrap();
-    fails_with(
+    command_fails_with(
+        "simplify",
         &scratch("gap.graph.json", text.as_bytes()),
         &[
             &format!("line {}", line_of(&text, &format!("\"id\": \"{road_id}\""))),
@@ -381,7 +388,8 @@ fn a_graph_file_with_bad_lanes_is_an_error_naming_the_element() {
         .unwrap()
         .0
         + connections_at;
-    fails_with(
+    command_fails_with(
+        "simplify",
         &scratch("missing_lane.graph.json", text.as_bytes()),
         &[
             &format!("line {}", text[..start].matches('\n').count() + 1),
