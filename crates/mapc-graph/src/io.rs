@@ -22,12 +22,12 @@ pub enum GraphFileError {
     NotAGraph { path: PathBuf, found: String },
     /// A road's lanes or a lane connection that cannot be: a gap in the lane numbering, a connection to a lane
     /// or road the graph lacks.
-    #[error("{path}: line {line}, {element}: {message}")]
+    /// `problem` names the element first (`road R3: ...`, `connection 12 (...): ...`).
+    #[error("{path}: line {line}, {problem}")]
     Lanes {
         path: PathBuf,
         line: usize,
-        element: String,
-        message: String,
+        problem: String,
     },
     #[error(
         "{path}: graph file version {found}, but this mapc reads version {FORMAT_VERSION}; re-run `mapc import` on the original map"
@@ -130,8 +130,7 @@ impl LaneGraph {
             Some((line, element, message)) => Err(GraphFileError::Lanes {
                 path: path.to_path_buf(),
                 line,
-                element,
-                message,
+                problem: format!("{element}: {message}"),
             }),
             None => Ok(graph),
         }
