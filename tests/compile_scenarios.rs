@@ -543,3 +543,186 @@ fn all_with_fit_on_the_i696_corridor() {
     assert!((control.windows[1].upstream_m - 346.0).abs() < 0.05);
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Without `--keep-lanes` the paper's outputs are what they were: the shipped I-696 window cut from the shipped
+/// corridor is the same byte for byte; the corridor simplified from the raw map and two windows of the merge set
+/// cut from the raw maps (Flow's I-210 net, the Arizona OSM map) are the shipped scenarios byte for byte and the
+/// shipped graphs but for what the graph files written since carry in addition (`joined` ids in provenance, the
+/// importer's warnings), which the shipped files predate.
+#[test]
+fn shipped_corridors_and_windows_are_unchanged_without_keep_lanes() {
+    let dir = scratch("unchanged");
+    let same = |written: &Path, shipped: &str| {
+        let a = std::fs::read(written).unwrap();
+        let b = std::fs::read(root().join(shipped)).unwrap();
+        assert!(a == b, "{} differs from {shipped}", written.display());
+    };
+    let same_graph = |written: &Path, shipped: &str| {
+        let strip = |text: String| {
+            let mut v: Value = serde_json::from_str(&text).unwrap();
+            v.as_object_mut().unwrap().remove("warnings");
+            for r in v["roads"].as_array_mut().unwrap() {
+                r["provenance"].as_object_mut().unwrap().remove("joined");
+            }
+            v
+        };
+        let a = strip(std::fs::read_to_string(written).unwrap());
+        let b = strip(std::fs::read_to_string(root().join(shipped)).unwrap());
+        assert!(a == b, "{} differs from {shipped}", written.display());
+    };
+    let corridor = paper_corridor(&dir.join("i696.corridor.graph.json"));
+    same_graph(&corridor, "scenarios/i696.corridor.graph.json");
+    let window = dir.join("i696_window.toml");
+    let (code, _, stderr) = mapc(&[
+        "window",
+        "scenarios/i696.corridor.graph.json",
+        "--junction",
+        "osm:61862553",
+        "--match",
+        "simple_merge",
+        "-o",
+        window.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    same(&window, "scenarios/i696_window.toml");
+    same(
+        &dir.join("i696_window.graph.json"),
+        "scenarios/i696_window.graph.json",
+    );
+    for (name, map, junction) in [
+        ("i210_300944078", "maps/i210.net.xml", "osm:300944078"),
+        (
+            "arizona_5134463770",
+            "maps/arizona_highways.osm",
+            "osm:5134463770",
+        ),
+    ] {
+        let out = dir.join(format!("{name}.toml"));
+        let (code, _, stderr) = mapc(&[
+            "window",
+            map,
+            "--junction",
+            junction,
+            "--match",
+            "simple_merge",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{stderr}");
+        same(&out, &format!("scenarios/merges/{name}.toml"));
+        same_graph(
+            &dir.join(format!("{name}.graph.json")),
+            &format!("scenarios/merges/{name}.graph.json"),
+        );
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `simplify --keep-lanes` on the paper's I-696 corridor (OSM: lane connections derived) and on Flow's I-210 net
+/// (SUMO: the net's own): the lanes per road, lane connections, acceleration lanes and drops are pinned by
+/// `tests/golden/<map>/keep_lanes.json`; the written graph keeps every lane, sound, with every lane continuing or
+/// recorded as ending.
+#[test]
+fn keep_lanes_corridors_match_the_goldens() {
+    let dir = scratch("keep-lanes");
+    for (map, folder, via) in [
+        ("maps/i696.osm", "i696", &PAPER_VIA[..]),
+        ("maps/i210.net.xml", "i210", &[][..]),
+    ] {
+        let out = dir.join(format!("{folder}.graph.json"));
+        let mut args = vec![
+            "simplify",
+            map,
+            "--keep-lanes",
+            "-o",
+            out.to_str().unwrap(),
+            "--json",
+        ];
+        args.extend(via);
+        let report = mapc_json(&args);
+        let steps: Vec<&str> = report["steps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["step"].as_str().unwrap())
+            .collect();
+        assert!(
+            steps.contains(&"connect_lanes") && !steps.contains(&"collapse_lanes"),
+            "{steps:?}"
+        );
+        let g = mapc_graph::LaneGraph::load(&out).unwrap();
+        assert!(g.invariant_violations().is_empty(), "{map}");
+        assert!(g.lane_continuity_violations().is_empty(), "{map}");
+        let most = g.roads.iter().map(|r| r.lanes.len()).max().unwrap();
+        assert!(
+            most >= 3,
+            "{map}: the freeway keeps its lanes ({most} at most)"
+        );
+        let lanes = &report["lanes"];
+        assert_eq!(
+            lanes["per_road"].as_object().unwrap().len(),
+            g.roads.len(),
+            "{map}"
+        );
+        assert_eq!(lanes["connections"], g.connections.len(), "{map}");
+        golden(folder, "keep_lanes", report);
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `mapc window --keep-lanes` on a raw map cuts the multi-lane corridor at the same lengths and names the lanes
+/// of each road of the window; the scenario it writes runs on every lane, with lane changes.
+#[test]
+fn keep_lanes_window_is_cut_and_simulated_on_every_lane() {
+    let dir = scratch("keep-lanes-window");
+    let out = dir.join("w.toml");
+    let report = mapc_json(&[
+        "window",
+        "maps/i210.net.xml",
+        "--keep-lanes",
+        "--junction",
+        "osm:300944078",
+        "--match",
+        "simple_merge",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    for (k, want) in [
+        ("upstream_m", 600.0),
+        ("merge_m", 200.0),
+        ("downstream_m", 100.0),
+    ] {
+        assert!(
+            (report[k].as_f64().unwrap() - want).abs() <= 0.5,
+            "{k}: {report}"
+        );
+    }
+    let per_road = report["lanes"]["per_road"].as_object().unwrap();
+    let region = report["region"].as_array().unwrap();
+    assert_eq!(per_road.len(), region.len(), "{report}");
+    assert!(
+        per_road.values().any(|n| n.as_u64().unwrap() > 1),
+        "{report}"
+    );
+    assert!(report.get("regime").is_some(), "{report}");
+    let g = mapc_graph::LaneGraph::load(&dir.join("w.graph.json")).unwrap();
+    assert!(g.lane_continuity_violations().is_empty());
+
+    let (code, stdout, _) = mapc(&[
+        "window",
+        "maps/i210.net.xml",
+        "--keep-lanes",
+        "--junction",
+        "osm:300944078",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0);
+    assert!(stdout.contains("lanes: R"), "{stdout}");
+
+    let sim = mapc_json(&["sim", "--scenario", out.to_str().unwrap(), "--seeds", "2", "--json"]);
+    assert!(sim["outflow"]["mean"].as_f64().unwrap() > 0.0, "{sim}");
+    assert!(sim["lane_changes"]["mean"].as_f64().unwrap() > 0.0, "{sim}");
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -19,13 +19,18 @@ fn scratch(name: &str, bytes: &[u8]) -> PathBuf {
 
 /// Run `mapc import FILE`; expect exit 2 and a message with every one of `expected`.
 fn fails_with(file: &Path, expected: &[&str]) -> String {
+    command_fails_with("import", file, expected)
+}
+
+/// Run `mapc COMMAND FILE -o OUT`; expect exit 2, a message with every one of `expected`, and no OUT.
+fn command_fails_with(command: &str, file: &Path, expected: &[&str]) -> String {
     let out_file = std::env::temp_dir().join(format!(
         "mapc-import-errors-{}-never.graph.json",
         std::process::id()
     ));
     let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
         .args([
-            "import",
+            command,
             file.to_str().unwrap(),
             "-o",
             out_file.to_str().unwrap(),
@@ -273,5 +278,123 @@ fn a_duplicate_sumo_junction_id_is_an_error() {
     fails_with(
         &scratch("dup_junction.net.xml", bad.as_bytes()),
         &[&format!("line {line}"), "`center`", "duplicate id"],
+    );
+}
+
+/// The line of the first `needle` in `text` (1-based).
+fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.find(needle).unwrap()].matches('\n').count() + 1
+}
+
+#[test]
+fn a_sumo_connection_to_a_missing_lane_is_an_error_naming_it() {
+    let text = String::from_utf8(map("simple_merge.net.xml")).unwrap();
+    let from = "<connection from=\"left\" to=\"center\" fromLane=\"0\"";
+    let bad = text.replacen(
+        from,
+        "<connection from=\"left\" to=\"center\" fromLane=\"1\"",
+        1,
+    );
+    fails_with(
+        &scratch("from_lane.net.xml", bad.as_bytes()),
+        &[
+            &format!("line {}", line_of(&text, from)),
+            "<connection from=\"left\" to=\"center\">",
+            "fromLane=\"1\" names a missing lane: edge `left` has 1 lane",
+        ],
+    );
+    let to = "<connection from=\"bottom\" to=\"center\" fromLane=\"0\" toLane=\"0\"";
+    let bad = text.replacen(
+        to,
+        "<connection from=\"bottom\" to=\"center\" fromLane=\"0\" toLane=\"3\"",
+        1,
+    );
+    fails_with(
+        &scratch("to_lane.net.xml", bad.as_bytes()),
+        &[
+            &format!("line {}", line_of(&text, to)),
+            "toLane=\"3\" names a missing lane: edge `center` has 1 lane",
+        ],
+    );
+}
+
+#[test]
+fn a_sumo_edge_with_a_gap_in_its_lane_indices_is_an_error() {
+    let text = String::from_utf8(map("us_merge.net.xml")).unwrap();
+    let lane = "<lane id=\"center_1\" index=\"1\"";
+    let bad = text.replacen(lane, "<lane id=\"center_1\" index=\"2\"", 1);
+    fails_with(
+        &scratch("lane_gap.net.xml", bad.as_bytes()),
+        &[
+            &format!("line {}", line_of(&text, "<edge id=\"center\"")),
+            "<edge id=\"center\">",
+            "lane indices are not 0, 1, 2, ...: its 2 lanes have indices 0, 2",
+        ],
+    );
+}
+
+/// A graph file whose lanes cannot be: a road listing its lanes with a gap, a connection to a lane or road the
+/// graph lacks. Every command that reads a graph (here `simplify`) says so naming the file, the line and the road
+/// or connection.
+#[test]
+fn a_graph_file_with_bad_lanes_is_an_error_naming_the_element() {
+    let good = scratch("us_merge.graph.json", b"");
+    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .args([
+            "import",
+            root().join("maps/us_merge.net.xml").to_str().unwrap(),
+            "-o",
+            good.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let graph: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&good).unwrap()).unwrap();
+    let two_lane = graph["roads"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|r| r["lanes"].as_array().unwrap().len() == 2)
+        .expect("us_merge has a road of two lanes");
+    let road_id = graph["roads"][two_lane]["id"].as_str().unwrap().to_string();
+
+    let mut gap = graph.clone();
+    gap["roads"][two_lane]["lanes"][1]["index"] = 2.into();
+    let text = serde_json::to_string_pretty(&gap).unwrap();
+    command_fails_with(
+        "simplify",
+        &scratch("gap.graph.json", text.as_bytes()),
+        &[
+            &format!("line {}", line_of(&text, &format!("\"id\": \"{road_id}\""))),
+            &format!("road {road_id}"),
+            "lists lane index 2 in place 1 of its 2 lanes",
+        ],
+    );
+
+    let mut missing = graph.clone();
+    let k = graph["connections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|c| c["to_road"] == road_id.as_str())
+        .expect("a connection into the two-lane road");
+    missing["connections"][k]["to_lane"] = 5.into();
+    let text = serde_json::to_string_pretty(&missing).unwrap();
+    let connections_at = text.find("\"connections\"").unwrap();
+    let start = text[connections_at..]
+        .match_indices("\"from_road\"")
+        .nth(k)
+        .unwrap()
+        .0
+        + connections_at;
+    command_fails_with(
+        "simplify",
+        &scratch("missing_lane.graph.json", text.as_bytes()),
+        &[
+            &format!("line {}", text[..start].matches('\n').count() + 1),
+            &format!("connection {k} ("),
+            &format!("to_lane 5 names a missing lane: road {road_id} has 2 lanes"),
+        ],
     );
 }

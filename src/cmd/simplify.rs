@@ -1,4 +1,5 @@
-//! `mapc simplify`: a highway map becomes a single-lane corridor with its merging roads (a `*.graph.json`).
+//! `mapc simplify`: a highway map becomes a single-lane corridor with its merging roads (a `*.graph.json`), or with
+//! `--keep-lanes` a corridor that keeps every lane.
 
 use mapc_scenario::compile::{corridor_report, simplify_map};
 use mapc_scenario::simplify::corridor_merges;
@@ -29,6 +30,10 @@ pub struct RouteArgs {
     /// they are dropped, and a junction only they join is no merge).
     #[arg(long)]
     pub minor_roads: bool,
+    /// Keep every lane of the main and merging roads, with their lane-level connections, lane drops, gains and
+    /// acceleration lanes (by default each road keeps its rightmost lane, as the paper's corridors do).
+    #[arg(long)]
+    pub keep_lanes: bool,
 }
 
 impl RouteArgs {
@@ -39,6 +44,7 @@ impl RouteArgs {
             feeder_length_m: self.feeder_length,
             keep_exits: self.keep_exits,
             minor_roads: self.minor_roads,
+            keep_lanes: self.keep_lanes,
         }
     }
 }
@@ -131,5 +137,36 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             if m.merging_is_major { " (major)" } else { "" }
         );
     }
+    if g.roads.iter().any(|r| r.lanes.len() > 1) {
+        print_lanes(g, &g.roads.iter().map(|r| r.id).collect::<Vec<_>>());
+    }
     Ok(())
+}
+
+/// Lanes per road of a corridor or window that keeps several lanes a road, and the lanes that end there.
+pub fn print_lanes(g: &mapc_graph::LaneGraph, roads: &[mapc_graph::RoadId]) {
+    let mut parts = Vec::new();
+    for r in roads.iter().filter_map(|r| g.road(*r)) {
+        let ends: Vec<String> = r
+            .lanes
+            .iter()
+            .filter_map(|l| {
+                l.end
+                    .map(|e| format!("lane {} {}", l.index, lane_end_name(e)))
+            })
+            .collect();
+        parts.push(if ends.is_empty() {
+            format!("{} {}", r.id, r.lanes.len())
+        } else {
+            format!("{} {} ({})", r.id, r.lanes.len(), ends.join(", "))
+        });
+    }
+    println!("  lanes: {}", parts.join(", "));
+}
+
+pub fn lane_end_name(e: mapc_graph::LaneEnd) -> &'static str {
+    match e {
+        mapc_graph::LaneEnd::Drop => "drops",
+        mapc_graph::LaneEnd::Acceleration => "ends (acceleration lane)",
+    }
 }

@@ -138,10 +138,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => None,
     };
     // a short human run of what was written: which regime each merge is in under this demand
-    let resolved = mapc_scenario::ResolvedScenario::load(&written.scenario.display().to_string())?;
-    let spec = mapc_sim::spec_from_scenario(&resolved)?;
-    let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
-    let regime = mapc_sim::merge_regimes(&spec, &seeds)?;
+    let multi_lane = cut.graph.roads.iter().any(|r| r.lanes.len() > 1);
+    let regime = {
+        let resolved =
+            mapc_scenario::ResolvedScenario::load(&written.scenario.display().to_string())?;
+        let spec = mapc_sim::spec_from_scenario(&resolved)?;
+        let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
+        mapc_sim::merge_regimes(&spec, &seeds)?
+    };
     let lengths = WindowLengths {
         lengths: Lengths {
             upstream_m: cut.upstream_m,
@@ -183,6 +187,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     if let Some(r) = render {
         println!("drew {}", r.path.display());
+    }
+    if multi_lane {
+        super::simplify::print_lanes(&cut.graph, &cut.region());
     }
     super::sim::print_regime(&regime);
     Ok(())
@@ -266,6 +273,10 @@ fn run_several(
     }
     for s in &written.cut.skipped {
         println!("skipped {s}");
+    }
+    if g.roads.iter().any(|r| r.lanes.len() > 1) {
+        let roads: Vec<_> = written.cut.regions.iter().flat_map(|r| r.roads()).collect();
+        super::simplify::print_lanes(g, &roads);
     }
     println!(
         "wrote {} and {}",

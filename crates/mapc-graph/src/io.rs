@@ -20,6 +20,15 @@ pub enum GraphFileError {
     },
     #[error("{path}: not a mapc graph file ({found}, expected `{FORMAT_NAME}`)")]
     NotAGraph { path: PathBuf, found: String },
+    /// A road's lanes or a lane connection that cannot be: a gap in the lane numbering, a connection to a lane
+    /// or road the graph lacks.
+    /// `problem` names the element first (`road R3: ...`, `connection 12 (...): ...`).
+    #[error("{path}: line {line}, {problem}")]
+    Lanes {
+        path: PathBuf,
+        line: usize,
+        problem: String,
+    },
     #[error(
         "{path}: graph file version {found}, but this mapc reads version {FORMAT_VERSION}; re-run `mapc import` on the original map"
     )]
@@ -116,8 +125,71 @@ impl LaneGraph {
                 found: version,
             });
         }
-        serde_json::from_str(text).map_err(parse_err)
+        let graph: LaneGraph = serde_json::from_str(text).map_err(parse_err)?;
+        match lane_problem(&graph, text) {
+            Some((line, element, message)) => Err(GraphFileError::Lanes {
+                path: path.to_path_buf(),
+                line,
+                problem: format!("{element}: {message}"),
+            }),
+            None => Ok(graph),
+        }
     }
+}
+
+/// The first lane problem of a parsed graph, with the line of `text` where its element starts: a road whose lanes
+/// are not numbered 0, 1, 2, ..., a connection naming a road or lane the graph lacks.
+fn lane_problem(g: &LaneGraph, text: &str) -> Option<(usize, String, String)> {
+    let line_at = |byte: usize| text[..byte.min(text.len())].matches('\n').count() + 1;
+    for r in &g.roads {
+        let why = if r.lanes.is_empty() {
+            Some("has no lanes".to_string())
+        } else {
+            crate::validate::lane_numbering_problem(&r.lanes)
+        };
+        if let Some(why) = why {
+            let needle = format!("\"id\": \"{}\"", r.id);
+            let line = text.find(&needle).map_or(1, line_at);
+            return Some((line, format!("road {}", r.id), format!("the road {why}")));
+        }
+    }
+    // The n-th connection object is the n-th `"from_road"` after the `"connections"` key.
+    let connections_at = text.find("\"connections\"").unwrap_or(0);
+    let mut starts = text[connections_at..]
+        .match_indices("\"from_road\"")
+        .map(|(i, _)| connections_at + i);
+    for (n, c) in g.connections.iter().enumerate() {
+        let start = starts.next();
+        let lanes_of = |id| g.road(id).map(|r| r.lanes.len());
+        let problem = match (lanes_of(c.from_road), lanes_of(c.to_road)) {
+            (None, _) => Some(format!("names road {}, which the graph lacks", c.from_road)),
+            (_, None) => Some(format!("names road {}, which the graph lacks", c.to_road)),
+            (Some(n_from), _) if c.from_lane as usize >= n_from => Some(format!(
+                "from_lane {} names a missing lane: road {} has {n_from} lanes (0..{})",
+                c.from_lane,
+                c.from_road,
+                n_from.saturating_sub(1)
+            )),
+            (_, Some(n_to)) if c.to_lane as usize >= n_to => Some(format!(
+                "to_lane {} names a missing lane: road {} has {n_to} lanes (0..{})",
+                c.to_lane,
+                c.to_road,
+                n_to.saturating_sub(1)
+            )),
+            _ => None,
+        };
+        if let Some(message) = problem {
+            return Some((
+                start.map_or(1, line_at),
+                format!(
+                    "connection {n} ({} lane {} -> {} lane {} at {})",
+                    c.from_road, c.from_lane, c.to_road, c.to_lane, c.junction
+                ),
+                message,
+            ));
+        }
+    }
+    None
 }
 
 #[cfg(test)]

@@ -109,6 +109,7 @@ mod tests {
                 speed_mps: 30.0,
                 width_m: 3.5,
                 length_m: 100.0,
+                end: None,
             }],
             geometry: vec![a, b],
             length_m: ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt(),

@@ -150,11 +150,25 @@ pub struct Junction {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Lane {
-    /// 0 is the rightmost lane.
+    /// 0 is the rightmost lane (as in SUMO); a road's lanes are numbered 0, 1, 2, ... without gaps.
     pub index: u8,
     pub speed_mps: f64,
     pub width_m: f64,
     pub length_m: f64,
+    /// Set where the lane has no way on at the road's end although the road continues (`simplify --keep-lanes`
+    /// records it): its traffic must change lanes before the end.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end: Option<LaneEnd>,
+}
+
+/// Why a lane ends where its road goes on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LaneEnd {
+    /// A lane the road loses (its lane count falls): a lane drop.
+    Drop,
+    /// The end of an acceleration lane: a lane that a merging road's traffic entered on, beside the main road's.
+    Acceleration,
 }
 
 /// A directed road between two junctions: one carriageway, one direction of travel.

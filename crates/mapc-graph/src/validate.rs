@@ -32,6 +32,9 @@ impl LaneGraph {
             if r.lanes.is_empty() {
                 out.push(format!("road {} has no lanes", r.id));
             }
+            if let Some(why) = lane_numbering_problem(&r.lanes) {
+                out.push(format!("road {} {why}", r.id));
+            }
             if !(r.length_m.is_finite() && r.length_m > 0.0) {
                 out.push(format!("road {} has length {}", r.id, r.length_m));
             }
@@ -75,6 +78,36 @@ impl LaneGraph {
         out
     }
 
+    /// Lanes that stop where their road goes on: every lane of a road whose end junction has a road out has a
+    /// connection onward or is recorded as a lane that ends ([`crate::LaneEnd`]), and a lane recorded as ending
+    /// has no connection onward. Checked on corridors kept with all their lanes (`simplify --keep-lanes`); a
+    /// map as imported may have lanes its source left unconnected.
+    pub fn lane_continuity_violations(&self) -> Vec<String> {
+        let mut onward: HashSet<(crate::RoadId, u8)> = HashSet::new();
+        for c in &self.connections {
+            onward.insert((c.from_road, c.from_lane));
+        }
+        let mut out = Vec::new();
+        for r in &self.roads {
+            let continues = self.junction(r.to).is_some_and(|j| !j.outgoing.is_empty());
+            for l in &r.lanes {
+                let connected = onward.contains(&(r.id, l.index));
+                match (continues, connected, l.end) {
+                    (true, false, None) => out.push(format!(
+                        "lane {} of road {} stops at {} with no connection onward and is not recorded as ending",
+                        l.index, r.id, r.to
+                    )),
+                    (_, true, Some(end)) => out.push(format!(
+                        "lane {} of road {} is recorded as ending ({end:?}) but has a connection onward",
+                        l.index, r.id
+                    )),
+                    _ => {}
+                }
+            }
+        }
+        out
+    }
+
     /// Total driving length: every road's length times its lanes, plus every connection's internal length.
     pub fn total_lane_length_m(&self) -> f64 {
         self.roads
@@ -83,4 +116,20 @@ impl LaneGraph {
             .sum::<f64>()
             + self.connections.iter().map(|c| c.via_length_m).sum::<f64>()
     }
+}
+
+/// Why a road's lanes are not numbered 0, 1, 2, ... in order (`None` when they are).
+pub(crate) fn lane_numbering_problem(lanes: &[crate::Lane]) -> Option<String> {
+    lanes
+        .iter()
+        .enumerate()
+        .find(|(i, l)| l.index as usize != *i)
+        .map(|(i, l)| {
+            format!(
+                "lists lane index {} in place {i} of its {} lanes (lanes are numbered 0, 1, 2, ... from the right \
+                 without gaps)",
+                l.index,
+                lanes.len()
+            )
+        })
 }

@@ -627,6 +627,7 @@ pub fn build_graph(
                         speed_mps: speed,
                         width_m: OSM_LANE_WIDTH_M,
                         length_m: length,
+                        end: None,
                     })
                     .collect(),
                 geometry: seq.iter().map(|&n| local(n)).collect(),

@@ -459,11 +459,21 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         })?;
         let mut lanes: Vec<&SumoLane> = e.lanes.iter().collect();
         lanes.sort_by_key(|l| l.index);
-        if lanes.iter().enumerate().any(|(i, l)| l.index as usize != i) {
+        if let Some((i, l)) = lanes
+            .iter()
+            .enumerate()
+            .find(|(i, l)| l.index as usize != *i)
+        {
+            let indices: Vec<String> = lanes.iter().map(|l| l.index.to_string()).collect();
             return Err(ParseError::new(
                 e.at,
                 place(),
-                "lane indices are not 0, 1, 2, ...",
+                format!(
+                    "lane indices are not 0, 1, 2, ...: its {} lanes have indices {} (lane `{}` where {i} was due)",
+                    lanes.len(),
+                    indices.join(", "),
+                    l.id
+                ),
             ));
         }
         let geometry = match &e.shape {
@@ -503,6 +513,7 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                     speed_mps: l.speed,
                     width_m: l.width,
                     length_m: l.length.max(0.01),
+                    end: None,
                 })
                 .collect(),
             geometry,
@@ -567,14 +578,23 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         if from_edge.internal || to_edge.internal {
             continue;
         }
-        if c.from_lane as usize >= from_edge.lanes.len()
-            || c.to_lane as usize >= to_edge.lanes.len()
-        {
-            return Err(ParseError::new(
-                c.at,
-                el(),
-                format!("lane {} -> {} does not exist", c.from_lane, c.to_lane),
-            ));
+        for (attr, lane, edge) in [
+            ("fromLane", c.from_lane, from_edge),
+            ("toLane", c.to_lane, to_edge),
+        ] {
+            if lane as usize >= edge.lanes.len() {
+                return Err(ParseError::new(
+                    c.at,
+                    el(),
+                    format!(
+                        "{attr}=\"{lane}\" names a missing lane: edge `{}` has {} lane{} (indices 0 to {})",
+                        edge.id,
+                        edge.lanes.len(),
+                        if edge.lanes.len() == 1 { "" } else { "s" },
+                        edge.lanes.len().saturating_sub(1)
+                    ),
+                ));
+            }
         }
         if from_edge.to != to_edge.from {
             return Err(ParseError::new(

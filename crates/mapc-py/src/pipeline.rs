@@ -22,6 +22,7 @@ fn options(
         feeder_length_m: feeder_length,
         keep_exits,
         minor_roads: defaults.minor_roads,
+        keep_lanes: defaults.keep_lanes,
     }
 }
 

@@ -95,7 +95,41 @@ pub fn corridor_report(s: &Simplified, map: &Path, output: &Path) -> Value {
     if !complex.is_empty() {
         report["junctions_with_several_merging_roads"] = json!(complex);
     }
+    if let Some(lanes) = lane_report(g, &g.roads.iter().map(|r| r.id).collect::<Vec<_>>()) {
+        report["lanes"] = lanes;
+    }
     report
+}
+
+/// Lanes per road of `roads`, the lanes that end where their road goes on, and the lane connections, for a graph
+/// with several lanes on some road (`--keep-lanes`); `None` for a graph of one lane a road, whose reports stay as
+/// they were.
+pub fn lane_report(g: &LaneGraph, roads: &[mapc_graph::RoadId]) -> Option<Value> {
+    if g.roads.iter().all(|r| r.lanes.len() == 1) {
+        return None;
+    }
+    let mut per_road = serde_json::Map::new();
+    let mut ends = Vec::new();
+    for r in roads.iter().filter_map(|r| g.road(*r)) {
+        per_road.insert(r.id.to_string(), json!(r.lanes.len()));
+        for l in r.lanes.iter().filter(|l| l.end.is_some()) {
+            ends.push(json!({"road": r.id.to_string(), "lane": l.index, "end": l.end}));
+        }
+    }
+    let count = |kind: mapc_graph::LaneEnd| {
+        g.roads
+            .iter()
+            .flat_map(|r| &r.lanes)
+            .filter(|l| l.end == Some(kind))
+            .count()
+    };
+    Some(json!({
+        "per_road": per_road,
+        "connections": g.connections.len(),
+        "acceleration_lanes": count(mapc_graph::LaneEnd::Acceleration),
+        "lane_drops": count(mapc_graph::LaneEnd::Drop),
+        "ends": ends,
+    }))
 }
 
 /// The corridor of `map`: the graph itself when it is one, else the map simplified with `options`. Without
@@ -427,7 +461,7 @@ impl WrittenWindows {
                 })
             })
             .collect();
-        json!({
+        let mut report = json!({
             "matched_to": matched_to,
             "source": {
                 "upstream_m": self.shape.upstream_m,
@@ -441,7 +475,12 @@ impl WrittenWindows {
             "scenario": self.scenario.display().to_string(),
             "graph": self.graph.display().to_string(),
             "render": render.map(|r| r.display().to_string()),
-        })
+        });
+        let roads: Vec<_> = self.cut.regions.iter().flat_map(|r| r.roads()).collect();
+        if let Some(lanes) = lane_report(&self.cut.graph, &roads) {
+            report["lanes"] = lanes;
+        }
+        report
     }
 }
 
@@ -450,7 +489,7 @@ impl WrittenWindow {
     pub fn report(&self, matched_to: &str, render: Option<&Path>) -> Value {
         let cut = &self.cut;
         let junction = cut.graph.junction(cut.junction);
-        json!({
+        let mut report = json!({
             "junction": cut.junction.to_string(),
             "osm_node": junction.and_then(|j| j.provenance.osm_nodes.first()),
             "sumo_id": junction.and_then(|j| j.provenance.sumo_ids.first()),
@@ -479,7 +518,11 @@ impl WrittenWindow {
             "graph": self.graph.display().to_string(),
             "render": render.map(|r| r.display().to_string()),
             "timing": self.timing,
-        })
+        });
+        if let Some(lanes) = lane_report(&cut.graph, &cut.region()) {
+            report["lanes"] = lanes;
+        }
+        report
     }
 }
 

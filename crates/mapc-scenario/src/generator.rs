@@ -199,6 +199,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
                         speed_mps: p.speed_limit_mps,
                         width_m: LANE_WIDTH_M,
                         length_m,
+                        end: None,
                     })
                     .collect(),
                 geometry: vec![nodes[jid(from).0 as usize].1, nodes[jid(to).0 as usize].1],

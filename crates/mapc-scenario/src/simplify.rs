@@ -1,7 +1,7 @@
-//! `simplify`: a highway map becomes a single-lane corridor with the roads that merge into it, by the ordered
-//! steps of [`crate::transform`]. Lengths reported here are sums of road lengths (geodesic for OSM input); the
-//! internal length of a junction that remains (a merge) is not counted, that of a removed joint is part of the
-//! joined road.
+//! `simplify`: a highway map becomes a single-lane corridor with the roads that merge into it (or, with
+//! `keep_lanes`, one that keeps every lane), by the ordered steps of [`crate::transform`]. Lengths reported here
+//! are sums of road lengths (geodesic for OSM input); the internal length of a junction that remains (a merge) is
+//! not counted, that of a removed joint is part of the joined road.
 
 use crate::transform::pick_route::describe_junction;
 use crate::transform::{
@@ -323,6 +323,66 @@ mod tests {
         let m = &corridor_merges(&s.graph, &s.roles)[0];
         assert!(close(m.merge_m, 120.0), "{m:?}");
         assert!(s.graph.invariant_violations().is_empty());
+    }
+
+    #[test]
+    fn keep_lanes_keeps_every_lane_with_its_drops_and_acceleration_lane() {
+        use mapc_graph::LaneEnd;
+        // As read from OSM: the builder's lane 0 to lane 0 connections are a guess, to be derived again.
+        let mut raw = highway();
+        raw.source.format = mapc_graph::SourceFormat::OsmXml;
+        let opts = SimplifyOptions {
+            keep_lanes: true,
+            ..Default::default()
+        };
+        let s = simplify(&raw, &opts).unwrap();
+        let names: Vec<&str> = s.steps.iter().map(|r| r.step.as_str()).collect();
+        assert_eq!(names[4], "connect_lanes");
+        let g = &s.graph;
+        assert!(g.invariant_violations().is_empty());
+        assert!(g.lane_continuity_violations().is_empty());
+        // The joints where lanes change stay (J1: 3 -> 2 lanes, J6: 1 -> 2); the ramp's two pieces are joined.
+        assert_eq!(
+            s.roles.main,
+            vec![RoadId(0), RoadId(1), RoadId(4), RoadId(8), RoadId(7)]
+        );
+        assert_eq!(s.roles.feeders, vec![vec![RoadId(2)]]);
+        let lanes = |r: u32| g.road(RoadId(r)).unwrap().lanes.len();
+        assert_eq!(
+            [lanes(0), lanes(1), lanes(2), lanes(4), lanes(8), lanes(7)],
+            [3, 2, 1, 3, 1, 2]
+        );
+        // The merge J2: 2 + 1 lanes into 3, the ramp on the right takes lane 0 and the main road lanes 1 and 2.
+        let links = |from: u32, to: u32| -> Vec<(u8, u8)> {
+            g.connections
+                .iter()
+                .filter(|k| k.from_road == RoadId(from) && k.to_road == RoadId(to))
+                .map(|k| (k.from_lane, k.to_lane))
+                .collect()
+        };
+        assert_eq!(links(2, 4), [(0, 0)]);
+        assert_eq!(links(1, 4), [(0, 1), (1, 2)]);
+        // J1 loses the rightmost lane; J5 (the exit dropped) keeps the leftmost; J6 adds one on the left.
+        assert_eq!(links(0, 1), [(1, 0), (2, 1)]);
+        assert_eq!(links(4, 8), [(2, 0)]);
+        assert_eq!(links(8, 7), [(0, 0), (0, 1)]);
+        let end = |r: u32, l: usize| g.road(RoadId(r)).unwrap().lanes[l].end;
+        assert_eq!(end(0, 0), Some(LaneEnd::Drop));
+        assert_eq!(end(4, 0), Some(LaneEnd::Acceleration));
+        assert_eq!(end(4, 1), Some(LaneEnd::Drop));
+        assert_eq!(end(4, 2), None);
+        // Lengths are kept as in the one-lane corridor.
+        let one_lane = simplify(&raw, &SimplifyOptions::default()).unwrap();
+        let main_len = |s: &Simplified| Corridor::chain_length_m(&s.graph, &s.roles.main);
+        assert!(close(main_len(&s), main_len(&one_lane)));
+        // A lane that stops without being recorded as ending breaks the invariants.
+        let mut c = Corridor::new(g.clone());
+        c.lanes_connected = true;
+        c.graph.road_mut(RoadId(0)).unwrap().lanes[0].end = None;
+        let err = crate::transform::check(&c, "broken", None)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("lane 0 of road R0 stops"), "{err}");
     }
 
     #[test]

@@ -89,6 +89,8 @@ pub fn cut_road(
         first.provenance = provenance;
         for lane in &mut first.lanes {
             lane.length_m *= fraction;
+            // a lane that ends does so at the road's end, now the second piece's
+            lane.end = None;
         }
     }
     g.roads.push(second);

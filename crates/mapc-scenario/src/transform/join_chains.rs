@@ -1,10 +1,14 @@
 //! `join_chains`: a junction with one road in and one out is only a joint; the two roads become one (the first
-//! keeps its id; the joint's and the second road's ids go to its provenance's `joined`, where lookups find them). The joined road's length is the driving length, the connection's internal length included, so
-//! no length is lost; its speed is the one that keeps the free-flow travel time; class, name and ref are the
-//! longer piece's, the priority the downstream piece's (it meets the next junction).
+//! keeps its id; the joint's and the second road's ids go to its provenance's `joined`, where lookups find them).
+//! The joined road's length is the driving length, the connection's internal length included, so no length is
+//! lost; its speed is the one that keeps the free-flow travel time; class, name and ref are the longer piece's,
+//! the priority the downstream piece's (it meets the next junction). With every lane kept (`--keep-lanes`) a joint
+//! is only joined where each lane goes straight on into the lane of the same index and none ends: a joint where
+//! the lanes change (a drop, a gain, lanes that shift) stays, as the place where they do; each lane's length and
+//! speed are then joined like the road's.
 
 use super::{Corridor, SimplifyOptions, TransformError, mark};
-use mapc_graph::{JunctionId, JunctionKind, RoadId};
+use mapc_graph::{JunctionId, JunctionKind, Lane, LaneGraph, Road, RoadId};
 
 pub const NAME: &str = "join_chains";
 
@@ -18,6 +22,9 @@ pub fn join_at(c: &mut Corridor, j: JunctionId) -> Option<(RoadId, RoadId)> {
     let (a_id, b_id) = (junction.incoming[0], junction.outgoing[0]);
     let (a, b) = (g.road(a_id)?, g.road(b_id)?);
     if a_id == b_id || a.from == b.to {
+        return None;
+    }
+    if c.lanes_connected && !lanes_go_straight_on(g, a, b) {
         return None;
     }
     let via = g
@@ -57,11 +64,17 @@ pub fn join_at(c: &mut Corridor, j: JunctionId) -> Option<(RoadId, RoadId)> {
     }
     let to = b.to;
 
+    let lanes = if c.lanes_connected {
+        joined_lanes(g, a, b)
+    } else {
+        let mut lane = a.lanes[0].clone();
+        lane.length_m = length;
+        lane.speed_mps = speed;
+        vec![lane]
+    };
     let a = c.graph.road_mut(a_id).unwrap();
     a.length_m = length;
-    a.lanes.truncate(1);
-    a.lanes[0].length_m = length;
-    a.lanes[0].speed_mps = speed;
+    a.lanes = lanes;
     a.geometry = geometry;
     a.class = class;
     a.name = name;
@@ -84,6 +97,44 @@ pub fn join_at(c: &mut Corridor, j: JunctionId) -> Option<(RoadId, RoadId)> {
         chain.retain(|r| *r != b_id);
     }
     Some((a_id, b_id))
+}
+
+/// Whether every lane of `a` goes on into the lane of `b` with its index, and only there.
+fn lanes_go_straight_on(g: &LaneGraph, a: &Road, b: &Road) -> bool {
+    if a.lanes.len() != b.lanes.len() || a.lanes.iter().any(|l| l.end.is_some()) {
+        return false;
+    }
+    let links: Vec<(u8, u8)> = g
+        .connections_from(a.id)
+        .map(|k| (k.from_lane, k.to_lane))
+        .collect();
+    links.len() == a.lanes.len() && links.iter().all(|(f, t)| f == t)
+}
+
+/// The lanes of `a` and `b` joined lane by lane: each lane's driving length, and the speed that keeps its
+/// free-flow travel time.
+fn joined_lanes(g: &LaneGraph, a: &Road, b: &Road) -> Vec<Lane> {
+    a.lanes
+        .iter()
+        .zip(&b.lanes)
+        .map(|(la, lb)| {
+            let via = g
+                .connections_from(a.id)
+                .find(|k| k.from_lane == la.index && k.to_road == b.id);
+            let via_m = via.map_or(0.0, |k| k.via_length_m);
+            let via_speed = via.and_then(|k| k.via_speed_mps).unwrap_or(lb.speed_mps);
+            let length = la.length_m + via_m + lb.length_m;
+            let travel_s =
+                la.length_m / la.speed_mps + via_m / via_speed + lb.length_m / lb.speed_mps;
+            let mut lane = la.clone();
+            lane.length_m = length;
+            if travel_s.is_finite() && travel_s > 0.0 {
+                lane.speed_mps = length / travel_s;
+            }
+            lane.end = lb.end;
+            lane
+        })
+        .collect()
 }
 
 pub fn apply(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, TransformError> {

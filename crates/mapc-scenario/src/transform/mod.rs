@@ -1,13 +1,15 @@
 //! The corridor compiler's transformations: an ordered list of named steps, each taking the [`Corridor`] to its
 //! next state and saying in one line what it did. After every step the invariants are checked ([`check`]): the
 //! graph is sound (`LaneGraph::invariant_violations`, which includes "every junction lists its roads"), connected
-//! once pruned, single-lane once collapsed, and the driving length of the main road and of every merging road is
+//! once pruned, single-lane once collapsed (or, with `--keep-lanes`, every lane continuing or recorded as ending,
+//! `LaneGraph::lane_continuity_violations`, once lane connections are settled), and the driving length of the main road and of every merging road is
 //! unchanged within [`LENGTH_TOLERANCE_M`] unless the step exists to change it.
 //!
 //! Roles survive in the saved graph through provenance: a road's `made_by` names the step that gave it its role
 //! ([`ROLE_MAIN`], [`ROLE_FEEDER`], [`ROLE_EXIT`]), so a corridor file can be read back with [`CorridorRoles`].
 
 pub mod collapse_lanes;
+pub mod connect_lanes;
 pub mod cut_at;
 pub mod diverges;
 pub mod join_chains;
@@ -67,6 +69,9 @@ pub struct SimplifyOptions {
     /// Keep footways, paths, service roads and the like ([`mapc_graph::MINOR_CLASSES`]) that meet the main road
     /// as merging roads; by default they are dropped, and a junction where only they join is no merge.
     pub minor_roads: bool,
+    /// Keep every lane of the main and merging roads with their lane-level connections, lane drops, gains and
+    /// acceleration lanes ([`connect_lanes`] instead of [`collapse_lanes`]).
+    pub keep_lanes: bool,
 }
 
 impl Default for SimplifyOptions {
@@ -79,6 +84,7 @@ impl Default for SimplifyOptions {
             feeder_length_m: None,
             keep_exits: false,
             minor_roads: false,
+            keep_lanes: false,
         }
     }
 }
@@ -104,10 +110,20 @@ pub struct Corridor {
     pub pruned: bool,
     /// Set once every road has one lane.
     pub single_lane: bool,
+    /// Set once lane-level connections are settled with every lane kept: from then on every lane continues or is
+    /// recorded as ending.
+    pub lanes_connected: bool,
+    /// Whether the map's lane connections are the importer's guess (OSM: the map has none), to be derived again
+    /// on the corridor by [`connect_lanes`]; a SUMO net's are the net's own and kept.
+    pub guessed_connections: bool,
 }
 
 impl Corridor {
     pub fn new(graph: LaneGraph) -> Corridor {
+        let guessed_connections = matches!(
+            graph.source.format,
+            mapc_graph::SourceFormat::OsmXml | mapc_graph::SourceFormat::OsmPbf
+        );
         Corridor {
             graph,
             main: vec![],
@@ -115,6 +131,8 @@ impl Corridor {
             exits: vec![],
             pruned: false,
             single_lane: false,
+            lanes_connected: false,
+            guessed_connections,
         }
     }
 
@@ -193,10 +211,18 @@ pub fn simplify_steps(opts: &SimplifyOptions) -> Vec<Step> {
             changes_lengths: false,
             apply: prune::apply,
         },
-        Step {
-            name: collapse_lanes::NAME,
-            changes_lengths: false,
-            apply: collapse_lanes::apply,
+        if opts.keep_lanes {
+            Step {
+                name: connect_lanes::NAME,
+                changes_lengths: false,
+                apply: connect_lanes::apply,
+            }
+        } else {
+            Step {
+                name: collapse_lanes::NAME,
+                changes_lengths: false,
+                apply: collapse_lanes::apply,
+            }
         },
         Step {
             name: join_chains::NAME,
@@ -260,6 +286,9 @@ pub fn check(
         for r in c.graph.roads.iter().filter(|r| r.lanes.len() != 1) {
             violations.push(format!("road {} has {} lanes", r.id, r.lanes.len()));
         }
+    }
+    if c.lanes_connected {
+        violations.extend(c.graph.lane_continuity_violations());
     }
     let chains = std::iter::once(&c.main).chain(&c.feeders).chain(&c.exits);
     for chain in chains {
@@ -527,6 +556,7 @@ pub(crate) mod test_maps {
                             speed_mps: 30.0,
                             width_m: 3.5,
                             length_m,
+                            end: None,
                         })
                         .collect(),
                     geometry,
