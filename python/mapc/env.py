@@ -37,7 +37,8 @@ def _spaces(native: Any) -> Tuple[spaces.Box, spaces.Box]:
 class MergeEnv(gymnasium.Env):
     """The paper's centralized merge-control environment: one acceleration per controlled AV (the first N_AV in
     the control region, by entry), the five-value observation of each, and the outflow, Flow or speed reward.
-    An episode is the scenario's horizon; it ends truncated (there is no terminal state)."""
+    An episode is the whole simulation, the scenario's warm-up (if any) and its horizon; it ends truncated (there
+    is no terminal state)."""
 
     metadata = {"render_modes": []}
 

@@ -176,22 +176,36 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             format!("{mean:8.2} ± {ci:5.2}")
         }
     };
-    for m in report.merges.iter().flatten() {
-        let human = m
+    let compared = |f: &mapc_rl::eval::FlowComparison| {
+        let human = f
             .baseline
             .map(|b| format!("   human {} veh/h", flow(b.mean, b.ci95)))
             .unwrap_or_default();
-        let welch = m
+        let welch = f
             .welch
             .filter(|_| !one_seed)
             .map(|w| format!("   Welch t = {:.2}", w.t))
             .unwrap_or_default();
+        format!(
+            "policy {} veh/h{human}{welch}",
+            flow(f.flow.mean, f.flow.ci95)
+        )
+    };
+    // per-merge flows where the scenario measures merges, with the corridor's end beside them
+    for m in report.merges.iter().flatten() {
+        let window = m
+            .window
+            .as_ref()
+            .map(|w| format!(" (window {w})"))
+            .unwrap_or_default();
         println!(
-            "  past merge {:>4} (window {}): policy {} veh/h{human}{welch}",
+            "  past merge {:>4}{window}: {}",
             m.merge,
-            m.window,
-            flow(m.flow.mean, m.flow.ci95)
+            compared(&m.figures)
         );
+    }
+    if let (Some(_), Some(end)) = (&report.merges, &report.end_flow) {
+        println!("  past the corridor's end: {}", compared(end));
     }
     println!("  {:.1} s wall", report.wall_s);
     // a run directory means its last checkpoint; its best policy is a file beside it (a hint: a best.json that

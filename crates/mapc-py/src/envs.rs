@@ -74,7 +74,7 @@ impl Episode {
         Ok(obs)
     }
 
-    /// One step; `truncated` once the scenario's horizon is reached (the episode has no other end).
+    /// One step; `truncated` once the episode (the scenario's warm-up and horizon) is over (it has no other end).
     fn step(&mut self, action: &[f32]) -> PyResult<(Vec<f32>, f32, bool)> {
         if !self.started {
             return Err(mapc_error("step before reset: call reset(seed) first"));

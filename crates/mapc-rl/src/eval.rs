@@ -1,8 +1,12 @@
 //! Evaluation of a policy on a scenario over fixed seeds, against the all-human baseline on the same seeds.
+//! Every run, whatever drives its AVs (the humans, a policy on one region, on several windows, or every AV as an
+//! agent), simulates the scenario's warm-up and measured horizon, and every figure is the simulation's own
+//! measurement of it (`mapc_sim::RunMetrics`: outflow, inflow, speed, the flow past each measured merge and past
+//! the corridor's end).
 
 use std::path::Path;
 
-use mapc_sim::{MeanCi, SimSpec, Summary, VehicleId};
+use mapc_sim::{MeanCi, RunMetrics, SimSpec, Summary, VehicleId};
 use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::Checkpoint;
@@ -10,11 +14,16 @@ use crate::deploy::{Deploy, Deployment, Withheld};
 use crate::env::distributed::{DistributedConfig, DistributedEnv};
 use crate::env::merge::{MergeEnv, MergeEnvConfig};
 use crate::env::obs::{ObsNorm, PER_AV};
+use crate::env::windows::WindowsEnv;
 use crate::error::RlError;
+use crate::eval_windows::run_windows_episode;
 use crate::ppo::gae::EpisodeEnd;
 use crate::ppo::tensor::Model;
+use crate::ppo::tensor::Scratch;
 use crate::rng::mix_seed;
-use crate::rollout::{ActionMode, Env, EpisodeMetrics, collect, collect_agents_with};
+use crate::rollout::{
+    ActionMode, EpisodeMetrics, EpisodeSettings, collect_agents_with, over_seeds,
+};
 use crate::stats::{WelchTest, welch_t_test};
 
 /// Mean and 95% CI of one metric.
@@ -93,9 +102,12 @@ pub struct EvalReport {
     pub baseline: Option<FigureSet>,
     pub comparison: Option<Comparison>,
     pub wall_s: f64,
-    /// With several windows and a centralized policy: the flow past every window's merge.
+    /// The flow past every merge the scenario measures (none measured: absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub merges: Option<Vec<crate::eval_windows::MergeFlowReport>>,
+    pub merges: Option<Vec<MergeFlowReport>>,
+    /// The flow past the corridor's end (the end of its main line).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_flow: Option<FlowComparison>,
     /// The policy's deployment rule, if it has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub deploy: Option<Deploy>,
@@ -149,41 +161,15 @@ pub fn evaluate(
     let driver =
         PolicyDriver::for_scenario(ck, policy_file, scenario, Some(scenario_n_av.unwrap_or(5)))?;
     let deployment = deployed_spec(ck, &driver, spec)?;
-    let (runs, human, merges) = match &driver {
-        PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
-            // Several windows: the corridor's figures and the flow past every merge, policy and humans.
-            let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
-            let eps = match &deployment.spec {
-                Some(deployed) => crate::eval_windows::run_windows_policy(
-                    &ck.state.model,
-                    deployed,
-                    cfg,
-                    &pairs,
-                    mode,
-                )?,
-                None => crate::eval_windows::run_human_windows(spec, seeds)?,
-            };
-            let human = if baseline {
-                Some(crate::eval_windows::run_human_windows(spec, seeds)?)
-            } else {
-                None
-            };
-            let merges = crate::eval_windows::merge_flow_reports(spec, &eps, human.as_deref());
-            let metrics = |v: &[crate::env::windows::WindowsMetrics]| -> Vec<EpisodeMetrics> {
-                v.iter().map(|m| m.metrics).collect()
-            };
-            (metrics(&eps), human.as_deref().map(metrics), Some(merges))
-        }
-        _ => {
-            let runs = driver.run_deployed(ck, spec, &deployment, seeds, mode)?;
-            let human = if baseline {
-                Some(run_human(spec, seeds)?)
-            } else {
-                None
-            };
-            (runs, human, None)
-        }
+    let runs = driver.run_deployed(ck, spec, &deployment, seeds, mode)?;
+    let human = if baseline {
+        Some(run_human(spec, seeds)?)
+    } else {
+        None
     };
+    let (merges, end_flow) = flow_reports(spec, &runs, human.as_deref());
+    let episodes = |v: &[RunMetrics]| -> Vec<EpisodeMetrics> { v.iter().map(Into::into).collect() };
+    let (runs, human) = (episodes(&runs), human.as_deref().map(episodes));
     let figs = FigureSet::of(&runs);
     let (baseline, comparison) = match &human {
         Some(human) => (Some(FigureSet::of(human)), Some(compare(&runs, human))),
@@ -205,6 +191,7 @@ pub fn evaluate(
         comparison,
         wall_s: start.elapsed().as_secs_f64(),
         merges,
+        end_flow,
         deploy: ck.spec.deploy,
         withheld: deployment.withheld,
     };
@@ -245,14 +232,14 @@ impl PolicyDriver {
         }
     }
 
-    /// The policy on `spec` for each seed (in parallel, results in seed order).
+    /// The policy on `spec` for each seed (in parallel, results in seed order), each run the simulation's measurement.
     pub fn run(
         &self,
         ck: &Checkpoint,
         spec: &SimSpec,
         seeds: &[u64],
         mode: ActionMode,
-    ) -> Result<Vec<EpisodeMetrics>, RlError> {
+    ) -> Result<Vec<RunMetrics>, RlError> {
         let deployment = deployed_spec(ck, self, spec)?;
         self.run_deployed(ck, spec, &deployment, seeds, mode)
     }
@@ -266,22 +253,13 @@ impl PolicyDriver {
         deployment: &Deployment,
         seeds: &[u64],
         mode: ActionMode,
-    ) -> Result<Vec<EpisodeMetrics>, RlError> {
+    ) -> Result<Vec<RunMetrics>, RlError> {
         let Some(spec) = deployment.spec.as_ref() else {
             return run_human(spec, seeds);
         };
         match self {
             PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
-                let pairs: Vec<(u64, u64)> =
-                    seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
-                let eps = crate::eval_windows::run_windows_policy(
-                    &ck.state.model,
-                    spec,
-                    cfg,
-                    &pairs,
-                    mode,
-                )?;
-                Ok(eps.into_iter().map(|e| e.metrics).collect())
+                run_windows_policy(ck, spec, cfg, seeds, mode)
             }
             PolicyDriver::Centralized(cfg) => run_policy(ck, spec, cfg, seeds, mode),
             PolicyDriver::Distributed(cfg) => run_distributed_policy(ck, spec, cfg, seeds, mode),
@@ -354,6 +332,25 @@ pub(crate) fn eval_noise_seed(seed: u64) -> u64 {
     mix_seed(&[seed, 0xE7A1])
 }
 
+/// One evaluation episode per seed on the rayon pool (results in seed order): `episode` drives a whole
+/// simulation (its warm-up and measured horizon) in a fresh environment of `make_env`, and the run's figures are
+/// the simulation's measurement.
+fn measured_runs<E>(
+    make_env: &(dyn Fn() -> E + Sync),
+    horizon: usize,
+    seeds: &[u64],
+    mode: ActionMode,
+    episode: impl Fn(&mut E, &mut Scratch, EpisodeSettings) -> Result<RunMetrics, RlError> + Sync,
+) -> Result<Vec<RunMetrics>, RlError> {
+    let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
+    over_seeds(make_env, &pairs, horizon, mode, false, episode)
+}
+
+/// The simulation's measurement at the end of an episode.
+fn measured(sim: Option<&mapc_sim::Simulation>) -> RunMetrics {
+    sim.expect("an episode resets its environment").metrics()
+}
+
 /// Runs the policy on `spec` for each seed (in parallel, results in seed order).
 pub fn run_policy(
     ck: &Checkpoint,
@@ -361,15 +358,30 @@ pub fn run_policy(
     cfg: &MergeEnvConfig,
     seeds: &[u64],
     mode: ActionMode,
-) -> Result<Vec<EpisodeMetrics>, RlError> {
-    let probe = MergeEnv::new(spec.clone(), cfg.clone())?;
-    let horizon = probe.horizon();
-    let factory = || -> Box<dyn Env> {
-        Box::new(MergeEnv::new(spec.clone(), cfg.clone()).expect("validated above"))
-    };
-    let pairs: Vec<(u64, u64)> = seeds.iter().map(|&s| (s, eval_noise_seed(s))).collect();
-    let eps = collect(&factory, &ck.state.model, &pairs, horizon, mode, false)?;
-    Ok(eps.into_iter().map(|e| e.metrics).collect())
+) -> Result<Vec<RunMetrics>, RlError> {
+    let horizon = MergeEnv::new(spec.clone(), cfg.clone())?.horizon();
+    let make_env = || MergeEnv::new(spec.clone(), cfg.clone()).expect("validated above");
+    measured_runs(&make_env, horizon, seeds, mode, |env, scratch, settings| {
+        crate::rollout::run_episode(env, &ck.state.model, scratch, settings)?;
+        Ok(measured(env.simulation()))
+    })
+}
+
+/// Runs a centralized policy on every window of a several-window scenario for each seed (in parallel, results in
+/// seed order).
+pub fn run_windows_policy(
+    ck: &Checkpoint,
+    spec: &SimSpec,
+    cfg: &MergeEnvConfig,
+    seeds: &[u64],
+    mode: ActionMode,
+) -> Result<Vec<RunMetrics>, RlError> {
+    let horizon = WindowsEnv::new(spec.clone(), cfg.clone())?.horizon();
+    let make_env = || WindowsEnv::new(spec.clone(), cfg.clone()).expect("validated above");
+    measured_runs(&make_env, horizon, seeds, mode, |env, scratch, settings| {
+        run_windows_episode(env, &ck.state.model, scratch, settings, &mut |_| Ok(()))?;
+        Ok(measured(env.simulation()))
+    })
 }
 
 /// Runs the policy on one seed (mean or sampled actions, the same episode as [`run_policy`] gives for that
@@ -403,16 +415,15 @@ pub fn trace_windows_policy(
     mode: ActionMode,
     out: &mut impl std::io::Write,
 ) -> Result<EpisodeMetrics, RlError> {
-    let mut env = crate::env::windows::WindowsEnv::new(spec.clone(), cfg.clone())?;
+    let mut env = WindowsEnv::new(spec.clone(), cfg.clone())?;
     let settings = trace_settings(seed, env.horizon(), mode);
-    let m = crate::eval_windows::run_windows_episode(
+    run_windows_episode(
         &mut env,
         &ck.state.model,
         &mut crate::ppo::tensor::Scratch::default(),
         settings,
         &mut |env| write_sim_rows(env.simulation(), out),
-    )?;
-    Ok(m.metrics)
+    )
 }
 
 /// The evaluation episode of `seed`, without training data (what a trace runs).
@@ -441,10 +452,78 @@ fn write_sim_rows(
 }
 
 /// The human baseline on the same seeds.
-pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<EpisodeMetrics>, RlError> {
-    let runs = mapc_sim::run_baseline_spec(&human_spec(spec), seeds)
-        .map_err(|e| crate::env::scenario_error(spec, e))?;
-    Ok(runs.iter().map(EpisodeMetrics::from).collect())
+pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, RlError> {
+    mapc_sim::run_baseline_spec(&human_spec(spec), seeds)
+        .map_err(|e| crate::env::scenario_error(spec, e))
+}
+
+/// One measured flow (veh/h): the policy's, the humans' on the same seeds, and the Welch test of the difference.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlowComparison {
+    pub flow: Figure,
+    pub baseline: Option<Figure>,
+    pub welch: Option<WelchTest>,
+}
+
+impl FlowComparison {
+    /// `flow(run)` over the policy's runs and the humans'.
+    fn of(
+        policy: &[RunMetrics],
+        human: Option<&[RunMetrics]>,
+        flow: impl Fn(&RunMetrics) -> f64,
+    ) -> Self {
+        let p: Vec<f64> = policy.iter().map(&flow).collect();
+        let b: Option<Vec<f64>> = human.map(|h| h.iter().map(&flow).collect());
+        FlowComparison {
+            flow: MeanCi::of(&p).into(),
+            baseline: b.as_ref().map(|b| MeanCi::of(b).into()),
+            welch: b.as_ref().and_then(|b| welch_t_test(&p, b)),
+        }
+    }
+}
+
+/// The flow past one measured merge.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MergeFlowReport {
+    /// The window the merge belongs to (as the scenario names the window's first merge); none outside windows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window: Option<String>,
+    /// The merge junction (`J43`).
+    pub merge: String,
+    #[serde(flatten)]
+    pub figures: FlowComparison,
+}
+
+/// The flow past every merge `spec` measures (in its order; `None` when it measures none) and past the corridor's
+/// end, from the runs' own measurement.
+pub fn flow_reports(
+    spec: &SimSpec,
+    policy: &[RunMetrics],
+    human: Option<&[RunMetrics]>,
+) -> (Option<Vec<MergeFlowReport>>, Option<FlowComparison>) {
+    let end = FlowComparison::of(policy, human, |r| r.end_flow_veh_h);
+    if spec.measure_points.is_empty() {
+        return (None, Some(end));
+    }
+    let merges = spec
+        .measure_junctions()
+        .into_iter()
+        .zip(&spec.measure_points)
+        .enumerate()
+        .map(|(k, (junction, point))| MergeFlowReport {
+            window: junction.and_then(|j| {
+                spec.control_windows
+                    .iter()
+                    .find(|w| w.merges.contains(&j))
+                    .map(|w| w.name.clone())
+            }),
+            merge: junction.map_or_else(|| point.name.clone(), |j| j.to_string()),
+            figures: FlowComparison::of(policy, human, |r| {
+                r.merge_flows_veh_h.get(k).copied().unwrap_or(f64::NAN)
+            }),
+        })
+        .collect();
+    (Some(merges), Some(end))
 }
 
 /// Welch tests and the outflow change of `policy` against `baseline`.
@@ -479,9 +558,14 @@ pub fn run_distributed_policy(
     cfg: &DistributedConfig,
     seeds: &[u64],
     mode: ActionMode,
-) -> Result<Vec<EpisodeMetrics>, RlError> {
-    let eps = agent_episodes(spec, cfg, seeds, &|_| &ck.state.model, mode, false)?;
-    Ok(eps.into_iter().map(|e| e.metrics).collect())
+) -> Result<Vec<RunMetrics>, RlError> {
+    let horizon = DistributedEnv::new(spec.clone(), *cfg)?.horizon();
+    let make_env = || DistributedEnv::new(spec.clone(), *cfg).expect("validated above");
+    measured_runs(&make_env, horizon, seeds, mode, |env, scratch, settings| {
+        let model = &ck.state.model;
+        crate::rollout::run_agents_episode(env, &|_| model, scratch, settings, &mut |_| Ok(()))?;
+        Ok(measured(env.simulation()))
+    })
 }
 
 /// The evaluation episodes of a distributed setting, one per seed (its noise stream fixed by the seed), each
@@ -576,3 +660,7 @@ pub fn run_mixed_population(
         })
         .collect())
 }
+
+#[cfg(test)]
+#[path = "eval_tests.rs"]
+mod tests;

@@ -24,8 +24,9 @@
 //!
 //! Layout: `ppo::tensor` holds all tensor code (burn for the loss gradient, plain `f32` for rollout inference),
 //! `ppo::gae` the advantage estimation, `rollout` the `Env` trait and parallel collection, `env` the merge
-//! environment on `mapc-sim`, `run` a training run on disk, `eval` evaluation against the human baseline, `eval_windows`
-//! its several-window form (one FIFO per window, the flow past every merge).
+//! environment on `mapc-sim`, `run` a training run on disk, `eval` evaluation against the human baseline (every run's
+//! figures, per-merge flows included, are the simulation's own measurement), `eval_windows` the several-window
+//! episode it runs (one FIFO per window).
 
 pub mod checkpoint;
 pub mod deploy;

@@ -211,7 +211,7 @@ pub fn collect(
 
 /// `run(env, scratch, settings)` for every seed pair on the rayon pool (one environment and scratch per worker),
 /// results in input order.
-fn over_seeds<E, T: Send>(
+pub(crate) fn over_seeds<E, T: Send>(
     make_env: &(dyn Fn() -> E + Sync),
     seeds: &[(u64, u64)],
     horizon: usize,

@@ -71,7 +71,7 @@ mod vehicle_table;
 mod waiting;
 
 pub use idm::IdmParams;
-pub use measure::MeasurePoint;
+pub use measure::{MeasurePoint, Passage};
 pub use metrics::{
     BaselineReport, MeanCi, MergeFlow, RunMetrics, Summary, run_baseline_spec, t_quantile_975,
 };

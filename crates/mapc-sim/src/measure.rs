@@ -1,8 +1,12 @@
 //! Measurement points: vehicles past each measured merge (entering a road that starts at it) and past the
 //! corridor's end (arriving at the end of the main line), counted over the measured time (after the warm-up).
-//! Counting only reads the moves, so every other result stays as it was.
+//! Counting only reads the moves, so every other result stays as it was. This is the one measurement of every
+//! run, whoever drives the AVs: a policy's evaluation reads it from [`crate::Simulation::metrics`] as the
+//! humans' baseline does. On request ([`crate::Simulation::record_passages`]) each passage is also kept, so that
+//! a test can follow every vehicle.
 
 use crate::network::{LaneIdx, LaneKind, Network};
+use crate::sim::VehicleId;
 use mapc_graph::RoadId;
 use serde::{Deserialize, Serialize};
 
@@ -12,6 +16,16 @@ pub struct MeasurePoint {
     /// For reports: `merge J3 (osm:123)`.
     pub name: String,
     pub roads: Vec<RoadId>,
+}
+
+/// One vehicle passing a measure point or the corridor's end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Passage {
+    pub vehicle: VehicleId,
+    /// The measure point (index into the spec's `measure_points`); `None`: the corridor's end.
+    pub point: Option<usize>,
+    /// Passed after the warm-up (counted in the run's metrics).
+    pub counted: bool,
 }
 
 /// No point on this lane.
@@ -26,6 +40,10 @@ pub(crate) struct MeasureAcc {
     /// Per lane, whether it is a lane of the main line's last road (arrivals from it are past the corridor's end).
     end_lanes: Vec<bool>,
     pub(crate) end_count: u64,
+    /// The warm-up is over: passages count.
+    measuring: bool,
+    /// Every passage, when asked for (off by default: it grows with the run).
+    log: Option<Vec<Passage>>,
 }
 
 impl MeasureAcc {
@@ -49,23 +67,37 @@ impl MeasureAcc {
             counts: vec![0; points.len()],
             end_lanes,
             end_count: 0,
+            measuring: false,
+            log: None,
         }
     }
 
-    /// A vehicle entered `lane`.
+    /// Vehicle `id` entered `lane`.
     #[inline]
-    pub(crate) fn entered(&mut self, lane: LaneIdx) {
+    pub(crate) fn entered(&mut self, lane: LaneIdx, id: VehicleId) {
         let p = self.lane_point[lane as usize];
         if p != NO_POINT {
             self.counts[p as usize] += 1;
+            self.note(id, Some(p as usize));
         }
     }
 
-    /// A vehicle whose route ends on `last_lane` arrived.
+    /// Vehicle `id`, whose route ends on `last_lane`, arrived.
     #[inline]
-    pub(crate) fn arrived(&mut self, last_lane: LaneIdx) {
+    pub(crate) fn arrived(&mut self, last_lane: LaneIdx, id: VehicleId) {
         if self.end_lanes[last_lane as usize] {
             self.end_count += 1;
+            self.note(id, None);
+        }
+    }
+
+    fn note(&mut self, vehicle: VehicleId, point: Option<usize>) {
+        if let Some(log) = &mut self.log {
+            log.push(Passage {
+                vehicle,
+                point,
+                counted: self.measuring,
+            });
         }
     }
 
@@ -73,5 +105,15 @@ impl MeasureAcc {
     pub(crate) fn reset(&mut self) {
         self.counts.iter_mut().for_each(|c| *c = 0);
         self.end_count = 0;
+        self.measuring = true;
+    }
+
+    /// Keep every passage from now on.
+    pub(crate) fn record(&mut self) {
+        self.log.get_or_insert_with(Vec::new);
+    }
+
+    pub(crate) fn passages(&self) -> &[Passage] {
+        self.log.as_deref().unwrap_or(&[])
     }
 }

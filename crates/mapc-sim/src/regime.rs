@@ -187,6 +187,7 @@ pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimE
     let factor = types.iter().map(|t| t.speed_factor).sum::<f64>() / types.len().max(1) as f64;
     let max_speed = types.iter().map(|t| t.max_speed).fold(0.0, f64::max);
     let mut merges = Vec::new();
+    let junctions = spec.measure_junctions();
     for (m, (point, roads)) in spec.measure_points.iter().zip(&shape).enumerate() {
         let mut out = Vec::new();
         for (a, &(road, lane, major)) in roads.iter().enumerate() {
@@ -224,7 +225,7 @@ pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimE
             .fold(f64::NAN, f64::min);
         merges.push(MergeRegime {
             name: point.name.clone(),
-            junction: junction_of(spec, point).unwrap_or(JunctionId(0)),
+            junction: junctions[m].unwrap_or(JunctionId(0)),
             approaches: out,
             congestion: Congestion::of(worst),
         });
@@ -270,11 +271,13 @@ impl MergePriority {
 pub fn merge_priorities(spec: &SimSpec) -> Result<Vec<MergePriority>, SimError> {
     let sim = Simulation::from_spec(spec.clone(), 0)?;
     let shape = approaches(&sim);
+    let junctions = spec.measure_junctions();
     Ok(spec
         .measure_points
         .iter()
         .zip(&shape)
-        .map(|(point, roads)| {
+        .zip(junctions)
+        .map(|((point, roads), junction)| {
             let major = |main: bool| {
                 roads
                     .iter()
@@ -282,18 +285,12 @@ pub fn merge_priorities(spec: &SimSpec) -> Result<Vec<MergePriority>, SimError> 
             };
             MergePriority {
                 name: point.name.clone(),
-                junction: junction_of(spec, point).unwrap_or(JunctionId(0)),
+                junction: junction.unwrap_or(JunctionId(0)),
                 main_major: major(true),
                 merging_major: major(false),
             }
         })
         .collect())
-}
-
-/// The junction a measure point's roads start at.
-fn junction_of(spec: &SimSpec, point: &crate::measure::MeasurePoint) -> Option<JunctionId> {
-    let r = spec.graph.road(*point.roads.first()?)?;
-    Some(r.from)
 }
 
 /// Per measure point, its approaches: (road, its lane, major).

@@ -160,6 +160,15 @@ impl SimSpec {
         self.measure_points.iter().map(|p| p.name.clone()).collect()
     }
 
+    /// The junction of each measure point (the one its roads start at), in the order of
+    /// [`crate::RunMetrics::merge_flows_veh_h`]; `None` for a point without a road.
+    pub fn measure_junctions(&self) -> Vec<Option<mapc_graph::JunctionId>> {
+        self.measure_points
+            .iter()
+            .map(|p| Some(self.graph.road(*p.roads.first()?)?.from))
+            .collect()
+    }
+
     /// Check the numbers a run relies on; errors name the item.
     pub fn validate(&self) -> Result<(), SimError> {
         if !(self.step_s > 0.0 && self.step_s <= 10.0) {

@@ -59,12 +59,38 @@ fn an_overloaded_entry_counts_its_queue_and_forgets_old_records() {
 fn flows_past_the_merge_and_the_end_are_counted_after_the_warmup() {
     let mut spec = human_spec();
     spec.warmup_steps = 400;
-    let m = Simulation::from_spec(spec.clone(), 0)
-        .unwrap()
-        .run()
-        .unwrap();
+    let mut sim = Simulation::from_spec(spec.clone(), 0).unwrap();
+    sim.record_passages();
+    let m = sim.run().unwrap();
     assert_eq!(m.steps, spec.horizon_steps);
     assert_eq!(spec.measure_points.len(), 1, "{:?}", spec.measure_points);
+    // the counts are the passages after the warm-up, and every vehicle counted at the end passed the merge
+    let secs = spec.horizon_steps as f64 * spec.step_s;
+    let counted = |point: Option<usize>| -> Vec<VehicleId> {
+        sim.passages()
+            .iter()
+            .filter(|p| p.counted && p.point == point)
+            .map(|p| p.vehicle)
+            .collect()
+    };
+    let (at_merge, at_end) = (counted(Some(0)), counted(None));
+    assert_eq!(
+        m.merge_flows_veh_h[0],
+        3600.0 * at_merge.len() as f64 / secs
+    );
+    assert_eq!(m.end_flow_veh_h, 3600.0 * at_end.len() as f64 / secs);
+    assert!(
+        sim.passages().iter().any(|p| !p.counted),
+        "none in the warm-up"
+    );
+    for id in at_end {
+        assert!(
+            sim.passages()
+                .iter()
+                .any(|p| p.vehicle == id && p.point == Some(0)),
+            "vehicle {id} left without passing the merge"
+        );
+    }
     // on the Simple Merge every vehicle leaves at the corridor's end
     assert_eq!(m.end_flow_veh_h, m.outflow_veh_h);
     let merge = m.merge_flows_veh_h[0];

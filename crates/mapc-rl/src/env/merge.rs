@@ -127,9 +127,11 @@ impl SpecSource {
         }
     }
 
-    pub fn horizon_steps(&self) -> u64 {
+    /// Steps of one episode: a fixed scenario's warm-up and measured horizon (the whole simulation); for drawn
+    /// merges, the horizon each draw is simulated for.
+    pub fn episode_steps(&self) -> u64 {
         match self {
-            SpecSource::Fixed(spec) => spec.horizon_steps,
+            SpecSource::Fixed(spec) => spec.warmup_steps + spec.horizon_steps,
             SpecSource::Drawn { horizon_steps, .. } => *horizon_steps,
         }
     }
@@ -174,9 +176,9 @@ impl MergeEnv {
         &self.cfg
     }
 
-    /// Horizon of the scenario (steps).
+    /// Steps of one episode ([`SpecSource::episode_steps`]).
     pub fn horizon(&self) -> usize {
-        self.source.horizon_steps() as usize
+        self.source.episode_steps() as usize
     }
 
     fn sim(&self) -> &Simulation {

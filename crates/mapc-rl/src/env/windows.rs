@@ -1,10 +1,10 @@
 //! Several control windows on one corridor (a scenario with `[[control.windows]]`): each window keeps its own
 //! FIFO of up to `N_AV` AVs and builds its observation exactly as the single-window environment
 //! ([`super::merge::MergeEnv`]) does; one policy acts on every window's observation (zero-shot). An AV is
-//! controlled by the window it is in and, once it has left that window, never again by it. The environment also
-//! counts the flow past every window's merge.
+//! controlled by the window it is in and, once it has left that window, never again by it. The flow past every
+//! merge is the simulation's own measurement (`mapc_sim::RunMetrics`), as for any run.
 
-use mapc_graph::{JunctionId, RoadId};
+use mapc_graph::RoadId;
 use mapc_sim::{SimSpec, Simulation, VehicleId};
 
 use super::merge::MergeEnvConfig;
@@ -30,101 +30,12 @@ impl Window {
     }
 }
 
-/// Counts the vehicles that pass merges (that enter the road leaving each merge junction), from the end of
-/// the warm-up on.
-#[derive(Clone, Debug)]
-pub struct MergeFlowCounter {
-    /// The road leaving each merge.
-    roads_after: Vec<RoadId>,
-    counts: Vec<u64>,
-    /// Each vehicle's road after the last step (`None`: not yet seen on a road).
-    last_road: Vec<Option<RoadId>>,
-    horizon_s: f64,
-}
-
-impl MergeFlowCounter {
-    /// A counter for `merges` of `spec`'s graph.
-    pub fn new(spec: &SimSpec, merges: &[JunctionId]) -> Result<MergeFlowCounter, RlError> {
-        let roads_after = merges
-            .iter()
-            .map(|&j| {
-                spec.graph
-                    .junction(j)
-                    .and_then(|jn| jn.outgoing.first().copied())
-                    .ok_or_else(|| {
-                        super::scenario_error(
-                            spec,
-                            format!("window merge {j} has no road after it"),
-                        )
-                    })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        Ok(MergeFlowCounter {
-            counts: vec![0; roads_after.len()],
-            roads_after,
-            last_road: Vec::new(),
-            horizon_s: spec.horizon_steps as f64 * spec.step_s,
-        })
-    }
-
-    /// Every window's merges of `spec`, in window order.
-    pub fn merges_of(spec: &SimSpec) -> Vec<JunctionId> {
-        spec.control_windows
-            .iter()
-            .flat_map(|w| w.merges.iter().copied())
-            .collect()
-    }
-
-    /// Starts counting on a new episode's simulation (the vehicles already placed are not counted).
-    pub fn reset(&mut self, sim: &Simulation) {
-        self.counts.iter_mut().for_each(|c| *c = 0);
-        self.last_road.clear();
-        self.update(sim, false);
-    }
-
-    /// Notes where every vehicle is after a step; `counted`: the step was one the metrics count.
-    pub fn update(&mut self, sim: &Simulation, counted: bool) {
-        self.last_road.resize(sim.vehicle_count(), None);
-        for id in sim.active_ids() {
-            let Some(v) = sim.vehicle(id) else { continue };
-            if v.in_junction {
-                continue;
-            }
-            let before = self.last_road[id as usize].replace(v.road);
-            if counted && before != Some(v.road) {
-                for (k, r) in self.roads_after.iter().enumerate() {
-                    if *r == v.road {
-                        self.counts[k] += 1;
-                    }
-                }
-            }
-        }
-    }
-
-    /// Vehicles past each merge per hour of the horizon.
-    pub fn flows_veh_h(&self) -> Vec<f64> {
-        self.counts
-            .iter()
-            .map(|&c| 3600.0 * c as f64 / self.horizon_s.max(f64::MIN_POSITIVE))
-            .collect()
-    }
-}
-
-/// An episode's figures with the flow past every window's merge (veh/h, in [`MergeFlowCounter::merges_of`]'s
-/// order).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct WindowsMetrics {
-    pub metrics: EpisodeMetrics,
-    pub merge_flows: Vec<f64>,
-}
-
 /// The centralized environment over every window of a several-window scenario.
 pub struct WindowsEnv {
     spec: SimSpec,
     cfg: MergeEnvConfig,
     sim: Option<Simulation>,
     windows: Vec<Window>,
-    counter: MergeFlowCounter,
     obs: Vec<Vec<f32>>,
 }
 
@@ -167,19 +78,18 @@ impl WindowsEnv {
                 }
             })
             .collect();
-        let counter = MergeFlowCounter::new(&spec, &MergeFlowCounter::merges_of(&spec))?;
         Ok(WindowsEnv {
             spec,
             cfg,
             sim: None,
             windows,
-            counter,
             obs: Vec::new(),
         })
     }
 
+    /// Steps of one episode: the scenario's warm-up and measured horizon (the whole simulation).
     pub fn horizon(&self) -> usize {
-        self.spec.horizon_steps as usize
+        (self.spec.warmup_steps + self.spec.horizon_steps) as usize
     }
 
     pub fn window_count(&self) -> usize {
@@ -189,7 +99,6 @@ impl WindowsEnv {
     /// Starts an episode; returns every window's observation.
     pub fn reset(&mut self, seed: u64) -> Result<&[Vec<f32>], RlError> {
         let sim = super::episode_simulation(&self.spec, seed)?;
-        self.counter.reset(&sim);
         self.sim = Some(sim);
         for w in &mut self.windows {
             w.queue.clear();
@@ -258,9 +167,7 @@ impl WindowsEnv {
             }
         }
         if !sim.is_done() {
-            let counted = !sim.in_warmup();
             sim.step().map_err(super::sim_error)?;
-            self.counter.update(sim, counted);
         }
         self.observe();
         Ok(&self.obs)
@@ -272,34 +179,12 @@ impl WindowsEnv {
     }
 
     /// The episode's figures so far.
-    pub fn metrics(&self) -> WindowsMetrics {
-        WindowsMetrics {
-            metrics: self
-                .sim
-                .as_ref()
-                .map(|s| (&s.metrics()).into())
-                .unwrap_or_default(),
-            merge_flows: self.counter.flows_veh_h(),
-        }
+    pub fn metrics(&self) -> EpisodeMetrics {
+        self.sim
+            .as_ref()
+            .map(|s| (&s.metrics()).into())
+            .unwrap_or_default()
     }
-}
-
-/// The all-human episode of `seed` on `spec` (every AV driving as a human), with the flow past every window's
-/// merge; its traffic figures are those of `mapc_sim::run_baseline_spec`.
-pub fn human_windows_episode(spec: &SimSpec, seed: u64) -> Result<WindowsMetrics, RlError> {
-    let mut sim =
-        Simulation::from_spec(spec.clone(), seed).map_err(|e| super::scenario_error(spec, e))?;
-    let mut counter = MergeFlowCounter::new(spec, &MergeFlowCounter::merges_of(spec))?;
-    counter.reset(&sim);
-    while !sim.is_done() {
-        let counted = !sim.in_warmup();
-        sim.step().map_err(super::sim_error)?;
-        counter.update(&sim, counted);
-    }
-    Ok(WindowsMetrics {
-        metrics: (&sim.metrics()).into(),
-        merge_flows: counter.flows_veh_h(),
-    })
 }
 
 #[cfg(test)]

@@ -267,6 +267,17 @@ impl Simulation {
         Ok(out)
     }
 
+    /// Keep every passage past a measure point or the corridor's end from now on (for tests that follow each
+    /// vehicle; the log grows with the run).
+    pub fn record_passages(&mut self) {
+        self.measure.record();
+    }
+
+    /// The passages kept since [`Self::record_passages`], in the order they happened.
+    pub fn passages(&self) -> &[crate::measure::Passage] {
+        self.measure.passages()
+    }
+
     /// Turn the per-step collision check on or off (on by default in debug builds).
     pub fn set_invariant_checks(&mut self, on: bool) {
         self.check_invariants = on;

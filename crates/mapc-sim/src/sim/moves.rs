@@ -150,7 +150,7 @@ impl Simulation {
                 while v_pos > self.lane_at(r.lanes[rp] as usize).length {
                     v_pos -= self.lane_at(r.lanes[rp] as usize).length;
                     rp += 1;
-                    self.measure.entered(r.lanes[rp]);
+                    self.measure.entered(r.lanes[rp], id);
                     if rp + 1 >= r.lanes.len()
                         && !r.dead_end
                         && v_pos > self.lane_at(r.lanes[rp] as usize).length - POSITION_EPS
@@ -185,7 +185,7 @@ impl Simulation {
         v.status = VehicleStatus::Arrived;
         v.arrive_s = self.time_s + self.spec.step_s;
         if let Some(&last) = self.routes[v.route as usize].lanes.last() {
-            self.measure.arrived(last);
+            self.measure.arrived(last, id);
         }
         self.metrics.arrived += 1;
         let tt = v.arrive_s - v.depart_s;
