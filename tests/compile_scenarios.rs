@@ -721,7 +721,14 @@ fn keep_lanes_window_is_cut_and_simulated_on_every_lane() {
     assert_eq!(code, 0);
     assert!(stdout.contains("lanes: R"), "{stdout}");
 
-    let sim = mapc_json(&["sim", "--scenario", out.to_str().unwrap(), "--seeds", "2", "--json"]);
+    let sim = mapc_json(&[
+        "sim",
+        "--scenario",
+        out.to_str().unwrap(),
+        "--seeds",
+        "2",
+        "--json",
+    ]);
     assert!(sim["outflow"]["mean"].as_f64().unwrap() > 0.0, "{sim}");
     assert!(sim["lane_changes"]["mean"].as_f64().unwrap() > 0.0, "{sim}");
     std::fs::remove_dir_all(dir).unwrap();
