@@ -277,8 +277,9 @@ impl DistributedEnv {
         &self.cfg
     }
 
+    /// Steps of an episode: the scenario's warm-up, then its measured horizon (the simulation is done after both).
     pub fn horizon(&self) -> usize {
-        self.spec.horizon_steps as usize
+        (self.spec.warmup_steps + self.spec.horizon_steps) as usize
     }
 
     /// The simulation of the current episode (after `reset`).

@@ -127,9 +127,11 @@ impl SpecSource {
         }
     }
 
+    /// Steps of an episode: a fixed scenario's warm-up, then its measured horizon (the simulation is done after
+    /// both; stopping at the horizon alone measured only what of it was left after the warm-up).
     pub fn horizon_steps(&self) -> u64 {
         match self {
-            SpecSource::Fixed(spec) => spec.horizon_steps,
+            SpecSource::Fixed(spec) => spec.warmup_steps + spec.horizon_steps,
             SpecSource::Drawn { horizon_steps, .. } => *horizon_steps,
         }
     }
@@ -174,7 +176,7 @@ impl MergeEnv {
         &self.cfg
     }
 
-    /// Horizon of the scenario (steps).
+    /// Steps of an episode: the scenario's warm-up and measured horizon.
     pub fn horizon(&self) -> usize {
         self.source.horizon_steps() as usize
     }

@@ -178,8 +178,9 @@ impl WindowsEnv {
         })
     }
 
+    /// Steps of an episode: the scenario's warm-up, then its measured horizon (the simulation is done after both).
     pub fn horizon(&self) -> usize {
-        self.spec.horizon_steps as usize
+        (self.spec.warmup_steps + self.spec.horizon_steps) as usize
     }
 
     pub fn window_count(&self) -> usize {

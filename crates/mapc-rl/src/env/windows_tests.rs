@@ -142,3 +142,25 @@ fn human_windows_episode_is_the_baseline() {
         );
     }
 }
+
+/// On a scenario with a warm-up, an episode of `horizon()` steps runs the warm-up and the whole measured horizon:
+/// with no action its AVs drive as humans, so it measures exactly what the humans' episode does. (Stopping after
+/// `horizon_steps` measured only what was left of the horizon after the warm-up, and the flows past the merges,
+/// divided by the whole horizon, came out ten times too low on a window with a 900 s warm-up.)
+#[test]
+fn an_episode_runs_the_warm_up_and_the_whole_horizon() {
+    let mut spec = spec_of(load("scenarios/i696_3merge.toml"));
+    spec.warmup_steps = 400;
+    spec.horizon_steps = 600;
+    let humans = human_windows_episode(&crate::eval::human_spec(&spec), 2).unwrap();
+    let mut env = WindowsEnv::new(spec, MergeEnvConfig::paper(RewardKind::Outflow, 5)).unwrap();
+    assert_eq!(env.horizon(), 1000);
+    env.reset(2).unwrap();
+    let none = vec![None; env.window_count()];
+    for _ in 0..env.horizon() {
+        env.step(&none).unwrap();
+    }
+    assert!(env.simulation().unwrap().is_done());
+    assert!(humans.merge_flows.iter().all(|&f| f > 0.0), "{humans:?}");
+    assert_eq!(env.metrics(), humans);
+}
