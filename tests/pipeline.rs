@@ -35,6 +35,12 @@ fn pipeline_runs_every_stage_on_the_real_map() {
         stderr.contains("$ mapc window") && stderr.contains("--junction osm:61862553"),
         "{stderr}"
     );
+    // the paper's map takes the paper's corridor and merge, as before, with nothing more to say about it
+    assert!(
+        stderr.contains("--via osm-way:59440544 --via osm-way:8667198 --via osm-way:8708084")
+            && !stderr.contains("is not the paper's I-696 map"),
+        "{stderr}"
+    );
     // The last JSON document printed is the evaluation against the human baseline.
     let start = stdout.rfind("\n{\n").map_or(0, |i| i + 1);
     let eval: serde_json::Value =
