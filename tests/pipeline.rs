@@ -100,7 +100,7 @@ fn pipeline_on_another_map_takes_the_default_corridor() {
     assert!(chose < simplify, "{stderr}");
     assert!(!stderr.contains("osm-way:59440544"), "{stderr}");
     assert!(
-        stderr.contains("$ mapc window") && stderr.contains(" --all "),
+        stderr.contains("$ mapc window") && stderr.contains(" --all --fit "),
         "{stderr}"
     );
     // the corridor passes the expressway's one merge, and the window is cut there

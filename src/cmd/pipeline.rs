@@ -4,7 +4,7 @@
 //!
 //! The paper's corridor and merge (`--via`, `--junction`) belong to the shipped I-696 map: they are the defaults
 //! only where the imported map has those roads and that junction. On any other map the corridor is `mapc
-//! simplify`'s default route and a window is cut at every merge of it that fits (`mapc window --all`); the
+//! simplify`'s default route and a window is cut at every merge of it that fits (`mapc window --all --fit`); the
 //! pipeline says which it chose.
 
 use std::path::{Path, PathBuf};
@@ -28,7 +28,7 @@ pub struct Args {
     #[arg(long = "via", value_name = "ID")]
     pub via: Vec<String>,
     /// The merge to cut the transfer window around; default: where I-696 joins on the I-696 map, a window at
-    /// every merge that fits (`mapc window --all`) on any other.
+    /// every merge that fits (`mapc window --all --fit`) on any other.
     #[arg(long)]
     pub junction: Option<String>,
     /// The Simple Merge policy evaluated zero-shot in the window.
@@ -92,7 +92,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             },
             match &junction {
                 Some(j) => format!("the window is cut at --junction {j}"),
-                None => "a window is cut at every merge of it that fits (`mapc window --all`)"
+                None => "a window is cut at every merge of it that fits, fitted to what the map has (`mapc window --all --fit`)"
                     .to_string(),
             }
         );
@@ -107,7 +107,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut window_step = cmd(&["window", &corridor]);
     match &junction {
         Some(j) => window_step.extend(["--junction".to_string(), j.clone()]),
-        None => window_step.push("--all".to_string()),
+        None => window_step.extend(["--all".to_string(), "--fit".to_string()]),
     }
     window_step.extend(cmd(&[
         "--match",
