@@ -35,6 +35,12 @@ fn pipeline_runs_every_stage_on_the_real_map() {
         stderr.contains("$ mapc window") && stderr.contains("--junction osm:61862553"),
         "{stderr}"
     );
+    // the paper's map takes the paper's corridor and merge, as before, with nothing more to say about it
+    assert!(
+        stderr.contains("--via osm-way:59440544 --via osm-way:8667198 --via osm-way:8708084")
+            && !stderr.contains("is not the paper's I-696 map"),
+        "{stderr}"
+    );
     // The last JSON document printed is the evaluation against the human baseline.
     let start = stdout.rfind("\n{\n").map_or(0, |i| i + 1);
     let eval: serde_json::Value =
@@ -63,4 +69,56 @@ fn pipeline_names_a_missing_map() {
     assert!(String::from_utf8_lossy(&run.stderr).contains("nonesuch.osm"));
     // it fails before writing anything, its output folder included
     assert!(!out.exists());
+}
+
+/// On a map other than I-696 the paper's `--via` and `--junction` do not apply: the pipeline takes the default
+/// corridor, cuts a window at every merge that fits, says so, and runs to the evaluation.
+#[test]
+fn pipeline_on_another_map_takes_the_default_corridor() {
+    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mapc-pipeline-rongwu-{}", std::process::id()));
+    std::fs::remove_dir_all(&out).ok();
+    let run = Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["pipeline", "maps/rongwu.net.xml", "--seeds", "2", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "pipeline failed:\n{stderr}");
+    // what it chose, before the steps that use it
+    let chose = stderr
+        .find("is not the paper's I-696 map")
+        .expect("the pipeline says what it chose");
+    assert!(
+        stderr[chose..].contains("`mapc simplify`'s default route")
+            && stderr[chose..].contains("every merge of it that fits"),
+        "{stderr}"
+    );
+    let simplify = stderr.find("$ mapc simplify").unwrap();
+    assert!(chose < simplify, "{stderr}");
+    assert!(!stderr.contains("osm-way:59440544"), "{stderr}");
+    assert!(
+        stderr.contains("$ mapc window") && stderr.contains(" --all --fit "),
+        "{stderr}"
+    );
+    // the corridor passes the expressway's one merge, and the window is cut there
+    assert!(stdout.contains("window at J5 (gneJ12)"), "{stdout}");
+    for file in [
+        "rongwu.graph.json",
+        "rongwu.corridor.graph.json",
+        "rongwu_window.toml",
+        "rongwu_window_human_trace.csv",
+        "rongwu_window_timespace.png",
+        "rongwu_window_replay.html",
+    ] {
+        let meta = std::fs::metadata(out.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert!(meta.len() > 100, "{file} is nearly empty");
+    }
+    assert!(
+        stdout.contains("2 seeds") || stdout.contains("seeds: 2"),
+        "{stdout}"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
 }

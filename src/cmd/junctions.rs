@@ -2,6 +2,7 @@
 
 use mapc_graph::{Junction, JunctionKind, LaneGraph, RoadId};
 use mapc_import::ImportOptions;
+use mapc_scenario::transform::map_merges::{counted_roads, junction_kind};
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -112,27 +113,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let graph = mapc_import::load_any_with(&args.map, &options)?;
     let want: Option<JunctionKind> = args.kind.map(Into::into);
-    let counted = |ids: &[RoadId]| -> Vec<RoadId> {
-        ids.iter()
-            .copied()
-            .filter(|r| {
-                args.minor_roads
-                    || graph
-                        .road(*r)
-                        .is_some_and(|r| !mapc_graph::is_minor_class(&r.class))
-            })
-            .collect()
-    };
+    let counted = |ids: &[RoadId]| counted_roads(&graph, ids, args.minor_roads);
     let rows: Vec<JunctionRow> = graph
         .junctions
         .iter()
         .filter_map(|j| {
-            let (incoming, outgoing) = (counted(&j.incoming), counted(&j.outgoing));
             // a junction of footways or service roads only is none of the main roads' junctions
-            if incoming.is_empty() && outgoing.is_empty() {
-                return None;
-            }
-            let kind = JunctionKind::classify(incoming.len(), outgoing.len());
+            let kind = junction_kind(&graph, j, args.minor_roads)?;
+            let (incoming, outgoing) = (counted(&j.incoming), counted(&j.outgoing));
             want.is_none_or(|k| kind == k)
                 .then_some((j, kind, incoming, outgoing))
         })

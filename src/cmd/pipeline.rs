@@ -1,6 +1,11 @@
 //! `mapc pipeline`: the whole job on a real map, as the sequence of `mapc` commands a user would type. Each
 //! command is printed before it runs, so the output doubles as a tutorial. The evaluation comes last, so its
 //! table ends the output.
+//!
+//! The paper's corridor and merge (`--via`, `--junction`) belong to the shipped I-696 map: they are the defaults
+//! only where the imported map has those roads and that junction. On any other map the corridor is `mapc
+//! simplify`'s default route and a window is cut at every merge of it that fits (`mapc window --all --fit`); the
+//! pipeline says which it chose.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -18,12 +23,14 @@ pub struct Args {
     /// Output folder.
     #[arg(short, long, default_value = "out/pipeline")]
     pub output: PathBuf,
-    /// Points the corridor must pass (`mapc simplify --via`); default: the paper's I-696 corridor.
+    /// Points the corridor must pass (`mapc simplify --via`); default: the paper's I-696 corridor on the I-696
+    /// map, `mapc simplify`'s default route on any other.
     #[arg(long = "via", value_name = "ID")]
     pub via: Vec<String>,
-    /// The merge to cut the transfer window around; default: where I-696 joins.
-    #[arg(long, default_value = I696_MERGE)]
-    pub junction: String,
+    /// The merge to cut the transfer window around; default: where I-696 joins on the I-696 map, a window at
+    /// every merge that fits (`mapc window --all --fit`) on any other.
+    #[arg(long)]
+    pub junction: Option<String>,
     /// The Simple Merge policy evaluated zero-shot in the window.
     #[arg(long, default_value = "policies/simple_merge_outflow.json")]
     pub policy: PathBuf,
@@ -49,27 +56,60 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let trace = file(format!("{stem}_window_human_trace.csv"));
     let seeds = args.seeds.to_string();
     let map = path_text(&args.map);
-    let via: Vec<String> = if args.via.is_empty() {
-        I696_VIA.iter().map(|s| s.to_string()).collect()
-    } else {
-        args.via.clone()
-    };
 
-    let mut steps: Vec<Vec<String>> = vec![
+    let mut first_steps: Vec<Vec<String>> = vec![
         cmd(&["import", &map, "-o", &graph]),
         cmd(&["junctions", &graph, "--kind", "merge"]),
         cmd(&["render", &graph, "-o", &file(format!("{stem}.png"))]),
     ];
+    if args.json {
+        for s in &mut first_steps[..2] {
+            s.push("--json".to_string());
+        }
+    }
+    for s in first_steps {
+        run_step(&s)?;
+    }
+    // the imported graph tells whether the paper's corridor applies
+    let paper_map = is_paper_map(&mapc_graph::LaneGraph::load(Path::new(&graph))?);
+    let via: Vec<String> = match (args.via.is_empty(), paper_map) {
+        (false, _) => args.via.clone(),
+        (true, true) => I696_VIA.iter().map(|s| s.to_string()).collect(),
+        (true, false) => Vec::new(),
+    };
+    let junction = match (&args.junction, paper_map) {
+        (Some(j), _) => Some(j.clone()),
+        (None, true) => Some(I696_MERGE.to_string()),
+        (None, false) => None,
+    };
+    if !paper_map {
+        eprintln!(
+            "\npipeline: {map} is not the paper's I-696 map (its --via roads and --junction merge apply there only), so: {}; {}",
+            if via.is_empty() {
+                "the corridor is `mapc simplify`'s default route".to_string()
+            } else {
+                format!("the corridor passes --via {}", via.join(", "))
+            },
+            match &junction {
+                Some(j) => format!("the window is cut at --junction {j}"),
+                None => "a window is cut at every merge of it that fits, fitted to what the map has (`mapc window --all --fit`)"
+                    .to_string(),
+            }
+        );
+    }
+
+    let mut steps: Vec<Vec<String>> = Vec::new();
     let mut simplify = cmd(&["simplify", &map, "-o", &corridor]);
     for v in &via {
         simplify.extend(["--via".to_string(), v.clone()]);
     }
     steps.push(simplify);
-    steps.push(cmd(&[
-        "window",
-        &corridor,
-        "--junction",
-        &args.junction,
+    let mut window_step = cmd(&["window", &corridor]);
+    match &junction {
+        Some(j) => window_step.extend(["--junction".to_string(), j.clone()]),
+        None => window_step.extend(["--all".to_string(), "--fit".to_string()]),
+    }
+    window_step.extend(cmd(&[
         "--match",
         "simple_merge",
         "-o",
@@ -77,6 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "--render",
         &file(format!("{stem}_window.png")),
     ]));
+    steps.push(window_step);
     steps.push(cmd(&[
         "sim",
         "--scenario",
@@ -119,8 +160,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     for s in steps {
-        eprintln!("\n$ mapc {}", s.join(" "));
-        crate::run_command_line(&s)?;
+        run_step(&s)?;
     }
     eprintln!(
         "\npipeline done in {:.1} s; outputs in {}",
@@ -128,6 +168,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// Whether a map is the shipped I-696 extract the paper's route is given for: it has the roads and the merge.
+fn is_paper_map(g: &mapc_graph::LaneGraph) -> bool {
+    I696_VIA.iter().all(|v| g.find_roads(v).is_ok()) && g.find_junction(I696_MERGE).is_ok()
+}
+
+/// Print a step as the command a user would type, then run it.
+fn run_step(words: &[String]) -> anyhow::Result<()> {
+    eprintln!("\n$ mapc {}", words.join(" "));
+    crate::run_command_line(words)
 }
 
 fn cmd(words: &[&str]) -> Vec<String> {

@@ -2,7 +2,7 @@
 //! `--keep-lanes` a corridor that keeps every lane.
 
 use mapc_scenario::compile::{corridor_report, simplify_map};
-use mapc_scenario::simplify::corridor_merges;
+use mapc_scenario::simplify::{corridor_merges, no_merge_warning};
 use mapc_scenario::transform::{Corridor, SimplifyOptions};
 use std::path::{Path, PathBuf};
 
@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Clone, Debug)]
 pub struct RouteArgs {
     /// A point the main road must pass, in order (repeat): `osm-way:WAY`, `osm:NODE`, a SUMO edge or junction id,
-    /// `R3` or `J3`. Default: the longest through route over --classes.
+    /// `R3` or `J3`. Default: the longest through route over --classes (and roads of no class as fast as a
+    /// ramp) that passes a junction where another road joins.
     #[arg(long = "via", value_name = "ID")]
     pub via: Vec<String>,
     /// Keep merging roads at most this long (metres) instead of back to where they start in the map.
@@ -98,6 +99,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{}.corridor.graph.json", map_stem(&args.map))));
     s.graph.save(&output)?;
+    // on stderr, so that the JSON on stdout stays one document (it carries the warning too)
+    if let Some(warning) = no_merge_warning(&s, &args.map) {
+        eprintln!("warning: {warning}");
+    }
     if args.json {
         println!(
             "{}",

@@ -3,7 +3,8 @@
 //! back, and the JSON reports both print.
 
 use crate::simplify::{
-    MergeSummary, Simplified, corridor_complex_junctions, corridor_merges, simplify,
+    MergeSummary, Simplified, corridor_complex_junctions, corridor_merges, no_merge_warning,
+    simplify,
 };
 use crate::transform::pick_route::describe_junction;
 use crate::transform::{Corridor, CorridorRoles, SimplifyOptions, TransformError};
@@ -97,6 +98,9 @@ pub fn corridor_report(s: &Simplified, map: &Path, output: &Path) -> Value {
     }
     if let Some(lanes) = lane_report(g, &g.roads.iter().map(|r| r.id).collect::<Vec<_>>()) {
         report["lanes"] = lanes;
+    }
+    if let Some(warning) = no_merge_warning(s, map) {
+        report["warning"] = json!(warning);
     }
     report
 }

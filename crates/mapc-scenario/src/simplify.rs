@@ -18,6 +18,8 @@ pub struct Simplified {
     pub graph: LaneGraph,
     pub roles: CorridorRoles,
     pub steps: Vec<StepReport>,
+    /// The raw map's merges as `mapc junctions --kind merge` finds them, named by [`describe_junction`].
+    pub map_merges: Vec<String>,
 }
 
 /// One merge on the corridor, with the lengths around it.
@@ -65,10 +67,44 @@ pub fn simplify(raw: &LaneGraph, opts: &SimplifyOptions) -> Result<Simplified, T
     for query in &opts.via {
         check_via(&corridor.graph, &roles, query)?;
     }
+    let map_merges = transform::map_merges::merges(raw, opts.minor_roads)
+        .into_iter()
+        .map(|j| describe_junction(raw, j))
+        .collect();
     Ok(Simplified {
         graph: corridor.graph,
         roles,
         steps: reports,
+        map_merges,
+    })
+}
+
+/// How many of the map's merges a warning names before it says how many more there are.
+const MERGES_NAMED: usize = 5;
+
+/// What to say when the corridor of `map` has no merge (so `mapc window` has nothing to cut): the map's merges,
+/// if it has any, and how to list them and choose a corridor through one. `None` where the corridor has a merge.
+pub fn no_merge_warning(s: &Simplified, map: &std::path::Path) -> Option<String> {
+    if !corridor_merges(&s.graph, &s.roles).is_empty() {
+        return None;
+    }
+    let map = map.display();
+    let how = format!(
+        "list them with `mapc junctions {map} --kind merge` and choose a corridor through one with `mapc simplify {map} --via JUNCTION` (or `--via ROAD`, a road into it)"
+    );
+    Some(if s.map_merges.is_empty() {
+        format!(
+            "the corridor's main road passes no merge, and the map has none that `mapc junctions {map} --kind merge` finds; choose another route with `--via`"
+        )
+    } else {
+        let mut named = s.map_merges[..s.map_merges.len().min(MERGES_NAMED)].join(", ");
+        if s.map_merges.len() > MERGES_NAMED {
+            named.push_str(&format!(" and {} more", s.map_merges.len() - MERGES_NAMED));
+        }
+        format!(
+            "the corridor's main road passes no merge, but the map has {} ({named}): {how}",
+            s.map_merges.len()
+        )
     })
 }
 

@@ -14,6 +14,7 @@ pub mod cut_at;
 pub mod diverges;
 pub mod join_chains;
 pub mod keep_feeders;
+pub mod map_merges;
 pub mod pick_route;
 pub mod prune;
 pub mod trim_feeders;

@@ -1,9 +1,12 @@
 //! `pick_route`: choose the corridor's main road. Through the `--via` points in order (shortest connections
-//! between them over any road), then extended at both ends by the longest route over the allowed classes; with no
-//! `--via`, the longest through route of the map over those classes. Where the road graph has cycles (loop ramps),
+//! between them over any road), then extended at both ends by the longest route over the allowed roads; with no
+//! `--via`, the longest through route of the map over those roads that passes a junction where another road joins
+//! (so the corridor has a merge), else the longest of all. Allowed roads are those of the allowed classes and,
+//! where a map gives a road no class (a SUMO edge without `type`), those as fast as a ramp
+//! ([`map_merges::main_road_allowed`]): the route must not depend on types being present. Where the road graph has cycles (loop ramps),
 //! the search ignores the edge that closes a cycle, so the result is a simple route and the same on every run.
 
-use super::{Corridor, SimplifyOptions, TransformError, chains_of, mark};
+use super::{Corridor, SimplifyOptions, TransformError, chains_of, map_merges, mark};
 use mapc_graph::{JunctionId, LaneGraph, LookupError, Road, RoadId};
 use std::collections::{HashMap, HashSet};
 
@@ -220,26 +223,117 @@ pub fn route_through(
     Ok(full)
 }
 
-/// The longest through route of the whole map over allowed roads.
-pub fn longest_through_route(
+/// The best routes downstream of one junction: the longest, and the longest that passes a join on the way
+/// (`f64::NEG_INFINITY` where none does), each by its first road.
+#[derive(Clone, Copy)]
+struct Downstream {
+    any: (f64, Option<RoadId>),
+    joined: (f64, Option<RoadId>),
+}
+
+/// Whether the route, arriving at `next`, passes a join there: one is there and the route goes on from it.
+fn passes_join(joins: &HashSet<JunctionId>, next: JunctionId, after: &Downstream) -> bool {
+    joins.contains(&next) && after.any.1.is_some()
+}
+
+fn downstream_from(
     g: &LaneGraph,
+    j: JunctionId,
     allowed: &dyn Fn(&Road) -> bool,
-) -> Result<Vec<RoadId>, TransformError> {
-    let mut memo = HashMap::new();
-    let avoid = HashSet::new();
-    let mut best: (f64, Option<JunctionId>) = (0.0, None);
-    for j in &g.junctions {
-        let (d, _) = longest_route(g, j.id, Direction::Downstream, allowed, &avoid, &mut memo);
-        if d > best.0 {
-            best = (d, Some(j.id));
+    joins: &HashSet<JunctionId>,
+    memo: &mut HashMap<JunctionId, Downstream>,
+    in_progress: &mut HashSet<JunctionId>,
+) -> Downstream {
+    if let Some(&d) = memo.get(&j) {
+        return d;
+    }
+    let mut best = Downstream {
+        any: (0.0, None),
+        joined: (f64::NEG_INFINITY, None),
+    };
+    let Some(junction) = g.junction(j) else {
+        return best;
+    };
+    in_progress.insert(j);
+    for &rid in &junction.outgoing {
+        let road = g.road(rid).unwrap();
+        let next = road.to;
+        if !allowed(road) || in_progress.contains(&next) || next == j {
+            continue;
+        }
+        let after = downstream_from(g, next, allowed, joins, memo, in_progress);
+        let any = road.length_m + after.any.0;
+        if any > best.any.0 {
+            best.any = (any, Some(rid));
+        }
+        let joined = road.length_m
+            + if passes_join(joins, next, &after) {
+                after.any.0
+            } else {
+                after.joined.0
+            };
+        if joined > best.joined.0 {
+            best.joined = (joined, Some(rid));
         }
     }
-    let Some(start) = best.1 else {
-        return Err(TransformError::NoRoute(
-            "no road of the allowed classes in this map".into(),
-        ));
+    in_progress.remove(&j);
+    memo.insert(j, best);
+    best
+}
+
+/// The default main road: the longest through route over allowed roads that passes a junction in `joins` (where
+/// another road comes in, so the corridor can have a merge), else the longest through route of all. Returns the
+/// roads in driving order and whether the route passes a join.
+pub fn best_through_route(
+    g: &LaneGraph,
+    allowed: &dyn Fn(&Road) -> bool,
+    joins: &HashSet<JunctionId>,
+) -> Result<(Vec<RoadId>, bool), TransformError> {
+    let mut memo = HashMap::new();
+    let mut best_any: (f64, Option<JunctionId>) = (0.0, None);
+    let mut best_joined: (f64, Option<JunctionId>) = (f64::NEG_INFINITY, None);
+    for j in &g.junctions {
+        let d = downstream_from(g, j.id, allowed, joins, &mut memo, &mut HashSet::new());
+        if d.any.0 > best_any.0 {
+            best_any = (d.any.0, Some(j.id));
+        }
+        if d.joined.1.is_some() && d.joined.0 > best_joined.0 {
+            best_joined = (d.joined.0, Some(j.id));
+        }
+    }
+    let (start, mut want_join) = match (best_joined.1, best_any.1) {
+        (Some(s), _) => (s, true),
+        (None, Some(s)) => (s, false),
+        (None, None) => {
+            return Err(TransformError::NoRoute(
+                "no road of the allowed classes (or, where roads have no class, as fast as a ramp) in this map"
+                    .into(),
+            ));
+        }
     };
-    Ok(longest_route(g, start, Direction::Downstream, allowed, &avoid, &mut memo).1)
+    let joined = want_join;
+    let mut roads = Vec::new();
+    let mut cur = start;
+    let mut seen = HashSet::from([start]);
+    while let Some(d) = memo.get(&cur) {
+        let Some(r) = (if want_join { d.joined.1 } else { d.any.1 }) else {
+            break;
+        };
+        let next = g.road(r).unwrap().to;
+        if want_join
+            && memo
+                .get(&next)
+                .is_some_and(|after| passes_join(joins, next, after))
+        {
+            want_join = false;
+        }
+        if !seen.insert(next) {
+            break;
+        }
+        roads.push(r);
+        cur = next;
+    }
+    Ok((roads, joined))
 }
 
 /// `J12 (osm:61862553)` or `J12 (gneJ18)`.
@@ -258,9 +352,13 @@ pub fn describe_junction(g: &LaneGraph, j: JunctionId) -> String {
 }
 
 pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, TransformError> {
-    let allowed = |r: &Road| opts.class_allowed(&r.class);
+    let allowed = |r: &Road| map_merges::main_road_allowed(r, &|class| opts.class_allowed(class));
+    let mut passes_join = true;
     let route = if opts.via.is_empty() {
-        longest_through_route(&c.graph, &allowed)?
+        let joins = map_merges::joins(&c.graph, opts.minor_roads);
+        let (route, joined) = best_through_route(&c.graph, &allowed, &joins)?;
+        passes_join = joined;
+        route
     } else {
         let waypoints = opts
             .via
@@ -277,7 +375,15 @@ pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, Transfo
     let first = g.road(c.main[0]).unwrap().from;
     let last = g.road(*c.main.last().unwrap()).unwrap().to;
     let how = if opts.via.is_empty() {
-        format!("the longest through route over {}", opts.classes.join("/"))
+        format!(
+            "the longest through route {}over {} (and roads of no class as fast as a ramp)",
+            if passes_join {
+                "past a junction where another road joins "
+            } else {
+                "(no route passes a junction where another road joins) "
+            },
+            opts.classes.join("/")
+        )
     } else {
         format!("through --via {}", opts.via.join(", "))
     };
