@@ -128,6 +128,41 @@ fn a_scenario_and_a_policy_read_back_whatever_their_name() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// A map given as a scenario or a policy is named for what it is (by its content, whatever its name), with the
+/// commands that make a scenario of it, instead of a TOML or JSON syntax error.
+#[test]
+fn a_map_given_as_a_scenario_or_a_policy_says_what_it_is_and_how_to_make_one() {
+    let dir = scratch_dir("map-as-scenario");
+    let renamed = dir.join("merge.toml");
+    std::fs::copy(root().join("maps/simple_merge.net.xml"), &renamed).unwrap();
+    for (map, what) in [
+        ("maps/i696.osm", "is an OSM XML map, not a scenario"),
+        ("maps/i696.osm.pbf", "is an OSM PBF map, not a scenario"),
+        (s(&renamed), "is a SUMO network (net.xml), not a scenario"),
+    ] {
+        let said = refused(
+            &["sim", "--scenario", map, "--seeds", "1"],
+            &[
+                map,
+                what,
+                &format!("`mapc pipeline {map}`"),
+                &format!("`mapc window {map} --junction J"),
+            ],
+        );
+        assert!(!said.contains("TOML parse error"), "{said}");
+        assert_eq!(said.trim_end().lines().count(), 1, "{said}");
+    }
+    refused(
+        &["eval", "--policy", "maps/i696.osm", "--seeds", "1"],
+        &[
+            "maps/i696.osm",
+            "is an OSM XML map, not a policy",
+            "mapc train",
+        ],
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 /// The I-696 merge's id as `mapc junctions` lists it on the raw map.
 fn listed_id(map: &str, node: i64) -> String {
     let listing = json_of(&["junctions", map, "--kind", "merge", "--json"]);

@@ -201,6 +201,36 @@ fn an_absurd_horizon_is_refused_with_the_limit_named() {
     );
 }
 
+/// A flow beginning at -1e308 once made `mapc sim` run forever (its departure times stood still), and one at -1e6
+/// sent 555 556 vehicles in the first step: both are refused with the file, the key, the value and the range.
+#[test]
+fn a_flow_beginning_outside_the_run_is_refused_with_the_range() {
+    for (begin, shown) in [
+        ("-1e308", "-1e308"),
+        ("-1e6", "-1e6"),
+        ("inf", "inf"),
+        ("nan", "NaN"),
+    ] {
+        let path = edited_simple_merge("far-begin", |t| {
+            t.replacen("begin_s = 1.0", &format!("begin_s = {begin}"), 1)
+        });
+        let out = std::process::Command::new("timeout")
+            .args(["60", env!("CARGO_BIN_EXE_mapc"), "sim", "--scenario"])
+            .arg(&path)
+            .args(["--seeds", "1"])
+            .current_dir(common::root())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "begin_s = {begin}: {err}");
+        let expected = format!(
+            "{}: flows[0].begin_s: {shown} is outside the allowed range [0, 172800] s",
+            path.display()
+        );
+        assert!(err.contains(&expected), "{err}");
+    }
+}
+
 #[test]
 fn sim_reports_flows_past_points_the_regime_and_warns_on_a_short_horizon() {
     let out = mapc()

@@ -84,9 +84,17 @@ class MergeParallelEnv(ParallelEnv):
         unknown = [a for a in actions if a not in self.agents]
         if unknown:
             raise _mapc.MapcError(f"actions for agents that are not acting now: {', '.join(sorted(unknown))}")
+        acting = [a for a in self.agents if a in actions]
         native_actions = [(self._vehicle_of[a], float(np.asarray(actions[a], dtype=F32).reshape(-1)[0]))
-                          for a in self.agents if a in actions]
-        acted, present, at_horizon = self._native.step(native_actions)
+                          for a in acting]
+        try:
+            acted, present, at_horizon = self._native.step(native_actions)
+        except _mapc.MapcError as e:
+            # mapc refuses an action that is not a finite number and says which one: name its agent
+            index = getattr(e, "action_index", None)
+            if index is None:
+                raise
+            raise _mapc.MapcError(f"agent {acting[index]}: {e}") from None
         present, at_horizon = self._until_agents(present, at_horizon)
         obs = self._observations(present)
         rewards: Dict[str, float] = {}

@@ -132,6 +132,47 @@ def test_mapcs_errors_are_python_exceptions_with_mapcs_message(tmp_path):
         mapc.simulate("simple_merge", seeds=0)
     with pytest.raises(mapc.MapcError, match="nope.json"):
         mapc.Policy(str(tmp_path / "nope.json"))
+    # a map where a scenario or a policy is expected: what it is and how to make a scenario of it
+    with pytest.raises(mapc.MapcError, match=r"i696.osm: is an OSM XML map, not a scenario: .*mapc pipeline"):
+        mapc.make_env(str(ROOT / "maps" / "i696.osm"))
+    with pytest.raises(mapc.MapcError, match=r"is a SUMO network \(net.xml\), not a scenario"):
+        mapc.parallel_env(str(ROOT / "maps" / "simple_merge.net.xml"))
+    with pytest.raises(mapc.MapcError, match=r"is an OSM PBF map, not a policy"):
+        mapc.Policy(str(ROOT / "maps" / "i696.osm.pbf"))
+
+
+def test_an_action_that_is_not_a_number_is_refused_naming_its_place():
+    # the single env: the index in the action; the episode goes on as if the bad step had not been tried
+    env, twin = mapc.make_env("simple_merge"), mapc.make_env("simple_merge")
+    env.reset(seed=1)
+    twin.reset(seed=1)
+    good = np.array([1.0, -1.0, 0.5, 2.0, -3.0], np.float32)
+    for _ in range(60):
+        env.step(good), twin.step(good)
+    for slot, bad in [(0, np.nan), (3, np.inf), (4, -np.inf)]:
+        action = good.copy()
+        action[slot] = bad
+        with pytest.raises(mapc.MapcError, match=rf"^action\[{slot}\] is (NaN|inf|-inf): .*finite acceleration"):
+            env.step(action)
+    for _ in range(40):
+        a, b = env.step(good), twin.step(good)
+        assert np.array_equal(a[0], b[0]) and a[1] == b[1]
+    # the vector env: the sub-environment and the index
+    venv = mapc.make_vec_env("simple_merge", num_envs=3, seed=0)
+    venv.reset()
+    actions = np.zeros((3, 5), np.float32)
+    actions[2, 1] = np.inf
+    with pytest.raises(mapc.MapcError, match=r"^sub-environment 2: action\[1\] is inf"):
+        venv.step(actions)
+    # the parallel env: the agent
+    penv = mapc.parallel_env("simple_merge")
+    penv.reset(seed=3)
+    while len(penv.agents) < 2:
+        penv.step({a: np.array([1.0], np.float32) for a in penv.agents})
+    actions = {a: np.array([1.0], np.float32) for a in penv.agents}
+    actions[penv.agents[1]] = np.array([np.nan], np.float32)
+    with pytest.raises(mapc.MapcError, match=rf"^agent {penv.agents[1]}: .*is NaN"):
+        penv.step(actions)
 
 
 def test_the_parallel_env_passes_pettingzoos_test_and_plays_mapc_evals_distributed_episode():

@@ -1,7 +1,7 @@
 //! What a file mapc wrote is, read from its content rather than its name: a graph, a scenario or a policy is
 //! recognised by the format name or keys inside it, so `x.graph`, `x.txt` or a file without an extension reads
-//! back as what it is. Map files (OSM, SUMO) are told apart by `mapc-import`; this module only says "one of
-//! mapc's own files, and which".
+//! back as what it is. Maps (OSM XML, OSM PBF, SUMO net.xml) are told by their first bytes too ([`sniff_map`]), so
+//! a map given where a scenario or a policy is expected is named for what it is, with the commands that make one.
 
 use std::io::Read;
 use std::path::Path;
@@ -27,6 +27,85 @@ impl MapcFile {
             MapcFile::Scenario => "a mapc scenario",
             MapcFile::Policy => "a mapc policy",
             MapcFile::MergeDistribution => "a mapc merge distribution",
+        }
+    }
+}
+
+/// A map, as a person gives it to mapc (what `mapc-import` reads).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapKind {
+    OsmXml,
+    OsmPbf,
+    SumoNet,
+}
+
+impl MapKind {
+    /// How messages name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            MapKind::OsmXml => "an OSM XML map",
+            MapKind::OsmPbf => "an OSM PBF map",
+            MapKind::SumoNet => "a SUMO network (net.xml)",
+        }
+    }
+}
+
+/// Which map `head` starts, by content alone: a PBF starts with a length and `OSMHeader`; XML by its root element
+/// (`<osm>`, `<net>`), found past the declaration and comments (netconvert's header comment names `<osm-files>`,
+/// so a mere "contains `<osm`" would misread a SUMO net).
+pub fn sniff_map(head: &[u8]) -> Option<MapKind> {
+    if head.len() >= 13 && &head[4..7] == b"\x0a\x09O" && head[6..].starts_with(b"OSMHeader") {
+        return Some(MapKind::OsmPbf);
+    }
+    match xml_root(head)? {
+        "osm" => Some(MapKind::OsmXml),
+        "net" => Some(MapKind::SumoNet),
+        _ => None,
+    }
+}
+
+/// What to say of the map at `path` given where `wanted` (a scenario or a policy) is expected: what it is, and
+/// the commands that make a scenario of it.
+pub fn map_given_for(kind: MapKind, path: &Path, wanted: MapcFile) -> String {
+    let map = path.display();
+    let scenario = format!(
+        "`mapc window {map} --junction J -o scenario.toml` makes a scenario of it around merge J (`mapc junctions \
+         {map} --kind merge` lists them; `mapc simplify {map}` shows the corridor first), and `mapc pipeline {map}` \
+         does the whole job"
+    );
+    match wanted {
+        MapcFile::Policy => format!(
+            "is {}, not a policy: policies come from `mapc train --scenario SCENARIO`; {scenario}",
+            kind.name()
+        ),
+        _ => format!(
+            "is {}, not {}: {scenario}",
+            kind.name(),
+            wanted.name().replace("a mapc ", "a ")
+        ),
+    }
+}
+
+/// The name of the root element of the XML that `head` starts, skipping the declaration, comments, processing
+/// instructions and a doctype; `None` when `head` is not XML or ends before the root.
+fn xml_root(head: &[u8]) -> Option<&str> {
+    let text = std::str::from_utf8(head).unwrap_or_else(|e| {
+        std::str::from_utf8(&head[..e.valid_up_to()]).expect("valid up to here")
+    });
+    let mut rest = text.trim_start_matches('\u{feff}');
+    loop {
+        rest = rest.trim_start();
+        if let Some(after) = rest.strip_prefix("<!--") {
+            rest = &after[after.find("-->")? + 3..];
+        } else if rest.starts_with("<?") || rest.starts_with("<!") {
+            rest = &rest[rest.find('>')? + 1..];
+        } else if let Some(after) = rest.strip_prefix('<') {
+            let end = after
+                .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
+                .unwrap_or(after.len());
+            return (end > 0).then(|| &after[..end]);
+        } else {
+            return None;
         }
     }
 }
@@ -150,5 +229,37 @@ mod tests {
             sniff(&shipped("scenarios/merge_mix.toml")),
             Some(MapcFile::MergeDistribution)
         );
+    }
+
+    #[test]
+    fn shipped_maps_are_recognised_by_content() {
+        assert_eq!(
+            sniff_map(&shipped("maps/i696.osm")[..4096]),
+            Some(MapKind::OsmXml)
+        );
+        assert_eq!(
+            sniff_map(&shipped("maps/simple_merge.net.xml")),
+            Some(MapKind::SumoNet)
+        );
+        assert_eq!(
+            sniff_map(&shipped("maps/i696.osm.pbf")[..4096]),
+            Some(MapKind::OsmPbf)
+        );
+        for other in [
+            "scenarios/simple_merge.toml",
+            "scenarios/i696_window.graph.json",
+        ] {
+            assert_eq!(sniff_map(&shipped(other)), None, "{other}");
+        }
+        let said = map_given_for(
+            MapKind::OsmXml,
+            Path::new("maps/i696.osm"),
+            MapcFile::Scenario,
+        );
+        assert!(
+            said.starts_with("is an OSM XML map, not a scenario: "),
+            "{said}"
+        );
+        assert!(said.contains("`mapc pipeline maps/i696.osm`"), "{said}");
     }
 }

@@ -119,18 +119,13 @@ impl MapFormat {
         }
     }
 
-    /// By the first bytes: a PBF starts with a length and `OSMHeader`; XML by its root element (`<osm>`, `<net>`),
-    /// found past the declaration and comments (netconvert's header comment names `<osm-files>`, so a mere
-    /// "contains `<osm`" would misread a SUMO net).
+    /// By the first bytes ([`filekind::sniff_map`]).
     pub fn sniff(head: &[u8]) -> Option<MapFormat> {
-        if head.len() >= 13 && &head[4..7] == b"\x0a\x09O" && head[6..].starts_with(b"OSMHeader") {
-            return Some(MapFormat::OsmPbf);
-        }
-        match xml_root(head)? {
-            "osm" => Some(MapFormat::OsmXml),
-            "net" => Some(MapFormat::SumoNet),
-            _ => None,
-        }
+        Some(match filekind::sniff_map(head)? {
+            filekind::MapKind::OsmXml => MapFormat::OsmXml,
+            filekind::MapKind::OsmPbf => MapFormat::OsmPbf,
+            filekind::MapKind::SumoNet => MapFormat::SumoNet,
+        })
     }
 
     fn source_format(self) -> SourceFormat {
@@ -138,30 +133,6 @@ impl MapFormat {
             MapFormat::OsmXml => SourceFormat::OsmXml,
             MapFormat::OsmPbf => SourceFormat::OsmPbf,
             MapFormat::SumoNet => SourceFormat::SumoNet,
-        }
-    }
-}
-
-/// The name of the root element of the XML that `head` starts, skipping the declaration, comments, processing
-/// instructions and a doctype; `None` when `head` is not XML or ends before the root.
-fn xml_root(head: &[u8]) -> Option<&str> {
-    let text = std::str::from_utf8(head).unwrap_or_else(|e| {
-        std::str::from_utf8(&head[..e.valid_up_to()]).expect("valid up to here")
-    });
-    let mut rest = text.trim_start_matches('\u{feff}');
-    loop {
-        rest = rest.trim_start();
-        if let Some(after) = rest.strip_prefix("<!--") {
-            rest = &after[after.find("-->")? + 3..];
-        } else if rest.starts_with("<?") || rest.starts_with("<!") {
-            rest = &rest[rest.find('>')? + 1..];
-        } else if let Some(after) = rest.strip_prefix('<') {
-            let end = after
-                .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
-                .unwrap_or(after.len());
-            return (end > 0).then(|| &after[..end]);
-        } else {
-            return None;
         }
     }
 }

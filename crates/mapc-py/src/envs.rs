@@ -2,6 +2,7 @@
 
 use crate::{load_scenario, mapc_error};
 use mapc_rl::Checkpoint;
+use mapc_rl::RlError;
 use mapc_rl::env::distributed::{AgentReward, DistributedConfig, DistributedEnv, Features};
 use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind};
 use mapc_rl::ppo::tensor::Scratch;
@@ -75,16 +76,15 @@ impl Episode {
     }
 
     /// One step; `truncated` once the episode (the scenario's warm-up and horizon) is over (it has no other end).
-    fn step(&mut self, action: &[f32]) -> PyResult<(Vec<f32>, f32, bool)> {
+    /// An error is a message (the vector env says which sub-environment it came from).
+    fn step(&mut self, action: &[f32]) -> Result<(Vec<f32>, f32, bool), String> {
         if !self.started {
-            return Err(mapc_error("step before reset: call reset(seed) first"));
+            return Err("step before reset: call reset(seed) first".into());
         }
         if self.steps >= self.env.horizon() {
-            return Err(mapc_error(
-                "step after the episode's end: call reset(seed) for a new episode",
-            ));
+            return Err("step after the episode's end: call reset(seed) for a new episode".into());
         }
-        let tr = self.env.try_step(action).map_err(mapc_error)?;
+        let tr = self.env.try_step(action).map_err(|e| e.to_string())?;
         self.steps += 1;
         Ok((tr.obs, tr.reward, self.steps >= self.env.horizon()))
     }
@@ -147,7 +147,7 @@ impl Env {
         action: &[u8],
     ) -> PyResult<(Bound<'py, PyBytes>, f32, bool)> {
         let action = from_bytes(action, self.episode.env.act_dim(), "action")?;
-        let (obs, reward, truncated) = self.episode.step(&action)?;
+        let (obs, reward, truncated) = self.episode.step(&action).map_err(mapc_error)?;
         Ok((to_bytes(py, &obs), reward, truncated))
     }
     /// (outflow veh/h, inflow veh/h, mean speed m/s) of the episode so far, as `mapc sim` defines them.
@@ -262,8 +262,9 @@ impl VecEnv {
                         *seed += n;
                         return e.reset(*seed).map(|obs| (obs, 0.0, false, None));
                     }
-                    let (obs, reward, truncated) =
-                        e.step(&actions[i * act_dim..(i + 1) * act_dim])?;
+                    let (obs, reward, truncated) = e
+                        .step(&actions[i * act_dim..(i + 1) * act_dim])
+                        .map_err(|msg| mapc_error(format!("sub-environment {i}: {msg}")))?;
                     if !truncated {
                         return Ok((obs, reward, false, None));
                     }
@@ -451,7 +452,18 @@ impl DistEnv {
                 "step after the episode's end: call reset(seed) for a new episode",
             ));
         }
-        let out = self.env.step(&actions).map_err(mapc_error)?;
+        let out = self.env.step(&actions).map_err(|e| {
+            let index = match e {
+                RlError::Action { index, .. } => Some(index),
+                _ => None,
+            };
+            let err = mapc_error(e);
+            // which action was refused, for the PettingZoo wrapper to name the agent
+            if let Some(index) = index {
+                let _ = err.value(py).setattr("action_index", index);
+            }
+            err
+        })?;
         self.steps += 1;
         Ok((
             out.rewards,

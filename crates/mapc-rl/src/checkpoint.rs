@@ -170,12 +170,12 @@ impl Checkpoint {
     }
 
     pub fn load(path: &Path) -> Result<Self, RlError> {
-        let text = std::fs::read_to_string(path).map_err(|e| RlError::Io {
+        let bytes = std::fs::read(path).map_err(|e| RlError::Io {
             path: path.into(),
             source: e,
         })?;
-        // another of mapc's files, whatever its name: say what it is rather than name a missing field
-        if let Some(kind) = mapc_graph::filekind::sniff(text.as_bytes())
+        // another of mapc's files, or a map, whatever its name: say what it is rather than name a missing field
+        if let Some(kind) = mapc_graph::filekind::sniff(&bytes)
             && kind != mapc_graph::MapcFile::Policy
         {
             return Err(RlError::Format {
@@ -183,6 +183,16 @@ impl Checkpoint {
                 msg: format!("is {}, not a policy", kind.name()),
             });
         }
+        if let Some(map) = mapc_graph::filekind::sniff_map(&bytes) {
+            return Err(RlError::Format {
+                path: path.into(),
+                msg: mapc_graph::filekind::map_given_for(map, path, mapc_graph::MapcFile::Policy),
+            });
+        }
+        let text = String::from_utf8(bytes).map_err(|e| RlError::Io {
+            path: path.into(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
+        })?;
         let ck: Checkpoint = serde_json::from_str(&text).map_err(|e| RlError::Format {
             path: path.into(),
             msg: format!("line {} column {}: {e}", e.line(), e.column()),

@@ -25,4 +25,11 @@ pub enum RlError {
     Scenario { scenario: String, msg: String },
     #[error("{0}")]
     Config(String),
+    /// An action that is not a finite acceleration; `index` is its position in the step's actions.
+    #[error("{place} is {value}: an action must be a finite acceleration in m/s²")]
+    Action {
+        index: usize,
+        place: String,
+        value: f32,
+    },
 }

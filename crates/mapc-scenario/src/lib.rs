@@ -17,6 +17,8 @@
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
 //! - **entry capacity**: one vehicle per step per entry road (`bounds.rs`); demand above it is refused, like a
 //!   horizon past 48 h.
+//! - **allowed range**: every number of a scenario (times, counts, speeds, lengths, driver parameters) lies in
+//!   one (`ranges.rs`), checked on loading; outside it, the key, the value and the range are named.
 //! - **fill time**: the free-flow travel time of the longest route (`timing.rs`); a horizon that leaves too little
 //!   after it is warned about, and `mapc window` picks a warm-up for it.
 
@@ -25,6 +27,7 @@ pub mod compile;
 pub mod distribution;
 pub mod generator;
 pub mod model;
+pub mod ranges;
 pub mod simplify;
 pub mod timing;
 pub mod transform;
@@ -206,19 +209,34 @@ impl Scenario {
     }
 
     pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+        let bytes = std::fs::read(path).map_err(|source| ScenarioError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        // another of mapc's files, whatever its name: say what it is rather than fail on TOML syntax
-        if let Some(kind) = mapc_graph::filekind::sniff(text.as_bytes())
+        // another of mapc's files, or a map, whatever its name: say what it is rather than fail on TOML syntax
+        let not_a_scenario = |message: String| ScenarioError::Toml {
+            path: path.to_path_buf(),
+            message,
+        };
+        if let Some(kind) = mapc_graph::filekind::sniff(&bytes)
             && kind != mapc_graph::MapcFile::Scenario
         {
-            return Err(ScenarioError::Toml {
-                path: path.to_path_buf(),
-                message: format!("is {}, not a scenario", kind.name()),
-            });
+            return Err(not_a_scenario(format!(
+                "is {}, not a scenario",
+                kind.name()
+            )));
         }
+        if let Some(map) = mapc_graph::filekind::sniff_map(&bytes) {
+            return Err(not_a_scenario(mapc_graph::filekind::map_given_for(
+                map,
+                path,
+                mapc_graph::MapcFile::Scenario,
+            )));
+        }
+        let text = String::from_utf8(bytes).map_err(|e| ScenarioError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
+        })?;
         Scenario::from_toml(&text, path)
     }
 
@@ -262,6 +280,8 @@ impl ResolvedScenario {
             key,
             message,
         };
+        // the numbers first: a scenario with an absurd one is refused before its network is built
+        ranges::check_scenario(&scenario).map_err(|r| invalid(r.key, r.message))?;
         let graph = match &scenario.network {
             NetworkSpec::SimpleMerge(p) => {
                 generator::simple_merge(p).map_err(|message| ScenarioError::Network {
@@ -283,45 +303,6 @@ impl ResolvedScenario {
                     })?
             }
         };
-        if !(scenario.step_s.is_finite() && scenario.step_s > 0.0) {
-            return Err(invalid(
-                "step_s".into(),
-                format!(
-                    "must be a positive number of seconds, not {}",
-                    scenario.step_s
-                ),
-            ));
-        }
-        if scenario.horizon_steps == 0 {
-            return Err(invalid("horizon_steps".into(), "must be at least 1".into()));
-        }
-        for (name, t) in &scenario.vehicle_types {
-            for (field, v, positive) in [
-                ("accel", t.accel, true),
-                ("decel", t.decel, true),
-                ("tau", t.tau, false),
-                ("min_gap", t.min_gap, false),
-                ("max_speed", t.max_speed, true),
-                ("delta", t.delta, true),
-                ("speed_factor", t.speed_factor, true),
-                ("speed_dev", t.speed_dev, false),
-                ("length", t.length, true),
-                ("idm_stepping_s", t.idm_stepping_s, true),
-            ] {
-                if !v.is_finite() || v < 0.0 || (positive && v == 0.0) {
-                    return Err(invalid(
-                        format!("vehicle_types.{name}.{field}"),
-                        format!("bad value {v}"),
-                    ));
-                }
-            }
-            if !(0.0..=1.0).contains(&t.impatience) {
-                return Err(invalid(
-                    format!("vehicle_types.{name}.impatience"),
-                    "must be between 0 and 1".into(),
-                ));
-            }
-        }
         let find_road = |key: String, r: &str| -> Result<RoadId, ScenarioError> {
             let found = graph
                 .find_roads(r)
@@ -334,18 +315,6 @@ impl ResolvedScenario {
                 return Err(invalid(
                     format!("flows[{i}].vehicle_type"),
                     format!("no vehicle type `{}`", f.vehicle_type),
-                ));
-            }
-            if !(f.vehs_per_hour.is_finite() && f.vehs_per_hour >= 0.0) {
-                return Err(invalid(
-                    format!("flows[{i}].vehs_per_hour"),
-                    format!("bad value {}", f.vehs_per_hour),
-                ));
-            }
-            if !(f.depart_speed_mps.is_finite() && f.depart_speed_mps >= 0.0) {
-                return Err(invalid(
-                    format!("flows[{i}].depart_speed_mps"),
-                    format!("bad value {}", f.depart_speed_mps),
                 ));
             }
             let from = find_road(format!("flows[{i}].from"), &f.from)?;

@@ -98,6 +98,8 @@ pub enum SimError {
     UnknownVehicle(VehicleId),
     #[error("vehicle {0} is not a controlled vehicle")]
     NotControlled(VehicleId),
+    #[error("vehicle {vehicle}: acceleration {accel} is not a finite number")]
+    BadAcceleration { vehicle: VehicleId, accel: f64 },
     #[error(
         "collision at t = {time_s} s: vehicle {follower} is {gap_m:.3} m into vehicle {leader} ({place})"
     )]

@@ -3,6 +3,7 @@
 
 use crate::SimError;
 use mapc_graph::{LaneGraph, RoadId};
+use mapc_scenario::ranges;
 
 /// One driver/vehicle type.
 #[derive(Clone, Debug, PartialEq)]
@@ -171,12 +172,11 @@ impl SimSpec {
 
     /// Check the numbers a run relies on; errors name the item.
     pub fn validate(&self) -> Result<(), SimError> {
-        if !(self.step_s > 0.0 && self.step_s <= 10.0) {
-            return Err(SimError::Spec(format!(
-                "step_s must be in (0, 10], got {}",
-                self.step_s
-            )));
-        }
+        let range = |what: String, v: f64, range: ranges::Range| {
+            ranges::check(what, v, range)
+                .map_err(|r| SimError::Spec(format!("{}: {}", r.key, r.message)))
+        };
+        range("step_s".into(), self.step_s, ranges::STEP_S)?;
         for (i, t) in self.vehicle_types.iter().enumerate() {
             let bad = |what: &str, v: f64| {
                 SimError::Spec(format!("vehicle type {i} `{}`: {what} = {v}", t.name))
@@ -193,9 +193,11 @@ impl SimSpec {
                     return Err(bad(what, v));
                 }
             }
-            if !(t.idm_stepping_s > 0.0) {
-                return Err(bad("idm_stepping_s", t.idm_stepping_s));
-            }
+            range(
+                format!("vehicle type {i} `{}`: idm_stepping_s", t.name),
+                t.idm_stepping_s,
+                ranges::IDM_STEPPING_S,
+            )?;
             for (what, v) in [
                 ("tau", t.tau),
                 ("min_gap", t.min_gap),
@@ -225,10 +227,18 @@ impl SimSpec {
                     f.vehs_per_hour
                 )));
             }
-            if !(f.depart_speed >= 0.0) {
+            if !(f.depart_speed >= 0.0 && f.depart_speed.is_finite()) {
                 return Err(SimError::Spec(format!(
                     "flow {i}: depart_speed = {}",
                     f.depart_speed
+                )));
+            }
+            // departure times are begin + n * period: a begin out of range makes them stand still or pile up
+            range(format!("flow {i}: begin_s"), f.begin_s, ranges::FLOW_TIME_S)?;
+            if !(f.end_s > f.begin_s) {
+                return Err(SimError::Spec(format!(
+                    "flow {i}: end_s = {} is not after begin_s = {}",
+                    f.end_s, f.begin_s
                 )));
             }
         }

@@ -163,6 +163,9 @@ fn controlled_vehicles_obey_commands_within_limits_and_never_collide() {
                 };
                 sim.set_acceleration(id, a).unwrap();
                 commanded += 1;
+                for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                    assert!(sim.set_acceleration(id, bad).is_err());
+                }
             } else {
                 assert!(sim.set_acceleration(id, 1.0).is_err());
             }

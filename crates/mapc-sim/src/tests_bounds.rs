@@ -112,3 +112,38 @@ fn initial_vehicles_that_do_not_fit_are_refused_with_the_count_that_would() {
     rs.scenario.initial_vehicles.as_mut().unwrap().count = 100;
     assert!(spec_from_scenario(&rs).is_ok());
 }
+
+/// Departure times that could not advance (a begin of -1e308 once made `mapc sim` run forever) are refused by the
+/// simulator itself, and a period too long to be a number departs once: each run ends, within a timeout.
+#[test]
+fn departure_times_always_advance_or_are_refused() {
+    let within = |spec: SimSpec| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let run = Simulation::from_spec(spec, 1).and_then(|mut sim| sim.run());
+            let _ = tx.send(run.map(|m| m.departed).map_err(|e| e.to_string()));
+        });
+        rx.recv_timeout(std::time::Duration::from_secs(60))
+            .expect("the run ends")
+    };
+    for begin in [-1e308, -1e6, f64::NAN, f64::NEG_INFINITY, 1e308] {
+        let mut spec = human_spec();
+        spec.horizon_steps = 50;
+        spec.flows[1].begin_s = begin;
+        let err = within(spec).unwrap_err();
+        assert!(
+            err.contains("flow 1: begin_s") && err.contains("[0, 172800] s"),
+            "{begin}: {err}"
+        );
+    }
+    let mut spec = human_spec();
+    spec.flows[1].end_s = spec.flows[1].begin_s;
+    assert!(within(spec).unwrap_err().contains("is not after begin_s"));
+    // 5e-324 veh/h: one departure at begin, the next one never
+    let mut spec = human_spec();
+    spec.horizon_steps = 50;
+    spec.flows.truncate(1);
+    spec.initial.clear();
+    spec.flows[0].vehs_per_hour = 5e-324;
+    assert_eq!(within(spec), Ok(1));
+}

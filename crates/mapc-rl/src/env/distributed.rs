@@ -361,11 +361,17 @@ impl DistributedEnv {
             .collect()
     }
 
-    /// Applies one acceleration per agent (clipped to the bounds; a non-finite one counts as 0), steps the
+    /// Applies one acceleration per agent (clipped to the bounds; a non-finite one is refused), steps the
     /// simulation, and returns each acting agent's reward and whether it is done (left the region or the
     /// network), then the observations of the agents present now.
     pub fn step(&mut self, actions: &[(VehicleId, f32)]) -> Result<AgentsStep, RlError> {
         let (lo, hi) = (self.cfg.accel_min, self.cfg.accel_max);
+        super::check_actions(actions.iter().map(|&(_, a)| a), |k| {
+            format!(
+                "the action of agent vehicle {} (actions[{k}])",
+                actions[k].0
+            )
+        })?;
         let sim = self.sim.as_mut().expect("reset before step");
         for &(id, a) in actions {
             super::apply_action(sim, id, a, (lo, hi))?;

@@ -246,6 +246,7 @@ impl MergeEnv {
     /// Steps with the given accelerations; errors of the simulator are passed on.
     pub fn try_step(&mut self, action: &[f32]) -> Result<Transition, RlError> {
         let (lo, hi) = (self.cfg.accel_min, self.cfg.accel_max);
+        super::check_actions(action.iter().copied(), |k| format!("action[{k}]"))?;
         let sim = self.sim.as_mut().expect("reset before step");
         for (k, &id) in self.controlled.iter().enumerate() {
             if let Some(&a) = action.get(k) {

@@ -35,18 +35,37 @@ pub(crate) fn episode_simulation(spec: &SimSpec, seed: u64) -> Result<Simulation
     Ok(sim)
 }
 
-/// Give AV `id` a policy's acceleration for the next step, clamped to `[lo, hi]` (a non-finite one is 0: the
-/// network's output is never trusted to be a number).
+/// Refuse the step's actions if any is not a number: every acceleration that enters an environment (from a
+/// policy, a controller, Python) goes through here before any is applied, so a bad one leaves the episode as it
+/// was. `place(k)` says how the caller names action `k` (`action[3]`, `agent vehicle 12 (actions[0])`).
+pub(crate) fn check_actions(
+    actions: impl IntoIterator<Item = f32>,
+    place: impl Fn(usize) -> String,
+) -> Result<(), RlError> {
+    match actions
+        .into_iter()
+        .enumerate()
+        .find(|(_, a)| !a.is_finite())
+    {
+        Some((k, value)) => Err(RlError::Action {
+            index: k,
+            place: place(k),
+            value,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Give AV `id` a checked acceleration ([`check_actions`]) for the next step, clamped to `[lo, hi]`.
 pub(crate) fn apply_action(
     sim: &mut Simulation,
     id: VehicleId,
     a: f32,
     (lo, hi): (f64, f64),
 ) -> Result<(), RlError> {
-    let a = if a.is_finite() {
-        (a as f64).clamp(lo, hi)
-    } else {
-        0.0
-    };
-    sim.set_acceleration(id, a).map_err(sim_error)
+    sim.set_acceleration(id, (a as f64).clamp(lo, hi))
+        .map_err(sim_error)
 }
+
+#[cfg(test)]
+mod action_tests;

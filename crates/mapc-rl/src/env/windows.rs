@@ -159,6 +159,12 @@ impl WindowsEnv {
     /// without an action keeps its AVs on the driver model); returns every window's next observation.
     pub fn step(&mut self, actions: &[Option<Vec<f32>>]) -> Result<&[Vec<f32>], RlError> {
         let (lo, hi) = (self.cfg.accel_min, self.cfg.accel_max);
+        for (w, action) in actions.iter().enumerate() {
+            let Some(action) = action else { continue };
+            super::check_actions(action.iter().copied(), |k| {
+                format!("window {w} action[{k}]")
+            })?;
+        }
         let sim = self.sim.as_mut().expect("reset before step");
         for (w, action) in self.windows.iter().zip(actions) {
             let Some(action) = action else { continue };

@@ -13,10 +13,19 @@ impl Simulation {
             if flow.vehs_per_hour <= 0.0 {
                 continue;
             }
+            // Departure n is at begin + n * period. `validate` keeps begin within the longest run and the period
+            // at least one step, so each departure time is a distinct sane number and this loop makes at most a
+            // few departures per step (a begin of -1e308 once made `depart` stand still: a run without end).
             let period = 3600.0 / flow.vehs_per_hour;
             loop {
-                let depart = flow.begin_s + self.flow_next[f] as f64 * period;
-                if depart > now + 1e-9 || depart >= flow.end_s {
+                let n = self.flow_next[f];
+                // the first departure without the product: a period too long to be a number departs once
+                let depart = if n == 0 {
+                    flow.begin_s
+                } else {
+                    flow.begin_s + n as f64 * period
+                };
+                if !(depart <= now + 1e-9) || depart >= flow.end_s {
                     break;
                 }
                 let entry = self.routes[self.flow_route[f] as usize].lanes[0];

@@ -347,7 +347,8 @@ impl Simulation {
     }
 
     /// Set the acceleration a controlled vehicle applies in the next step (clamped to [-decel, accel], then
-    /// capped by the safe speed). Ignored for vehicles that are not controlled or not in the network.
+    /// capped by the safe speed). An error for a vehicle that is not controlled or not in the network, and for an
+    /// acceleration that is not a finite number (the vehicle keeps its command).
     pub fn set_acceleration(&mut self, id: VehicleId, accel: f64) -> Result<(), SimError> {
         let v = self
             .veh
@@ -356,9 +357,10 @@ impl Simulation {
         if !v.controlled {
             return Err(SimError::NotControlled(id));
         }
-        if accel.is_finite() {
-            v.accel_cmd = accel;
+        if !accel.is_finite() {
+            return Err(SimError::BadAcceleration { vehicle: id, accel });
         }
+        v.accel_cmd = accel;
         Ok(())
     }
 
