@@ -237,7 +237,10 @@ fn an_episode_runs_the_warm_up_and_the_whole_horizon() {
     let mut spec = spec_of(load("scenarios/i696_3merge.toml"));
     spec.warmup_steps = 400;
     spec.horizon_steps = 600;
-    let humans = human_windows_episode(&crate::eval::human_spec(&spec), 2).unwrap();
+    let humans = mapc_sim::Simulation::from_spec(crate::eval::human_spec(&spec), 2)
+        .unwrap()
+        .run()
+        .unwrap();
     let mut env = WindowsEnv::new(spec, MergeEnvConfig::paper(RewardKind::Outflow, 5)).unwrap();
     assert_eq!(env.horizon(), 1000);
     env.reset(2).unwrap();
@@ -246,9 +249,9 @@ fn an_episode_runs_the_warm_up_and_the_whole_horizon() {
         env.step(&none).unwrap();
     }
     assert!(env.simulation().unwrap().is_done());
-    let ran = env.metrics();
-    assert_eq!(ran.merge_flows.len(), humans.merge_flows.len());
-    for (f, h) in ran.merge_flows.iter().zip(&humans.merge_flows) {
+    let ran = env.simulation().unwrap().metrics();
+    assert_eq!(ran.merge_flows_veh_h.len(), humans.merge_flows_veh_h.len());
+    for (f, h) in ran.merge_flows_veh_h.iter().zip(&humans.merge_flows_veh_h) {
         assert!(
             *h > 0.0 && (f - h).abs() <= 0.25 * h,
             "{ran:?} against {humans:?}"
