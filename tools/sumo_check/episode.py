@@ -1,8 +1,9 @@
 """One SUMO 1.8 episode of an exported scenario, the way the paper's Flow code ran it (REFERENCE.md sec. 2):
 sumo with the export's sumocfg and the seed, the set-up steps (the initial vehicles enter in the second), then the
-horizon; every vehicle gets speed mode 9 and lane-change mode 512 when it departs; the mean speed of the vehicles
+horizon; every vehicle gets speed mode 9 when it departs, and on a one-lane network lane-change mode 512 (on a
+network with a road of several lanes SUMO's default mode, LC2013 as mapc drives it); the mean speed of the vehicles
 in the network is sampled before each step (steps with mean 0 skipped); departures and arrivals are counted per
-step. With a policy, the controlled AVs are chosen and observed before each step and their accelerations are
+step; a lane change is a vehicle's lane index changing on the same edge from one horizon step to the next. With a policy, the controlled AVs are chosen and observed before each step and their accelerations are
 applied as Flow did: next speed max(v + a dt, 0) through slowDown, capped by SUMO's safe speed (speed mode 9)."""
 import os
 
@@ -37,12 +38,14 @@ def _episode(conn, tc, manifest, policy):
     is_av = {}
     entry = {}
     min_gap = {}
+    multi_lane = any(conn.edge.getLaneNumber(e) > 1 for e in conn.edge.getIDList() if not e.startswith(":"))
 
     def on_departed(ids):
         for v in ids:
             V.setSpeedMode(v, SPEED_MODE)
-            V.setLaneChangeMode(v, LANE_CHANGE_MODE)
-            V.subscribe(v, [tc.VAR_SPEED, tc.VAR_ROAD_ID])
+            if not multi_lane:
+                V.setLaneChangeMode(v, LANE_CHANGE_MODE)
+            V.subscribe(v, [tc.VAR_SPEED, tc.VAR_ROAD_ID, tc.VAR_LANE_INDEX])
             t = V.getTypeID(v)
             is_av[v] = t in av_types
             min_gap[v] = V.getMinGap(v)
@@ -59,8 +62,15 @@ def _episode(conn, tc, manifest, policy):
     queue = ControlQueue()
     speeds, departed, arrived = [], 0, 0
     controlled_steps = 0
+    lane_changes, lane_of = 0, {}
     for _ in range(manifest["horizon_steps"]):
         state = V.getAllSubscriptionResults()
+        for v, r in state.items():
+            now = (r[tc.VAR_ROAD_ID], r[tc.VAR_LANE_INDEX])
+            before = lane_of.get(v)
+            if before is not None and before[0] == now[0] and before[1] != now[1]:
+                lane_changes += 1
+            lane_of[v] = now
         if state:
             m = sum(r[tc.VAR_SPEED] for r in state.values()) / len(state)
             if m > 0:
@@ -77,6 +87,7 @@ def _episode(conn, tc, manifest, policy):
     horizon_s = manifest["horizon_steps"] * step_s
     return dict(outflow=3600.0 * arrived / horizon_s, inflow=3600.0 * departed / horizon_s,
                 speed=sum(speeds) / len(speeds) if speeds else 0.0, arrived=arrived, departed=departed,
+                lane_changes=lane_changes, lane_changes_per_veh=lane_changes / departed if departed else 0.0,
                 controlled_av_steps=controlled_steps)
 
 

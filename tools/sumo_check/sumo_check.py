@@ -23,7 +23,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import stats  # noqa: E402
 
-METRICS = (("outflow", "outflow veh/h"), ("inflow", "inflow veh/h"), ("speed", "avg speed m/s"))
+METRICS = (("outflow", "outflow veh/h"), ("inflow", "inflow veh/h"), ("speed", "avg speed m/s"),
+           ("lane_changes_per_veh", "lane changes / veh"))
+# Per run: lane changes in the horizon over the vehicles that departed in it (mapc: `lane_changes` / `departed`).
+LANE_CHANGES = "lane_changes_per_veh"
 
 
 def parse_seeds(text):
@@ -93,12 +96,16 @@ def summary_of_runs(runs):
 
 
 def summary_of_mapc(block, n):
-    return {k: dict(mean=block[k]["mean"], ci95=block[k]["ci95"], std=stats.sd_from_ci(block[k]["ci95"], n), n=n)
-            for k, _ in METRICS}
+    out = {k: dict(mean=block[k]["mean"], ci95=block[k]["ci95"], std=stats.sd_from_ci(block[k]["ci95"], n), n=n)
+           for k, _ in METRICS if k != LANE_CHANGES}
+    per_veh = [r["lane_changes"] / r["departed"] if r["departed"] else 0.0 for r in block["runs"]]
+    m, ci, sd = stats.mean_ci(per_veh)
+    out[LANE_CHANGES] = dict(mean=m, ci95=ci, std=sd, n=len(per_veh))
+    return out
 
 
-def fmt(s):
-    return "%.2f ± %.2f" % (s["mean"], s["ci95"])
+def fmt(s, decimals=2):
+    return "%.*f ± %.*f" % (decimals, s["mean"], decimals, s["ci95"])
 
 
 def welch_line(a, b):
@@ -112,7 +119,9 @@ def print_table(columns, comparisons):
     print("| metric | " + " | ".join(names) + " | " + " | ".join(c[0] for c in comparisons) + " |")
     print("|---" * (1 + len(columns) + len(comparisons)) + "|")
     for key, label in METRICS:
-        cells = [fmt(c[1][key]) for c in columns]
+        if key == LANE_CHANGES and all(c[1][key]["mean"] == 0 for c in columns):
+            continue  # one-lane roads: nobody changes lanes
+        cells = [fmt(c[1][key], 3 if key == LANE_CHANGES else 2) for c in columns]
         comps = [welch_line(a[key], b[key]) for _, a, b in comparisons]
         print("| %s | %s | %s |" % (label, " | ".join(cells), " | ".join(comps)))
 

@@ -6,7 +6,7 @@
 use crate::names::SumoNames;
 use crate::xml::{element, num, start};
 use mapc_graph::{LaneGraph, RoadId};
-use mapc_sim::{Network, SimError, SimSpec};
+use mapc_sim::{DepartLane, FlowSpec, Network, SimError, SimSpec};
 
 /// IDM's integration sub-step in SUMO 1.8 (not settable there as a duration).
 const SUMO_IDM_STEPPING_S: f64 = 0.25;
@@ -24,10 +24,11 @@ pub fn route_roads(
     from: RoadId,
     to: Option<RoadId>,
 ) -> Result<Vec<RoadId>, SimError> {
+    // Road by road, as mapc-sim routes a vehicle of a given entry lane: a lane that ends (an acceleration lane)
+    // is left by a lane change, so the lane path may end early where the road path goes on.
     Ok(net
-        .route(graph, from, to)?
+        .route_roads(graph, from, to)?
         .into_iter()
-        .filter_map(|l| net.road_of(l))
         .map(|r| net.road_ids[r])
         .collect())
 }
@@ -134,7 +135,7 @@ pub fn routes_xml(
                 ("begin", num(f.begin_s, 4)),
                 ("end", num(end, 4)),
                 ("vehsPerHour", num(f.vehs_per_hour, 4)),
-                ("departLane", "free".into()),
+                ("departLane", depart_lane(graph, f)),
                 ("departSpeed", num(f.depart_speed, 4)),
             ],
         );
@@ -150,9 +151,34 @@ pub fn routes_xml(
     Ok(out)
 }
 
+/// SUMO's `departLane` of a flow: mapc's `depart_lane` on an entry road of several lanes; on a one-lane road
+/// `free`, which there is lane 0 as any other choice is.
+fn depart_lane(graph: &LaneGraph, f: &FlowSpec) -> String {
+    let lanes = graph
+        .roads
+        .binary_search_by_key(&f.from, |r| r.id)
+        .map_or(1, |i| graph.roads[i].lanes.len());
+    if lanes <= 1 {
+        return "free".into();
+    }
+    match f.depart_lane {
+        DepartLane::First => "first".into(),
+        DepartLane::Best => "best".into(),
+        DepartLane::Index(i) => i.to_string(),
+    }
+}
+
 /// The `.sumocfg`: the files, the step, and the options of the paper's runs (REFERENCE.md): no teleporting,
-/// collisions checked inside junctions but not acted on, no min gap in the collision check.
-pub fn sumocfg(net_file: &str, routes_file: &str, step_s: f64, end_s: f64) -> String {
+/// collisions checked inside junctions but not acted on, no min gap in the collision check; with `multi_lane`,
+/// lane changes done in one step (`lanechange.duration` 0, SUMO 1.8's default, written out as mapc's LC2013
+/// assumes it) by each vehicle type's default model, LC2013.
+pub fn sumocfg(
+    net_file: &str,
+    routes_file: &str,
+    step_s: f64,
+    end_s: f64,
+    multi_lane: bool,
+) -> String {
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\n");
     out.push_str("<!-- written by `mapc export` for SUMO 1.8; tools/sumo_check drives it with speed mode 9 -->\n");
     start(&mut out, 0, "configuration", &[]);
@@ -180,16 +206,16 @@ pub fn sumocfg(net_file: &str, routes_file: &str, step_s: f64, end_s: f64) -> St
             ("step-length", num(step_s, 4)),
         ],
     );
-    section(
-        &mut out,
-        "processing",
-        &[
-            ("time-to-teleport", "-1".into()),
-            ("collision.check-junctions", "true".into()),
-            ("collision.action", "none".into()),
-            ("collision.mingap-factor", "0".into()),
-        ],
-    );
+    let mut processing = vec![
+        ("time-to-teleport", "-1".to_string()),
+        ("collision.check-junctions", "true".into()),
+        ("collision.action", "none".into()),
+        ("collision.mingap-factor", "0".into()),
+    ];
+    if multi_lane {
+        processing.push(("lanechange.duration", "0".into()));
+    }
+    section(&mut out, "processing", &processing);
     // The PyPI builds of SUMO ship without their XML schemas: validating would only warn that they are missing.
     section(
         &mut out,

@@ -220,7 +220,13 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
         (routes_file.clone(), routes),
         (
             config_file,
-            demand::sumocfg(&net_file, &routes_file, spec.step_s, end_s),
+            demand::sumocfg(
+                &net_file,
+                &routes_file,
+                spec.step_s,
+                end_s,
+                spec.graph.roads.iter().any(|r| r.lanes.len() > 1),
+            ),
         ),
         (format!("{stem}.mapc.json"), to_json(&manifest)),
     ];

@@ -1,0 +1,196 @@
+//! The export of a multi-lane scenario (`two_lane_merge`) parsed back as XML (no SUMO needed): every lane of each
+//! edge side by side at mapc's lengths, lane-level connections with their internal lanes, the acceleration lane
+//! ending without a connection onward, the flows' `departLane` from mapc's `depart_lane`, and one-step lane changes.
+
+use mapc_scenario::ResolvedScenario;
+use quick_xml::events::Event;
+use quick_xml::{Reader, XmlVersion};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Every element of `path` as (name, attributes), in document order.
+fn elements(path: &Path) -> Vec<(String, HashMap<String, String>)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut reader = Reader::from_str(&text);
+    let mut out = Vec::new();
+    loop {
+        match reader.read_event().unwrap() {
+            Event::Start(e) | Event::Empty(e) => {
+                let attrs = e
+                    .attributes()
+                    .map(|a| {
+                        let a = a.unwrap();
+                        (
+                            a.key.as_ref().to_string(),
+                            a.normalized_value(XmlVersion::Implicit1_0)
+                                .unwrap()
+                                .into_owned(),
+                        )
+                    })
+                    .collect();
+                out.push((e.name().as_ref().to_string(), attrs));
+            }
+            Event::Eof => return out,
+            _ => {}
+        }
+    }
+}
+
+fn points(shape: &str) -> Vec<[f64; 2]> {
+    shape
+        .split(' ')
+        .map(|p| {
+            let (x, y) = p.split_once(',').unwrap();
+            [x.parse().unwrap(), y.parse().unwrap()]
+        })
+        .collect()
+}
+
+#[test]
+fn two_lane_merge_exports_every_lane_its_connections_and_depart_lanes() {
+    let rs = ResolvedScenario::load("two_lane_merge").unwrap();
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mapc-sumo-two-lane-{}", std::process::id()));
+    mapc_sumo::export_scenario(&rs, &dir).unwrap();
+    let names = mapc_sumo::names::SumoNames::of(&rs.graph);
+    let net = elements(&dir.join("two_lane_merge.net.xml"));
+
+    // Lanes per normal edge, with mapc's lengths and speeds, side by side one lane width apart.
+    let mut lanes: HashMap<String, Vec<&HashMap<String, String>>> = HashMap::new();
+    for (name, a) in &net {
+        if name == "lane" && !a["id"].starts_with(':') {
+            let (edge, _) = a["id"].rsplit_once('_').unwrap();
+            lanes.entry(edge.to_string()).or_default().push(a);
+        }
+    }
+    let mut multi = 0;
+    for (i, road) in rs.graph.roads.iter().enumerate() {
+        let got = &lanes[&names.edges[i]];
+        assert_eq!(got.len(), road.lanes.len(), "lanes of {}", names.edges[i]);
+        for (k, (a, lane)) in got.iter().zip(&road.lanes).enumerate() {
+            assert_eq!(a["index"], k.to_string());
+            let length: f64 = a["length"].parse().unwrap();
+            assert!(
+                (length - lane.length_m).abs() < 1e-3,
+                "{}: length {length}",
+                a["id"]
+            );
+            let speed: f64 = a["speed"].parse().unwrap();
+            assert!(
+                (speed - lane.speed_mps).abs() < 0.01,
+                "{}: speed {speed}",
+                a["id"]
+            );
+        }
+        if road.lanes.len() > 1 {
+            multi += 1;
+            for k in 1..got.len() {
+                let (p, q) = (points(&got[k - 1]["shape"]), points(&got[k]["shape"]));
+                let apart = (q[0][0] - p[0][0]).hypot(q[0][1] - p[0][1]);
+                let width = (road.lanes[k - 1].width_m + road.lanes[k].width_m) / 2.0;
+                assert!(
+                    (apart - width).abs() < 0.01,
+                    "{}: lanes {apart} m apart",
+                    names.edges[i]
+                );
+            }
+        }
+    }
+    assert!(
+        multi >= 3,
+        "the main road's edges have two lanes, the one after the merge three"
+    );
+
+    // One connection per lane-level connection of the graph, each through its own internal lane, and one on
+    // from each internal lane.
+    let connections: Vec<_> = net
+        .iter()
+        .filter(|(n, _)| n == "connection")
+        .map(|(_, a)| a)
+        .collect();
+    let (through, onward): (Vec<_>, Vec<_>) = connections
+        .iter()
+        .partition(|a| !a["from"].starts_with(':'));
+    assert_eq!(through.len(), rs.graph.connections.len());
+    assert_eq!(onward.len(), rs.graph.connections.len());
+    let edge_of = |id| {
+        let i = rs
+            .graph
+            .roads
+            .binary_search_by_key(&id, |r: &mapc_graph::Road| r.id)
+            .unwrap();
+        names.edges[i].clone()
+    };
+    for c in &rs.graph.connections {
+        let (from, to) = (edge_of(c.from_road), edge_of(c.to_road));
+        let found = through.iter().find(|a: &&&HashMap<String, String>| {
+            a["from"] == from
+                && a["to"] == to
+                && a["fromLane"] == c.from_lane.to_string()
+                && a["toLane"] == c.to_lane.to_string()
+        });
+        let found = found.unwrap_or_else(|| {
+            panic!("no connection {from}_{} -> {to}_{}", c.from_lane, c.to_lane)
+        });
+        let via = found["via"].rsplit_once('_').unwrap().0;
+        assert!(
+            onward
+                .iter()
+                .any(|a| a["from"] == via && a["to"] == to && a["toLane"] == c.to_lane.to_string()),
+            "internal edge {via} does not lead on to {to}_{}",
+            c.to_lane
+        );
+    }
+    // The acceleration lane (the rightmost lane of the road after the merge) has no connection onward.
+    let post = rs
+        .graph
+        .roads
+        .iter()
+        .position(|r| r.lanes.len() == 3)
+        .expect("the road after the merge has the acceleration lane");
+    assert!(
+        through
+            .iter()
+            .any(|a| a["from"] == names.edges[post] && a["fromLane"] == "1")
+    );
+    assert!(
+        !through
+            .iter()
+            .any(|a| a["from"] == names.edges[post] && a["fromLane"] == "0")
+    );
+
+    // Flows depart on mapc's lanes; the vehicle type leaves the lane-change model at SUMO's default (LC2013).
+    let routes = elements(&dir.join("two_lane_merge.rou.xml"));
+    let depart: HashMap<&str, &str> = routes
+        .iter()
+        .filter(|(n, _)| n == "flow")
+        .map(|(_, a)| (a["id"].as_str(), a["departLane"].as_str()))
+        .collect();
+    assert_eq!(
+        depart,
+        HashMap::from([("main_right", "0"), ("main_left", "1"), ("ramp", "free")])
+    );
+    for (n, a) in &routes {
+        if n == "vType" {
+            assert!(!a.contains_key("laneChangeModel"), "{a:?}");
+            assert!(!a.keys().any(|k| k.starts_with("lc")), "{a:?}");
+        }
+    }
+    let cfg = elements(&dir.join("two_lane_merge.sumocfg"));
+    assert!(
+        cfg.iter()
+            .any(|(n, a)| n == "lanechange.duration" && a["value"] == "0")
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn one_lane_config_is_unchanged() {
+    let rs = ResolvedScenario::load("simple_merge").unwrap();
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mapc-sumo-one-lane-{}", std::process::id()));
+    mapc_sumo::export_scenario(&rs, &dir).unwrap();
+    let cfg = elements(&dir.join("simple_merge.sumocfg"));
+    assert!(!cfg.iter().any(|(n, _)| n == "lanechange.duration"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
