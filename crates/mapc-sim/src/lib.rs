@@ -84,9 +84,11 @@ pub use spec::{
 };
 pub use trace::trace_run;
 
-/// Header of trace CSV files.
+/// Header of trace CSV files. `road` is the road (`R3`) or the junction connection (`R1>R2`); `lane` the lane's
+/// index on that road (0 rightmost; in a connection, the lane it came from). Traces written before `lane` was
+/// added lack it: readers take 0.
 pub const TRACE_HEADER: &str =
-    "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled";
+    "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled,lane";
 
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {

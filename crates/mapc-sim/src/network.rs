@@ -69,8 +69,10 @@ pub struct Network {
     pub road_lanes: Vec<Vec<LaneIdx>>,
     /// Some road has more than one lane (lane changing runs only then).
     pub multi_lane: bool,
-    /// Road labels for traces: `R3`; via lanes `R1>R2`.
+    /// Lane labels for messages: `R3` (`R3_1` where some road has more lanes); via lanes `R1>R2` (`R1_0>R2_1`).
     pub lane_names: Vec<String>,
+    /// The road of each lane for traces, lane index aside: `R3`; via lanes `R1>R2`.
+    pub road_labels: Vec<String>,
 }
 
 impl Network {
@@ -80,6 +82,7 @@ impl Network {
         let mut lanes = Vec::with_capacity(g.roads.len() + g.connections.len());
         let mut road_lane = HashMap::new();
         let mut lane_names = Vec::new();
+        let mut road_labels = Vec::new();
         let mut road_lanes: Vec<Vec<LaneIdx>> = Vec::with_capacity(g.roads.len());
         let lane_name = |r: &mapc_graph::Road, i: usize| {
             if multi_lane {
@@ -113,6 +116,7 @@ impl Network {
             road_lanes.push(vec![i as LaneIdx]);
             lanes.push(road_sim_lane(i, 0, r.length_m, speed));
             lane_names.push(lane_name(r, 0));
+            road_labels.push(r.id.to_string());
         }
         // the other lanes of each road after every road's lane 0 (so one-lane graphs keep their indices)
         for (i, r) in g.roads.iter().enumerate() {
@@ -125,6 +129,7 @@ impl Network {
                 road_lanes[i].push(lanes.len() as LaneIdx);
                 lanes.push(road_sim_lane(i, k as u8, r.length_m, speed));
                 lane_names.push(lane_name(r, k));
+                road_labels.push(r.id.to_string());
             }
             for k in 0..road_lanes[i].len() {
                 let l = road_lanes[i][k] as usize;
@@ -173,6 +178,7 @@ impl Network {
                 "{}>{}",
                 lane_names[from as usize], lane_names[to as usize]
             ));
+            road_labels.push(format!("{}>{}", c.from_road, c.to_road));
             lanes[from as usize].out_links.push(link_idx);
             lanes[to as usize].in_links.push(link_idx);
             links.push(SimLink {
@@ -204,6 +210,7 @@ impl Network {
             road_lanes,
             multi_lane,
             lane_names,
+            road_labels,
         };
         net.compute_downstream()?;
         Ok(net)

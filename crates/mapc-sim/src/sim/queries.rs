@@ -31,6 +31,8 @@ pub struct VehicleView<'a> {
     pub road: RoadId,
     /// True while inside a junction (on the connection from `road` to the next road).
     pub in_junction: bool,
+    /// The lane's index on `road`, 0 rightmost (inside a junction, the lane it came from).
+    pub lane_index: u8,
     pub pos_m: f64,
     pub speed: f64,
     pub length: f64,
@@ -118,12 +120,24 @@ impl Simulation {
             status: v.status,
             road,
             in_junction,
+            lane_index: self.lane_index_on_road(v.lane),
             pos_m: v.pos,
             speed: v.speed,
             length: v.length,
             entry_order: v.entry_order,
             depart_s: v.depart_s,
         })
+    }
+
+    /// Index on its road of a road lane; for a via lane, of the lane it leaves.
+    fn lane_index_on_road(&self, lane: LaneIdx) -> u8 {
+        match self.lane_at(lane as usize).kind {
+            LaneKind::Road(_) => self.lane_at(lane as usize).index,
+            LaneKind::Via(k) => {
+                self.lane_at(self.link_at(k as usize).from_lane as usize)
+                    .index
+            }
+        }
     }
 
     pub(super) fn road_of_lane(&self, lane: LaneIdx) -> (RoadId, bool) {
@@ -374,8 +388,7 @@ impl Simulation {
         self.pending.iter().map(|q| q.len() as usize).sum()
     }
 
-    /// Append this step's rows to a trace (`time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,
-    /// speed_mps,controlled`).
+    /// Append this step's rows to a trace ([`crate::TRACE_HEADER`]).
     pub fn write_trace_rows(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
         for id in self.active_ids() {
             let v = &self.veh[id as usize];
@@ -385,15 +398,16 @@ impl Simulation {
                 .unwrap_or_default();
             writeln!(
                 out,
-                "{:.2},{},{},{},{:.3},{},{:.3},{}",
+                "{:.2},{},{},{},{:.3},{},{:.3},{},{}",
                 self.time_s,
                 id,
                 self.spec.vehicle_types[v.vtype as usize].name,
-                self.net.lane_names[v.lane as usize],
+                self.net.road_labels[v.lane as usize],
                 v.pos,
                 x,
                 v.speed,
-                v.controlled
+                v.controlled,
+                self.lane_index_on_road(v.lane)
             )?;
         }
         Ok(())

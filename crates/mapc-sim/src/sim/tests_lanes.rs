@@ -183,3 +183,63 @@ fn multi_lane_runs_are_deterministic_for_any_thread_count() {
     assert_eq!(one, bits(once(2)));
     assert_eq!(one, bits(once(1)));
 }
+
+#[test]
+fn traces_carry_the_road_and_the_lane_index_that_lane_changes_move() {
+    let mut spec = two_lane_merge_spec();
+    spec.warmup_steps = 0;
+    spec.horizon_steps = 600;
+    let mut out = Vec::new();
+    let metrics = crate::trace_run(&spec, 0, &mut out).unwrap();
+    assert!(metrics.lane_changes > 0);
+    let text = String::from_utf8(out).unwrap();
+    let columns = crate::TRACE_HEADER.split(',').count();
+    let mut lanes_of: std::collections::HashMap<
+        String,
+        std::collections::BTreeSet<(String, String)>,
+    > = std::collections::HashMap::new();
+    for row in text.lines() {
+        let f: Vec<&str> = row.split(',').collect();
+        assert_eq!(f.len(), columns, "{row}");
+        // the road column names the road (`R3`, `R1>R2`), the lane is in its own column
+        assert!(!f[3].contains('_'), "{row}");
+        let lane: u8 = f[8].parse().unwrap();
+        assert!(lane < 3, "{row}");
+        if !f[3].contains('>') {
+            lanes_of
+                .entry(f[1].to_string())
+                .or_default()
+                .insert((f[3].to_string(), f[8].to_string()));
+        }
+    }
+    // some vehicle is seen on two lanes of one road: a lane change
+    let changed = lanes_of.values().any(|seen| {
+        seen.iter()
+            .any(|(road, lane)| seen.iter().any(|(r, l)| r == road && l != lane))
+    });
+    assert!(changed, "no vehicle changed lane in the trace");
+}
+
+#[test]
+fn vehicle_views_say_the_lane_index_on_the_road() {
+    let spec = two_lane_merge_spec();
+    let mut sim = Simulation::from_spec(spec, 1).unwrap();
+    let mut seen = std::collections::BTreeSet::new();
+    for _ in 0..600 {
+        sim.step().unwrap();
+        let ids: Vec<VehicleId> = sim.active_ids().collect();
+        for id in ids {
+            let v = sim.vehicle(id).unwrap();
+            let lanes = &sim.network().road_lanes;
+            let r = sim
+                .network()
+                .road_ids
+                .iter()
+                .position(|&x| x == v.road)
+                .unwrap();
+            assert!((v.lane_index as usize) < lanes[r].len());
+            seen.insert(v.lane_index);
+        }
+    }
+    assert_eq!(seen.into_iter().collect::<Vec<_>>(), [0, 1, 2]);
+}
