@@ -67,11 +67,11 @@ fn sim_trace_writes_the_csv_header_and_rows() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled"
+        "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled,lane"
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert!(rows.len() > 50_000, "{} rows", rows.len());
-    assert!(rows.iter().all(|r| r.len() == 8));
+    assert!(rows.iter().all(|r| r.len() == 9 && r[8] == "0"));
     // main-line vehicles have a corridor position, ramp vehicles none
     assert!(rows.iter().any(|r| r[5].is_empty()));
     assert!(

@@ -14,7 +14,8 @@ pub enum Command {
 
 #[derive(clap::Args)]
 pub struct TimespaceArgs {
-    /// Trace CSV (header `time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled`).
+    /// Trace CSV (header `time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled,lane`;
+    /// traces without `lane` are read as one-lane).
     pub trace: PathBuf,
     /// Output picture: .png or .svg.
     #[arg(short = 'o', long = "output", value_name = "FILE")]
@@ -29,6 +30,9 @@ pub struct TimespaceArgs {
     /// Leave out samples before this time, s (a warm-up).
     #[arg(long, value_name = "S")]
     pub start: Option<f64>,
+    /// Draw only lane N of each road (0 rightmost; default: all lanes).
+    #[arg(long, value_name = "N")]
+    pub lane: Option<u8>,
     #[arg(long, default_value_t = 1400, value_name = "PX")]
     pub width: u32,
     #[arg(long, default_value_t = 800, value_name = "PX")]
@@ -86,6 +90,7 @@ fn timespace(a: TimespaceArgs) -> anyhow::Result<()> {
         height_px: a.height,
         speed_max_mps: a.speed_max,
         start_s: a.start,
+        lane: a.lane,
         title: a.title,
     };
     let s = mapc_viz::timespace::plot_timespace(&a.trace, &a.output, &options)?;

@@ -7,7 +7,8 @@
 //! - **GeoJSON export**: one LineString per road and one Point per junction, WGS84 longitude/latitude
 //!   (RFC 7946) when the graph has a geographic frame ([`geojson`]).
 //! - **trace**: the simulator's CSV of vehicle samples
-//!   (`time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled`).
+//!   (`time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled,lane`; `lane` is the
+//!   lane's index on its road, 0 rightmost, and traces written without it read as lane 0).
 //! - **time-space diagram**: vehicle trajectories with time across and corridor position up, coloured by speed;
 //!   stop-and-go waves show as red bands running upstream ([`timespace`]).
 //! - **replay page**: `mapc view`'s self-contained HTML file that plays traces on the map in a browser

@@ -278,6 +278,49 @@ fn timespace_shows_slow_and_fast_traffic() {
 }
 
 #[test]
+fn timespace_draws_one_lane_or_all() {
+    let dir = temp_dir("timespace-lanes");
+    // the wave trace with a `lane` column: odd vehicles on lane 1
+    let mut two_lanes = String::new();
+    for (i, line) in wave_trace().lines().enumerate() {
+        let lane = if i == 0 {
+            "lane".to_string()
+        } else {
+            let vid: u32 = line.split(',').nth(1).unwrap().parse().unwrap();
+            (vid % 2).to_string()
+        };
+        writeln!(two_lanes, "{line},{lane}").unwrap();
+    }
+    let trace = dir.join("two_lanes.csv");
+    std::fs::write(&trace, two_lanes).unwrap();
+    let draw = |path: &std::path::Path, lane: Option<u8>| {
+        plot_timespace(
+            path,
+            &dir.join("ts.png"),
+            &TimeSpaceOptions {
+                lane,
+                ..TimeSpaceOptions::default()
+            },
+        )
+    };
+    let all = draw(&trace, None).unwrap();
+    let right = draw(&trace, Some(0)).unwrap();
+    let left = draw(&trace, Some(1)).unwrap();
+    assert_eq!((all.vehicles, right.vehicles, left.vehicles), (60, 30, 30));
+    assert_eq!(right.samples_drawn + left.samples_drawn, all.samples_drawn);
+    // a trace written before lanes has every vehicle on lane 0
+    let old = dir.join("old.csv");
+    std::fs::write(&old, wave_trace()).unwrap();
+    assert_eq!(draw(&old, Some(0)).unwrap().vehicles, 60);
+    let none = draw(&old, Some(1)).unwrap_err().to_string();
+    assert!(
+        none.contains("in lane 1") && none.contains("old.csv"),
+        "{none}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
 fn bad_traces_are_reported_with_file_line_and_column() {
     let dir = temp_dir("timespace-bad");
     let path = dir.join("t.csv");

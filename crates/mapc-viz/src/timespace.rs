@@ -78,8 +78,19 @@ pub struct Trace {
 
 /// Read a trace CSV, keeping the samples `filter` selects. The columns are found by name.
 pub fn read_trace(path: &Path, filter: &RoadFilter) -> Result<Trace, VizError> {
+    read_trace_lane(path, filter, None)
+}
+
+/// [`read_trace`], keeping only the samples on lane `lane` of their road (trace column `lane`; a trace without it
+/// has every vehicle on lane 0).
+pub fn read_trace_lane(
+    path: &Path,
+    filter: &RoadFilter,
+    lane: Option<u8>,
+) -> Result<Trace, VizError> {
     let mut input = CsvInput::open(path)?;
     let idx = input.require(&TRACE_COLUMNS)?;
+    let i_lane = input.column("lane");
     let [i_time, i_vid, _i_type, i_road, i_pos, i_x, i_speed, i_ctrl] = idx[..] else {
         unreachable!("require returns one index per name")
     };
@@ -90,6 +101,15 @@ pub fn read_trace(path: &Path, filter: &RoadFilter) -> Result<Trace, VizError> {
     let mut rows = 0usize;
     input.for_each_row(|rec, line| {
         rows += 1;
+        if let Some(want) = lane {
+            let on = match i_lane {
+                Some(i) => parser.number(rec, i, "lane", line)?.unwrap_or(0.0),
+                None => 0.0,
+            };
+            if on != f64::from(want) {
+                return Ok(());
+            }
+        }
         let y = match filter {
             RoadFilter::Main => match parser.number(rec, i_x, "corridor_x_m", line)? {
                 Some(x) if x.is_finite() => x,
@@ -153,6 +173,8 @@ pub struct TimeSpaceOptions {
     pub speed_max_mps: Option<f64>,
     /// Only samples at or after this time (to skip a warm-up).
     pub start_s: Option<f64>,
+    /// Only samples on this lane of their road (0 rightmost); all lanes when `None`.
+    pub lane: Option<u8>,
     pub title: Option<String>,
 }
 
@@ -164,6 +186,7 @@ impl Default for TimeSpaceOptions {
             height_px: 800,
             speed_max_mps: None,
             start_s: None,
+            lane: None,
             title: None,
         }
     }
@@ -191,7 +214,7 @@ pub fn plot_timespace(
     options: &TimeSpaceOptions,
 ) -> Result<TimeSpaceSummary, VizError> {
     crate::canvas::picture_kind(out)?;
-    let mut t = read_trace(trace, &options.filter)?;
+    let mut t = read_trace_lane(trace, &options.filter, options.lane)?;
     if let Some(start) = options.start_s {
         t.samples.retain(|s| s.time_s >= start);
     }
@@ -201,6 +224,10 @@ pub fn plot_timespace(
                 "no samples on the main line (corridor_x_m is empty in every row; try --road-filter ROAD)".to_string()
             }
             RoadFilter::Roads(r) => format!("no samples on road(s) {}", r.join(",")),
+        };
+        let what = match options.lane {
+            Some(k) => format!("{what} in lane {k}"),
+            None => what,
         };
         return Err(VizError::Input {
             path: trace.to_path_buf(),
@@ -299,6 +326,10 @@ impl TimeSpaceFigure {
                 format!("position on {} (m)", r.join(", ")),
                 format!("road {}", r.join(", ")),
             ),
+        };
+        let what = match options.lane {
+            Some(k) => format!("{what}, lane {k}"),
+            None => what,
         };
         let n_veh = {
             let mut v: Vec<u32> = t.samples.iter().map(|s| s.vehicle).collect();

@@ -261,6 +261,7 @@ fn replay_json(
         },
         "rows": {
             "lane": b64(&r.row_lane),
+            "lane_index": b64(&r.row_lane_index),
             "pos": b64(&r.row_pos),
             "speed": b64(&r.row_speed),
         },
@@ -276,6 +277,11 @@ fn replay_json(
 /// Numbers that travel as little-endian bytes.
 trait LeBytes: Copy {
     fn put(self, out: &mut Vec<u8>);
+}
+impl LeBytes for u8 {
+    fn put(self, out: &mut Vec<u8>) {
+        out.push(self);
+    }
 }
 impl LeBytes for u16 {
     fn put(self, out: &mut Vec<u8>) {

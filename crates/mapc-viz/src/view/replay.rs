@@ -48,6 +48,8 @@ pub struct Replay {
     pub types: Vec<String>,
     pub tracks: Vec<Track>,
     pub row_lane: Vec<u16>,
+    /// Index of the lane on its road (trace column `lane`, 0 rightmost; 0 for traces without it).
+    pub row_lane_index: Vec<u8>,
     pub row_pos: Vec<f32>,
     /// Centimetres per second.
     pub row_speed: Vec<u16>,
@@ -68,6 +70,7 @@ const MAX_LANES: usize = u16::MAX as usize;
 struct RawRow {
     frame: u32,
     lane: u16,
+    lane_index: u8,
     pos: f32,
     speed: u16,
 }
@@ -87,6 +90,8 @@ impl Replay {
         let [i_time, i_vid, i_type, i_road, i_pos, i_x, i_speed, _] = idx[..] else {
             unreachable!("require returns one index per name")
         };
+        // optional: traces written before lanes were simulated lack it
+        let i_lane_index = csv.column("lane");
         let fields = csv.fields();
         let frames = clock.frames();
         let mut lanes: Vec<String> = Vec::new();
@@ -129,6 +134,20 @@ impl Replay {
                     lane_index.insert(road.to_string(), (lanes.len() - 1) as u16);
                     (lanes.len() - 1) as u16
                 }
+            };
+            let lane_index = match i_lane_index {
+                Some(i) => {
+                    let k = fields.number(rec, i, "lane", line)?.unwrap_or(0.0);
+                    if !(0.0..=f64::from(u8::MAX)).contains(&k) || k.fract() != 0.0 {
+                        return Err(fields.error(
+                            line,
+                            "lane",
+                            format!("{k} is not a lane index (0 to {})", u8::MAX),
+                        ));
+                    }
+                    k as u8
+                }
+                None => 0,
             };
             let pos = fields.required(rec, i_pos, "pos_on_road_m", line)?;
             if let Some(x) = fields.number(rec, i_x, "corridor_x_m", line)? {
@@ -175,6 +194,7 @@ impl Replay {
             rows.push(RawRow {
                 frame,
                 lane,
+                lane_index,
                 pos: pos as f32,
                 speed: (speed * 100.0).round() as u16,
             });
@@ -206,6 +226,7 @@ impl Replay {
             types,
             tracks: Vec::with_capacity(vehicles.len()),
             row_lane: Vec::new(),
+            row_lane_index: Vec::new(),
             row_pos: Vec::new(),
             row_speed: Vec::new(),
             outflow_vph: Vec::new(),
@@ -240,6 +261,7 @@ impl Replay {
                 r.on_road[row.frame as usize] += 1;
                 speed_sum[row.frame as usize] += f64::from(row.speed) / 100.0;
                 r.row_lane.push(row.lane);
+                r.row_lane_index.push(row.lane_index);
                 r.row_pos.push(row.pos);
                 r.row_speed.push(row.speed);
             }
@@ -293,7 +315,8 @@ impl Replay {
             return;
         }
         let keep = |f: u32| (f as usize).is_multiple_of(k);
-        let (mut lane, mut pos, mut speed) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut lane, mut lane_index, mut pos, mut speed) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut tracks = Vec::new();
         for t in &self.tracks {
             let kept: Vec<u32> = (t.first..t.first + t.count).filter(|f| keep(*f)).collect();
@@ -302,6 +325,7 @@ impl Replay {
             for f in &kept {
                 let i = (t.offset + f - t.first) as usize;
                 lane.push(self.row_lane[i]);
+                lane_index.push(self.row_lane_index[i]);
                 pos.push(self.row_pos[i]);
                 speed.push(self.row_speed[i]);
             }
@@ -318,6 +342,7 @@ impl Replay {
         self.avg_speed_mps = every(&self.avg_speed_mps);
         self.on_road = self.on_road.iter().step_by(k).copied().collect();
         (self.row_lane, self.row_pos, self.row_speed, self.tracks) = (lane, pos, speed, tracks);
+        self.row_lane_index = lane_index;
         self.decimation *= k;
     }
 
@@ -375,6 +400,22 @@ mod tests {
         assert_eq!(r.outflow_vph[4], 3600.0 / 2.0);
         assert_eq!(*r.avg_speed_mps.last().unwrap(), 10.0);
         assert_eq!(r.lane_corridor_start, [Some(0.0)]);
+    }
+
+    #[test]
+    fn the_lane_column_is_read_and_old_traces_without_it_are_on_lane_0() {
+        let old = read(format!("{HEADER}\n{}", rows(0, 0, 2))).unwrap();
+        assert_eq!(old.row_lane_index, [0, 0]);
+        let new = read(format!(
+            "{HEADER},lane\n1.0,0,human,R0,0,0,10,false,1\n1.5,0,human,R0,5,5,10,false,0\n"
+        ))
+        .unwrap();
+        assert_eq!(new.row_lane_index, [1, 0]);
+        let bad = read(format!("{HEADER},lane\n1.0,0,human,R0,0,0,10,false,-1\n")).unwrap_err();
+        assert!(
+            bad.to_string().contains("line 2") && bad.to_string().contains("lane"),
+            "{bad}"
+        );
     }
 
     #[test]

@@ -46,6 +46,37 @@ function along(pl, f) {
   return [pl.xs[lo] + u * dx, pl.ys[lo] + u * dy, Math.atan2(dy, dx)];
 }
 
+// ---- lanes: right-hand traffic, lane 0 rightmost, every lane of a road drawn beside the others ----
+
+const LANE_WIDTH_M = 3.2;
+// Lanes stay this many pixels apart however far out the view is zoomed, so a lane change shows at any scale.
+const MIN_LANE_SPACING_PX = 4;
+
+function laneSpacingPx() { return Math.max(LANE_WIDTH_M * view.scale, MIN_LANE_SPACING_PX); }
+
+// Offset to the left of the centre line, in pixels, of lane `k` of a road with `lanes` lanes.
+function laneOffsetPx(lanes, k) { return lanes > 1 ? (k - (lanes - 1) / 2) * laneSpacingPx() : 0; }
+
+// Screen points of a polyline moved `d` pixels to the left of its direction (mitred at the vertices).
+function offsetScreenPath(pts, d) {
+  if (d === 0 || pts.length < 2) return pts;
+  const n = pts.length, out = [];
+  const normal = (a, b) => {
+    const dx = b[0] - a[0], dy = b[1] - a[1], l = Math.hypot(dx, dy) || 1;
+    return [dy / l, -dx / l]; // the left of travel on a screen whose y grows downwards
+  };
+  for (let i = 0; i < n; i++) {
+    const na = normal(pts[Math.max(i - 1, 0)], pts[Math.max(i, 1)]);
+    const nb = normal(pts[Math.min(i, n - 2)], pts[Math.min(i + 1, n - 1)]);
+    let mx = na[0] + nb[0], my = na[1] + nb[1];
+    const ml = Math.hypot(mx, my) || 1;
+    mx /= ml; my /= ml;
+    const k = Math.min(1 / Math.max(mx * na[0] + my * na[1], 0.25), 4);
+    out.push([pts[i][0] + mx * d * k, pts[i][1] + my * d * k]);
+  }
+  return out;
+}
+
 function segmentDistance(px, py, ax, ay, bx, by) {
   const dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy;
   const u = l2 > 0 ? Math.min(Math.max(((px - ax) * dx + (py - ay) * dy) / l2, 0), 1) : 0;
@@ -102,6 +133,7 @@ function prepareReplay(rep, net) {
       lane.pl = polyline([ax, ay, b.xs[0], b.ys[0]]);
     }
     lane.factor = lane.pl.len > 0 && lane.length > 0 ? 1 / lane.length : 0;
+    lane.roadLanes = net.roads[lane.road !== undefined ? lane.road : lane.from].lanes; // a connection: its from road's
   }
   const v = rep.vehicles;
   v.type = decode(v.type, Uint16Array);
@@ -109,6 +141,7 @@ function prepareReplay(rep, net) {
   v.count = decode(v.count, Uint32Array);
   v.offset = decode(v.offset, Uint32Array);
   rep.rows.lane = decode(rep.rows.lane, Uint16Array);
+  rep.rows.lane_index = decode(rep.rows.lane_index, Uint8Array);
   rep.rows.pos = decode(rep.rows.pos, Float32Array);
   rep.rows.speed = decode(rep.rows.speed, Uint16Array);
   for (const k of ["outflow", "inflow", "speed"]) rep.metrics[k] = decode(rep.metrics[k], Float32Array);
@@ -146,19 +179,22 @@ function sizeCanvas(canvas) {
 
 function drawNetwork(ctx, canvas, net) {
   ctx.lineJoin = "round"; ctx.lineCap = "round";
-  const path = (r) => {
+  const screenPts = (r) => r.pl.xs.map((x, i) => toScreen(canvas, x, r.pl.ys[i]));
+  const path = (r, d = 0) => {
     ctx.beginPath();
-    for (let i = 0; i < r.pl.xs.length; i++) {
-      const [sx, sy] = toScreen(canvas, r.pl.xs[i], r.pl.ys[i]);
-      if (i === 0) ctx.moveTo(sx, sy); else ctx.lineTo(sx, sy);
-    }
+    offsetScreenPath(screenPts(r), d).forEach(([sx, sy], i) => { if (i === 0) ctx.moveTo(sx, sy); else ctx.lineTo(sx, sy); });
   };
   for (const r of net.drawOrder) if (r.window !== undefined) {
     path(r); ctx.strokeStyle = "rgba(255, 196, 0, 0.45)"; ctx.lineWidth = Math.max(14, 14 * view.scale); ctx.stroke();
   }
   for (const r of net.drawOrder) {
-    path(r); ctx.strokeStyle = r.color; ctx.lineWidth = Math.max(1.5, Math.min(3.5 * r.lanes * view.scale, 40));
-    ctx.stroke();
+    ctx.strokeStyle = r.color;
+    if (r.lanes > 1) { // one line per lane, with a gap between neighbours
+      ctx.lineWidth = Math.max(1.2, 0.6 * laneSpacingPx());
+      for (let k = 0; k < r.lanes; k++) { path(r, laneOffsetPx(r.lanes, k)); ctx.stroke(); }
+    } else {
+      path(r); ctx.lineWidth = Math.max(1.5, Math.min(3.5 * view.scale, 40)); ctx.stroke();
+    }
   }
   ctx.font = "11px system-ui, sans-serif"; ctx.textBaseline = "bottom";
   const windowJunctions = new Set(net.windows.map((w) => w.junction));
@@ -184,7 +220,9 @@ function drawVehicles(ctx, canvas, pane, frame) {
     const k = v.offset[i] + frame - v.first[i];
     const lane = rep.lanes[rows.lane[k]];
     const [x, y, heading] = along(lane.pl, rows.pos[k] * lane.factor);
-    const [sx, sy] = toScreen(canvas, x, y);
+    const d = laneOffsetPx(lane.roadLanes, rows.lane_index[k]);
+    const [cx, cy] = toScreen(canvas, x, y);
+    const sx = cx - Math.sin(heading) * d, sy = cy - Math.cos(heading) * d; // `d` to the left of travel
     if (sx < -20 || sy < -20 || sx > canvas.clientWidth + 20 || sy > canvas.clientHeight + 20) continue;
     const speed = rows.speed[k] / 100;
     const av = rep.types[v.type[i]].av;
@@ -380,7 +418,8 @@ function describe(pane, sx, sy, only) {
     if (best) {
       const rep = pane.replay, v = rep.vehicles, k = best[3], type = rep.types[v.type[best[2]]];
       return `vehicle ${v.ids[best[2]]} · ${type.name}${type.av ? " (AV)" : ""}\n` +
-        `${fmt(rep.rows.speed[k] / 100, 2)} m/s · ${rep.lanes[rep.rows.lane[k]].name} at ${fmt(rep.rows.pos[k], 1)} m`;
+        `${fmt(rep.rows.speed[k] / 100, 2)} m/s · ${rep.lanes[rep.rows.lane[k]].name}` +
+        `${rep.lanes[rep.rows.lane[k]].roadLanes > 1 ? ` lane ${rep.rows.lane_index[k]}` : ""} at ${fmt(rep.rows.pos[k], 1)} m`;
     }
   }
   for (const j of only && only !== "junction" ? [] : net.junctions) {
@@ -492,8 +531,12 @@ function start(data) {
     document.addEventListener("keydown", (e) => { if (e.code === "Space") { e.preventDefault(); setPlaying(!player.playing); } });
   }
   window.addEventListener("resize", render);
-  // #t=SECONDS starts there; #play starts playing; #rate=R sets the speed
+  // #t=SECONDS starts there; #play starts playing; #rate=R sets the speed; #zoom=Z&at=X,Y zooms Z times the
+  // whole-network view in around the world point X,Y (metres)
   const hash = new URLSearchParams(location.hash.slice(1));
+  const zoom = Number(hash.get("zoom")), at = (hash.get("at") || "").split(",").map(Number);
+  if (zoom > 0 && Number.isFinite(zoom)) view.scale *= zoom;
+  if (at.length === 2 && at.every(Number.isFinite)) [view.cx, view.cy] = at;
   if (hash.has("rate")) player.rate = Number(hash.get("rate")) || player.rate;
   if (hash.has("t") && DATA.replays.length) seek(Math.round((Number(hash.get("t")) - DATA.replays[0].start_s) / stepS()));
   render();
