@@ -379,11 +379,14 @@ fn tiny_distributed_training_resume_and_eval() {
     assert!(v["outflow"]["mean"].as_f64().unwrap() > 0.0, "{v}");
     assert!(v["comparison"]["outflow"]["p_value"].is_number(), "{v}");
     let csv = std::fs::read_to_string(&trace).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|&c| c == "controlled").unwrap();
     let controlled: std::collections::HashSet<&str> = csv
         .lines()
         .skip(1)
-        .filter(|l| l.ends_with(",true"))
-        .map(|l| l.split(',').nth(1).unwrap())
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|f| f[col] == "true")
+        .map(|f| f[1])
         .collect();
     assert!(
         controlled.len() > 5,
