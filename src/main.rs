@@ -1,6 +1,18 @@
 //! `mapc`: turn real road maps into traffic scenarios and train AV policies that reduce congestion.
 
+// Shadow the standard printing macros for the whole binary (macro_rules! scope is textual: these come before
+// `mod cmd`), so no line reaches the terminal with a map's escape sequences in it, however it was built.
+macro_rules! println {
+    () => { ::std::println!() };
+    ($($arg:tt)*) => { ::std::println!("{}", $crate::terminal::printable(&::std::format!($($arg)*))) };
+}
+macro_rules! eprintln {
+    () => { ::std::eprintln!() };
+    ($($arg:tt)*) => { ::std::eprintln!("{}", $crate::terminal::printable(&::std::format!($($arg)*))) };
+}
+
 mod cmd;
+mod terminal;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
