@@ -21,6 +21,8 @@
 //!   ([`merge_regimes`]).
 //! - **warm-up**: steps simulated before the horizon; every metric ignores them.
 //! - **vehicle-step**: one vehicle simulated for one step (the unit of the speed figures).
+//! - **best lanes**: per lane of a vehicle's road, how far its route goes on without a lane change, looking
+//!   about 3000 m ahead ([`best_lanes`], SUMO's `updateBestLanes`, cached per route suffix and type).
 //! - **lane-change model**: [`lcmodels`] holds SUMO 1.8's LC2013 behind a small interface, tested on its own;
 //!   the step does not use it yet (roads are single-lane).
 //!
@@ -55,6 +57,7 @@
 // `!(x > 0.0)` and the like reject NaN on purpose; `partial_cmp` would hide that.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod best_lanes;
 pub mod idm;
 pub mod lcmodels;
 pub mod measure;

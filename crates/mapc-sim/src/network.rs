@@ -285,7 +285,8 @@ impl Network {
 
     /// Route as lanes from `from` to `to` (or, without `to`, downstream to a sink taking the through road at each
     /// diverge: highest priority, then most lanes, then the smallest turning angle), starting on the rightmost of
-    /// the first road's lanes that go furthest on it.
+    /// the first road's lanes that go furthest on it ([`Network::best_lanes`] with the shortest look-ahead), each
+    /// road's link taken as a vehicle entering it would ([`Network::best_lane_path`]).
     pub fn route(
         &self,
         g: &LaneGraph,
@@ -293,11 +294,10 @@ impl Network {
         to: Option<RoadId>,
     ) -> Result<Vec<LaneIdx>, SimError> {
         let roads = self.route_roads(g, from, to)?;
-        let best = self.best_lanes(&roads);
-        let first = &best[0];
+        let first = self.best_lanes(&roads, 0.0);
         let top = first.iter().map(|q| q.length).fold(f64::MIN, f64::max);
         let start = first.iter().position(|q| q.length == top).unwrap_or(0);
-        let (lanes, dead_end) = self.lane_path(self.road_lanes[roads[0]][start], &roads, &best);
+        let (lanes, dead_end) = self.best_lane_path(self.road_lanes[roads[0]][start], &roads, 0.0);
         if dead_end {
             let k = lanes.iter().filter(|&&l| self.road_of(l).is_some()).count();
             return Err(SimError::Network(format!(
@@ -394,97 +394,6 @@ impl Network {
                 .then(turn_angle(from_road, ra).total_cmp(&turn_angle(from_road, rb)))
                 .then(ra.id.cmp(&rb.id))
         })
-    }
-
-    /// SUMO's best lanes along `roads` (`MSVehicle::updateBestLanes`): per road of the route and per lane of it,
-    /// how far the route can be driven from the lane's start without changing lanes, the link its best
-    /// continuation takes, and whether a lane that stops short leads elsewhere. Computed from the route's end
-    /// backwards; every lane of the last road reaches the end.
-    pub fn best_lanes(&self, roads: &[usize]) -> Vec<Vec<BestLane>> {
-        let mut out: Vec<Vec<BestLane>> = vec![Vec::new(); roads.len()];
-        for k in (0..roads.len()).rev() {
-            let mut qs = Vec::with_capacity(self.road_lanes[roads[k]].len());
-            for &l in &self.road_lanes[roads[k]] {
-                let lane = &self.lanes[l as usize];
-                let mut q = BestLane {
-                    length: lane.length,
-                    next_link: None,
-                    leads_elsewhere: !lane.out_links.is_empty(),
-                };
-                if let Some(&next_road) = roads.get(k + 1) {
-                    for &link in &lane.out_links {
-                        let lk = &self.links[link as usize];
-                        if self.road_of(lk.to_lane) != Some(next_road) {
-                            continue;
-                        }
-                        let to = &out[k + 1][self.lanes[lk.to_lane as usize].index as usize];
-                        let len = lane.length + self.lanes[lk.via_lane as usize].length + to.length;
-                        if q.next_link.is_none() || len > q.length {
-                            q = BestLane {
-                                length: len,
-                                next_link: Some(link),
-                                leads_elsewhere: to.leads_elsewhere,
-                            };
-                        }
-                    }
-                } else {
-                    q.leads_elsewhere = false;
-                }
-                qs.push(q);
-            }
-            out[k] = qs;
-        }
-        out
-    }
-
-    /// The lanes driven from road lane `start` (on `roads[0]`) along `roads` without changing lanes, following
-    /// each lane's best continuation; `true` when the path stops at a lane that does not continue on the route.
-    pub fn lane_path(
-        &self,
-        start: LaneIdx,
-        roads: &[usize],
-        best: &[Vec<BestLane>],
-    ) -> (Vec<LaneIdx>, bool) {
-        let mut lanes = vec![start];
-        let mut cur = start;
-        for q in best.iter().take(roads.len().saturating_sub(1)) {
-            let Some(link) = q[self.lanes[cur as usize].index as usize].next_link else {
-                return (lanes, true);
-            };
-            let lk = &self.links[link as usize];
-            lanes.push(lk.via_lane);
-            lanes.push(lk.to_lane);
-            cur = lk.to_lane;
-        }
-        (lanes, false)
-    }
-}
-
-/// One lane of a road on a route (see [`Network::best_lanes`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BestLane {
-    /// Distance (m) from the lane's start the route can be followed without a lane change.
-    pub length: f64,
-    /// The link to the next road of the route on the best continuation; none at a dead end or the route's end.
-    pub next_link: Option<LinkIdx>,
-    /// The lane stops short of the route's end but has links elsewhere (it turns off the route).
-    pub leads_elsewhere: bool,
-}
-
-impl BestLane {
-    /// SUMO's `bestLaneOffset` for each lane of a road: lanes to move (negative: right) to the nearest lane
-    /// that goes furthest (the right one of two equally near).
-    pub fn offsets(qs: &[BestLane]) -> Vec<i32> {
-        let top = qs.iter().map(|q| q.length).fold(f64::MIN, f64::max);
-        (0..qs.len() as i32)
-            .map(|i| {
-                (0..qs.len() as i32)
-                    .filter(|&j| qs[j as usize].length == top)
-                    .map(|j| j - i)
-                    .min_by_key(|d| (d.abs(), *d > 0))
-                    .unwrap_or(0)
-            })
-            .collect()
     }
 }
 

@@ -6,7 +6,7 @@
 //!   gain, keep right), urgency, what blocks it, and the marks other vehicles leave (blocking leader / follower).
 //! - **best lanes** ([`LaneQ`]): per lane of the current road, how far the route can be driven on it and its
 //!   continuations before a lane change is needed (SUMO's `MSVehicle::LaneQ`), the vehicles' length on them
-//!   (occupation) and the offset to the nearest lane that goes furthest (`bestLaneOffset`).
+//!   (occupation) and the offset to the road's best lane (`bestLaneOffset`).
 //! - **gap**: bumper to bumper minus the follower's minimum gap (SUMO's convention): a leader's gap is its back
 //!   minus the ego's front minus the ego's min gap; a follower's gap is the ego's back minus the follower's front
 //!   minus the follower's min gap. Negative means overlapping.
@@ -227,7 +227,7 @@ pub struct LaneQ {
     /// (`nextOccupation`) plus those on this lane already visited in this step's pass, i.e. ahead of the ego or
     /// changed onto it (the lane changer's `dens`; SUMO's `occupation` = `dens + nextOccupation`).
     pub occupation: f64,
-    /// Lanes to move (negative: right) to reach the nearest lane that goes furthest (`bestLaneOffset`).
+    /// Lanes to move (negative: right) to reach the road's best lane (`bestLaneOffset`).
     pub best_lane_offset: i32,
     /// The last lane of its best continuation has outgoing links: it is no dead end, so with a short `length` it
     /// is a lane that turns off the route (SUMO: `bestContinuations.back()->getLinkCont().size() != 0`).

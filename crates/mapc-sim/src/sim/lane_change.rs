@@ -4,11 +4,12 @@
 //! neighbour lane at the same position. Runs only on networks with a road of several lanes.
 
 use super::*;
+use crate::best_lanes::BestLane;
 use crate::lcmodels::{
     BlockedAhead, Ego, LaneQ, Lc2013, Lc2013Memory, Message, NeighbourLane, Other, Side,
     Surroundings,
 };
-use crate::network::BestLane;
+use std::collections::HashMap;
 
 /// How far ahead the leader of a lane is searched across its end (m).
 const LEADER_SEARCH_M: f64 = 300.0;
@@ -24,7 +25,31 @@ pub(super) struct LcVeh {
     pub(super) best_lane_offset: i32,
 }
 
+/// Best lanes by (road sequence, index of the current road in it, vehicle type): they depend on nothing else, so
+/// each is computed once per run, when the first vehicle of its type enters that road on that route.
+#[derive(Clone, Debug, Default)]
+pub(super) struct BestLanesCache {
+    index: HashMap<(u32, u32, u16), u32>,
+    store: Vec<Vec<BestLane>>,
+}
+
 impl Simulation {
+    /// The best lanes of road `k` of the route `route` for a vehicle of type `vtype` (an index into
+    /// `best_cache.store`).
+    pub(super) fn best_lanes_at(&mut self, route: u32, k: usize, vtype: u16) -> u32 {
+        let r = &self.routes[route as usize];
+        let key = (r.roads_id, k as u32, vtype);
+        if let Some(&i) = self.best_cache.index.get(&key) {
+            return i;
+        }
+        let brake = self.type_consts[vtype as usize].max_brake_dist;
+        let best = self.net.best_lanes(&r.roads[k..], brake);
+        let i = self.best_cache.store.len() as u32;
+        self.best_cache.store.push(best);
+        self.best_cache.index.insert(key, i);
+        i
+    }
+
     /// LC2013's `patch_speed` for a vehicle's next speed between `min` and `max` (`wanted`: the car-following
     /// speed); on one-lane roads the speed stays `wanted`.
     #[allow(clippy::too_many_arguments)]
@@ -63,6 +88,17 @@ impl Simulation {
     /// The lane-change pass of a step (after the moves).
     pub(super) fn change_lanes(&mut self) {
         let dt = self.spec.step_s;
+        // each lane's vehicles' lengths with min gaps (SUMO's brutto occupancy), kept up to date by the changes
+        let mut brutto = std::mem::take(&mut self.lane_brutto);
+        brutto.clear();
+        brutto.resize(self.net.lanes.len(), 0.0);
+        for (l, q) in self.lane_veh.iter().enumerate() {
+            for &id in q.iter() {
+                let v = &self.veh[id as usize];
+                brutto[l] += v.length + self.types[v.vtype as usize].min_gap;
+            }
+        }
+        self.lane_brutto = brutto;
         // after the moves, before any message of this pass: forget the last step's advices and marks (advices
         // sent in this pass are read in the next move)
         for q in self.lane_veh.iter() {
@@ -112,27 +148,36 @@ impl Simulation {
         dens: &[f64],
         blocked: &mut [(Option<VehicleId>, Option<VehicleId>)],
     ) -> usize {
+        let (route, route_pos, vtype) = {
+            let v = &self.veh[id as usize];
+            (v.route, v.route_pos, v.vtype)
+        };
+        let k = self.routes[route as usize].road_k[route_pos as usize] as usize;
+        let best_i = self.best_lanes_at(route, k, vtype);
+        let best: &[BestLane] = &self.best_cache.store[best_i as usize];
         let v = &self.veh[id as usize];
         let lane = v.lane;
         let index = self.lane_at(lane as usize).index as usize;
-        let route = &self.routes[v.route as usize];
-        let k = route.road_k[v.route_pos as usize] as usize;
-        let best: Vec<BestLane> = self.net.best_lanes(&route.roads[k..]).swap_remove(0);
-        let offsets = BestLane::offsets(&best);
+        // SUMO's occupation: this pass's density on the lane plus the vehicles on its continuation
         let best_lanes: Vec<LaneQ> = best
             .iter()
-            .zip(&offsets)
             .zip(dens)
-            .map(|((q, &o), &d)| LaneQ {
+            .map(|(q, &d)| LaneQ {
                 length: q.length,
-                occupation: d,
-                best_lane_offset: o,
+                occupation: d + q
+                    .continuation
+                    .iter()
+                    .map(|&c| self.lane_brutto[c as usize])
+                    .sum::<f64>(),
+                best_lane_offset: q.best_lane_offset,
                 leads_elsewhere: q.leads_elsewhere,
             })
             .collect();
+        let best_lane_offset = best[index].best_lane_offset;
         if let Some(rec) = self.lc.get_mut(&id) {
-            rec.best_lane_offset = offsets[index];
+            rec.best_lane_offset = best_lane_offset;
         }
+        let best: &[BestLane] = &self.best_cache.store[best_i as usize];
         let p = self.types[v.vtype as usize];
         let l = self.lane_at(lane as usize);
         let (l_right, l_left) = (l.right, l.left);
@@ -149,8 +194,8 @@ impl Simulation {
         // a vehicle whose back is still in the junction behind stays on its lane
         let may_change = v.pos >= v.length;
         let side_lane = |n: Option<LaneIdx>| n.filter(|_| may_change);
-        let right = side_lane(l_right).map(|n| self.neighbours(id, n, &best));
-        let left = side_lane(l_left).map(|n| self.neighbours(id, n, &best));
+        let right = side_lane(l_right).map(|n| self.neighbours(id, n, best));
+        let left = side_lane(l_left).map(|n| self.neighbours(id, n, best));
         let leader = self.own_leader(id);
         let (last, first) = blocked[index];
         let blocked_ahead = BlockedAhead {
@@ -210,8 +255,9 @@ impl Simulation {
         .expect("the model changes only to an existing lane");
         self.move_to_lane(id, target);
         let target_index = self.lane_at(target as usize).index as usize;
+        let offset = self.best_cache.store[best_i as usize][target_index].best_lane_offset;
         if let Some(rec) = self.lc.get_mut(&id) {
-            rec.best_lane_offset = offsets[target_index];
+            rec.best_lane_offset = offset;
         }
         self.metrics.lane_changes += 1;
         target_index
@@ -220,10 +266,24 @@ impl Simulation {
     /// Moves a vehicle to `target`, a neighbour lane of its road, at the same position, and follows the route
     /// from there.
     pub(super) fn move_to_lane(&mut self, id: VehicleId, target: LaneIdx) {
-        let (old, pos, route, rp) = {
+        let (old, pos, route, rp, vtype, occupancy) = {
             let v = &self.veh[id as usize];
-            (v.lane, v.pos, v.route, v.route_pos as usize)
+            let occupancy = v.length + self.types[v.vtype as usize].min_gap;
+            (
+                v.lane,
+                v.pos,
+                v.route,
+                v.route_pos as usize,
+                v.vtype,
+                occupancy,
+            )
         };
+        if let Some(b) = self.lane_brutto.get_mut(old as usize) {
+            *b -= occupancy;
+        }
+        if let Some(b) = self.lane_brutto.get_mut(target as usize) {
+            *b += occupancy;
+        }
         let q = &mut self.lane_veh[old as usize];
         if let Some(i) = q.iter().position(|&o| o == id) {
             q.remove(i);
@@ -238,8 +298,14 @@ impl Simulation {
         let k = r.road_k[rp] as usize;
         let roads: Vec<usize> = r.roads.clone();
         let mut lanes: Vec<LaneIdx> = r.lanes.0[..rp].to_vec();
-        let best = self.net.best_lanes(&roads[k..]);
-        let (rest, dead_end) = self.net.lane_path(target, &roads[k..], &best);
+        // the path on from the new lane: at each road the link a vehicle of this type entering it would take
+        let best_at: Vec<u32> = (k..roads.len().saturating_sub(1))
+            .map(|j| self.best_lanes_at(route, j, vtype))
+            .collect();
+        let store = &self.best_cache.store;
+        let (rest, dead_end) = self.net.lane_path(target, &roads[k..], |j, i| {
+            store[best_at[j] as usize][i].next_link
+        });
         lanes.extend(rest);
         let new_route = self.add_lane_route(lanes, roads, dead_end);
         let v = &mut self.veh[id as usize];

@@ -28,6 +28,7 @@ use crate::waiting::EntryQueue;
 use accounting::MetricsAcc;
 use junction::Approach;
 use junction::LinkItem;
+use lane_change::BestLanesCache;
 use mapc_graph::RoadId;
 use planning::Plan;
 use rand::rngs::StdRng;
@@ -89,6 +90,12 @@ pub struct Simulation {
     /// Lane changing (networks with a road of several lanes only): the model and each vehicle's record.
     lc_model: crate::lcmodels::Lc2013,
     lc: std::collections::HashMap<VehicleId, lane_change::LcVeh>,
+    /// Road sequences of the routes, numbered (routes that differ only in lanes share one).
+    road_seqs: std::collections::HashMap<Vec<usize>, u32>,
+    /// Best lanes computed so far, by (road sequence, index of the current road in it, vehicle type).
+    best_cache: BestLanesCache,
+    /// Per lane, the summed lengths with min gaps of its vehicles during the lane-change pass.
+    lane_brutto: Vec<f64>,
 }
 
 impl Simulation {
@@ -153,6 +160,7 @@ impl Simulation {
                 .zip(&types)
                 .map(|(t, p)| TypeConsts {
                     max_speed: t.max_speed,
+                    max_brake_dist: p.brake_gap(t.max_speed, p.decel, p.tau) + t.min_gap,
                     impatience: t.impatience,
                     inv_two_decel: Some(0.5 / p.decel).filter(|x| *x > 0.0 && x.is_finite()),
                     max_arrival_from_visibility: IdmParams::speed_after_distance(
@@ -165,6 +173,9 @@ impl Simulation {
             types: Table(types),
             lc_model: lane_change::default_model(),
             lc: std::collections::HashMap::new(),
+            road_seqs: std::collections::HashMap::new(),
+            best_cache: BestLanesCache::default(),
+            lane_brutto: Vec::new(),
             net,
             spec,
         };

@@ -93,6 +93,7 @@ fn brake_gap_bound_lies_above_the_exact_gap() {
         let p = IdmParams::new(2.6, decel, 9.0, 1.0, 2.5, 4.0, dt);
         let tc = TypeConsts {
             max_speed: 30.0,
+            max_brake_dist: 0.0,
             impatience: 0.5,
             max_arrival_from_visibility: 0.0,
             inv_two_decel: Some(0.5 / p.decel),

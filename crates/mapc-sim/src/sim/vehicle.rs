@@ -42,6 +42,8 @@ pub(super) struct Route {
     pub(super) start_m: Table<f64>,
     /// The route's roads (indices into the graph's roads), to its destination.
     pub(super) roads: Vec<usize>,
+    /// The same for every route over the same roads (the best lanes are cached by it).
+    pub(super) roads_id: u32,
     /// Per lane of `lanes`, the index in `roads` of its road (a via lane: of the road it leaves).
     pub(super) road_k: Vec<u32>,
     /// The lanes stop at a lane that does not continue on the route: the vehicle must change lanes before its
@@ -53,6 +55,8 @@ pub(super) struct Route {
 #[derive(Clone, Copy, Debug)]
 pub(super) struct TypeConsts {
     pub(super) max_speed: f64,
+    /// Brake distance from `max_speed` plus the min gap: the best lanes' look-ahead is at least this.
+    pub(super) max_brake_dist: f64,
     pub(super) impatience: f64,
     /// Highest arrival speed at a minor link from the foe visibility point (a function of the type only).
     pub(super) max_arrival_from_visibility: f64,
@@ -225,8 +229,7 @@ impl Simulation {
         let Some(&start) = self.net.road_lanes[roads[0]].get(lane as usize) else {
             return Err(SimError::Spec(format!("road {from} has no lane {lane}")));
         };
-        let best = self.net.best_lanes(&roads);
-        let (lanes, dead_end) = self.net.lane_path(start, &roads, &best);
+        let (lanes, dead_end) = self.net.best_lane_path(start, &roads, 0.0);
         Ok(self.add_lane_route(lanes, roads, dead_end))
     }
 
@@ -254,9 +257,12 @@ impl Simulation {
         }
         let idx = self.routes.len() as u32;
         self.route_index.insert((lanes.clone(), roads.clone()), idx);
+        let next_seq = self.road_seqs.len() as u32;
+        let roads_id = *self.road_seqs.entry(roads.clone()).or_insert(next_seq);
         self.routes.push(Route {
             lanes: Table(lanes),
             start_m: Table(start_m),
+            roads_id,
             roads,
             road_k,
             dead_end,
