@@ -733,3 +733,89 @@ fn keep_lanes_window_is_cut_and_simulated_on_every_lane() {
     assert!(sim["lane_changes"]["mean"].as_f64().unwrap() > 0.0, "{sim}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The demand of a multi-lane window is the source's per lane on every lane at the window (Flow's and SUMO's
+/// convention: the Simple Merge's 2000 veh/h is one lane's): on I-210's five-lane main road 5 x 2000 veh/h, one
+/// flow per entry lane and vehicle type, the one-lane ramp 200 veh/h; the report says so. The shipped multi-lane
+/// windows are what these commands write.
+#[test]
+fn keep_lanes_windows_get_the_per_lane_demand_on_every_lane_and_are_the_shipped_ones() {
+    let dir = scratch("lanes-demand");
+    let i210 = dir.join("i210_window_lanes.toml");
+    let report = mapc_json(&[
+        "window",
+        "maps/i210.net.xml",
+        "--keep-lanes",
+        "--junction",
+        "osm:300944078",
+        "-o",
+        i210.to_str().unwrap(),
+        "--json",
+    ]);
+    let demand: Vec<&str> = report["demand"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_str().unwrap())
+        .collect();
+    assert!(
+        demand
+            .iter()
+            .any(|d| d.contains("10000 veh/h") && d.contains("2000 veh/h per lane x 5 lane(s)")),
+        "{demand:?}"
+    );
+    let scenario = mapc_scenario::ResolvedScenario::load(i210.to_str().unwrap()).unwrap();
+    let main_entry = report["main_entry"].as_str().unwrap();
+    let main: Vec<&mapc_scenario::Flow> = scenario
+        .scenario
+        .flows
+        .iter()
+        .filter(|f| f.from == main_entry)
+        .collect();
+    assert_eq!(main.len(), 10, "two vehicle types on five lanes");
+    let total: f64 = main.iter().map(|f| f.vehs_per_hour).sum();
+    assert!((total - 10000.0).abs() < 1e-6, "{total}");
+    let lanes: std::collections::BTreeSet<&str> = main
+        .iter()
+        .map(|f| f.depart_lane.as_deref().unwrap())
+        .collect();
+    assert_eq!(lanes.len(), 5);
+    let ramp: f64 = scenario
+        .scenario
+        .flows
+        .iter()
+        .filter(|f| f.from != main_entry)
+        .map(|f| f.vehs_per_hour)
+        .sum();
+    assert_eq!(ramp, 200.0);
+    let same = |written: &Path, shipped: &str| {
+        let a = std::fs::read(written).unwrap();
+        let b = std::fs::read(root().join(shipped)).unwrap();
+        assert!(a == b, "{} differs from {shipped}", written.display());
+    };
+    same(&i210, "scenarios/i210_window_lanes.toml");
+    same(
+        &dir.join("i210_window_lanes.graph.json"),
+        "scenarios/i210_window_lanes.graph.json",
+    );
+    let i696 = dir.join("i696_window_lanes.toml");
+    let mut args = vec![
+        "window",
+        "maps/i696.osm",
+        "--keep-lanes",
+        "--junction",
+        "osm:61862553",
+        "-o",
+        i696.to_str().unwrap(),
+    ];
+    args.extend(PAPER_VIA);
+    let (code, stdout, stderr) = mapc(&args);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("demand on the main road"), "{stdout}");
+    same(&i696, "scenarios/i696_window_lanes.toml");
+    same(
+        &dir.join("i696_window_lanes.graph.json"),
+        "scenarios/i696_window_lanes.graph.json",
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

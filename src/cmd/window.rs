@@ -180,6 +180,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(t) = &written.timing {
         println!("  {}", t.note);
     }
+    for d in &written.demand_notes {
+        println!("  {d}");
+    }
     println!(
         "wrote {} and {}",
         written.scenario.display(),
@@ -273,6 +276,9 @@ fn run_several(
     }
     for s in &written.cut.skipped {
         println!("skipped {s}");
+    }
+    for d in &written.demand_notes {
+        println!("  {d}");
     }
     if g.roads.iter().any(|r| r.lanes.len() > 1) {
         let roads: Vec<_> = written.cut.regions.iter().flat_map(|r| r.roads()).collect();

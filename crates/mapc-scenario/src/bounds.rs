@@ -7,10 +7,19 @@ use std::collections::BTreeMap;
 /// The longest simulated time a scenario may ask for (warm-up plus horizon): two days.
 pub const MAX_SIMULATED_S: f64 = 48.0 * 3600.0;
 
-/// The most vehicles per hour one entry road can take: the simulator drives every road as one lane and inserts at
-/// most one vehicle per entry lane and step (SUMO's insertion), so demand above this can only pile up.
+/// The most vehicles per hour one entry lane can take: the simulator inserts at most one vehicle per entry lane
+/// and step (SUMO's insertion), so demand above this can only pile up.
 pub fn entry_capacity_vph(step_s: f64) -> f64 {
     3600.0 / step_s
+}
+
+/// The key of a flow's entry in [`check_demand`]: the road, or the road and lane for a flow that departs on one
+/// lane given by its index (each entry lane takes its own vehicle per step).
+pub fn entry_key(road: &str, depart_lane: Option<&str>) -> String {
+    match depart_lane.and_then(|l| l.parse::<u8>().ok()) {
+        Some(lane) => format!("{road} lane {lane}"),
+        None => road.to_string(),
+    }
 }
 
 /// One flow as the demand check sees it.
@@ -112,6 +121,27 @@ mod tests {
             err.message.contains("`a`, `b`") && err.message.contains("8000"),
             "{err:?}"
         );
+    }
+
+    #[test]
+    fn flows_on_different_lanes_of_one_road_each_get_a_lane() {
+        let lanes: Vec<String> = (0..5)
+            .map(|l| entry_key("R1", Some(&l.to_string())))
+            .collect();
+        let flows: Vec<FlowDemand> = lanes
+            .iter()
+            .map(|key| FlowDemand {
+                id: "main",
+                entry: key.clone(),
+                vehs_per_hour: 2000.0,
+            })
+            .collect();
+        assert!(check_demand(&flows, 0.5).is_ok());
+        // the same demand without lanes is one lane's worth too much
+        let road = entry_key("R1", Some("best"));
+        assert_eq!(road, "R1");
+        let one: Vec<FlowDemand> = (0..5).map(|_| flow("main", &road, 2000.0)).collect();
+        assert!(check_demand(&one, 0.5).is_err());
     }
 
     #[test]

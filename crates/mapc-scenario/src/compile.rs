@@ -212,6 +212,8 @@ pub struct WrittenWindow {
     pub graph: PathBuf,
     /// The warm-up picked for a corridor longer than the source's timing allows (`None`: the source's kept).
     pub timing: Option<crate::timing::PickedTiming>,
+    /// What demand each road of several lanes got (the source's per lane on each lane); empty on one lane.
+    pub demand_notes: Vec<String>,
 }
 
 /// Cut the window of `corridor` (read from `map`) around one merge (a junction id, or a [`WindowRequest`] to fit
@@ -234,7 +236,7 @@ pub fn write_window(
     };
     let cut = cut_window(corridor, request, &shape).map_err(transform)?;
     let (name, graph_file, graph) = output_names(output);
-    let mut scenario =
+    let (mut scenario, demand_notes) =
         window_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
     let timing = bounded(
         &mut scenario,
@@ -248,6 +250,7 @@ pub fn write_window(
         scenario: output.to_path_buf(),
         graph,
         timing,
+        demand_notes,
     })
 }
 
@@ -313,7 +316,7 @@ fn bounded(
         .iter()
         .map(|f| crate::bounds::FlowDemand {
             id: &f.id,
-            entry: f.from.clone(),
+            entry: crate::bounds::entry_key(&f.from, f.depart_lane.as_deref()),
             vehs_per_hour: f.vehs_per_hour,
         })
         .collect();
@@ -356,6 +359,8 @@ pub struct WrittenWindows {
     pub graph: PathBuf,
     /// The warm-up picked for a corridor longer than the source's timing allows (`None`: the source's kept).
     pub timing: Option<crate::timing::PickedTiming>,
+    /// What demand each road of several lanes got (the source's per lane on each lane); empty on one lane.
+    pub demand_notes: Vec<String>,
 }
 
 /// Which windows [`write_windows`] cuts besides those asked for, and how.
@@ -419,7 +424,7 @@ pub fn write_windows(
     };
     let cut = cut_windows(corridor, &requests, &shape, overlap).map_err(transform)?;
     let (name, graph_file, graph) = output_names(output);
-    let mut scenario =
+    let (mut scenario, demand_notes) =
         windows_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
     let timing = bounded(&mut scenario, &cut.graph, &[cut.main_entry])?;
     save_checked(&cut.graph, &graph, &scenario, output)?;
@@ -429,6 +434,7 @@ pub fn write_windows(
         scenario: output.to_path_buf(),
         graph,
         timing,
+        demand_notes,
     })
 }
 
@@ -483,6 +489,7 @@ impl WrittenWindows {
         let roads: Vec<_> = self.cut.regions.iter().flat_map(|r| r.roads()).collect();
         if let Some(lanes) = lane_report(&self.cut.graph, &roads) {
             report["lanes"] = lanes;
+            report["demand"] = json!(self.demand_notes);
         }
         report
     }
@@ -525,6 +532,7 @@ impl WrittenWindow {
         });
         if let Some(lanes) = lane_report(&cut.graph, &cut.region()) {
             report["lanes"] = lanes;
+            report["demand"] = json!(self.demand_notes);
         }
         report
     }

@@ -336,7 +336,7 @@ impl ResolvedScenario {
             .zip(&flow_roads)
             .map(|(f, (from, _))| bounds::FlowDemand {
                 id: &f.id,
-                entry: from.to_string(),
+                entry: bounds::entry_key(&from.to_string(), f.depart_lane.as_deref()),
                 vehs_per_hour: f.vehs_per_hour,
             })
             .collect();

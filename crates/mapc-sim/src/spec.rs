@@ -247,7 +247,14 @@ impl SimSpec {
             .iter()
             .map(|f| mapc_scenario::bounds::FlowDemand {
                 id: &f.id,
-                entry: f.from.to_string(),
+                entry: mapc_scenario::bounds::entry_key(
+                    &f.from.to_string(),
+                    match f.depart_lane {
+                        DepartLane::Index(lane) => Some(lane.to_string()),
+                        _ => None,
+                    }
+                    .as_deref(),
+                ),
                 vehs_per_hour: f.vehs_per_hour,
             })
             .collect();

@@ -50,6 +50,15 @@ fn matched_to(source: &ResolvedScenario) -> String {
         .to_string()
 }
 
+/// The main road's road that ends at merge `j`.
+fn main_road_into(g: &LaneGraph, roles: &CorridorRoles, j: JunctionId) -> RoadId {
+    *roles
+        .main
+        .iter()
+        .find(|r| g.road(**r).unwrap().to == j)
+        .expect("a window's merge is on the main road")
+}
+
 /// The first road of every merging road of the corridor, in driving order of their merges.
 fn ramp_entries(g: &LaneGraph, roles: &CorridorRoles) -> Vec<RoadId> {
     let at = |f: &Vec<RoadId>| {
@@ -64,18 +73,81 @@ fn ramp_entries(g: &LaneGraph, roles: &CorridorRoles) -> Vec<RoadId> {
     feeders.iter().map(|f| f[0]).collect()
 }
 
+/// Lanes of `road` that continue at its end (an acceleration lane or a dropped lane does not count); all its
+/// lanes where nothing continues.
+fn through_lanes(g: &LaneGraph, road: RoadId) -> usize {
+    let lanes = g.road(road).unwrap().lanes.len();
+    let continuing: HashSet<u8> = g
+        .connections
+        .iter()
+        .filter(|c| c.from_road == road)
+        .map(|c| c.from_lane)
+        .collect();
+    if continuing.is_empty() {
+        lanes
+    } else {
+        continuing.len()
+    }
+}
+
+/// How many lanes a flow's demand is for: a single-lane source's demand is per lane (Flow's and SUMO's
+/// convention), so a road of several lanes at the window's boundary gets it once per lane.
+struct LaneScale {
+    /// Through lanes of the source's road into its merge.
+    source_lanes: usize,
+    /// Through lanes of the corridor's road into the (first) window's merge.
+    boundary_lanes: usize,
+    /// Lanes of the entry road the flow departs on (its demand is spread over them, one flow per lane).
+    entry_lanes: usize,
+}
+
+impl LaneScale {
+    /// The default demand's factor on a source flow's rate.
+    fn factor(&self) -> f64 {
+        if self.boundary_lanes == self.source_lanes {
+            1.0
+        } else {
+            self.boundary_lanes as f64 / self.source_lanes as f64
+        }
+    }
+}
+
+/// The flows of one source flow at an entry: one flow as it is on a one-lane entry road, else one flow per entry
+/// lane (`depart_lane` its index, id suffixed `_lane<i>`) sharing `vph` equally.
+fn per_lane(flow: Flow, vph: f64, entry_lanes: usize) -> Vec<Flow> {
+    if entry_lanes <= 1 {
+        return vec![Flow {
+            vehs_per_hour: vph,
+            ..flow
+        }];
+    }
+    (0..entry_lanes)
+        .map(|lane| Flow {
+            id: format!("{}_lane{lane}", flow.id),
+            vehs_per_hour: vph / entry_lanes as f64,
+            depart_lane: Some(lane.to_string()),
+            ..flow.clone()
+        })
+        .collect()
+}
+
 /// The flows of a corridor scenario: each source flow on the main road moved to `main_entry`, each source
 /// flow on the merging road repeated on every entry of `ramps` (its id suffixed with the road's when there are
-/// several), scaled as `demand` says.
+/// several), scaled as `demand` says. By default a road of several lanes gets the source's per-lane demand on
+/// each of its lanes at the window (`main_boundary`: the main road's road into the first window's merge; a
+/// merging road's: its last road); `--main-vph` and the other overrides stay totals. On an entry road of several
+/// lanes a flow is split into one flow per lane. Also returns one line per road of several lanes saying so.
+#[allow(clippy::too_many_arguments)]
 fn corridor_flows(
     g: &LaneGraph,
     roles: &CorridorRoles,
     main_entry: RoadId,
+    main_boundary: RoadId,
     ramps: &[RoadId],
     source: &ResolvedScenario,
     shape: &SourceShape,
     demand: &DemandOverride,
-) -> Result<Vec<Flow>, TransformError> {
+) -> Result<(Vec<Flow>, Vec<String>), TransformError> {
     let s = &source.scenario;
     let main_set: HashSet<RoadId> = shape.main_roads.iter().copied().collect();
     let merge_set: HashSet<RoadId> = shape.merge_roads.iter().copied().collect();
@@ -118,19 +190,65 @@ fn corridor_flows(
         }
     }
     ramps.sort_by_key(|r| all_ramps.iter().position(|a| a == r));
+    let source_main = through_lanes(&source.graph, *shape.main_roads.last().unwrap());
+    let source_merge = through_lanes(&source.graph, *shape.merge_roads.last().unwrap());
+    let main_scale = LaneScale {
+        source_lanes: source_main,
+        boundary_lanes: through_lanes(g, main_boundary),
+        entry_lanes: g.road(main_entry).unwrap().lanes.len(),
+    };
+    let ramp_scale = |entry: RoadId| {
+        let feeder = roles.feeders.iter().find(|f| f[0] == entry).unwrap();
+        LaneScale {
+            source_lanes: source_merge,
+            boundary_lanes: through_lanes(g, *feeder.last().unwrap()),
+            entry_lanes: g.road(entry).unwrap().lanes.len(),
+        }
+    };
+    let mut notes = Vec::new();
+    let mut note = |what: &str, road: RoadId, scale: &LaneScale, total: f64, overridden: bool| {
+        if scale.boundary_lanes <= 1 && scale.entry_lanes <= 1 && scale.source_lanes <= 1 {
+            return;
+        }
+        let how = if overridden {
+            "as asked".to_string()
+        } else {
+            format!(
+                "the source's {:.0} veh/h per lane x {} lane(s) at the window",
+                total / scale.boundary_lanes as f64,
+                scale.boundary_lanes
+            )
+        };
+        let spread = if scale.entry_lanes > 1 {
+            format!(
+                ", one flow per lane of its {} entry lanes",
+                scale.entry_lanes
+            )
+        } else {
+            String::new()
+        };
+        notes.push(format!(
+            "demand {what} (enters at {road}): {total:.0} veh/h, {how}{spread}"
+        ));
+    };
     let mut flows = Vec::new();
-    for (f, role) in s.flows.iter().zip(kinds) {
-        let scaled = |wanted: Option<f64>| match wanted {
+    let mut main_total = 0.0;
+    for (f, role) in s.flows.iter().zip(kinds.iter().copied()) {
+        let scaled = |wanted: Option<f64>, scale: &LaneScale| match wanted {
             Some(total) if totals[role] > 0.0 => f.vehs_per_hour * total / totals[role],
-            _ => f.vehs_per_hour,
+            Some(_) => f.vehs_per_hour,
+            None if scale.factor() == 1.0 => f.vehs_per_hour,
+            None => f.vehs_per_hour * scale.factor(),
         };
         if role == 0 {
-            flows.push(Flow {
+            let vph = scaled(demand.main_vph, &main_scale);
+            main_total += vph;
+            let moved = Flow {
                 from: main_entry.to_string(),
                 to: None,
-                vehs_per_hour: scaled(demand.main_vph),
                 ..f.clone()
-            });
+            };
+            flows.extend(per_lane(moved, vph, main_scale.entry_lanes));
             continue;
         }
         for &entry in &ramps {
@@ -142,7 +260,8 @@ fn corridor_flows(
             if wanted == Some(0.0) && per_road.iter().any(|(r, _)| *r == entry) {
                 continue;
             }
-            flows.push(Flow {
+            let scale = ramp_scale(entry);
+            let moved = Flow {
                 id: if ramps.len() > 1 {
                     format!("{}_{entry}", f.id)
                 } else {
@@ -150,17 +269,41 @@ fn corridor_flows(
                 },
                 from: entry.to_string(),
                 to: None,
-                vehs_per_hour: scaled(wanted),
                 ..f.clone()
-            });
+            };
+            flows.extend(per_lane(moved, scaled(wanted, &scale), scale.entry_lanes));
         }
     }
-    Ok(flows)
+    note(
+        "on the main road",
+        main_entry,
+        &main_scale,
+        main_total,
+        demand.main_vph.is_some(),
+    );
+    for &entry in &ramps {
+        let total: f64 = flows
+            .iter()
+            .filter(|f| f.from == entry.to_string())
+            .map(|f| f.vehs_per_hour)
+            .sum();
+        let overridden = demand.merge_vph.is_some() || per_road.iter().any(|(r, _)| *r == entry);
+        if total > 0.0 {
+            note(
+                "on the merging road",
+                entry,
+                &ramp_scale(entry),
+                total,
+                overridden,
+            );
+        }
+    }
+    Ok((flows, notes))
 }
 
 /// The window scenario: the whole cut corridor (saved as `graph_file`, relative to the scenario), the source's
 /// vehicle types, step, horizon and initial vehicles, its flows moved to the corridor's entries, and the window
-/// as the controlled region.
+/// as the controlled region; with it, a line per road of several lanes saying what demand it got.
 pub fn window_scenario(
     cut: &WindowCut,
     source: &ResolvedScenario,
@@ -168,17 +311,18 @@ pub fn window_scenario(
     name: &str,
     graph_file: &str,
     demand: &DemandOverride,
-) -> Result<Scenario, TransformError> {
+) -> Result<(Scenario, Vec<String>), TransformError> {
     let s = &source.scenario;
     let ramps = if demand.every_ramp {
         ramp_entries(&cut.graph, &cut.roles)
     } else {
         vec![cut.merge_entry]
     };
-    let flows = corridor_flows(
+    let (flows, demand_notes) = corridor_flows(
         &cut.graph,
         &cut.roles,
         cut.main_entry,
+        main_road_into(&cut.graph, &cut.roles, cut.junction),
         &ramps,
         source,
         shape,
@@ -209,18 +353,14 @@ pub fn window_scenario(
         }),
         windows: vec![],
     };
-    Ok(corridor_scenario(
-        s,
-        name,
-        description,
-        graph_file,
-        flows,
-        control,
+    Ok((
+        corridor_scenario(s, name, description, graph_file, flows, control),
+        demand_notes,
     ))
 }
 
 /// The scenario of a corridor cut for several windows: as [`window_scenario`], with a flow on every merging road
-/// of the corridor and one `[[control.windows]]` entry per region.
+/// of the corridor and one `[[control.windows]]` entry per region (and the demand's lines).
 pub fn windows_scenario(
     cut: &WindowsCut,
     source: &ResolvedScenario,
@@ -228,11 +368,21 @@ pub fn windows_scenario(
     name: &str,
     graph_file: &str,
     demand: &DemandOverride,
-) -> Result<Scenario, TransformError> {
+) -> Result<(Scenario, Vec<String>), TransformError> {
     let s = &source.scenario;
     let g = &cut.graph;
     let ramps = ramp_entries(g, &cut.roles);
-    let flows = corridor_flows(g, &cut.roles, cut.main_entry, &ramps, source, shape, demand)?;
+    let first_merge = cut.regions[0].merges[0];
+    let (flows, demand_notes) = corridor_flows(
+        g,
+        &cut.roles,
+        cut.main_entry,
+        main_road_into(g, &cut.roles, first_merge),
+        &ramps,
+        source,
+        shape,
+        demand,
+    )?;
     let n_av = controlled_avs(source, demand);
     let matched_to = matched_to(source);
     let windows: Vec<ControlWindow> = cut
@@ -278,13 +428,9 @@ pub fn windows_scenario(
         window: None,
         windows,
     };
-    Ok(corridor_scenario(
-        s,
-        name,
-        description,
-        graph_file,
-        flows,
-        control,
+    Ok((
+        corridor_scenario(s, name, description, graph_file, flows, control),
+        demand_notes,
     ))
 }
 

@@ -42,7 +42,7 @@ fn window_cuts_exactly_and_keeps_the_corridor() {
     // Three cuts: three new roads above the largest id, three new through junctions.
     assert_eq!(cut.graph.roads.len(), g.roads.len() + 3);
     assert_eq!(cut.main_entry, RoadId(0));
-    let scenario = window_scenario(
+    let (scenario, _) = window_scenario(
         &cut,
         &source,
         &shape,
@@ -434,7 +434,7 @@ fn the_scenario_records_the_fitted_lengths() {
     let mut shape = SourceShape::of(&source).unwrap();
     shape.upstream_m = 1600.0;
     let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
-    let scenario = window_scenario(
+    let (scenario, _) = window_scenario(
         &cut,
         &source,
         &shape,
