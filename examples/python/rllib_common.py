@@ -1,8 +1,33 @@
-"""What the two RLlib examples share: the env seeds of each runner, and the training loop with its log."""
+"""What the RLlib examples share: Ray's start on loopback, the env seeds of each runner, where the runners run, and
+the training loop with its log."""
 
 import json
 import os
+import socket
 import time
+
+
+def init_ray(address):
+    """Join the Ray cluster at `address`, or start a local one whose processes talk over loopback only."""
+    import ray
+
+    if address is None:
+        # A local Ray takes the machine's outward address as its node address (even when given 127.0.0.1);
+        # Ray's switch for single-machine clusters keeps every socket of a local Ray on loopback.
+        import ray._private.ray_constants as ray_constants
+
+        ray_constants.ENABLE_RAY_CLUSTER = False
+    ray.init(address=address, include_dashboard=False, log_to_driver=False)
+
+
+def runner_placement(algo):
+    """Where each remote env runner of `algo` runs: (worker index, node IP, host name, pid), by index."""
+    import ray
+
+    def where(runner):
+        return runner.worker_index, ray.util.get_node_ip_address(), socket.gethostname(), os.getpid()
+
+    return sorted(algo.env_runner_group.foreach_env_runner(where, local_env_runner=False))
 
 
 def runner_seed(cfg):

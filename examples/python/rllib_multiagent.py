@@ -25,7 +25,7 @@ import mapc
 from mapc.export import save_rllib_distributed_policy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from rllib_common import runner_seed, train  # noqa: E402
+from rllib_common import init_ray, runner_seed, train  # noqa: E402
 
 
 class MapcAgents(ParallelPettingZooEnv):
@@ -57,7 +57,7 @@ def main():
     p.add_argument("--out", default="out/rllib_multiagent")
     a = p.parse_args()
 
-    ray.init(address=a.address, include_dashboard=False, log_to_driver=False)
+    init_ray(a.address)
     register_env("mapc_merge_agents", make_env)
     scenario = os.path.abspath(a.scenario) if os.path.exists(a.scenario) else a.scenario
     config = (

@@ -1,6 +1,7 @@
 """RLlib's PPO (Ray, new API stack) on mapc's environment: the centralized Simple Merge policy, sampled by N env
-runners on a local Ray cluster or on an existing one, written at the end as a mapc policy file and evaluated over
-seeds against the humans with mapc's own evaluation (what `mapc eval` prints).
+runners on a local Ray cluster or on an existing one, each stepping K episodes through mapc's vector env (one Rust
+call per step, `mapc.rllib`), written at the end as a mapc policy file and evaluated over seeds against the humans
+with mapc's own evaluation (what `mapc eval` prints).
 
     pip install ./python "ray[rllib]" torch
     python examples/python/rllib_ppo.py --iters 2 --env-runners 1 --eval-seeds 2          # smoke run
@@ -20,14 +21,11 @@ from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
 from ray.tune.registry import register_env
 
 import mapc
+import mapc.rllib
 from mapc.export import save_rllib_policy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from rllib_common import runner_seed, train  # noqa: E402
-
-
-def make_env(cfg):
-    return mapc.make_env(cfg["scenario"], reward=cfg["reward"], seed=runner_seed(cfg))
+from rllib_common import init_ray, runner_placement, train  # noqa: E402
 
 
 def main():
@@ -36,7 +34,8 @@ def main():
     p.add_argument("--reward", default="outflow")
     p.add_argument("--iters", type=int, default=300)
     p.add_argument("--env-runners", type=int, default=2)
-    p.add_argument("--envs-per-runner", type=int, default=1)
+    p.add_argument("--envs-per-runner", type=int, default=32,
+                   help="sub-environments each runner steps in one call (mapc's vector env)")
     p.add_argument("--batch", type=int, default=12_000, help="env steps per iteration (mapc's fast preset)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--address", default=None, help="an existing Ray cluster (`auto`); default: a local one")
@@ -44,8 +43,8 @@ def main():
     p.add_argument("--out", default="out/rllib")
     a = p.parse_args()
 
-    ray.init(address=a.address, include_dashboard=False, log_to_driver=False)
-    register_env("mapc_merge", make_env)
+    init_ray(a.address)
+    register_env("mapc_merge", mapc.rllib.env_creator)
     scenario = os.path.abspath(a.scenario) if os.path.exists(a.scenario) else a.scenario
     config = (
         PPOConfig()
@@ -54,7 +53,7 @@ def main():
         .environment("mapc_merge", env_config={"scenario": scenario, "reward": a.reward, "seed": a.seed},
                      normalize_actions=False)
         .env_runners(num_env_runners=a.env_runners, num_envs_per_env_runner=a.envs_per_runner,
-                     rollout_fragment_length="auto")
+                     gym_env_vectorize_mode=mapc.rllib.VECTORIZE_MODE, rollout_fragment_length="auto")
         # the paper's centralized PPO (REFERENCE.md sec. 5) at mapc's fast preset's batch
         .training(lr=5e-4, gamma=0.99, lambda_=0.97, clip_param=0.3, train_batch_size_per_learner=a.batch,
                   minibatch_size=1000, num_epochs=8, kl_coeff=0.2, kl_target=0.01, entropy_coeff=0.0,
@@ -64,6 +63,8 @@ def main():
         .debugging(seed=a.seed)
     )
     algo = config.build_algo()
+    for index, ip, host, pid in runner_placement(algo):
+        print(f"env runner {index}: node {ip} (host {host}, pid {pid}), {a.envs_per_runner} sub-environments")
     log, wall = train(algo, a.iters, a.out)
     policy = os.path.join(a.out, "policy.json")
     save_rllib_policy(algo.get_module(), policy, scenario=a.scenario, reward=a.reward)
