@@ -9,6 +9,8 @@
 - ``Policy(path)``: a trained policy's mean action.
 - ``import_map``, ``simplify``, ``window``: the scenario pipeline, writing the stages' files and returning the
   reports of ``mapc import|simplify|window --json``.
+- ``mapc.rllib``: RLlib's env runners on the vector env (``env_creator`` for ``register_env``); ``mapc.export``:
+  policies trained in Python written as mapc policy files.
 
 Every error of mapc is raised as ``MapcError`` with mapc's message (the file and the place).
 """

@@ -11,7 +11,7 @@
 # processes in its namespaces (by their ids), deletes the namespaces (the veth pair goes with them) and its
 # temporary folder.
 #
-#   sudo tools/ray_cluster/run.sh                 # as root (network namespaces); ITERS=2 BATCH=4000 by default
+#   sudo tools/ray_cluster/run.sh                 # as root (network namespaces); ITERS=2 BATCH=8000 by default
 #
 # Environment: VENV (default target/ray-py: made on first use with `pip install ./python "ray[rllib]" torch`),
 # OUT (default out/ray_cluster), ITERS, BATCH, ENVS_PER_RUNNER, EVAL_SEEDS.
@@ -21,8 +21,8 @@ ROOT=$PWD
 VENV=${VENV:-$ROOT/target/ray-py}
 OUT=${OUT:-$ROOT/out/ray_cluster}
 ITERS=${ITERS:-2}
-BATCH=${BATCH:-4000}
-ENVS_PER_RUNNER=${ENVS_PER_RUNNER:-16}
+BATCH=${BATCH:-8000}
+ENVS_PER_RUNNER=${ENVS_PER_RUNNER:-2}
 EVAL_SEEDS=${EVAL_SEEDS:-10}
 HEAD_IP=10.77.0.1
 WORKER_IP=10.77.0.2
