@@ -13,8 +13,9 @@
 #
 #   sudo tools/ray_cluster/run.sh                 # as root (network namespaces); ITERS=2 BATCH=8000 by default
 #
-# Environment: VENV (default target/ray-py: made on first use with `pip install ./python "ray[rllib]" torch`),
-# OUT (default out/ray_cluster), ITERS, BATCH, ENVS_PER_RUNNER, EVAL_SEEDS.
+# Environment: VENV (default target/ray-py: made on first use with `pip install ./python "ray[rllib]" torch`;
+# after changing mapc's sources, `MATURIN_PEP517_ARGS="--profile dev" $VENV/bin/pip install --no-build-isolation
+# ./python` brings it up to date), OUT (default out/ray_cluster), ITERS, BATCH, ENVS_PER_RUNNER, EVAL_SEEDS.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 ROOT=$PWD
