@@ -81,7 +81,9 @@ pub use metrics::{
 pub use network::Network;
 pub use regime::{MergePriority, RegimeReport, merge_priorities, merge_regimes};
 pub use scenario::{run_baseline, spec_from_scenario};
-pub use sim::{MergeFoe, Neighbor, Simulation, VehicleId, VehicleStatus, VehicleView};
+pub use sim::{
+    MergeFoe, Neighbor, SideNeighbors, Simulation, VehicleId, VehicleStatus, VehicleView,
+};
 pub use spec::{
     ControlWindowSpec, DepartLane, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec,
 };

@@ -10,11 +10,14 @@ mod lookahead;
 mod moves;
 mod planning;
 mod queries;
+mod side_lanes;
 mod table;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod tests_lanes;
+#[cfg(test)]
+mod tests_side_lanes;
 mod vehicle;
 
 use crate::SimError;
@@ -38,6 +41,7 @@ use table::Table;
 use vehicle::{Route, TypeConsts, Veh};
 
 pub use queries::{MergeFoe, Neighbor, VehicleView};
+pub use side_lanes::SideNeighbors;
 pub use vehicle::VehicleStatus;
 
 /// Index of a vehicle, stable for the whole run (vehicles are numbered in creation order).

@@ -184,10 +184,11 @@ impl Simulation {
         })
     }
 
-    /// Distance from the vehicle's front to the next merge on its route (a connection with foes; diverges are
-    /// passed), and that junction; `None` if no merge lies ahead.
+    /// Distance from the vehicle's front to the next merge on its route (a connection onto a road that another
+    /// road joins in the same junction, whichever lane it joins: on one-lane roads, a connection with foes;
+    /// diverges are passed), and that junction; `None` if no merge lies ahead.
     pub fn distance_to_next_merge(&self, id: VehicleId) -> Option<(f64, mapc_graph::JunctionId)> {
-        self.distance_to_next_link(id, |l| !l.foes.is_empty())
+        self.distance_to_next_link_at(id, |k| self.joins_another_road(k))
     }
 
     /// Distance from the vehicle's front to the next connection on its route that `wanted` picks, and its junction.
@@ -195,6 +196,15 @@ impl Simulation {
         &self,
         id: VehicleId,
         wanted: impl Fn(&SimLink) -> bool,
+    ) -> Option<(f64, mapc_graph::JunctionId)> {
+        self.distance_to_next_link_at(id, |k| wanted(self.link_at(k as usize)))
+    }
+
+    /// As [`Self::distance_to_next_link`], `wanted` given the link's index.
+    fn distance_to_next_link_at(
+        &self,
+        id: VehicleId,
+        wanted: impl Fn(LinkIdx) -> bool,
     ) -> Option<(f64, mapc_graph::JunctionId)> {
         let v = self
             .veh
@@ -205,7 +215,7 @@ impl Simulation {
         for k in (v.route_pos as usize + 1)..r.lanes.len() {
             let lane = self.lane_at(r.lanes[k] as usize);
             if let LaneKind::Via(link) = lane.kind
-                && wanted(self.link_at(link as usize))
+                && wanted(link)
             {
                 return Some((seen, self.link_at(link as usize).junction));
             }
@@ -312,7 +322,9 @@ impl Simulation {
     }
 
     /// The vehicle on another road nearest to the merge point that this vehicle's route reaches next, among those
-    /// approaching it (on the merging road within `max_dist` of the merge, or inside the junction).
+    /// approaching it (on the merging road within `max_dist` of the merge, or inside the junction). The merge is
+    /// the next junction where another road joins the road the route enters, on the same lane (one-lane roads)
+    /// or on one of its own (an acceleration lane); its point is the end of the merging connection.
     pub fn nearest_merge_foe(&self, id: VehicleId, max_dist: f64) -> Option<MergeFoe> {
         let v = self
             .veh
@@ -326,10 +338,10 @@ impl Simulation {
         }
         while k < r.lanes.len() {
             if let LaneKind::Via(link) = self.lane_at(r.lanes[k] as usize).kind {
-                let foes = &self.link_at(link as usize).foes;
+                let foes = self.joining_links(link);
                 if !foes.is_empty() {
                     let mut best: Option<MergeFoe> = None;
-                    for &f in foes {
+                    for f in foes {
                         let fl = self.link_at(f as usize);
                         let via_len = self.lane_at(fl.via_lane as usize).length;
                         let mut consider = |o: VehicleId, d: f64| {
