@@ -307,3 +307,53 @@ def test_a_deployment_rule_from_python_is_mapc_evals(tmp_path):
     assert "withheld" not in lifted
     with pytest.raises(mapc.MapcError, match="unknown deployment rule"):
         mapc.evaluate(robust, arizona, seeds=1, deploy="anywhere")
+
+
+TWO_LANES = str(ROOT / "scenarios" / "two_lane_merge_av.toml")
+
+
+def test_a_multi_lane_scenario_is_an_env_and_plays_mapc_evals_episode():
+    # the two-lane merge: the policy sets accelerations, lane changes stay with the lane-change model
+    env, policy = mapc.make_env(TWO_LANES), mapc.Policy(POLICY)
+    obs, _ = env.reset(seed=1)
+    assert obs.shape == (25,)
+    truncated = False
+    while not truncated:
+        obs, _, _, truncated, info = env.step(policy.act(obs))
+    theirs = binary_json("eval", "--policy", POLICY, "--scenario", TWO_LANES, "--seeds", "1", "--first-seed", "1",
+                         "--no-baseline")
+    assert (info["outflow"], info["inflow"], info["speed"]) == (
+        theirs["outflow"]["mean"], theirs["inflow"]["mean"], theirs["speed"]["mean"])
+    venv = mapc.make_vec_env(TWO_LANES, num_envs=2, seed=1)
+    obs, _ = venv.reset()
+    assert obs.shape == (2, 25)
+    assert np.array_equal(obs[0], mapc.make_env(TWO_LANES).reset(seed=1)[0])
+    obs, rewards, _, _, _ = venv.step(np.zeros((2, 5), dtype=np.float32))
+    assert obs.shape == (2, 25) and rewards.shape == (2,)
+
+
+def test_the_parallel_env_takes_a_multi_lane_scenario_and_the_adjacent_lanes():
+    policy_path = ROOT / "policies" / "simple_merge_distributed.json"
+    policy = mapc.Policy(policy_path)
+    env = mapc.parallel_env(TWO_LANES, features=policy.features)
+    obs, _ = env.reset(seed=2)
+    info, seen = {}, set()
+    while env.agents:
+        obs, _, _, _, infos = env.step({a: policy.act(obs[a]) for a in env.agents})
+        seen |= set(obs)
+        info = next(iter(infos.values()), info)
+    assert len(seen) > 20
+    theirs = binary_json("eval", "--policy", str(policy_path), "--scenario", TWO_LANES, "--seeds", "1",
+                         "--first-seed", "2", "--no-baseline")
+    assert (info["outflow"], info["inflow"], info["speed"]) == (
+        theirs["outflow"]["mean"], theirs["inflow"]["mean"], theirs["speed"]["mean"])
+    # the adjacent lanes: ten more values per agent, a lane flag 0 or 1 for each side
+    env = mapc.parallel_env(TWO_LANES, features="full,lanes")
+    obs, _ = env.reset(seed=2)
+    flags = set()
+    for _ in range(300):
+        for o in obs.values():
+            assert o.shape == (19,)
+            flags |= {float(o[9]), float(o[14])}
+        obs, *_ = env.step({a: np.zeros(1, dtype=np.float32) for a in env.agents})
+    assert flags == {0.0, 1.0}

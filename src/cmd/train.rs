@@ -30,10 +30,12 @@ pub struct Args {
     /// leaves); the presets become the paper's distributed hyperparameters.
     #[arg(long)]
     pub distributed: bool,
-    /// Distributed: the agents' state augmentations, `full` (default), `none`, or a list of dist, congestion,
-    /// merge.
-    #[arg(long, default_value = "full", requires = "distributed")]
-    pub features: String,
+    /// What the observation adds to the paper's five values per AV. Distributed: the agents' state augmentations,
+    /// `full` (default: dist, congestion, merge), `none`, or a list of dist, congestion, merge, lanes.
+    /// Centralized: `none` (default) or `lanes`. `lanes`: the leader and follower on the lanes to the left and
+    /// right (for multi-lane roads; a missing lane reads as an empty one, flagged).
+    #[arg(long)]
+    pub features: Option<String>,
     /// Distributed: weight of the selfish time penalty.
     #[arg(long, default_value_t = 0.9, requires = "distributed")]
     pub eta1: f64,
@@ -359,8 +361,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         validate(&config)?;
         let n_av = args.n_av.or(sc.n_av).unwrap_or(5);
         let mut spec = PolicySpec::centralized(&args.scenario, reward.name(), n_av);
+        if !args.distributed
+            && let Some(f) = &args.features
+        {
+            let features = Features::parse(f).map_err(anyhow::Error::msg)?;
+            if features.dist || features.congestion || features.merge_info {
+                bail!(
+                    "--features {f}: a centralized policy observes only `lanes` besides the paper's five values (dist, congestion and merge are --distributed augmentations)"
+                );
+            }
+            if features.lanes {
+                spec = spec.with_lanes();
+            }
+        }
         if args.distributed {
-            let features = Features::parse(&args.features).map_err(anyhow::Error::msg)?;
+            let features = Features::parse(args.features.as_deref().unwrap_or("full"))
+                .map_err(anyhow::Error::msg)?;
             for (name, v) in [
                 ("eta1", args.eta1),
                 ("eta2", args.eta2),
@@ -434,6 +450,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         accel_min: run.spec.accel_min,
         accel_max: run.spec.accel_max,
+        lanes: run.spec.lanes,
     };
     let source = training_source(&run.spec.scenario, spec.horizon_steps)?;
     let probe = MergeEnv::with_source(source.clone(), env_cfg.clone())?;

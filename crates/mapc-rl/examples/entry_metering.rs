@@ -68,6 +68,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         norm: SIMPLE_MERGE_NORM,
         accel_min: ACCEL_MIN,
         accel_max: ACCEL_MAX,
+        lanes: false,
     };
     let fmt = |f: mapc_rl::eval::Figure| format!("{:.1} ± {:.1}", f.mean, f.ci95);
     println!("| target m/s | metering until m | outflow veh/h | inflow veh/h | speed m/s |");

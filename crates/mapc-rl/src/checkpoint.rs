@@ -35,6 +35,10 @@ pub struct PolicySpec {
     /// and `reward` then do not apply); absent for a centralized one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub distributed: Option<DistributedSpec>,
+    /// A centralized policy that observes the adjacent lanes' leaders and followers too (`--features lanes`;
+    /// a distributed policy says so in its features); absent: the paper's five values per AV.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub lanes: bool,
     /// The merges the policy is meant for: windows whose merge is not among them are left to the humans
     /// ([`crate::deploy`]); absent: every window.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -65,7 +69,17 @@ impl PolicySpec {
             accel_min: ACCEL_MIN,
             accel_max: ACCEL_MAX,
             distributed: None,
+            lanes: false,
             deploy: None,
+        }
+    }
+
+    /// This centralized policy observing the adjacent lanes too (`--features lanes`): 15 values per AV.
+    pub fn with_lanes(self) -> PolicySpec {
+        PolicySpec {
+            lanes: true,
+            obs_dim: crate::env::obs::per_av(true) * self.n_av,
+            ..self
         }
     }
 

@@ -13,7 +13,7 @@ use crate::checkpoint::Checkpoint;
 use crate::deploy::{Deploy, Deployment, Withheld};
 use crate::env::distributed::{DistributedConfig, DistributedEnv};
 use crate::env::merge::{MergeEnv, MergeEnvConfig};
-use crate::env::obs::{ObsNorm, PER_AV};
+use crate::env::obs::ObsNorm;
 use crate::env::windows::WindowsEnv;
 use crate::error::RlError;
 use crate::eval_windows::run_windows_episode;
@@ -301,13 +301,14 @@ pub fn env_config_for(
     scenario_n_av: Option<usize>,
 ) -> Result<MergeEnvConfig, RlError> {
     let n_av = scenario_n_av.unwrap_or(ck.spec.n_av);
-    if PER_AV * n_av != ck.spec.obs_dim {
+    let per = crate::env::obs::per_av(ck.spec.lanes);
+    if per * n_av != ck.spec.obs_dim {
         return Err(RlError::ObsMismatch {
             policy: policy.into(),
             expected: ck.spec.obs_dim,
             policy_n_av: ck.spec.n_av,
             scenario: scenario.into(),
-            got: PER_AV * n_av,
+            got: per * n_av,
             scenario_n_av: n_av,
         });
     }
@@ -324,6 +325,7 @@ pub fn env_config_for(
         },
         accel_min: ck.spec.accel_min,
         accel_max: ck.spec.accel_max,
+        lanes: ck.spec.lanes,
     })
 }
 

@@ -6,6 +6,10 @@
 //!   control region, whose acceleration the policy sets.
 //! - **Observation**: five values per controlled AV (own speed, leader speed difference and gap, follower speed
 //!   difference and gap), normalised by `V` (max speed) and `L` (network lane length), zero-padded to `5 N_AV`.
+//!   Leader and follower are those in the AV's own lane (on a multi-lane road the policy sets accelerations only;
+//!   lane changes stay with the lane-change model). **Adjacent lanes** (`--features lanes`, not in the paper):
+//!   ten more values per AV, the leader and follower on the lanes to its left and right, each lane flagged as
+//!   present (a missing lane reads as an empty one).
 //! - **Centralized / distributed policy**: one policy sets the accelerations of the `N_AV` controlled AVs from
 //!   their joint observation (`env::merge`), or one policy shared by every AV acts on each AV's own observation
 //!   (its five values plus the optional augmentations) and every AV is an **agent** with its own reward and

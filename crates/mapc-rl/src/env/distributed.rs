@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use mapc_sim::{SimSpec, Simulation, VehicleId};
 
-use super::obs::{AvView, ObsNorm, PER_AV};
+use super::obs::{ADJACENT_PER_AV, AvView, ObsNorm, PER_AV};
 use crate::error::RlError;
 use crate::rollout::EpisodeMetrics;
 
@@ -23,6 +23,10 @@ pub struct Features {
     /// Distance to the junction and speed of the nearest vehicle about to merge from another road
     /// ("MergeInfo").
     pub merge_info: bool,
+    /// The leaders and followers on the adjacent lanes (not in the paper: for multi-lane roads, where vehicles
+    /// cut in from the side; [`super::obs::adjacent_lane_values`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub lanes: bool,
 }
 
 impl Features {
@@ -31,33 +35,49 @@ impl Features {
         dist: true,
         congestion: true,
         merge_info: true,
+        lanes: false,
+    };
+
+    /// The paper's five values only.
+    pub const NONE: Features = Features {
+        dist: false,
+        congestion: false,
+        merge_info: false,
+        lanes: false,
     };
 
     /// Observation values per agent.
     pub fn obs_dim(self) -> usize {
-        PER_AV + self.dist as usize + self.congestion as usize + 2 * self.merge_info as usize
+        PER_AV
+            + self.dist as usize
+            + self.congestion as usize
+            + 2 * self.merge_info as usize
+            + if self.lanes { ADJACENT_PER_AV } else { 0 }
     }
 
-    /// Parses `full`, `none` or a comma-separated list of `dist`, `congestion`, `merge`.
+    /// Parses `full`, `none` or a comma-separated list of `dist`, `congestion`, `merge`, `lanes` (and `full`:
+    /// `full,lanes` is the paper's three with the adjacent lanes).
     pub fn parse(s: &str) -> Result<Features, String> {
-        let mut f = Features {
-            dist: false,
-            congestion: false,
-            merge_info: false,
-        };
+        let mut f = Features::NONE;
         match s.trim() {
-            "full" | "all" => return Ok(Features::FULL),
             "none" | "" => return Ok(f),
             _ => {}
         }
         for part in s.split(',') {
             match part.trim() {
+                "full" | "all" => {
+                    f = Features {
+                        lanes: f.lanes,
+                        ..Features::FULL
+                    }
+                }
                 "dist" => f.dist = true,
                 "congestion" => f.congestion = true,
                 "merge" | "merge_info" | "mergeinfo" => f.merge_info = true,
+                "lanes" => f.lanes = true,
                 other => {
                     return Err(format!(
-                        "unknown feature `{other}` (full, none, or a list of dist, congestion, merge)"
+                        "unknown feature `{other}` (full, none, or a list of dist, congestion, merge, lanes)"
                     ));
                 }
             }
@@ -66,18 +86,27 @@ impl Features {
     }
 
     pub fn name(self) -> String {
-        if self == Features::FULL {
-            return "full".into();
-        }
-        let names: Vec<&str> = [
-            (self.dist, "dist"),
-            (self.congestion, "congestion"),
-            (self.merge_info, "merge"),
-        ]
-        .iter()
-        .filter(|(on, _)| *on)
-        .map(|&(_, n)| n)
-        .collect();
+        let paper = Features {
+            lanes: false,
+            ..self
+        };
+        let names: Vec<&str> = if paper == Features::FULL {
+            vec!["full"]
+        } else {
+            [
+                (self.dist, "dist"),
+                (self.congestion, "congestion"),
+                (self.merge_info, "merge"),
+            ]
+            .iter()
+            .filter(|(on, _)| *on)
+            .map(|&(_, n)| n)
+            .collect()
+        };
+        let names: Vec<&str> = names
+            .into_iter()
+            .chain(self.lanes.then_some("lanes"))
+            .collect();
         if names.is_empty() {
             "none".into()
         } else {
@@ -166,7 +195,7 @@ pub const MERGE_FOE_RANGE: f64 = 1.5;
 /// One agent's observation: the centralized observation's five values for the agent (not clipped), then the
 /// augmentations in the order dist, congestion, merge distance, merge speed. The distance is to the next merge on
 /// the agent's route, at most `DistNorm::junction`; no merge ahead counts as that far, no vehicle ahead of it as speed V, no merging vehicle as one at the merging road's
-/// start, standing.
+/// start, standing; with `lanes`, the adjacent lanes' ten values last (not clipped either).
 pub fn agent_obs(
     view: &AgentView,
     features: Features,
@@ -175,17 +204,9 @@ pub fn agent_obs(
     out: &mut Vec<f32>,
 ) {
     out.clear();
-    let (vmax, len) = (norm.max_speed, norm.length);
+    let vmax = norm.max_speed;
     let av = &view.av;
-    let (lead_v, lead_gap) = av.leader.unwrap_or((vmax, len));
-    let (fol_v, fol_gap) = av.follower.unwrap_or((0.0, len));
-    for x in [
-        av.speed / vmax,
-        (lead_v - av.speed) / vmax,
-        lead_gap / len,
-        (av.speed - fol_v) / vmax,
-        fol_gap / len,
-    ] {
+    for x in super::obs::own_lane_values(av, norm) {
         out.push(x as f32);
     }
     if features.dist {
@@ -204,6 +225,11 @@ pub fn agent_obs(
         let (d, v) = view.merge_foe.unwrap_or((dist_norm.merge, 0.0));
         out.push((d / dist_norm.merge) as f32);
         out.push((v / vmax) as f32);
+    }
+    if features.lanes {
+        for x in super::obs::adjacent_lane_values(av, norm) {
+            out.push(x as f32);
+        }
     }
 }
 
@@ -312,7 +338,6 @@ impl DistributedEnv {
     fn view(&self, id: VehicleId) -> AgentView {
         let sim = self.sim.as_ref().expect("reset before use");
         let len = self.cfg.norm.length;
-        let speed = sim.vehicle(id).map_or(0.0, |v| v.speed);
         let f = self.cfg.features;
         let junction_dist = if f.dist || f.congestion {
             sim.distance_to_next_merge(id).map(|(d, _)| d)
@@ -333,11 +358,7 @@ impl DistributedEnv {
             None
         };
         AgentView {
-            av: AvView {
-                speed,
-                leader: sim.leader(id, len).map(|n| (n.speed, n.gap_m)),
-                follower: sim.follower(id, len).map(|n| (n.speed, n.gap_m)),
-            },
+            av: super::av_view(sim, id, len, f.lanes),
             junction_dist,
             congestion_speed,
             merge_foe,
@@ -456,6 +477,7 @@ mod tests {
                 speed: 15.0,
                 leader: Some((45.0, 2000.0)),
                 follower: None,
+                ..AvView::default()
             },
             junction_dist: Some(150.0),
             congestion_speed: Some(6.0),
@@ -499,6 +521,26 @@ mod tests {
         assert_eq!(f.name(), "dist,merge");
         assert_eq!(Features::parse("none").unwrap().name(), "none");
         assert!(Features::parse("speed").is_err());
+        // the adjacent lanes, alone or with the paper's three
+        let l = Features::parse("lanes").unwrap();
+        assert!(l.lanes && !l.dist && l.obs_dim() == 15);
+        assert_eq!(l.name(), "lanes");
+        let fl = Features::parse("full,lanes").unwrap();
+        assert_eq!((fl.obs_dim(), fl.name()), (19, "full,lanes".to_string()));
+        assert_eq!(Features::parse(&fl.name()).unwrap(), fl);
+        assert_eq!(
+            Features::parse("merge,lanes").unwrap().name(),
+            "merge,lanes"
+        );
+        // a policy file without the field reads as the paper's observation
+        let old: Features =
+            serde_json::from_str(r#"{"dist":true,"congestion":true,"merge_info":true}"#).unwrap();
+        assert_eq!(old, Features::FULL);
+        assert!(
+            !serde_json::to_string(&Features::FULL)
+                .unwrap()
+                .contains("lanes")
+        );
     }
 
     #[test]

@@ -10,9 +10,7 @@ use mapc_scenario::distribution::LoadedDistribution;
 use mapc_sim::{SimSpec, Simulation, VehicleId};
 use serde::{Deserialize, Serialize};
 
-use super::obs::{
-    AvView, ControlQueue, ObsNorm, PER_AV, centralized_obs, flow_reward, speed_reward,
-};
+use super::obs::{AvView, ControlQueue, ObsNorm, centralized_obs, flow_reward, speed_reward};
 use crate::error::RlError;
 use crate::rollout::{Env, EpisodeMetrics, Transition};
 
@@ -69,6 +67,8 @@ pub struct MergeEnvConfig {
     pub norm: ObsNorm,
     pub accel_min: f64,
     pub accel_max: f64,
+    /// Observe the adjacent lanes' leaders and followers too (`mapc train --features lanes`).
+    pub lanes: bool,
 }
 
 impl MergeEnvConfig {
@@ -81,11 +81,12 @@ impl MergeEnvConfig {
             norm: SIMPLE_MERGE_NORM,
             accel_min: ACCEL_MIN,
             accel_max: ACCEL_MAX,
+            lanes: false,
         }
     }
 
     pub fn obs_dim(&self) -> usize {
-        PER_AV * self.n_av
+        super::obs::per_av(self.lanes) * self.n_av
     }
 }
 
@@ -207,13 +208,15 @@ impl MergeEnv {
         let views: Vec<AvView> = self
             .controlled
             .iter()
-            .map(|&id| AvView {
-                speed: sim.vehicle(id).map_or(0.0, |v| v.speed),
-                leader: sim.leader(id, len).map(|n| (n.speed, n.gap_m)),
-                follower: sim.follower(id, len).map(|n| (n.speed, n.gap_m)),
-            })
+            .map(|&id| super::av_view(sim, id, len, self.cfg.lanes))
             .collect();
-        centralized_obs(&views, self.cfg.n_av, self.cfg.norm, &mut self.obs_buf);
+        centralized_obs(
+            &views,
+            self.cfg.n_av,
+            self.cfg.norm,
+            self.cfg.lanes,
+            &mut self.obs_buf,
+        );
         self.obs_buf.clone()
     }
 

@@ -35,6 +35,31 @@ pub(crate) fn episode_simulation(spec: &SimSpec, seed: u64) -> Result<Simulation
     Ok(sim)
 }
 
+/// What the observation sees of AV `id` (neighbours within `len` m, the normalisation length): its leader and
+/// follower in its own lane, and with `lanes` the leader and follower on each adjacent lane of its road.
+pub(crate) fn av_view(sim: &Simulation, id: VehicleId, len: f64, lanes: bool) -> obs::AvView {
+    let pair = |n: Option<mapc_sim::Neighbor>| n.map(|n| (n.speed, n.gap_m));
+    let side = |side| {
+        sim.side_neighbors(id, side, len).map(|s| obs::SideView {
+            leader: pair(s.leader),
+            follower: pair(s.follower),
+        })
+    };
+    let (left, right) = if lanes {
+        use mapc_sim::lcmodels::Side;
+        (side(Side::Left), side(Side::Right))
+    } else {
+        (None, None)
+    };
+    obs::AvView {
+        speed: sim.vehicle(id).map_or(0.0, |v| v.speed),
+        leader: pair(sim.leader(id, len)),
+        follower: pair(sim.follower(id, len)),
+        left,
+        right,
+    }
+}
+
 /// Refuse the step's actions if any is not a number: every acceleration that enters an environment (from a
 /// policy, a controller, Python) goes through here before any is applied, so a bad one leaves the episode as it
 /// was. `place(k)` says how the caller names action `k` (`action[3]`, `agent vehicle 12 (actions[0])`).

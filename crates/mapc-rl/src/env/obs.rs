@@ -6,15 +6,74 @@ use serde::{Deserialize, Serialize};
 /// Values per controlled AV in the centralized observation.
 pub const PER_AV: usize = 5;
 
+/// Values the adjacent-lanes observation adds per AV: for the lane to the left, then the one to the right,
+/// whether it exists, and its leader's and follower's speed differences and gaps as in the paper's five.
+pub const ADJACENT_PER_AV: usize = 10;
+
+/// Values per AV of the centralized observation, with the adjacent lanes or without.
+pub fn per_av(lanes: bool) -> usize {
+    PER_AV + if lanes { ADJACENT_PER_AV } else { 0 }
+}
+
 /// What the observation needs to know about one controlled AV.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AvView {
     /// Own speed (m/s).
     pub speed: f64,
-    /// Leader's speed and bumper-to-bumper gap (m), if any.
+    /// Leader's speed and bumper-to-bumper gap (m), if any, in the AV's own lane.
     pub leader: Option<(f64, f64)>,
-    /// Follower's speed and gap (m), if any (the follower may be on the merging road).
+    /// Follower's speed and gap (m), if any, in the AV's own lane (it may be on the merging road, or on the
+    /// acceleration lane an AV from the ramp is on).
     pub follower: Option<(f64, f64)>,
+    /// The lanes to the left and right of the AV's lane; `None` where its road has none (read only by the
+    /// adjacent-lanes observation).
+    pub left: Option<SideView>,
+    pub right: Option<SideView>,
+}
+
+/// Leader and follower (speed, gap in m) on an adjacent lane, if any; gaps are negative while side by side.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SideView {
+    pub leader: Option<(f64, f64)>,
+    pub follower: Option<(f64, f64)>,
+}
+
+/// The paper's five values of one AV, not clipped: `[v/V, (v_lead - v)/V, h_lead/L, (v - v_follow)/V,
+/// h_follow/L]`; no leader counts as speed V at gap L, no follower as speed 0 at gap L.
+pub fn own_lane_values(av: &AvView, norm: ObsNorm) -> [f64; PER_AV] {
+    let (vmax, len) = (norm.max_speed, norm.length);
+    let (lead_v, lead_gap) = av.leader.unwrap_or((vmax, len));
+    let (fol_v, fol_gap) = av.follower.unwrap_or((0.0, len));
+    [
+        av.speed / vmax,
+        (lead_v - av.speed) / vmax,
+        lead_gap / len,
+        (av.speed - fol_v) / vmax,
+        fol_gap / len,
+    ]
+}
+
+/// The adjacent-lanes values of one AV, not clipped: for the left lane then the right one, `[1, (v_lead -
+/// v)/V, h_lead/L, (v - v_follow)/V, h_follow/L]` with the own lane's defaults for a missing leader or
+/// follower. A lane that does not exist reads as an empty one with its first value 0: no vehicle can cut in
+/// from it, as from an empty lane, and the flag tells the two apart.
+pub fn adjacent_lane_values(av: &AvView, norm: ObsNorm) -> [f64; ADJACENT_PER_AV] {
+    let mut out = [0.0; ADJACENT_PER_AV];
+    for (k, side) in [av.left, av.right].into_iter().enumerate() {
+        let present = side.is_some();
+        let side = side.unwrap_or_default();
+        let as_own = AvView {
+            speed: av.speed,
+            leader: side.leader,
+            follower: side.follower,
+            left: None,
+            right: None,
+        };
+        let v = own_lane_values(&as_own, norm);
+        out[k * PER_AV] = if present { 1.0 } else { 0.0 };
+        out[k * PER_AV + 1..(k + 1) * PER_AV].copy_from_slice(&v[1..]);
+    }
+    out
 }
 
 /// `V` and `L` of the observation.
@@ -24,24 +83,29 @@ pub struct ObsNorm {
     pub length: f64,
 }
 
-/// `[v/V, (v_lead - v)/V, h_lead/L, (v - v_follow)/V, h_follow/L]` per AV, clipped to [-1, 1]; no leader counts
-/// as speed V at gap L, no follower as speed 0 at gap L; zero-padded to `5 * n_av`.
-pub fn centralized_obs(avs: &[AvView], n_av: usize, norm: ObsNorm, out: &mut Vec<f32>) {
+/// `[v/V, (v_lead - v)/V, h_lead/L, (v - v_follow)/V, h_follow/L]` per AV ([`own_lane_values`]), followed with
+/// `lanes` by its adjacent lanes' ten values ([`adjacent_lane_values`]), clipped to [-1, 1]; zero-padded to
+/// `per_av(lanes) * n_av`.
+pub fn centralized_obs(
+    avs: &[AvView],
+    n_av: usize,
+    norm: ObsNorm,
+    lanes: bool,
+    out: &mut Vec<f32>,
+) {
+    let per = per_av(lanes);
     out.clear();
-    out.resize(PER_AV * n_av, 0.0);
-    let (vmax, len) = (norm.max_speed, norm.length);
+    out.resize(per * n_av, 0.0);
     for (k, av) in avs.iter().take(n_av).enumerate() {
-        let (lead_v, lead_gap) = av.leader.unwrap_or((vmax, len));
-        let (fol_v, fol_gap) = av.follower.unwrap_or((0.0, len));
-        let vals = [
-            av.speed / vmax,
-            (lead_v - av.speed) / vmax,
-            lead_gap / len,
-            (av.speed - fol_v) / vmax,
-            fol_gap / len,
-        ];
-        for (j, x) in vals.iter().enumerate() {
-            out[k * PER_AV + j] = x.clamp(-1.0, 1.0) as f32;
+        let own = own_lane_values(av, norm);
+        let side = if lanes {
+            adjacent_lane_values(av, norm)
+        } else {
+            [0.0; ADJACENT_PER_AV]
+        };
+        let vals = own.iter().chain(&side[..per - PER_AV]);
+        for (j, x) in vals.enumerate() {
+            out[k * per + j] = x.clamp(-1.0, 1.0) as f32;
         }
     }
 }
@@ -131,15 +195,17 @@ mod tests {
                 speed: 15.0,
                 leader: Some((20.0, 47.384)),
                 follower: Some((12.0, 94.768)),
+                ..AvView::default()
             },
             AvView {
                 speed: 6.0,
                 leader: None,
                 follower: None,
+                ..AvView::default()
             },
         ];
         let mut o = Vec::new();
-        centralized_obs(&avs, 3, NORM, &mut o);
+        centralized_obs(&avs, 3, NORM, false, &mut o);
         let want = [
             0.5,
             1.0 / 6.0,
@@ -170,11 +236,62 @@ mod tests {
             speed: 40.0,
             leader: Some((0.0, 2000.0)),
             follower: Some((75.0, 1.0)),
+            ..AvView::default()
         }; 3];
         let mut o = Vec::new();
-        centralized_obs(&avs, 2, NORM, &mut o);
+        centralized_obs(&avs, 2, NORM, false, &mut o);
         assert_eq!(o.len(), 10);
         assert_eq!(&o[..4], &[1.0, -1.0, 1.0, -1.0]);
+    }
+
+    #[test]
+    fn adjacent_lanes_by_hand() {
+        // a left lane with a leader 47.384 m ahead at 18 m/s and a follower 2 m behind the AV's back (side by side:
+        // -2 m) at 21 m/s; no lane on the right
+        let av = AvView {
+            speed: 15.0,
+            leader: Some((20.0, 47.384)),
+            follower: None,
+            left: Some(SideView {
+                leader: Some((18.0, 47.384)),
+                follower: Some((21.0, -2.0)),
+            }),
+            right: None,
+        };
+        let mut o = Vec::new();
+        centralized_obs(&[av], 2, NORM, true, &mut o);
+        assert_eq!(o.len(), 30);
+        let want = [
+            // own lane: the paper's five
+            0.5,
+            1.0 / 6.0,
+            0.05,
+            0.5,
+            1.0,
+            // left: present, leader, follower (clipped)
+            1.0,
+            0.1,
+            0.05,
+            -0.2,
+            -2.0 / 947.68,
+            // right: missing, read as an empty lane
+            0.0,
+            0.5,
+            1.0,
+            0.5,
+            1.0,
+        ];
+        for (a, b) in o.iter().zip(want) {
+            assert!((a - b as f32).abs() < 1e-6, "{o:?}");
+        }
+        assert!(o[15..].iter().all(|&x| x == 0.0));
+        // without the option, the paper's five values, whatever the sides hold
+        centralized_obs(&[av], 2, NORM, false, &mut o);
+        assert_eq!(o.len(), 10);
+        let bare = AvView { left: None, ..av };
+        let mut p = Vec::new();
+        centralized_obs(&[bare], 2, NORM, false, &mut p);
+        assert_eq!(o, p);
     }
 
     #[test]

@@ -126,7 +126,7 @@ impl WindowsEnv {
                 present[k].push((v.entry_order, id));
             }
         }
-        let (n_av, norm) = (self.cfg.n_av, self.cfg.norm);
+        let (n_av, norm, lanes) = (self.cfg.n_av, self.cfg.norm, self.cfg.lanes);
         self.obs.resize(self.windows.len(), Vec::new());
         for ((w, mut here), obs) in self.windows.iter_mut().zip(present).zip(&mut self.obs) {
             here.sort_unstable();
@@ -140,13 +140,9 @@ impl WindowsEnv {
             let views: Vec<AvView> = w
                 .controlled
                 .iter()
-                .map(|&id| AvView {
-                    speed: sim.vehicle(id).map_or(0.0, |v| v.speed),
-                    leader: sim.leader(id, norm.length).map(|n| (n.speed, n.gap_m)),
-                    follower: sim.follower(id, norm.length).map(|n| (n.speed, n.gap_m)),
-                })
+                .map(|&id| super::av_view(sim, id, norm.length, lanes))
                 .collect();
-            centralized_obs(&views, n_av, norm, obs);
+            centralized_obs(&views, n_av, norm, lanes, obs);
         }
     }
 

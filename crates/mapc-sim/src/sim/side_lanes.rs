@@ -20,7 +20,12 @@ impl Simulation {
     /// Leader and follower of `id` on the lane to its `side` on its road, within `max_dist` metres (searched across
     /// the lane's end along the vehicle's route and across its start through the connections into it). `None`
     /// when the road has no lane on that side, and inside a junction.
-    pub fn side_neighbors(&self, id: VehicleId, side: Side, max_dist: f64) -> Option<SideNeighbors> {
+    pub fn side_neighbors(
+        &self,
+        id: VehicleId,
+        side: Side,
+        max_dist: f64,
+    ) -> Option<SideNeighbors> {
         let v = self
             .veh
             .get(id as usize)
@@ -46,8 +51,13 @@ impl Simulation {
             let ov = &self.veh[o as usize];
             Some(neighbor(o, ov.pos - ov.length - v.pos))
         } else {
-            self.first_ahead_along_route(id, lane, self.lane_at(lane as usize).length - v.pos, max_dist)
-                .map(|(o, gap)| neighbor(o, gap))
+            self.first_ahead_along_route(
+                id,
+                lane,
+                self.lane_at(lane as usize).length - v.pos,
+                max_dist,
+            )
+            .map(|(o, gap)| neighbor(o, gap))
         };
         let leader = leader.filter(|n| n.gap_m <= max_dist);
         let follower = match q.get(split) {

@@ -34,7 +34,9 @@ fn side_neighbours_are_the_nearest_vehicles_on_the_adjacent_lane() {
                 };
                 let got = got.expect("a lane on that side");
                 // by hand, on the adjacent lane itself: the nearest front ahead, the nearest at or behind
-                let on_lane = sim.lane_veh[n as usize].iter().map(|&o| (o, &sim.veh[o as usize]));
+                let on_lane = sim.lane_veh[n as usize]
+                    .iter()
+                    .map(|&o| (o, &sim.veh[o as usize]));
                 let ahead = on_lane
                     .clone()
                     .filter(|(_, o)| o.pos > v.pos)
@@ -67,7 +69,10 @@ fn side_neighbours_are_the_nearest_vehicles_on_the_adjacent_lane() {
             }
         }
     }
-    assert!(leaders > 1000 && followers > 1000 && missing > 1000, "{leaders} {followers} {missing}");
+    assert!(
+        leaders > 1000 && followers > 1000 && missing > 1000,
+        "{leaders} {followers} {missing}"
+    );
 }
 
 #[test]
