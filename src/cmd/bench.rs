@@ -1,5 +1,6 @@
 //! `mapc bench`: the simulator's speed — vehicle-steps per second on one core, and the wall time of a many-seed
-//! baseline on a given number of threads.
+//! baseline on a given number of threads; with `--train N`, the trainer's: N iterations of the paper preset's
+//! centralized training, their wall and CPU time by phase, and the preset's 500 iterations extrapolated.
 
 use mapc_sim::{Simulation, spec_from_scenario};
 use rayon::prelude::*;
@@ -22,9 +23,16 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    /// Benchmark training instead: this many iterations of `mapc train --preset paper --reward outflow` on the
+    /// scenario (a fresh run in a temporary directory, on `--threads` threads).
+    #[arg(long)]
+    pub train: Option<u64>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(iters) = args.train {
+        return bench_training(&args, iters);
+    }
     anyhow::ensure!(
         args.single_core_seeds >= 1 && args.seeds >= 1,
         "seed counts must be at least 1"
@@ -90,6 +98,89 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// `--train N`: N iterations of the paper preset, timed; the preset's full run extrapolated from their mean.
+fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
+    use clap::Parser;
+    anyhow::ensure!(iters >= 1, "--train needs at least 1 iteration");
+    let dir = std::env::temp_dir().join(format!("mapc-bench-train-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    #[derive(Parser)]
+    struct Train {
+        #[command(flatten)]
+        args: super::train::Args,
+    }
+    let threads = args.threads.to_string();
+    let iters_s = iters.to_string();
+    let train = Train::try_parse_from(
+        [
+            "train",
+            "--scenario",
+            &args.scenario,
+            "--reward",
+            "outflow",
+            "--preset",
+            "paper",
+            "--iters",
+            &iters_s,
+            "--threads",
+            &threads,
+            "-o",
+        ]
+        .into_iter()
+        .map(std::ffi::OsString::from)
+        .chain([dir.clone().into_os_string()]),
+    )?;
+    let (cpu0, start) = (cpu_seconds(), Instant::now());
+    let run = super::train::train(train.args);
+    let (wall_s, cpu_s) = (start.elapsed().as_secs_f64(), cpu_seconds() - cpu0);
+    std::fs::remove_dir_all(&dir).ok();
+    let run = run?;
+    let timing = run.state.timing;
+    let full = mapc_rl::PpoConfig::default().iterations as f64;
+    let per_iter = wall_s / iters as f64;
+    let out = serde_json::json!({
+        "scenario": args.scenario,
+        "threads": args.threads,
+        "iterations": iters,
+        "wall_s": wall_s,
+        "cpu_s": cpu_s,
+        "per_iteration": {"wall_s": per_iter, "cpu_s": cpu_s / iters as f64,
+                          "rollout_s": timing.rollout_s / iters as f64,
+                          "update_s": timing.update_s / iters as f64},
+        "extrapolated_500_iterations_min": per_iter * full / 60.0,
+    });
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        println!(
+            "training, paper preset, {}: {iters} iterations on {} threads in {wall_s:.2} s wall, {cpu_s:.2} s CPU",
+            args.scenario, args.threads
+        );
+        println!(
+            "  per iteration: {per_iter:.3} s wall ({:.3} s rollouts, {:.3} s update), {:.3} s CPU",
+            timing.rollout_s / iters as f64,
+            timing.update_s / iters as f64,
+            cpu_s / iters as f64
+        );
+        println!(
+            "  the preset's {full} iterations at this rate: {:.1} min",
+            per_iter * full / 60.0
+        );
+    }
+    Ok(())
+}
+
+/// CPU time (user and system) of the whole process so far, in seconds.
+fn cpu_seconds() -> f64 {
+    // SAFETY: getrusage only writes the struct it is given
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) } != 0 {
+        return f64::NAN;
+    }
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    secs(usage.ru_utime) + secs(usage.ru_stime)
 }
 
 /// The process's peak resident memory so far (MiB), as the kernel counts it.

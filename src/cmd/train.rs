@@ -323,6 +323,11 @@ fn validate(c: &PpoConfig) -> anyhow::Result<()> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    train(args).map(|_| ())
+}
+
+/// `mapc train`: the run, once its iterations are done and saved.
+pub fn train(args: Args) -> anyhow::Result<TrainRun> {
     if let Some(t) = args.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
@@ -439,7 +444,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // (the sizes agree: `Checkpoint::load` checks a resumed run's, a new run derives them from the features)
         DistributedEnv::new(spec.clone(), dcfg)?;
         let factory = move || DistributedEnv::new(spec.clone(), dcfg).expect("validated above");
-        return train_loop(&mut run, &args, &mut |r| r.step_agents(&factory));
+        train_loop(&mut run, &args, &mut |r| r.step_agents(&factory))?;
+        return Ok(run);
     }
     let env_cfg = MergeEnvConfig {
         reward: run.spec.reward.parse().map_err(anyhow::Error::msg)?,
@@ -464,7 +470,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let factory = move || -> Box<dyn Env> {
         Box::new(MergeEnv::with_source(source.clone(), env_cfg.clone()).expect("validated"))
     };
-    train_loop(&mut run, &args, &mut |r| r.step(&factory))
+    train_loop(&mut run, &args, &mut |r| r.step(&factory))?;
+    Ok(run)
 }
 
 /// `--init`: a new run takes the weights of a policy with the same architecture and observation layout.

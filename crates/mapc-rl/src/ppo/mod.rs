@@ -64,6 +64,18 @@ pub struct TrainerState {
     /// Minibatches whose gradient overflowed and was not applied (0 in a healthy run).
     #[serde(default)]
     pub skipped_minibatches: u64,
+    /// Where this session's wall time went (not saved: a benchmark's figures).
+    #[serde(skip)]
+    pub timing: Timing,
+}
+
+/// Wall time of a session's iterations, by phase.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timing {
+    /// Collecting the rollouts (simulation and the policy's forward passes).
+    pub rollout_s: f64,
+    /// The batch's advantages and the minibatch updates (forward, backward, Adam).
+    pub update_s: f64,
 }
 
 impl TrainerState {
@@ -86,6 +98,7 @@ impl TrainerState {
             env_steps: 0,
             wall_s: 0.0,
             skipped_minibatches: 0,
+            timing: Timing::default(),
         }
     }
 
@@ -156,6 +169,7 @@ impl TrainerState {
         let it = self.iteration;
         let seeds = self.episode_seeds(it);
         let collected = collect(&self.model, &seeds)?;
+        let collected_at = Instant::now();
         let episodes = &collected.trajectories;
         let batch = Batch::from_episodes(episodes, &self.config);
         let kl_coeff_used = self.kl_coeff;
@@ -171,6 +185,8 @@ impl TrainerState {
         self.iteration += 1;
         self.env_steps += collected.sim_steps;
         self.wall_s += start.elapsed().as_secs_f64();
+        self.timing.rollout_s += (collected_at - start).as_secs_f64();
+        self.timing.update_s += collected_at.elapsed().as_secs_f64();
         let runs = &collected.runs;
         let n = runs.len() as f64;
         Ok(IterationStats {
@@ -190,6 +206,12 @@ impl TrainerState {
 
     /// Minibatch SGD over the batch; returns the mean loss terms of the last epoch.
     fn update(&mut self, b: &Batch) -> LossStats {
+        // on a worker of the pool, where each gradient's and Adam step's fork into two tasks is cheap (from
+        // outside, every fork would wake a worker and wait for it)
+        rayon::scope(|_| self.update_on_pool(b))
+    }
+
+    fn update_on_pool(&mut self, b: &Batch) -> LossStats {
         let c = &self.config;
         let coeffs = LossCoeffs {
             clip: c.clip,

@@ -103,14 +103,32 @@ fn normc_init(sizes: &[usize], rng: &mut Rng, out: &mut Vec<f32>) {
     }
 }
 
-/// Plain forward of one MLP on one input (tanh hidden layers, linear output).
-fn mlp_forward(params: &[f32], sizes: &[usize], x: &[f32], buf: &mut Vec<f32>, out: &mut Vec<f32>) {
+/// The (inputs, outputs) of each layer of an MLP reading `n_in` inputs through `hidden` to `n_out` outputs.
+fn layer_dims(
+    n_in: usize,
+    hidden: &[usize],
+    n_out: usize,
+) -> impl Iterator<Item = (usize, usize)> + '_ {
+    let ins = std::iter::once(n_in).chain(hidden.iter().copied());
+    let outs = hidden.iter().copied().chain(std::iter::once(n_out));
+    ins.zip(outs)
+}
+
+/// Plain forward of one MLP (`n_in` inputs, tanh `hidden` layers, `n_out` linear outputs) on one input.
+fn mlp_forward(
+    params: &[f32],
+    n_in: usize,
+    hidden: &[usize],
+    n_out: usize,
+    x: &[f32],
+    buf: &mut Vec<f32>,
+    out: &mut Vec<f32>,
+) {
     out.clear();
     out.extend_from_slice(x);
     let mut off = 0;
-    let layers = sizes.len() - 1;
-    for (l, w) in sizes.windows(2).enumerate() {
-        let (n_in, n_out) = (w[0], w[1]);
+    let layers = hidden.len() + 1;
+    for (l, (n_in, n_out)) in layer_dims(n_in, hidden, n_out).enumerate() {
         let weights = &params[off..off + n_in * n_out];
         let bias = &params[off + n_in * n_out..off + n_in * n_out + n_out];
         off += n_in * n_out + n_out;
@@ -147,6 +165,7 @@ pub struct PolicyOutput {
 pub struct Scratch {
     a: Vec<f32>,
     b: Vec<f32>,
+    c: Vec<f32>,
 }
 
 impl Model {
@@ -161,12 +180,29 @@ impl Model {
         Self { arch, params }
     }
 
+    /// The policy net's outputs: means, log-stds (and the value when it is shared).
+    fn policy_outputs(&self) -> usize {
+        2 * self.arch.act_dim + usize::from(self.arch.shared_value)
+    }
+
     /// Policy mean, log-std and value for one observation, in plain `f32` (no burn: ~50x cheaper per sample).
     pub fn infer(&self, obs: &[f32], scratch: &mut Scratch) -> PolicyOutput {
         let a = self.arch.act_dim;
         let (pp, vp) = self.params.split_at(self.arch.policy_len());
-        let mut out = Vec::new();
-        mlp_forward(pp, &self.arch.policy_sizes(), obs, &mut scratch.a, &mut out);
+        let Scratch {
+            a: buf,
+            b: vbuf,
+            c: out,
+        } = scratch;
+        mlp_forward(
+            pp,
+            self.arch.obs_dim,
+            &self.arch.hidden,
+            self.policy_outputs(),
+            obs,
+            buf,
+            out,
+        );
         let mean = out[..a].to_vec();
         let log_std = out[a..2 * a]
             .iter()
@@ -179,30 +215,32 @@ impl Model {
                 value: out[2 * a],
             };
         }
-        mlp_forward(
-            vp,
-            &self.arch.value_sizes(),
-            obs,
-            &mut scratch.a,
-            &mut scratch.b,
-        );
+        mlp_forward(vp, self.arch.obs_dim, &self.arch.hidden, 1, obs, buf, vbuf);
         PolicyOutput {
             mean,
             log_std,
-            value: scratch.b[0],
+            value: vbuf[0],
         }
     }
 
     /// Value estimate alone.
     pub fn value(&self, obs: &[f32], scratch: &mut Scratch) -> f32 {
-        let mut out = Vec::new();
+        let Scratch { a: buf, c: out, .. } = scratch;
         if self.arch.shared_value {
             let pp = &self.params[..self.arch.policy_len()];
-            mlp_forward(pp, &self.arch.policy_sizes(), obs, &mut scratch.a, &mut out);
+            mlp_forward(
+                pp,
+                self.arch.obs_dim,
+                &self.arch.hidden,
+                self.policy_outputs(),
+                obs,
+                buf,
+                out,
+            );
             return out[2 * self.arch.act_dim];
         }
         let vp = &self.params[self.arch.policy_len()..];
-        mlp_forward(vp, &self.arch.value_sizes(), obs, &mut scratch.a, &mut out);
+        mlp_forward(vp, self.arch.obs_dim, &self.arch.hidden, 1, obs, buf, out);
         out[0]
     }
 }
@@ -406,39 +444,72 @@ pub fn update_device() -> Device {
 /// PPO loss (RLlib's formulation) on one minibatch and its gradient with respect to every parameter:
 /// `mean(-min(A r, A clip(r, 1-c, 1+c)) + kl_coeff KL(old||new) + vf_coeff max((V-R)^2, (V_clipped-R)^2)
 /// - entropy_coeff H)`, `r = exp(logp - old_logp)`, `V_clipped = V_old + clip(V - V_old, -vf_clip, vf_clip)`.
+///
+/// With a separate value net the policy's terms and the value's are two graphs that share no parameter,
+/// differentiated side by side on the rayon pool ([`split_loss_and_grad`]); with a shared value, one graph
+/// ([`joint_loss_and_grad`]). Both give the same bits as the one graph would (a test compares them).
 pub fn loss_and_grad(
     model: &Model,
     mb: &Minibatch,
     c: &LossCoeffs,
     device: &Device,
 ) -> (LossStats, Vec<f32>) {
-    let n = mb.n;
-    let arch = &model.arch;
-    let a = arch.act_dim;
-    // Leaf tensors for every layer of both nets.
-    let mut leaves: Vec<(Tensor<2>, Tensor<2>)> = Vec::new();
+    if model.arch.shared_value {
+        joint_loss_and_grad(model, mb, c, device)
+    } else {
+        split_loss_and_grad(model, mb, c, device)
+    }
+}
+
+/// Leaf tensors (weight, bias) of the MLP with layer sizes `sizes` whose parameters start at `params[0]`.
+fn layer_leaves(params: &[f32], sizes: &[usize], device: &Device) -> Vec<(Tensor<2>, Tensor<2>)> {
+    let mut leaves = Vec::with_capacity(sizes.len().saturating_sub(1));
     let mut off = 0;
-    for sizes in [arch.policy_sizes(), arch.value_sizes()] {
-        for w in sizes.windows(2) {
-            let (n_in, n_out) = (w[0], w[1]);
-            let wt = leaf(
-                model.params[off..off + n_in * n_out].to_vec(),
-                [n_in, n_out],
-                device,
-            )
-            .require_grad();
-            off += n_in * n_out;
-            let bt =
-                leaf(model.params[off..off + n_out].to_vec(), [1, n_out], device).require_grad();
-            off += n_out;
-            leaves.push((wt, bt));
+    for w in sizes.windows(2) {
+        let (n_in, n_out) = (w[0], w[1]);
+        let wt = leaf(
+            params[off..off + n_in * n_out].to_vec(),
+            [n_in, n_out],
+            device,
+        )
+        .require_grad();
+        off += n_in * n_out;
+        let bt = leaf(params[off..off + n_out].to_vec(), [1, n_out], device).require_grad();
+        off += n_out;
+        leaves.push((wt, bt));
+    }
+    leaves
+}
+
+/// The leaves' gradients, flattened in parameter order (zeros for a leaf the loss does not reach).
+fn flat_grads(
+    leaves: &[(Tensor<2>, Tensor<2>)],
+    grads: &burn::tensor::Gradients,
+    flat: &mut Vec<f32>,
+) {
+    for (w, b) in leaves {
+        for t in [w, b] {
+            match t.grad(grads) {
+                Some(g) => {
+                    flat.extend_from_slice(g.into_data().as_slice::<f32>().expect("f32 gradient"))
+                }
+                None => flat.extend(std::iter::repeat_n(0.0, t.shape().num_elements())),
+            }
         }
     }
-    let n_policy_layers = arch.policy_sizes().len() - 1;
-    let obs = leaf(mb.obs.to_vec(), [n, arch.obs_dim], device);
-    let out = burn_mlp(obs.clone(), &leaves[..n_policy_layers]);
+}
+
+/// The policy's loss terms from the policy net's output `out` (`[n, 2 act_dim (+1)]`): the minibatch means of
+/// the clipped surrogate's negative, of KL(old || new) and of the entropy.
+fn policy_terms(
+    out: Tensor<2>,
+    act_dim: usize,
+    mb: &Minibatch,
+    c: &LossCoeffs,
+    device: &Device,
+) -> (Tensor<1>, Tensor<1>, Tensor<1>) {
+    let (n, a) = (mb.n, act_dim);
     let mean = out.clone().narrow(1, 0, a);
-    let shared_value = arch.shared_value.then(|| out.clone().narrow(1, 2 * a, 1));
     let log_std = out.narrow(1, a, a).clamp(LOG_STD_MIN, LOG_STD_MAX);
     let actions = leaf(mb.actions.to_vec(), [n, a], device);
     let old_mean = leaf(mb.old_mean.to_vec(), [n, a], device);
@@ -446,8 +517,6 @@ pub fn loss_and_grad(
     let col = |v: &[f32]| leaf(v.to_vec(), [n, 1], device);
     let old_logp = col(mb.old_log_prob);
     let adv = col(mb.advantages);
-    let targets = col(mb.value_targets);
-    let old_value = col(mb.old_value);
 
     let inv_std = log_std.clone().neg().exp();
     let z = (actions - mean.clone()) * inv_std.clone();
@@ -467,42 +536,108 @@ pub fn loss_and_grad(
     let entropy = log_std
         .sum_dim(1)
         .add_scalar(0.5 * (LN_2PI + 1.0) * a as f32);
+    (surr.neg().mean(), kl.mean(), entropy.mean())
+}
+
+/// The minibatch mean of the clipped value loss for the value estimates `value` (`[n, 1]`).
+fn value_term(value: Tensor<2>, mb: &Minibatch, c: &LossCoeffs, device: &Device) -> Tensor<1> {
+    let col = |v: &[f32]| leaf(v.to_vec(), [mb.n, 1], device);
+    let targets = col(mb.value_targets);
+    let old_value = col(mb.old_value);
+    let vf1 = (value.clone() - targets.clone()).square();
+    let vf_clipped = old_value.clone() + (value - old_value).clamp(-c.vf_clip, c.vf_clip);
+    let vf2 = (vf_clipped - targets).square();
+    vf1.max_pair(vf2).mean()
+}
+
+fn scalar(t: Tensor<1>) -> f32 {
+    t.into_scalar::<f32>()
+}
+
+/// The loss as one autodiff graph over both nets (needed when they share layers).
+pub fn joint_loss_and_grad(
+    model: &Model,
+    mb: &Minibatch,
+    c: &LossCoeffs,
+    device: &Device,
+) -> (LossStats, Vec<f32>) {
+    let arch = &model.arch;
+    let (pp, vp) = model.params.split_at(arch.policy_len());
+    let mut leaves = layer_leaves(pp, &arch.policy_sizes(), device);
+    let n_policy_layers = leaves.len();
+    leaves.extend(layer_leaves(vp, &arch.value_sizes(), device));
+    let obs = leaf(mb.obs.to_vec(), [mb.n, arch.obs_dim], device);
+    let out = burn_mlp(obs.clone(), &leaves[..n_policy_layers]);
+    let shared_value = arch
+        .shared_value
+        .then(|| out.clone().narrow(1, 2 * arch.act_dim, 1));
+    let (policy_loss, kl_mean, ent_mean) = policy_terms(out, arch.act_dim, mb, c, device);
     let value = match shared_value {
         Some(v) => v,
         None => burn_mlp(obs, &leaves[n_policy_layers..]),
     };
-    let vf1 = (value.clone() - targets.clone()).square();
-    let vf_clipped = old_value.clone() + (value - old_value).clamp(-c.vf_clip, c.vf_clip);
-    let vf2 = (vf_clipped - targets).square();
-    let vf_loss = vf1.max_pair(vf2);
-
-    let policy_loss = surr.neg().mean();
-    let kl_mean = kl.mean();
-    let vf_mean = vf_loss.mean();
-    let ent_mean = entropy.mean();
+    let vf_mean = value_term(value, mb, c, device);
     let total = policy_loss.clone()
         + kl_mean.clone().mul_scalar(c.kl_coeff)
         + vf_mean.clone().mul_scalar(c.vf_coeff)
         - ent_mean.clone().mul_scalar(c.entropy_coeff);
     let stats = LossStats {
-        total: total.clone().into_scalar::<f32>(),
-        policy_loss: policy_loss.into_scalar::<f32>(),
-        value_loss: vf_mean.into_scalar::<f32>(),
-        kl: kl_mean.into_scalar::<f32>(),
-        entropy: ent_mean.into_scalar::<f32>(),
+        total: scalar(total.clone()),
+        policy_loss: scalar(policy_loss),
+        value_loss: scalar(vf_mean),
+        kl: scalar(kl_mean),
+        entropy: scalar(ent_mean),
     };
     let grads = total.backward();
     let mut flat = Vec::with_capacity(model.params.len());
-    for (w, b) in &leaves {
-        for t in [w, b] {
-            match t.grad(&grads) {
-                Some(g) => {
-                    flat.extend_from_slice(g.into_data().as_slice::<f32>().expect("f32 gradient"))
-                }
-                None => flat.extend(std::iter::repeat_n(0.0, t.shape().num_elements())),
-            }
-        }
-    }
+    flat_grads(&leaves, &grads, &mut flat);
+    (stats, flat)
+}
+
+/// The loss of a model with a separate value net as two graphs, the policy's and the value's, differentiated in
+/// parallel. No parameter is in both, so each gradient is that of the joint graph, bit for bit: the joint
+/// total `((policy + kl_coeff kl) + vf_coeff vf) - entropy_coeff entropy` passes each term's gradient on
+/// unchanged (+1 or -1 times its coefficient), whichever terms sit beside it; and the total itself is formed
+/// from the terms' values with the same f32 operations in the same order.
+fn split_loss_and_grad(
+    model: &Model,
+    mb: &Minibatch,
+    c: &LossCoeffs,
+    device: &Device,
+) -> (LossStats, Vec<f32>) {
+    let arch = &model.arch;
+    let (pp, vp) = model.params.split_at(arch.policy_len());
+    let obs = || leaf(mb.obs.to_vec(), [mb.n, arch.obs_dim], device);
+    let policy = || {
+        let leaves = layer_leaves(pp, &arch.policy_sizes(), device);
+        let (policy_loss, kl_mean, ent_mean) =
+            policy_terms(burn_mlp(obs(), &leaves), arch.act_dim, mb, c, device);
+        let total = policy_loss.clone() + kl_mean.clone().mul_scalar(c.kl_coeff)
+            - ent_mean.clone().mul_scalar(c.entropy_coeff);
+        let grads = total.backward();
+        let mut flat = Vec::with_capacity(model.params.len());
+        flat_grads(&leaves, &grads, &mut flat);
+        (scalar(policy_loss), scalar(kl_mean), scalar(ent_mean), flat)
+    };
+    let value = || {
+        let leaves = layer_leaves(vp, &arch.value_sizes(), device);
+        let vf_mean = value_term(burn_mlp(obs(), &leaves), mb, c, device);
+        let grads = vf_mean.clone().mul_scalar(c.vf_coeff).backward();
+        let mut flat = Vec::with_capacity(vp.len());
+        flat_grads(&leaves, &grads, &mut flat);
+        (scalar(vf_mean), flat)
+    };
+    let ((policy_loss, kl, entropy, mut flat), (value_loss, value_flat)) =
+        rayon::join(policy, value);
+    flat.extend_from_slice(&value_flat);
+    let total = policy_loss + kl * c.kl_coeff + value_loss * c.vf_coeff - entropy * c.entropy_coeff;
+    let stats = LossStats {
+        total,
+        policy_loss,
+        value_loss,
+        kl,
+        entropy,
+    };
     (stats, flat)
 }
 
@@ -533,15 +668,36 @@ impl Adam {
         self.t += 1;
         let bc1 = 1.0 - self.beta1.powi(self.t as i32);
         let bc2 = 1.0 - self.beta2.powi(self.t as i32);
-        for i in 0..params.len() {
-            self.m[i] = self.beta1 * self.m[i] + (1.0 - self.beta1) * grad[i];
-            self.v[i] = self.beta2 * self.v[i] + (1.0 - self.beta2) * grad[i] * grad[i];
-            let mh = self.m[i] / bc1;
-            let vh = self.v[i] / bc2;
-            params[i] -= lr * mh / (vh.sqrt() + self.eps);
+        let (b1, b2, eps) = (self.beta1, self.beta2, self.eps);
+        // each element on its own, so the halves run on two threads with the same bits
+        let half = if params.len() >= ADAM_PARALLEL_LEN {
+            params.len() / 2
+        } else {
+            params.len()
+        };
+        let (p0, p1) = params.split_at_mut(half);
+        let (g0, g1) = grad.split_at(half);
+        let (m0, m1) = self.m.split_at_mut(half);
+        let (v0, v1) = self.v.split_at_mut(half);
+        let step = |p: &mut [f32], g: &[f32], m: &mut [f32], v: &mut [f32]| {
+            for (((p, &g), m), v) in p.iter_mut().zip(g).zip(m.iter_mut()).zip(v.iter_mut()) {
+                *m = b1 * *m + (1.0 - b1) * g;
+                *v = b2 * *v + (1.0 - b2) * g * g;
+                let mh = *m / bc1;
+                let vh = *v / bc2;
+                *p -= lr * mh / (vh.sqrt() + eps);
+            }
+        };
+        if p1.is_empty() {
+            step(p0, g0, m0, v0);
+        } else {
+            rayon::join(|| step(p0, g0, m0, v0), || step(p1, g1, m1, v1));
         }
     }
 }
+
+/// Parameter count from which Adam's step runs as two halves in parallel (below it, the fork costs more).
+const ADAM_PARALLEL_LEN: usize = 8192;
 
 #[cfg(test)]
 mod tests {
@@ -748,6 +904,96 @@ mod tests {
                 "param {i}: fd {fd} vs {}",
                 g[i]
             );
+        }
+    }
+
+    /// A random minibatch of `n` rows for `m`, with old outputs near the model's own (as after a few updates).
+    fn random_minibatch(m: &Model, n: usize, rng: &mut Rng) -> OwnedRows {
+        let (d, a) = (m.arch.obs_dim, m.arch.act_dim);
+        let mut r = OwnedRows::default();
+        let mut sc = Scratch::default();
+        for _ in 0..n {
+            let o: Vec<f32> = (0..d).map(|_| (rng.uniform() * 2.0 - 1.0) as f32).collect();
+            let out = m.infer(&o, &mut sc);
+            let act: Vec<f32> = (0..a).map(|_| (rng.normal() * 0.5) as f32).collect();
+            r.old_log_prob.push(
+                gaussian_log_prob(&act, &out.mean, &out.log_std) + (rng.normal() * 0.1) as f32,
+            );
+            r.old_mean
+                .extend(out.mean.iter().map(|x| x + (rng.normal() * 0.05) as f32));
+            r.old_log_std
+                .extend(out.log_std.iter().map(|x| x + (rng.normal() * 0.05) as f32));
+            r.old_value.push(out.value + (rng.normal() * 0.2) as f32);
+            r.advantages.push(rng.normal() as f32);
+            r.value_targets.push(out.value + rng.normal() as f32);
+            r.obs.extend(o);
+            r.actions.extend(act);
+        }
+        r
+    }
+
+    #[derive(Default)]
+    struct OwnedRows {
+        obs: Vec<f32>,
+        actions: Vec<f32>,
+        old_log_prob: Vec<f32>,
+        old_mean: Vec<f32>,
+        old_log_std: Vec<f32>,
+        old_value: Vec<f32>,
+        advantages: Vec<f32>,
+        value_targets: Vec<f32>,
+    }
+
+    impl OwnedRows {
+        fn view(&self) -> Minibatch<'_> {
+            Minibatch {
+                n: self.advantages.len(),
+                obs: &self.obs,
+                actions: &self.actions,
+                old_log_prob: &self.old_log_prob,
+                old_mean: &self.old_mean,
+                old_log_std: &self.old_log_std,
+                old_value: &self.old_value,
+                advantages: &self.advantages,
+                value_targets: &self.value_targets,
+            }
+        }
+    }
+
+    fn stats_bits(s: &LossStats) -> [u32; 5] {
+        [s.total, s.policy_loss, s.value_loss, s.kl, s.entropy].map(f32::to_bits)
+    }
+
+    #[test]
+    fn split_graphs_give_the_joint_graphs_bits() {
+        let mut rng = Rng::new(17);
+        for (seed, n, entropy_coeff) in [(1, 128, 0.0), (2, 37, 0.01), (3, 1, 0.0)] {
+            let mut m = Model::new(
+                Architecture {
+                    obs_dim: 25,
+                    act_dim: 5,
+                    hidden: vec![100, 50, 25],
+                    shared_value: false,
+                },
+                seed,
+            );
+            // weights away from the initial ones (the output layers start 100 times smaller)
+            for p in m.params.iter_mut() {
+                *p += (rng.normal() * 0.05) as f32;
+            }
+            let rows = random_minibatch(&m, n, &mut rng);
+            let c = test_coeffs(entropy_coeff);
+            let dev = update_device();
+            let (s_joint, g_joint) = joint_loss_and_grad(&m, &rows.view(), &c, &dev);
+            let (s_split, g_split) = split_loss_and_grad(&m, &rows.view(), &c, &dev);
+            assert_eq!(
+                stats_bits(&s_split),
+                stats_bits(&s_joint),
+                "{s_split:?} vs {s_joint:?}"
+            );
+            let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&g_split), bits(&g_joint), "seed {seed}");
+            assert!(g_joint.iter().any(|&g| g != 0.0));
         }
     }
 
