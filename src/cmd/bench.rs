@@ -126,6 +126,8 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
             &iters_s,
             "--threads",
             &threads,
+            // (no progress bar)
+            "--json",
             "-o",
         ]
         .into_iter()
@@ -136,7 +138,7 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
     let run = super::train::train(train.args);
     let (wall_s, cpu_s) = (start.elapsed().as_secs_f64(), cpu_seconds() - cpu0);
     std::fs::remove_dir_all(&dir).ok();
-    let run = run?;
+    let (run, _) = run?;
     let timing = run.state.timing;
     let full = mapc_rl::PpoConfig::default().iterations as f64;
     let per_iter = wall_s / iters as f64;

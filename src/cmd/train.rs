@@ -323,11 +323,13 @@ fn validate(c: &PpoConfig) -> anyhow::Result<()> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    train(args).map(|_| ())
+    let json = args.json;
+    let (run, last) = train(args)?;
+    report(&run, json, last)
 }
 
-/// `mapc train`: the run, once its iterations are done and saved.
-pub fn train(args: Args) -> anyhow::Result<TrainRun> {
+/// `mapc train` without its report: the run once its iterations are done and saved, and its last log row.
+pub fn train(args: Args) -> anyhow::Result<(TrainRun, Option<IterationStats>)> {
     if let Some(t) = args.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
@@ -444,8 +446,8 @@ pub fn train(args: Args) -> anyhow::Result<TrainRun> {
         // (the sizes agree: `Checkpoint::load` checks a resumed run's, a new run derives them from the features)
         DistributedEnv::new(spec.clone(), dcfg)?;
         let factory = move || DistributedEnv::new(spec.clone(), dcfg).expect("validated above");
-        train_loop(&mut run, &args, &mut |r| r.step_agents(&factory))?;
-        return Ok(run);
+        let last = train_loop(&mut run, &args, &mut |r| r.step_agents(&factory))?;
+        return Ok((run, last));
     }
     let env_cfg = MergeEnvConfig {
         reward: run.spec.reward.parse().map_err(anyhow::Error::msg)?,
@@ -470,8 +472,8 @@ pub fn train(args: Args) -> anyhow::Result<TrainRun> {
     let factory = move || -> Box<dyn Env> {
         Box::new(MergeEnv::with_source(source.clone(), env_cfg.clone()).expect("validated"))
     };
-    train_loop(&mut run, &args, &mut |r| r.step(&factory))?;
-    Ok(run)
+    let last = train_loop(&mut run, &args, &mut |r| r.step(&factory))?;
+    Ok((run, last))
 }
 
 /// `--init`: a new run takes the weights of a policy with the same architecture and observation layout.
@@ -504,7 +506,7 @@ fn train_loop(
     run: &mut TrainRun,
     args: &Args,
     step: &mut dyn FnMut(&mut TrainRun) -> Result<IterationStats, mapc_rl::RlError>,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<Option<IterationStats>> {
     let total = run.state.config.iterations;
     let bar = if args.json {
         ProgressBar::hidden()
@@ -529,10 +531,15 @@ fn train_loop(
     }
     run.save()?;
     bar.finish();
+    Ok(last)
+}
+
+/// What `mapc train` prints at the end: where the run's files are, its last row and its best policy.
+fn report(run: &TrainRun, json: bool, last: Option<IterationStats>) -> anyhow::Result<()> {
     let ck = mapc_rl::checkpoint::checkpoint_path(&run.dir);
     let best_file = mapc_rl::checkpoint::best_path(&run.dir);
     let best = run.best();
-    if args.json {
+    if json {
         let v = serde_json::json!({
             "run_dir": run.dir,
             "checkpoint": ck,
