@@ -64,6 +64,34 @@ def export(mapc, scenario, work):
         return out_dir, json.load(f)
 
 
+def export_digest(out_dir):
+    """SHA-256 over the exported SUMO inputs (net, routes, sumocfg; names and bytes): SUMO's runs depend on
+    nothing else, so runs recorded for the same digest and seeds can be reused (--sumo-runs)."""
+    import hashlib
+    h = hashlib.sha256()
+    for name in sorted(os.listdir(out_dir)):
+        if name.endswith(".mapc.json"):
+            continue
+        h.update(name.encode() + b"\0")
+        with open(os.path.join(out_dir, name), "rb") as f:
+            h.update(f.read() + b"\0")
+    return h.hexdigest()
+
+
+def reused_sumo_runs(path, digest, seeds):
+    """SUMO's human runs from an earlier --json of the same export and seeds (a mapc-only change re-compared
+    without running SUMO again); refused when the export or the seeds differ."""
+    with open(path) as f:
+        old = json.load(f)
+    if old.get("export_sha256") != digest:
+        sys.exit("sumo_check: %s was recorded for another export (SUMO inputs differ); run SUMO again" % path)
+    runs = old["sumo_human_runs"]
+    if [r["seed"] for r in runs] != list(seeds):
+        sys.exit("sumo_check: %s has SUMO runs for other seeds" % path)
+    print("  SUMO humans: %d seeds reused from %s (same export)" % (len(runs), path), file=sys.stderr)
+    return runs
+
+
 def _one(job):
     export_dir, manifest, seed, policy_path = job
     import traci
@@ -184,6 +212,8 @@ def main():
     ap.add_argument("--work", default=None, help="folder for the export (default: a temporary one)")
     ap.add_argument("--jobs", type=int, default=os.cpu_count(), help="SUMO processes at once")
     ap.add_argument("--json", dest="json_out", help="also write every run and summary here")
+    ap.add_argument("--sumo-runs", help="baseline: reuse SUMO's runs from an earlier --json of the same export "
+                                        "and seeds instead of running SUMO")
     a = ap.parse_args()
     if a.mode == "policy" and not a.policy:
         ap.error("policy mode needs --policy FILE")
@@ -205,10 +235,14 @@ def compare(a, mapc, seeds, work):
     multi_lane = any(r["lane_changes"] > 0 for r in mapc_h["runs"])
     points = reason_metrics(multi_lane) + point_metrics(manifest)
     mapc_h = summary_of_mapc(mapc_h, n, points)
-    sumo_h_runs = run_sumo(export_dir, manifest, seeds, None, a.jobs)
+    digest = export_digest(export_dir)
+    if a.sumo_runs:
+        sumo_h_runs = reused_sumo_runs(a.sumo_runs, digest, seeds)
+    else:
+        sumo_h_runs = run_sumo(export_dir, manifest, seeds, None, a.jobs)
     sumo_h = summary_of_runs(sumo_h_runs, points)
-    result = dict(scenario=a.scenario, seeds=a.seeds, mapc_humans=mapc_h, sumo_humans=sumo_h,
-                  sumo_human_runs=sumo_h_runs)
+    result = dict(scenario=a.scenario, seeds=a.seeds, export_sha256=digest, mapc_humans=mapc_h,
+                  sumo_humans=sumo_h, sumo_human_runs=sumo_h_runs)
     print("%s, %d seeds, SUMO %s" % (a.scenario, n, manifest["sumo_version"]))
     if a.mode == "baseline":
         print_table([("mapc humans", mapc_h), ("SUMO humans", sumo_h)],
