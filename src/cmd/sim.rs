@@ -117,6 +117,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         if s.runs.iter().any(|r| r.lane_changes > 0) {
             row("lane changes", &s.lane_changes, "per run");
             row("  per veh-km", &s.lane_changes_per_veh_km, "");
+            let by = |count: fn(&mapc_sim::LaneChangeReasons) -> u64| {
+                let xs: Vec<f64> = s
+                    .runs
+                    .iter()
+                    .map(|r| count(&r.lane_changes_by_reason) as f64)
+                    .collect();
+                MeanCi::of(&xs)
+            };
+            row("  strategic", &by(|r| r.strategic), "per run");
+            row("  cooperative", &by(|r| r.cooperative), "per run");
+            row("  speed gain", &by(|r| r.speed_gain), "per run");
+            row("  keep right", &by(|r| r.keep_right), "per run");
         }
         println!(
             "  per hour of the {:.0} s measured (after a {:.0} s warm-up):",

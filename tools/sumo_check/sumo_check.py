@@ -64,6 +64,34 @@ def export(mapc, scenario, work):
         return out_dir, json.load(f)
 
 
+def export_digest(out_dir):
+    """SHA-256 over the exported SUMO inputs (net, routes, sumocfg; names and bytes): SUMO's runs depend on
+    nothing else, so runs recorded for the same digest and seeds can be reused (--sumo-runs)."""
+    import hashlib
+    h = hashlib.sha256()
+    for name in sorted(os.listdir(out_dir)):
+        if name.endswith(".mapc.json"):
+            continue
+        h.update(name.encode() + b"\0")
+        with open(os.path.join(out_dir, name), "rb") as f:
+            h.update(f.read() + b"\0")
+    return h.hexdigest()
+
+
+def reused_sumo_runs(path, digest, seeds):
+    """SUMO's human runs from an earlier --json of the same export and seeds (a mapc-only change re-compared
+    without running SUMO again); refused when the export or the seeds differ."""
+    with open(path) as f:
+        old = json.load(f)
+    if old.get("export_sha256") != digest:
+        sys.exit("sumo_check: %s was recorded for another export (SUMO inputs differ); run SUMO again" % path)
+    runs = old["sumo_human_runs"]
+    if [r["seed"] for r in runs] != list(seeds):
+        sys.exit("sumo_check: %s has SUMO runs for other seeds" % path)
+    print("  SUMO humans: %d seeds reused from %s (same export)" % (len(runs), path), file=sys.stderr)
+    return runs
+
+
 def _one(job):
     export_dir, manifest, seed, policy_path = job
     import traci
@@ -87,20 +115,64 @@ def run_sumo(export_dir, manifest, seeds, policy_path, jobs):
     return runs
 
 
-def summary_of_runs(runs):
-    out = {}
-    for key, _ in METRICS:
-        m, ci, sd = stats.mean_ci([r[key] for r in runs])
-        out[key] = dict(mean=m, ci95=ci, std=sd, n=len(runs))
+def point_metrics(manifest):
+    """The measurement points' rows: past each measured merge, then past the corridor's end (both per hour of the
+    horizon after the warm-up, as mapc's `merges` and `end_flow`)."""
+    rows = [("merge_flow_%d" % i, "past %s, veh/h after warm-up" % p["name"])
+            for i, p in enumerate(manifest.get("measure_points", []))]
+    if manifest.get("end_edge"):
+        rows.append(("end_flow", "past the corridor's end, veh/h after warm-up"))
+    return rows
+
+
+REASONS = ("strategic", "cooperative", "speed_gain", "keep_right")
+
+
+def reason_metrics(multi_lane):
+    """Lane changes per vehicle by the lane-change model's reason (mapc's `lane_changes_by_reason`, SUMO's
+    --lanechange-output), on networks with a road of several lanes."""
+    if not multi_lane:
+        return []
+    return [("lc_" + r, "  of which %s / veh" % r.replace("_", " ")) for r in REASONS]
+
+
+def _per_veh_reason(r, key):
+    reasons = r.get("lane_changes_by_reason") or {}
+    return reasons.get(key[3:], float("nan")) / r["departed"] if r["departed"] else 0.0
+
+
+def _mean(values):
+    m, ci, sd = stats.mean_ci(values)
+    return dict(mean=m, ci95=ci, std=sd, n=len(values))
+
+
+def summary_of_runs(runs, points):
+    out = {key: _mean([r[key] for r in runs]) for key, _ in METRICS}
+    for key, _ in points:
+        if key.startswith("lc_"):
+            out[key] = _mean([_per_veh_reason(r, key) for r in runs])
+        elif key == "end_flow":
+            out[key] = _mean([r["end_flow"] for r in runs])
+        else:
+            i = int(key.rsplit("_", 1)[1])
+            out[key] = _mean([r["merge_flows"][i] for r in runs])
     return out
 
 
-def summary_of_mapc(block, n):
+def summary_of_mapc(block, n, points):
     out = {k: dict(mean=block[k]["mean"], ci95=block[k]["ci95"], std=stats.sd_from_ci(block[k]["ci95"], n), n=n)
            for k, _ in METRICS if k != LANE_CHANGES}
-    per_veh = [r["lane_changes"] / r["departed"] if r["departed"] else 0.0 for r in block["runs"]]
-    m, ci, sd = stats.mean_ci(per_veh)
-    out[LANE_CHANGES] = dict(mean=m, ci95=ci, std=sd, n=len(per_veh))
+    runs = block["runs"]
+    out[LANE_CHANGES] = _mean([r["lane_changes"] / r["departed"] if r["departed"] else 0.0 for r in runs])
+    nan = float("nan")
+    for key, _ in points:
+        if key.startswith("lc_"):
+            out[key] = _mean([_per_veh_reason(r, key) for r in runs])
+        elif key == "end_flow":
+            out[key] = _mean([r.get("end_flow_veh_h", nan) for r in runs])
+        else:
+            i = int(key.rsplit("_", 1)[1])
+            out[key] = _mean([(r.get("merge_flows_veh_h") or [nan] * (i + 1))[i] for r in runs])
     return out
 
 
@@ -109,19 +181,23 @@ def fmt(s, decimals=2):
 
 
 def welch_line(a, b):
+    if b["mean"] == 0:
+        return "%+.3f (difference)" % (a["mean"] - b["mean"])
     t, p = stats.welch(a["mean"], a["std"], a["n"], b["mean"], b["std"], b["n"])
     p_text = "p < 1e-15" if p < 1e-15 else "p %.2g" % p
     return "%+.2f %% (t %.1f, %s)" % (100.0 * (a["mean"] / b["mean"] - 1.0), t, p_text)
 
 
-def print_table(columns, comparisons):
+def print_table(columns, comparisons, points=()):
     names = [c[0] for c in columns]
     print("| metric | " + " | ".join(names) + " | " + " | ".join(c[0] for c in comparisons) + " |")
     print("|---" * (1 + len(columns) + len(comparisons)) + "|")
-    for key, label in METRICS:
+    for key, label in list(METRICS) + list(points):
         if key == LANE_CHANGES and all(c[1][key]["mean"] == 0 for c in columns):
             continue  # one-lane roads: nobody changes lanes
-        cells = [fmt(c[1][key], 3 if key == LANE_CHANGES else 2) for c in columns]
+        if key.startswith("lc_") and all(c[1][key]["mean"] == 0 for c in columns):
+            continue
+        cells = [fmt(c[1][key], 3 if key == LANE_CHANGES or key.startswith("lc_") else 2) for c in columns]
         comps = [welch_line(a[key], b[key]) for _, a, b in comparisons]
         print("| %s | %s | %s |" % (label, " | ".join(cells), " | ".join(comps)))
 
@@ -136,6 +212,8 @@ def main():
     ap.add_argument("--work", default=None, help="folder for the export (default: a temporary one)")
     ap.add_argument("--jobs", type=int, default=os.cpu_count(), help="SUMO processes at once")
     ap.add_argument("--json", dest="json_out", help="also write every run and summary here")
+    ap.add_argument("--sumo-runs", help="baseline: reuse SUMO's runs from an earlier --json of the same export "
+                                        "and seeds instead of running SUMO")
     a = ap.parse_args()
     if a.mode == "policy" and not a.policy:
         ap.error("policy mode needs --policy FILE")
@@ -154,26 +232,33 @@ def compare(a, mapc, seeds, work):
     export_dir, manifest = export(mapc, a.scenario, work)
     n = len(seeds)
     mapc_h = mapc_json(mapc, ["sim", "--scenario", a.scenario, "--seeds", str(n)])
-    mapc_h = summary_of_mapc(mapc_h, n)
-    sumo_h_runs = run_sumo(export_dir, manifest, seeds, None, a.jobs)
-    sumo_h = summary_of_runs(sumo_h_runs)
-    result = dict(scenario=a.scenario, seeds=a.seeds, mapc_humans=mapc_h, sumo_humans=sumo_h,
-                  sumo_human_runs=sumo_h_runs)
+    multi_lane = any(r["lane_changes"] > 0 for r in mapc_h["runs"])
+    points = reason_metrics(multi_lane) + point_metrics(manifest)
+    mapc_h = summary_of_mapc(mapc_h, n, points)
+    digest = export_digest(export_dir)
+    if a.sumo_runs:
+        sumo_h_runs = reused_sumo_runs(a.sumo_runs, digest, seeds)
+    else:
+        sumo_h_runs = run_sumo(export_dir, manifest, seeds, None, a.jobs)
+    sumo_h = summary_of_runs(sumo_h_runs, points)
+    result = dict(scenario=a.scenario, seeds=a.seeds, export_sha256=digest, mapc_humans=mapc_h,
+                  sumo_humans=sumo_h, sumo_human_runs=sumo_h_runs)
     print("%s, %d seeds, SUMO %s" % (a.scenario, n, manifest["sumo_version"]))
     if a.mode == "baseline":
         print_table([("mapc humans", mapc_h), ("SUMO humans", sumo_h)],
-                    [("mapc vs SUMO", mapc_h, sumo_h)])
+                    [("mapc vs SUMO", mapc_h, sumo_h)], points)
     else:
         ev = mapc_json(mapc, ["eval", "--policy", a.policy, "--scenario", a.scenario, "--seeds", str(n)])
-        mapc_p = summary_of_mapc(ev, n)
+        mapc_p = summary_of_mapc(ev, n, points)
         sumo_p_runs = run_sumo(export_dir, manifest, seeds, a.policy, a.jobs)
-        sumo_p = summary_of_runs(sumo_p_runs)
+        sumo_p = summary_of_runs(sumo_p_runs, points)
         result.update(policy=a.policy, mapc_policy=mapc_p, sumo_policy=sumo_p, sumo_policy_runs=sumo_p_runs)
         print("policy %s" % a.policy)
         print_table([("mapc humans", mapc_h), ("mapc policy", mapc_p), ("SUMO humans", sumo_h),
                      ("SUMO policy", sumo_p)],
                     [("policy vs humans, mapc", mapc_p, mapc_h), ("policy vs humans, SUMO", sumo_p, sumo_h),
-                     ("mapc vs SUMO, humans", mapc_h, sumo_h), ("mapc vs SUMO, policy", mapc_p, sumo_p)])
+                     ("mapc vs SUMO, humans", mapc_h, sumo_h), ("mapc vs SUMO, policy", mapc_p, sumo_p)],
+                    points)
     if a.json_out:
         with open(a.json_out, "w") as f:
             json.dump(result, f, indent=1)

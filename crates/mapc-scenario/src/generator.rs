@@ -1,7 +1,7 @@
 //! Built-in networks. The Simple Merge is laid out as the original code's MergeNetwork: the main road runs east
 //! along y = 0 with the merge at x = pre_merge_m; the ramp comes in from below at `angle_deg`.
 
-use crate::model::{MajorRoad, SimpleMergeParams};
+use crate::model::{LaneDropParams, MajorRoad, SimpleMergeParams};
 use mapc_graph::{
     Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance,
     RightOfWay, Road, RoadId, Source, SourceFormat,
@@ -20,6 +20,10 @@ pub const AFTER_LANE_DROP: &str = "after_lane_drop";
 /// The Simple Merge with a two-lane main road and the ramp joining through an acceleration lane.
 pub const TWO_LANE_MERGE: &str = "two_lane_merge";
 const LANE_WIDTH_M: f64 = 3.2;
+/// The lane-drop bottleneck and its roads.
+pub const LANE_DROP: &str = "lane_drop";
+pub const LANE_DROP_UPSTREAM: &str = "upstream";
+pub const LANE_DROP_DOWNSTREAM: &str = "downstream";
 
 pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     for (name, v) in [
@@ -287,9 +291,131 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     Ok(g)
 }
 
+/// The lane-drop bottleneck: road `upstream` (`lanes_before` lanes) east along y = 0 to the junction `drop`,
+/// then road `downstream` (`lanes_after` lanes); the rightmost `lanes_before - lanes_after` lanes of `upstream`
+/// have no connection onward, the others continue lane for lane (upstream lane i + dropped to downstream lane i).
+pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
+    for (name, v) in [
+        ("upstream_m", p.upstream_m),
+        ("downstream_m", p.downstream_m),
+        ("speed_limit_mps", p.speed_limit_mps),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(format!(
+                "network.lane_drop.{name} must be a positive number, not {v}"
+            ));
+        }
+    }
+    if p.lanes_after == 0 || p.lanes_after > p.lanes_before {
+        return Err(format!(
+            "network.lane_drop: lanes_after must be between 1 and lanes_before ({}), not {}",
+            p.lanes_before, p.lanes_after
+        ));
+    }
+    let provenance = |id: &str| Provenance {
+        sumo_ids: vec![id.to_string()],
+        ..Provenance::made_by(LANE_DROP)
+    };
+    let nodes = [
+        ("start", [0.0, 0.0]),
+        ("drop", [p.upstream_m, 0.0]),
+        ("end", [p.upstream_m + p.downstream_m, 0.0]),
+    ];
+    let mut g = LaneGraph::new(
+        Source {
+            file: LANE_DROP.to_string(),
+            format: SourceFormat::Generator,
+        },
+        Projection::Plane { offset: [0.0, 0.0] },
+    );
+    g.junctions = nodes
+        .iter()
+        .enumerate()
+        .map(|(i, (name, pos))| Junction {
+            id: JunctionId(i as u32),
+            pos: *pos,
+            kind: JunctionKind::Through,
+            incoming: vec![],
+            outgoing: vec![],
+            provenance: provenance(name),
+        })
+        .collect();
+    let roads = [
+        (LANE_DROP_UPSTREAM, 0, p.upstream_m, p.lanes_before),
+        (LANE_DROP_DOWNSTREAM, 1, p.downstream_m, p.lanes_after),
+    ];
+    g.roads = roads
+        .iter()
+        .enumerate()
+        .map(|(i, &(name, from, length_m, lanes))| Road {
+            id: RoadId(i as u32),
+            from: JunctionId(from),
+            to: JunctionId(from + 1),
+            class: "highway".to_string(),
+            name: Some(name.to_string()),
+            ref_: None,
+            priority: 1,
+            lanes: (0..lanes)
+                .map(|index| Lane {
+                    index,
+                    speed_mps: p.speed_limit_mps,
+                    width_m: LANE_WIDTH_M,
+                    length_m,
+                    end: None,
+                })
+                .collect(),
+            geometry: vec![nodes[from as usize].1, nodes[from as usize + 1].1],
+            length_m,
+            provenance: provenance(name),
+        })
+        .collect();
+    let dropped = p.lanes_before - p.lanes_after;
+    g.connections = (0..p.lanes_after)
+        .map(|lane| Connection {
+            junction: JunctionId(1),
+            from_road: RoadId(0),
+            from_lane: lane + dropped,
+            to_road: RoadId(1),
+            to_lane: lane,
+            via_length_m: p.through_internal_m,
+            via_speed_mps: Some(p.speed_limit_mps),
+            right_of_way: RightOfWay::Major,
+            right_of_way_overridden: false,
+            provenance: Provenance::made_by(LANE_DROP),
+        })
+        .collect();
+    g.rebuild_junction_links();
+    Ok(g)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lane_drop_ends_the_rightmost_lane_and_continues_the_others_lane_for_lane() {
+        let g = lane_drop(&LaneDropParams::default()).unwrap();
+        assert!(
+            g.invariant_violations().is_empty(),
+            "{:?}",
+            g.invariant_violations()
+        );
+        let up = g.find_roads(LANE_DROP_UPSTREAM).unwrap()[0];
+        let down = g.find_roads(LANE_DROP_DOWNSTREAM).unwrap()[0];
+        assert_eq!(g.road(up).unwrap().lanes.len(), 3);
+        assert_eq!(g.road(down).unwrap().lanes.len(), 2);
+        let links: Vec<(u8, u8)> = g
+            .connections_from(up)
+            .map(|c| (c.from_lane, c.to_lane))
+            .collect();
+        assert_eq!(links, vec![(1, 0), (2, 1)]);
+        assert!((g.total_lane_length_m() - (3.0 * 600.0 + 2.0 * 300.0 + 2.0 * 0.1)).abs() < 1e-6);
+        let more_after = LaneDropParams {
+            lanes_after: 4,
+            ..LaneDropParams::default()
+        };
+        assert!(lane_drop(&more_after).unwrap_err().contains("lanes_after"));
+    }
 
     #[test]
     fn simple_merge_has_the_papers_lengths_and_right_of_way() {

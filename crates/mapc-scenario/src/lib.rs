@@ -61,7 +61,7 @@ pub enum ScenarioError {
     #[error("{path}: network: {message}")]
     Network { path: PathBuf, message: String },
     #[error(
-        "no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge, two_lane_merge)"
+        "no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge, two_lane_merge, lane_drop)"
     )]
     Unknown(String),
 }
@@ -178,10 +178,48 @@ impl Scenario {
         }
     }
 
+    /// A lane-drop bottleneck in the spirit of Flow's bottleneck: 600 m of three lanes whose rightmost lane then
+    /// ends, 300 m of two lanes after; 1500 veh/h on each of the three lanes (more than two lanes carry), humans
+    /// only.
+    pub fn lane_drop() -> Scenario {
+        let base = Scenario::simple_merge();
+        let params = LaneDropParams::default();
+        let flows = (0..params.lanes_before)
+            .map(|lane| Flow {
+                id: format!("lane{lane}"),
+                from: generator::LANE_DROP_UPSTREAM.to_string(),
+                to: None,
+                vehs_per_hour: 1500.0,
+                vehicle_type: "human".to_string(),
+                depart_speed_mps: 10.0,
+                begin_s: 1.0,
+                end_s: None,
+                depart_lane: Some(lane.to_string()),
+            })
+            .collect();
+        Scenario {
+            name: generator::LANE_DROP.to_string(),
+            description: "A lane-drop bottleneck: 600 m of three lanes whose rightmost lane then ends, 300 m of two \
+                          lanes after; 1500 veh/h on each of the three lanes, humans only."
+                .to_string(),
+            network: NetworkSpec::LaneDrop(params),
+            vehicle_types: base
+                .vehicle_types
+                .into_iter()
+                .filter(|(name, _)| name == "human")
+                .collect(),
+            flows,
+            initial_vehicles: None,
+            control: None,
+            ..base
+        }
+    }
+
     pub fn builtin(name: &str) -> Option<Scenario> {
         match name {
             generator::SIMPLE_MERGE => Some(Scenario::simple_merge()),
             generator::TWO_LANE_MERGE => Some(Scenario::two_lane_merge()),
+            generator::LANE_DROP => Some(Scenario::lane_drop()),
             _ => None,
         }
     }
@@ -289,6 +327,12 @@ impl ResolvedScenario {
                     message,
                 })?
             }
+            NetworkSpec::LaneDrop(p) => {
+                generator::lane_drop(p).map_err(|message| ScenarioError::Network {
+                    path: path.clone(),
+                    message,
+                })?
+            }
             NetworkSpec::Graph(g) => {
                 LaneGraph::load(&base_dir.join(g)).map_err(|source| ScenarioError::Graph {
                     path: path.clone(),
@@ -328,6 +372,21 @@ impl ResolvedScenario {
                 }
                 None => None,
             };
+            if let Some(lane) = f.depart_lane.as_deref().and_then(|l| l.parse::<u32>().ok()) {
+                let lanes = graph.road(from).map_or(0, |r| r.lanes.len());
+                if lane as usize >= lanes {
+                    return Err(invalid(
+                        format!("flows[{i}].depart_lane"),
+                        format!(
+                            "flow `{}` departs on lane {lane}, but its entry road `{}` ({from}) has {lanes} lane(s) \
+                             (0 to {})",
+                            f.id,
+                            f.from,
+                            lanes.saturating_sub(1)
+                        ),
+                    ));
+                }
+            }
             flow_roads.push((from, to));
         }
         let demand: Vec<bounds::FlowDemand> = scenario

@@ -64,6 +64,8 @@ fn is_zero(x: &u32) -> bool {
 pub enum NetworkSpec {
     /// mapc's Simple Merge generator (`[network.simple_merge]`).
     SimpleMerge(SimpleMergeParams),
+    /// mapc's lane-drop bottleneck generator (`[network.lane_drop]`).
+    LaneDrop(LaneDropParams),
     /// A saved lane graph (`network.graph = "x.graph.json"`).
     Graph(PathBuf),
     /// A map imported on the fly (`network.map = "maps/x.net.xml"`).
@@ -105,6 +107,36 @@ pub struct SimpleMergeParams {
 
 fn is_zero_m(x: &f64) -> bool {
     *x == 0.0
+}
+
+/// A lane-drop bottleneck in the spirit of Flow's bottleneck benchmark: a straight road of `lanes_before` lanes
+/// whose rightmost lanes end after `upstream_m` (SUMO's lane drop: they have no connection onward), then
+/// `downstream_m` of `lanes_after` lanes. Drivers in an ending lane must change lanes before its end.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LaneDropParams {
+    /// The road before the drop (its rightmost lanes end at its end).
+    pub upstream_m: f64,
+    /// The road after the drop.
+    pub downstream_m: f64,
+    pub lanes_before: u8,
+    pub lanes_after: u8,
+    pub speed_limit_mps: f64,
+    /// Length of the internal lane at the drop (netconvert's for a straight joint).
+    pub through_internal_m: f64,
+}
+
+impl Default for LaneDropParams {
+    fn default() -> Self {
+        LaneDropParams {
+            upstream_m: 600.0,
+            downstream_m: 300.0,
+            lanes_before: 3,
+            lanes_after: 2,
+            speed_limit_mps: 30.0,
+            through_internal_m: 0.10,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

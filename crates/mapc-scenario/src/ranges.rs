@@ -121,6 +121,19 @@ pub fn check_scenario(s: &Scenario) -> Result<(), Refusal> {
         )?;
         check(key("lanes"), p.lanes as f64, LANES)?;
     }
+    if let crate::NetworkSpec::LaneDrop(p) = &s.network {
+        let key = |f: &str| format!("network.lane_drop.{f}");
+        check(key("upstream_m"), p.upstream_m, ROAD_LENGTH_M)?;
+        check(key("downstream_m"), p.downstream_m, ROAD_LENGTH_M)?;
+        check(
+            key("through_internal_m"),
+            p.through_internal_m,
+            INTERNAL_LENGTH_M,
+        )?;
+        check(key("speed_limit_mps"), p.speed_limit_mps, DRIVING_SPEED_MPS)?;
+        check(key("lanes_before"), p.lanes_before as f64, LANES)?;
+        check(key("lanes_after"), p.lanes_after as f64, LANES)?;
+    }
     for (name, t) in &s.vehicle_types {
         let key = |f: &str| format!("vehicle_types.{name}.{f}");
         for (f, v, range) in [

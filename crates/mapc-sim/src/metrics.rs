@@ -37,6 +37,41 @@ pub struct RunMetrics {
     /// The same per vehicle-kilometre driven after the warm-up.
     #[serde(default)]
     pub lane_changes_per_veh_km: f64,
+    /// `lane_changes` by the lane-change model's reason (their sum is `lane_changes`).
+    #[serde(default)]
+    pub lane_changes_by_reason: LaneChangeReasons,
+}
+
+/// Lane changes by why the lane-change model made them (SUMO's `--lanechange-output` reasons).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LaneChangeReasons {
+    /// To stay on the route (a lane that ends, an acceleration lane).
+    pub strategic: u64,
+    /// To make room for a vehicle that must enter the lane.
+    pub cooperative: u64,
+    /// To drive faster.
+    pub speed_gain: u64,
+    /// The obligation to keep right.
+    pub keep_right: u64,
+}
+
+impl LaneChangeReasons {
+    /// Count one change made for `reason` (`None`: a change without a reason, which LC2013 never makes, counted
+    /// nowhere so that the sum shows it).
+    pub fn count(&mut self, reason: Option<crate::lcmodels::Reason>) {
+        use crate::lcmodels::Reason;
+        match reason {
+            Some(Reason::Strategic) => self.strategic += 1,
+            Some(Reason::Cooperative) => self.cooperative += 1,
+            Some(Reason::SpeedGain) => self.speed_gain += 1,
+            Some(Reason::KeepRight) => self.keep_right += 1,
+            None => {}
+        }
+    }
+
+    pub fn total(&self) -> u64 {
+        self.strategic + self.cooperative + self.speed_gain + self.keep_right
+    }
 }
 
 /// Mean and half-width of the 95% confidence interval (Student t with n - 1 degrees of freedom).

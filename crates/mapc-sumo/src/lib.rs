@@ -90,6 +90,19 @@ pub struct Manifest {
     pub av_types: Vec<String>,
     /// mapc road id -> SUMO edge id.
     pub edges: std::collections::BTreeMap<String, String>,
+    /// Where mapc measures flow (after the warm-up): vehicles entering any of a point's edges pass it.
+    pub measure_points: Vec<ManifestPoint>,
+    /// The edge whose vehicles count as past the corridor's end when they leave the network (mapc's
+    /// `end_flow`); `None` for a bare network.
+    pub end_edge: Option<String>,
+}
+
+/// One measurement point in SUMO's names.
+#[derive(Clone, Debug, Serialize)]
+pub struct ManifestPoint {
+    /// `merge J3 (osm:123)`, as mapc's reports name it.
+    pub name: String,
+    pub edges: Vec<String>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -151,6 +164,8 @@ pub fn export_network(
         control_internal_edges: vec![],
         av_types: vec![],
         edges: edge_map(graph, &names),
+        measure_points: vec![],
+        end_edge: None,
     };
     let files = vec![
         (net_file, net::net_xml(graph, &names)),
@@ -181,6 +196,21 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
     let setup_steps = 2;
     let end_s = (setup_steps + spec.warmup_steps + spec.horizon_steps) as f64 * spec.step_s;
     let edges = edge_map(graph, &names);
+    let end_road = mapc_sim::Simulation::from_spec(spec.clone(), 0)
+        .map_err(scenario_err)?
+        .corridor_end_road();
+    let measure_points = spec
+        .measure_points
+        .iter()
+        .map(|p| ManifestPoint {
+            name: p.name.clone(),
+            edges: p
+                .roads
+                .iter()
+                .map(|r| edges[&r.to_string()].clone())
+                .collect(),
+        })
+        .collect();
     let manifest = Manifest {
         format: MANIFEST_FORMAT,
         version: MANIFEST_VERSION,
@@ -213,6 +243,8 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
             .filter(|t| t.controlled)
             .map(|t| t.name.clone())
             .collect(),
+        end_edge: end_road.map(|r| edges[&r.to_string()].clone()),
+        measure_points,
         edges,
     };
     let files = vec![

@@ -194,3 +194,44 @@ fn one_lane_config_is_unchanged() {
     assert!(!cfg.iter().any(|(n, _)| n == "lanechange.duration"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The lane-drop bottleneck exports its three lanes, the rightmost without a connection onward (SUMO's lane
+/// drop), one flow per lane, and a manifest that names the corridor's end for `sumo_check`'s measurement.
+#[test]
+fn lane_drop_exports_the_ending_lane_without_a_connection_and_its_measurement_points() {
+    let rs = ResolvedScenario::load("lane_drop").unwrap();
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mapc-sumo-lane-drop-{}", std::process::id()));
+    mapc_sumo::export_scenario(&rs, &dir).unwrap();
+    let net = elements(&dir.join("lane_drop.net.xml"));
+    let lanes_of = |edge: &str| {
+        net.iter()
+            .filter(|(n, a)| n == "lane" && a["id"].starts_with(&format!("{edge}_")))
+            .count()
+    };
+    assert_eq!((lanes_of("upstream"), lanes_of("downstream")), (3, 2));
+    let mut links: Vec<(String, String)> = net
+        .iter()
+        .filter(|(n, a)| n == "connection" && a["from"] == "upstream")
+        .map(|(_, a)| (a["fromLane"].clone(), a["toLane"].clone()))
+        .collect();
+    links.sort();
+    assert_eq!(
+        links,
+        vec![("1".into(), "0".into()), ("2".into(), "1".into())]
+    );
+    let routes = elements(&dir.join("lane_drop.rou.xml"));
+    let mut depart: Vec<&str> = routes
+        .iter()
+        .filter(|(n, _)| n == "flow")
+        .map(|(_, a)| a["departLane"].as_str())
+        .collect();
+    depart.sort();
+    assert_eq!(depart, vec!["0", "1", "2"]);
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("lane_drop.mapc.json")).unwrap())
+            .unwrap();
+    assert_eq!(manifest["end_edge"], "downstream");
+    assert_eq!(manifest["measure_points"], serde_json::json!([]));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -15,6 +15,7 @@ pub(super) struct MetricsAcc {
     pub(super) delay_sum: f64,
     /// Lane changes done, and metres driven (for lane changes per vehicle-km).
     pub(super) lane_changes: u64,
+    pub(super) lane_change_reasons: crate::metrics::LaneChangeReasons,
     pub(super) distance_m: f64,
 }
 
@@ -45,6 +46,7 @@ impl Simulation {
             steps: m.steps,
             vehicle_steps: m.veh_steps,
             lane_changes: m.lane_changes,
+            lane_changes_by_reason: m.lane_change_reasons,
             lane_changes_per_veh_km: if m.distance_m > 0.0 {
                 m.lane_changes as f64 / (m.distance_m / 1000.0)
             } else {

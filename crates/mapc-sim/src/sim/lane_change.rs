@@ -260,6 +260,7 @@ impl Simulation {
             rec.best_lane_offset = offset;
         }
         self.metrics.lane_changes += 1;
+        self.metrics.lane_change_reasons.count(d.reason);
         target_index
     }
 

@@ -224,6 +224,13 @@ impl Simulation {
         None
     }
 
+    /// The road whose vehicles count as past the corridor's end when they leave the network (the main line's
+    /// last road; `None` without a main line).
+    pub fn corridor_end_road(&self) -> Option<RoadId> {
+        let &(lane, _) = self.main_line.last()?;
+        self.net.road_of(lane).map(|r| self.net.road_ids[r])
+    }
+
     /// Distance from the vehicle's front to the network's end along its route position's main line
     /// (`corridor_x_m` of traces): `Some` only on main-line roads and their connections.
     pub fn corridor_x(&self, id: VehicleId) -> Option<f64> {
