@@ -10,7 +10,9 @@ use mapc_scenario::distribution::LoadedDistribution;
 use mapc_sim::{SimSpec, Simulation, VehicleId};
 use serde::{Deserialize, Serialize};
 
-use super::obs::{AvView, ControlQueue, ObsNorm, centralized_obs, flow_reward, speed_reward};
+use super::obs::{
+    AvView, ControlQueue, ObsNorm, RegionExits, centralized_obs, flow_reward, speed_reward,
+};
 use crate::error::RlError;
 use crate::rollout::{Env, EpisodeMetrics, Transition};
 
@@ -18,7 +20,8 @@ use crate::rollout::{Env, EpisodeMetrics, Transition};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RewardKind {
-    /// Vehicles that left the network this step.
+    /// Vehicles that left the network this step; in a scenario with a control region (a window cut from a
+    /// corridor), those that left the region (the paper's window runs: [`RegionExits`]).
     Outflow,
     /// Flow's desired-velocity reward with the AV time-gap penalty.
     Flow,
@@ -145,6 +148,10 @@ pub struct MergeEnv {
     queue: ControlQueue,
     controlled: Vec<VehicleId>,
     obs_buf: Vec<f32>,
+    /// The outflow reward's count in a scenario with a control region.
+    region_exits: RegionExits,
+    /// Vehicles that left the control region in the last step.
+    region_exits_last: usize,
 }
 
 impl MergeEnv {
@@ -170,6 +177,8 @@ impl MergeEnv {
             queue: ControlQueue::default(),
             controlled: vec![],
             obs_buf: vec![],
+            region_exits: RegionExits::default(),
+            region_exits_last: 0,
         })
     }
 
@@ -220,9 +229,29 @@ impl MergeEnv {
         self.obs_buf.clone()
     }
 
+    /// Whether the outflow reward counts vehicles leaving the control region rather than the network.
+    fn counts_region_exits(&self) -> bool {
+        self.cfg.reward == RewardKind::Outflow && self.sim().spec().control_region.is_some()
+    }
+
+    /// Updates the count of vehicles that left the control region (see [`RewardKind::Outflow`]).
+    fn update_region_exits(&mut self) {
+        if !self.counts_region_exits() {
+            return;
+        }
+        let sim = self.sim.as_ref().expect("reset before step");
+        let inside: Vec<u64> = sim
+            .active_ids()
+            .filter(|&id| sim.in_control_region(id))
+            .map(|id| id as u64)
+            .collect();
+        self.region_exits_last = self.region_exits.update(&inside);
+    }
+
     fn reward(&self) -> f64 {
         let sim = self.sim();
         match self.cfg.reward {
+            RewardKind::Outflow if self.counts_region_exits() => self.region_exits_last as f64,
             RewardKind::Outflow => sim.arrived_last_step().len() as f64,
             RewardKind::Speed | RewardKind::Flow => {
                 let speeds: Vec<f64> = sim
@@ -259,6 +288,7 @@ impl MergeEnv {
         if !sim.is_done() {
             sim.step().map_err(super::sim_error)?;
         }
+        self.update_region_exits();
         // The reward sees the controlled set that acted in this step.
         let reward = self.reward() as f32;
         let obs = self.observe();
@@ -291,6 +321,8 @@ impl Env for MergeEnv {
         let spec = self.source.spec_for(seed)?;
         self.sim = Some(super::episode_simulation(&spec, seed)?);
         self.queue.clear();
+        self.region_exits.clear();
+        self.update_region_exits();
         Ok(self.observe())
     }
     fn step(&mut self, action: &[f32]) -> Result<Transition, RlError> {

@@ -94,3 +94,5 @@ pub(crate) fn apply_action(
 
 #[cfg(test)]
 mod action_tests;
+#[cfg(test)]
+mod reward_tests;

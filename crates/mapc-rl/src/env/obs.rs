@@ -148,6 +148,40 @@ impl ControlQueue {
     }
 }
 
+/// Vehicles that left the control region, each counted once: the outflow reward of a scenario with a region. The
+/// paper's runs in a window count the vehicles that leave the window, its "observed area" (a vehicle that was in
+/// the window and is now on a road outside it), not those that reach the network's end, which on I-696 lies 5 km
+/// and about 200 s further on.
+#[derive(Clone, Debug, Default)]
+pub struct RegionExits {
+    /// Vehicles in the region at the last update, sorted.
+    inside: Vec<u64>,
+    /// Vehicles that have left it.
+    left: std::collections::HashSet<u64>,
+}
+
+impl RegionExits {
+    pub fn clear(&mut self) {
+        self.inside.clear();
+        self.left.clear();
+    }
+
+    /// Updates with the vehicles in the region now (any order); returns how many of those in it at the last
+    /// update have left it since, counting a vehicle only the first time it leaves.
+    pub fn update(&mut self, present: &[u64]) -> usize {
+        let mut now = present.to_vec();
+        now.sort_unstable();
+        let mut exits = 0;
+        for &id in &self.inside {
+            if now.binary_search(&id).is_err() && self.left.insert(id) {
+                exits += 1;
+            }
+        }
+        self.inside = now;
+        exits
+    }
+}
+
 /// Flow's desired-velocity reward: `max(||v*·1|| - ||v - v*||, 0) / ||v*·1||` over all vehicles, plus
 /// `0.1 * sum over controlled AVs with a leader and positive speed of min(gap/v - 1, 0)`, floored at 0.
 pub fn flow_reward(speeds: &[f64], desired: f64, controlled_headways: &[(f64, f64)]) -> f64 {
@@ -304,6 +338,21 @@ mod tests {
         // 7 reappears in the region (e.g. a window re-entered): not controlled again.
         assert_eq!(q.update(&[7, 3, 9, 11], 2), vec![3, 9]);
         assert_eq!(q.update(&[7, 11], 2), vec![11]);
+    }
+
+    #[test]
+    fn region_exits_count_each_vehicle_once() {
+        let mut e = RegionExits::default();
+        assert_eq!(e.update(&[4, 2]), 0);
+        // 5 enters, nobody leaves.
+        assert_eq!(e.update(&[5, 2, 4]), 0);
+        // 4 and 2 leave in the same step (2 arrived, 4 drove on: both are gone from the region).
+        assert_eq!(e.update(&[5]), 2);
+        // 4 comes back and leaves again: not counted twice.
+        assert_eq!(e.update(&[5, 4]), 0);
+        assert_eq!(e.update(&[]), 1);
+        e.clear();
+        assert_eq!(e.update(&[]), 0);
     }
 
     #[test]
