@@ -8,7 +8,9 @@ use std::collections::HashSet;
 use std::path::Path;
 
 fn spec(file: &str) -> SimSpec {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(file);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(file);
     let scenario = mapc_scenario::ResolvedScenario::load(path.to_str().unwrap()).unwrap();
     mapc_sim::spec_from_scenario(&scenario).unwrap()
 }
@@ -47,7 +49,10 @@ fn window_outflow_counts_vehicles_leaving_the_window() {
             })
         })
         .count();
-    assert!(past >= 20, "only {past} vehicles passed the window in 200 s");
+    assert!(
+        past >= 20,
+        "only {past} vehicles passed the window in 200 s"
+    );
     assert!(
         (reward - past as f64).abs() <= 1.0,
         "reward {reward}, vehicles past the window {past}"
