@@ -22,7 +22,8 @@ pub struct Args {
     /// "mapc-merge-distribution"`: each episode draws its merge from its seed).
     #[arg(long, default_value = "simple_merge")]
     pub scenario: String,
-    /// Reward of a centralized policy: outflow, flow (Flow's desired-velocity reward) or speed (average speed).
+    /// Reward of a centralized policy: outflow (vehicles leaving the network, or the control region of a window
+    /// scenario), flow (Flow's desired-velocity reward) or speed (average speed).
     #[arg(long, default_value = "outflow", conflicts_with = "distributed")]
     pub reward: String,
     /// Train a distributed policy: every AV in the control region runs the same policy on its own
