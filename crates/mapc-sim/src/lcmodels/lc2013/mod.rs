@@ -428,7 +428,7 @@ impl Lc2013 {
             if this_lane_vsafe - 5.0 / 3.6 > neigh_lane_vsafe {
                 // the current lane is clearly faster than the right one
                 if mem.speed_gain_probability < 0.0 {
-                    mem.speed_gain_probability *= decay(0.5, dt);
+                    mem.speed_gain_probability *= 0.5f64.powf(dt);
                 }
             } else {
                 if mem.speed_gain_probability < 0.0 || relative_gain > 0.0 {
@@ -453,11 +453,11 @@ impl Lc2013 {
         } else {
             if this_lane_vsafe > neigh_lane_vsafe {
                 if mem.speed_gain_probability > 0.0 {
-                    mem.speed_gain_probability *= decay(0.5, dt);
+                    mem.speed_gain_probability *= 0.5f64.powf(dt);
                 }
             } else if this_lane_vsafe == neigh_lane_vsafe {
                 if mem.speed_gain_probability > 0.0 {
-                    mem.speed_gain_probability *= decay(0.8, dt);
+                    mem.speed_gain_probability *= 0.8f64.powf(dt);
                 }
             } else {
                 mem.speed_gain_probability += dt * relative_gain;
@@ -553,16 +553,4 @@ fn current_dist_disallows(dist: f64, lanes: i32, look_ahead: f64) -> bool {
 /// SUMO's `currentDistAllows`.
 fn current_dist_allows(dist: f64, lanes: i32, look_ahead: f64) -> bool {
     dist / (lanes.abs() as f64) > look_ahead
-}
-
-/// `base^dt`, the speed-gain probability's decay per step; for the half-second step the two bases' powers are
-/// computed once (the same `powf` call, so the same bits), since `powf` was 2.5 % of a multi-lane run.
-fn decay(base: f64, dt: f64) -> f64 {
-    static HALF_SECOND: std::sync::OnceLock<[f64; 2]> = std::sync::OnceLock::new();
-    if dt == 0.5 && (base == 0.5 || base == 0.8) {
-        let [half, eight_tenths] =
-            *HALF_SECOND.get_or_init(|| [0.5f64.powf(0.5), 0.8f64.powf(0.5)]);
-        return if base == 0.5 { half } else { eight_tenths };
-    }
-    base.powf(dt)
 }
