@@ -122,3 +122,78 @@ fn pipeline_on_another_map_takes_the_default_corridor() {
     );
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// `mapc pipeline --keep-lanes`: the whole job multi-lane on the I-696 map, its outputs named apart, the window
+/// cut with its lanes, vehicles changing lanes in the run, one lane drawn in the time-space diagram.
+#[test]
+fn pipeline_keeps_the_lanes_end_to_end() {
+    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mapc-pipeline-lanes-{}", std::process::id()));
+    std::fs::remove_dir_all(&out).ok();
+    let run = Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args([
+            "pipeline",
+            "--keep-lanes",
+            "--lane",
+            "1",
+            "--seeds",
+            "2",
+            "--json",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "pipeline failed:\n{stderr}");
+    assert!(
+        stderr.contains("--via osm-way:8708084 --keep-lanes")
+            && stderr.contains("--junction osm:61862553")
+            && stderr.contains("i696_lanes_window_timespace.png --lane 1"),
+        "{stderr}"
+    );
+    for file in [
+        "i696.graph.json",
+        "i696_lanes.corridor.graph.json",
+        "i696_lanes_window.toml",
+        "i696_lanes_window.graph.json",
+        "i696_lanes_window.png",
+        "i696_lanes_window_human_trace.csv",
+        "i696_lanes_window_timespace.png",
+        "i696_lanes_window_replay.html",
+    ] {
+        let meta = std::fs::metadata(out.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert!(meta.len() > 100, "{file} is nearly empty");
+    }
+    // the one-lane run's names are left alone
+    assert!(!out.join("i696_window.toml").exists());
+    // the window keeps the corridor's lanes: 3 after the merge, 2 on I-696
+    let g = mapc_graph::LaneGraph::load(&out.join("i696_lanes_window.graph.json")).unwrap();
+    let most = g.roads.iter().map(|r| r.lanes.len()).max().unwrap();
+    assert!(most >= 3, "at most {most} lanes");
+    // vehicles drive on several lanes and change between them: some vehicle is seen on two lanes of one road
+    let trace = std::fs::read_to_string(out.join("i696_lanes_window_human_trace.csv")).unwrap();
+    let mut seen: std::collections::BTreeMap<(&str, &str), std::collections::BTreeSet<&str>> =
+        Default::default();
+    for row in trace.lines().skip(1) {
+        let f: Vec<&str> = row.split(',').collect();
+        seen.entry((f[1], f[3])).or_default().insert(f[8]);
+    }
+    let lanes: std::collections::BTreeSet<&str> = seen.values().flatten().copied().collect();
+    assert!(lanes.len() >= 3, "{lanes:?}");
+    let changed = seen.values().filter(|l| l.len() > 1).count();
+    assert!(changed > 50, "{changed} vehicles changed lanes on a road");
+    let start = stdout.rfind("\n{\n").map_or(0, |i| i + 1);
+    let eval: serde_json::Value =
+        serde_json::from_str(&stdout[start..]).expect("eval JSON at the end");
+    assert_eq!(eval["seeds"], 2);
+    let policy = eval["outflow"]["mean"].as_f64().unwrap();
+    let human = eval["baseline"]["outflow"]["mean"].as_f64().unwrap();
+    assert!(
+        policy > 500.0 && human > 500.0,
+        "policy {policy}, human {human}"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+}

@@ -104,6 +104,7 @@ fn bench_reports_vehicle_steps_per_second() {
             "1",
             "--seeds",
             "2",
+            "--no-sumo",
             "--json",
         ])
         .output()
@@ -114,6 +115,51 @@ fn bench_reports_vehicle_steps_per_second() {
     assert_eq!(v["baseline"]["seeds"], 2);
     let peak = v["peak_rss_mib"].as_f64().unwrap();
     assert!(peak > 1.0 && peak < 4096.0, "{peak}");
+}
+
+/// `mapc bench` runs SUMO's command line on the exported scenario right after mapc when SUMO is found (SUMO 1.8
+/// where tools/sumo_check installs it), and says so when it is not; a `--sumo` that is not there is refused.
+#[test]
+fn bench_measures_sumo_beside_mapc_or_says_it_is_absent() {
+    let out = mapc()
+        .args([
+            "bench",
+            "--scenario",
+            "two_lane_merge",
+            "--single-core-seeds",
+            "1",
+            "--seeds",
+            "1",
+            "--sumo-seeds",
+            "1",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["single_core"]["cpu_s"].as_f64().unwrap() > 0.0, "{v}");
+    let sumo = &v["sumo"];
+    if let Some(why) = sumo["absent"].as_str() {
+        assert!(why.contains("not found"), "{v}");
+    } else {
+        assert!(sumo["version"].as_str().unwrap().contains("SUMO"), "{v}");
+        // two_lane_merge carries some 60 000 vehicle-steps per run
+        let steps = sumo["vehicle_steps"].as_f64().unwrap();
+        assert!((2e4..2e5).contains(&steps), "{v}");
+        assert!(
+            sumo["mapc_speedup_per_cpu_s"].as_f64().unwrap() > 0.0,
+            "{v}"
+        );
+        assert!(sumo["peak_rss_mib"].as_f64().unwrap() > 1.0, "{v}");
+    }
+    let missing = mapc()
+        .args(["bench", "--single-core-seeds", "1", "--seeds", "1"])
+        .args(["--sumo", "no/such/sumo"])
+        .output()
+        .unwrap();
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/sumo"));
 }
 
 /// The shipped Simple Merge with `edit` applied to its text, written to a scratch file.

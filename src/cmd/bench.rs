@@ -1,6 +1,9 @@
-//! `mapc bench`: the simulator's speed — vehicle-steps per second on one core, and the wall time of a many-seed
-//! baseline on a given number of threads; with `--train N`, the trainer's: N iterations of the paper preset's
-//! centralized training, their wall and CPU time by phase, and the preset's 500 iterations extrapolated.
+//! `mapc bench`: the simulator's speed — vehicle-steps per second on one core, beside SUMO 1.8's command line on
+//! the same scenario exported (when SUMO is found; [`super::bench_sumo`]), and the wall time of a many-seed
+//! baseline on a given number of threads. Wall time and CPU time are both reported: on a shared machine CPU time
+//! is the steadier measure, and mapc and SUMO run back to back in one process so that they share the load. With
+//! `--train N`, the trainer's: N iterations of the paper preset's centralized training, their wall and CPU time
+//! by phase, and the preset's 500 iterations extrapolated.
 
 use mapc_sim::{Simulation, spec_from_scenario};
 use rayon::prelude::*;
@@ -20,6 +23,16 @@ pub struct Args {
     /// Threads of the parallel baseline.
     #[arg(long, default_value_t = 2)]
     pub threads: usize,
+    /// SUMO binary to compare with (default: SUMO 1.8 where tools/sumo_check installs it, `$MAPC_SUMO_VENV` or
+    /// `~/.cache/mapc/sumo-1.8.0`, else `sumo` on the PATH).
+    #[arg(long, value_name = "PATH", conflicts_with = "no_sumo")]
+    pub sumo: Option<std::path::PathBuf>,
+    /// Seeds SUMO runs one after another (it is some 20 times slower than mapc).
+    #[arg(long, default_value_t = 5)]
+    pub sumo_seeds: u64,
+    /// Measure mapc only.
+    #[arg(long)]
+    pub no_sumo: bool,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -40,24 +53,65 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let rs = super::sim::load_scenario(&args.scenario)?;
     let spec = spec_from_scenario(&rs)?;
 
+    let sumo_bin = if args.no_sumo {
+        None
+    } else {
+        super::bench_sumo::find_sumo(args.sumo.as_deref())?
+    };
+
     // One core: seeds in sequence on this thread.
+    let cpu_start = thread_cpu_s();
     let start = Instant::now();
     let mut vehicle_steps = 0u64;
+    let mut all_vehicle_steps = 0u64;
     let mut steps = 0u64;
     for seed in 0..args.single_core_seeds {
         let mut sim = Simulation::from_spec(spec.clone(), seed)?;
         sim.set_invariant_checks(false);
-        let m = sim.run()?;
+        // the warm-up's vehicle-steps too, as SUMO counts them
+        while !sim.is_done() {
+            all_vehicle_steps += sim.active_count() as u64;
+            sim.step()?;
+        }
+        let m = sim.metrics();
         vehicle_steps += m.vehicle_steps;
         steps += m.steps;
     }
     let single_s = start.elapsed().as_secs_f64();
+    let single_cpu_s = thread_cpu_s() - cpu_start;
     let vs_per_s = vehicle_steps as f64 / single_s;
+    let mapc_rss_mib = peak_rss_mib();
+
+    // SUMO right after, on the same load
+    let sumo = match &sumo_bin {
+        Some(bin) => {
+            let dir = std::env::temp_dir().join(format!("mapc-bench-sumo-{}", std::process::id()));
+            let runs = super::bench_sumo::run_sumo(bin, &rs, &dir, args.sumo_seeds);
+            std::fs::remove_dir_all(&dir).ok();
+            Some(runs?)
+        }
+        None => None,
+    };
+    // per CPU second, over every step of the run (SUMO's count includes the warm-up)
+    let mapc_cpu_rate = all_vehicle_steps as f64 / single_cpu_s;
+    let against_sumo = sumo.as_ref().map(|s| {
+        let sumo_cpu_rate = s.vehicle_steps / s.cpu_s;
+        let sumo_wall_rate = s.vehicle_steps / s.wall_s;
+        (
+            sumo_cpu_rate,
+            sumo_wall_rate,
+            mapc_cpu_rate / sumo_cpu_rate,
+            (all_vehicle_steps as f64 / single_s) / sumo_wall_rate,
+            // CPU time of one run of the scenario, SUMO's over mapc's
+            (s.cpu_s / s.seeds as f64) / (single_cpu_s / args.single_core_seeds as f64),
+        )
+    });
 
     // The parallel baseline, as `mapc sim` runs it.
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads)
         .build()?;
+    let baseline_cpu_start = cpu_seconds();
     let start = Instant::now();
     let runs = pool.install(|| {
         (0..args.seeds)
@@ -70,31 +124,78 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .collect::<Result<Vec<_>, _>>()
     })?;
     let baseline_s = start.elapsed().as_secs_f64();
+    let baseline_cpu_s = cpu_seconds() - baseline_cpu_start;
     let peak_mib = peak_rss_mib();
     let mean_vehicles = vehicle_steps as f64 / steps as f64;
+    let sumo_absent = if args.no_sumo {
+        "not run (--no-sumo)".to_string()
+    } else {
+        "not found (give --sumo PATH, or install SUMO 1.8 with tools/sumo_check/sumo_check)"
+            .to_string()
+    };
     if args.json {
+        let sumo_json = match (&sumo, against_sumo) {
+            (Some(s), Some((cpu_rate, wall_rate, x_cpu, x_wall, x_run))) => serde_json::json!({
+                "binary": s.binary, "version": s.version, "seeds": s.seeds, "wall_s": s.wall_s,
+                "cpu_s": s.cpu_s, "vehicle_steps": s.vehicle_steps, "vehicle_steps_per_cpu_s": cpu_rate,
+                "vehicle_steps_per_s": wall_rate, "peak_rss_mib": s.peak_rss_mib,
+                "mapc_speedup_per_cpu_s": x_cpu, "mapc_speedup_per_wall_s": x_wall,
+                "mapc_speedup_cpu_per_run": x_run,
+            }),
+            _ => serde_json::json!({ "absent": sumo_absent }),
+        };
         let out = serde_json::json!({
             "scenario": rs.origin,
-            "single_core": {"seeds": args.single_core_seeds, "wall_s": single_s, "vehicle_steps": vehicle_steps,
-                            "vehicle_steps_per_s": vs_per_s, "steps_per_s": steps as f64 / single_s,
-                            "mean_vehicles": mean_vehicles},
-            "baseline": {"seeds": args.seeds, "threads": args.threads, "wall_s": baseline_s, "runs": runs.len()},
+            "single_core": {"seeds": args.single_core_seeds, "wall_s": single_s, "cpu_s": single_cpu_s,
+                            "vehicle_steps": vehicle_steps, "vehicle_steps_per_s": vs_per_s,
+                            "vehicle_steps_with_warmup": all_vehicle_steps,
+                            "vehicle_steps_with_warmup_per_cpu_s": mapc_cpu_rate,
+                            "steps_per_s": steps as f64 / single_s, "mean_vehicles": mean_vehicles,
+                            "peak_rss_mib": mapc_rss_mib},
+            "sumo": sumo_json,
+            "baseline": {"seeds": args.seeds, "threads": args.threads, "wall_s": baseline_s,
+                         "cpu_s": baseline_cpu_s, "runs": runs.len()},
             "peak_rss_mib": peak_mib,
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         println!("{}", rs.origin);
         println!(
-            "  one core: {} seeds, {:.3} s, {:.3e} vehicle-steps/s ({:.0} steps/s, {:.1} vehicles on average)",
+            "  mapc, one core: {} seeds, {:.3} s wall, {:.3} s CPU, {:.3e} vehicle-steps/s ({:.0} steps/s, {:.1} \
+             vehicles on average); with the warm-up {:.3e} vehicle-steps per CPU second; peak memory {:.1} MiB",
             args.single_core_seeds,
             single_s,
+            single_cpu_s,
             vs_per_s,
             steps as f64 / single_s,
-            mean_vehicles
+            mean_vehicles,
+            mapc_cpu_rate,
+            mapc_rss_mib
         );
+        match (&sumo, against_sumo) {
+            (Some(s), Some((cpu_rate, wall_rate, x_cpu, x_wall, x_run))) => {
+                println!(
+                    "  {} ({}), one core: {} seeds, {:.3} s wall, {:.3} s CPU, {:.3e} vehicle-steps per CPU \
+                     second ({:.3e} per wall second); peak memory of a run {:.1} MiB",
+                    s.version,
+                    s.binary.display(),
+                    s.seeds,
+                    s.wall_s,
+                    s.cpu_s,
+                    cpu_rate,
+                    wall_rate,
+                    s.peak_rss_mib
+                );
+                println!(
+                    "  mapc against SUMO: {x_cpu:.1}x the vehicle-steps per CPU second ({x_wall:.1}x per wall \
+                     second); one run takes {x_run:.1}x less CPU time"
+                );
+            }
+            _ => println!("  SUMO: {sumo_absent}"),
+        }
         println!(
-            "  baseline: {} seeds on {} threads in {:.3} s; peak memory of the process {:.1} MiB",
-            args.seeds, args.threads, baseline_s, peak_mib
+            "  baseline: {} seeds on {} threads in {:.3} s wall ({:.3} s CPU); peak memory of the process {:.1} MiB",
+            args.seeds, args.threads, baseline_s, baseline_cpu_s, peak_mib
         );
     }
     Ok(())
@@ -183,6 +284,21 @@ fn cpu_seconds() -> f64 {
     }
     let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
     secs(usage.ru_utime) + secs(usage.ru_stime)
+}
+
+/// CPU time (user + system, s) of the calling thread.
+fn thread_cpu_s() -> f64 {
+    // SAFETY: getrusage only writes the struct it is given
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    #[cfg(any(target_os = "linux", target_os = "android"))]
+    let who = libc::RUSAGE_THREAD;
+    // elsewhere the process's (the one-core loop runs while no other thread of it works)
+    #[cfg(not(any(target_os = "linux", target_os = "android")))]
+    let who = libc::RUSAGE_SELF;
+    if unsafe { libc::getrusage(who, &mut u) } != 0 {
+        return f64::NAN;
+    }
+    super::bench_sumo::cpu_seconds(&u)
 }
 
 /// The process's peak resident memory so far (MiB), as the kernel counts it.

@@ -1,6 +1,7 @@
 //! One module per subcommand: its clap arguments and a `run` that returns an error for bad input.
 
 pub mod bench;
+mod bench_sumo;
 pub mod eval;
 pub mod export;
 pub mod import;

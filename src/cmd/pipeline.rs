@@ -6,6 +6,11 @@
 //! only where the imported map has those roads and that junction. On any other map the corridor is `mapc
 //! simplify`'s default route and a window is cut at every merge of it that fits (`mapc window --all --fit`); the
 //! pipeline says which it chose.
+//!
+//! With `--keep-lanes` the same job runs multi-lane: the corridor keeps every lane (`mapc simplify
+//! --keep-lanes`), the window is cut from it with its lanes, vehicles change lanes (LC2013), the time-space
+//! diagram draws every lane (or `--lane N`), and the outputs are named `<map>_lanes*` so that they sit beside the
+//! one-lane run's.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -37,6 +42,12 @@ pub struct Args {
     /// Seeds for the baseline and the evaluation.
     #[arg(long, default_value_t = 100)]
     pub seeds: u64,
+    /// Keep every lane of the corridor (`mapc simplify --keep-lanes`): the whole job multi-lane, with lane changes.
+    #[arg(long)]
+    pub keep_lanes: bool,
+    /// Draw only lane N (0 rightmost) in the time-space diagram; default every lane.
+    #[arg(long, value_name = "N")]
+    pub lane: Option<u8>,
     /// Print each step's output as JSON.
     #[arg(long)]
     pub json: bool,
@@ -48,9 +59,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // a map that cannot be read fails before anything is written
     std::fs::metadata(&args.map).map_err(|e| anyhow::anyhow!("{}: {e}", args.map.display()))?;
     std::fs::create_dir_all(out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
-    let stem = super::simplify::map_stem(&args.map);
+    let map_stem = super::simplify::map_stem(&args.map);
     let file = |name: String| path_text(&out.join(name));
-    let graph = file(format!("{stem}.graph.json"));
+    let graph = file(format!("{map_stem}.graph.json"));
+    // what follows the import is named apart when it keeps the lanes
+    let stem = if args.keep_lanes {
+        format!("{map_stem}_lanes")
+    } else {
+        map_stem.clone()
+    };
     let corridor = file(format!("{stem}.corridor.graph.json"));
     let window = file(format!("{stem}_window.toml"));
     let trace = file(format!("{stem}_window_human_trace.csv"));
@@ -60,7 +77,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut first_steps: Vec<Vec<String>> = vec![
         cmd(&["import", &map, "-o", &graph]),
         cmd(&["junctions", &graph, "--kind", "merge"]),
-        cmd(&["render", &graph, "-o", &file(format!("{stem}.png"))]),
+        cmd(&["render", &graph, "-o", &file(format!("{map_stem}.png"))]),
     ];
     if args.json {
         for s in &mut first_steps[..2] {
@@ -103,6 +120,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for v in &via {
         simplify.extend(["--via".to_string(), v.clone()]);
     }
+    if args.keep_lanes {
+        simplify.push("--keep-lanes".to_string());
+    }
     steps.push(simplify);
     let mut window_step = cmd(&["window", &corridor]);
     match &junction {
@@ -127,13 +147,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "--trace",
         &trace,
     ]));
-    steps.push(cmd(&[
+    let mut plot = cmd(&[
         "plot",
         "timespace",
         &trace,
         "-o",
         &file(format!("{stem}_window_timespace.png")),
-    ]));
+    ]);
+    if let Some(lane) = args.lane {
+        plot.extend(["--lane".to_string(), lane.to_string()]);
+    }
+    steps.push(plot);
     steps.push(cmd(&[
         "view",
         &window,

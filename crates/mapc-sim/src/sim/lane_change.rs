@@ -23,6 +23,19 @@ pub(super) struct LcVeh {
     accel: f64,
     /// Its lane's best-lane offset at the last pass (read when its speed is patched).
     pub(super) best_lane_offset: i32,
+    /// The best lanes it used last: (route, road index in it, index in `BestLanesCache::store`); the cache is
+    /// asked again only when it enters a new road or its route changes.
+    best_memo: Option<(u32, u32, u32)>,
+}
+
+/// Buffers of the lane-change pass, kept between steps so that the pass allocates nothing.
+#[derive(Clone, Debug, Default)]
+pub(super) struct LcScratch {
+    lanes: Vec<LaneIdx>,
+    cands: Vec<VehicleId>,
+    dens: Vec<f64>,
+    blocked: Vec<(Option<VehicleId>, Option<VehicleId>)>,
+    best_lanes: Vec<LaneQ>,
 }
 
 /// Best lanes by (road sequence, index of the current road in it, vehicle type): they depend on nothing else, so
@@ -31,6 +44,8 @@ pub(super) struct LcVeh {
 pub(super) struct BestLanesCache {
     index: HashMap<(u32, u32, u16), u32>,
     store: Vec<Vec<BestLane>>,
+    /// The route after a lane change, by (route, lane of it changed from, lane changed to, vehicle type).
+    after_change: HashMap<(u32, u32, LaneIdx, u16), u32>,
 }
 
 impl Simulation {
@@ -69,7 +84,7 @@ impl Simulation {
             return wanted;
         }
         let params = self.types[vtype];
-        let Some(rec) = self.lc.get_mut(&id) else {
+        let Some(rec) = self.veh[id as usize].lc.as_deref_mut() else {
             return wanted;
         };
         rec.mem.patch_speed(
@@ -103,26 +118,40 @@ impl Simulation {
         // sent in this pass are read in the next move)
         for q in self.lane_veh.iter() {
             for &id in q.iter() {
-                let speed = self.veh[id as usize].speed;
-                let rec = self.lc.entry(id).or_insert_with(|| LcVeh {
-                    prev_speed: speed,
-                    ..LcVeh::default()
+                let v = &mut self.veh[id as usize];
+                let speed = v.speed;
+                let rec = v.lc.get_or_insert_with(|| {
+                    Box::new(LcVeh {
+                        prev_speed: speed,
+                        ..LcVeh::default()
+                    })
                 });
                 rec.accel = (speed - rec.prev_speed) / dt;
                 rec.prev_speed = speed;
                 rec.mem.prepare_step();
             }
         }
+        let mut scratch = std::mem::take(&mut self.lc_scratch);
         for r in 0..self.net.road_lanes.len() {
-            let lanes = self.net.road_lanes[r].clone();
-            if lanes.len() < 2 {
+            if self.net.road_lanes[r].len() < 2 {
                 continue;
             }
+            let LcScratch {
+                lanes,
+                cands,
+                dens,
+                blocked,
+                best_lanes,
+            } = &mut scratch;
+            lanes.clear();
+            lanes.extend_from_slice(&self.net.road_lanes[r]);
             // SUMO's findCandidate: the largest position first; the right lane first on a tie
-            let mut cands: Vec<VehicleId> = lanes
-                .iter()
-                .flat_map(|&l| self.lane_veh[l as usize].iter().copied())
-                .collect();
+            cands.clear();
+            cands.extend(
+                lanes
+                    .iter()
+                    .flat_map(|&l| self.lane_veh[l as usize].iter().copied()),
+            );
             cands.sort_by(|&a, &b| {
                 let (va, vb) = (&self.veh[a as usize], &self.veh[b as usize]);
                 vb.pos.total_cmp(&va.pos).then(
@@ -131,14 +160,17 @@ impl Simulation {
                         .cmp(&self.lane_at(vb.lane as usize).index),
                 )
             });
-            let mut dens = vec![0.0; lanes.len()];
-            let mut blocked = vec![(None::<VehicleId>, None::<VehicleId>); lanes.len()];
-            for id in cands {
-                let final_index = self.change_one(id, &dens, &mut blocked);
+            dens.clear();
+            dens.resize(lanes.len(), 0.0);
+            blocked.clear();
+            blocked.resize(lanes.len(), (None, None));
+            for &id in cands.iter() {
+                let final_index = self.change_one(id, dens, blocked, best_lanes);
                 let v = &self.veh[id as usize];
                 dens[final_index] += v.length + self.types[v.vtype as usize].min_gap;
             }
         }
+        self.lc_scratch = scratch;
     }
 
     /// One vehicle's turn; returns the index of the lane it ends on.
@@ -147,22 +179,31 @@ impl Simulation {
         id: VehicleId,
         dens: &[f64],
         blocked: &mut [(Option<VehicleId>, Option<VehicleId>)],
+        best_lanes: &mut Vec<LaneQ>,
     ) -> usize {
         let (route, route_pos, vtype) = {
             let v = &self.veh[id as usize];
             (v.route, v.route_pos, v.vtype)
         };
-        let k = self.routes[route as usize].road_k[route_pos as usize] as usize;
-        let best_i = self.best_lanes_at(route, k, vtype);
+        let k = self.routes[route as usize].road_k[route_pos as usize];
+        let best_i = match self.lc_rec(id).best_memo {
+            Some((r, rk, i)) if r == route && rk == k => i,
+            _ => {
+                let i = self.best_lanes_at(route, k as usize, vtype);
+                self.lc_rec(id).best_memo = Some((route, k, i));
+                i
+            }
+        };
+        let lane = self.veh[id as usize].lane;
+        let index = self.lane_at(lane as usize).index as usize;
+        let best_lane_offset = self.best_cache.store[best_i as usize][index].best_lane_offset;
+        self.lc_rec(id).best_lane_offset = best_lane_offset;
         let best: &[BestLane] = &self.best_cache.store[best_i as usize];
         let v = &self.veh[id as usize];
-        let lane = v.lane;
-        let index = self.lane_at(lane as usize).index as usize;
         // SUMO's occupation: this pass's density on the lane plus the vehicles on its continuation
-        let best_lanes: Vec<LaneQ> = best
-            .iter()
-            .zip(dens)
-            .map(|(q, &d)| LaneQ {
+        best_lanes.clear();
+        best_lanes.extend(best.iter().zip(dens).map(|(q, &d)| {
+            LaneQ {
                 length: q.length,
                 occupation: d + q
                     .continuation
@@ -171,13 +212,8 @@ impl Simulation {
                     .sum::<f64>(),
                 best_lane_offset: q.best_lane_offset,
                 leads_elsewhere: q.leads_elsewhere,
-            })
-            .collect();
-        let best_lane_offset = best[index].best_lane_offset;
-        if let Some(rec) = self.lc.get_mut(&id) {
-            rec.best_lane_offset = best_lane_offset;
-        }
-        let best: &[BestLane] = &self.best_cache.store[best_i as usize];
+            }
+        }));
         let p = self.types[v.vtype as usize];
         let l = self.lane_at(lane as usize);
         let (l_right, l_left) = (l.right, l.left);
@@ -209,30 +245,29 @@ impl Simulation {
             leader,
             right,
             left,
-            best_lanes: &best_lanes,
+            best_lanes,
             blocked_ahead,
             road_has_lane_changer: true,
         };
         let model = self.lc_model;
-        let mut mem = std::mem::take(&mut self.lc.get_mut(&id).expect("recorded").mem);
+        let mut mem = std::mem::take(&mut self.lc_rec(id).mem);
         let d = model.decide(&mut mem, &s);
-        self.lc.get_mut(&id).expect("recorded").mem = mem;
+        self.lc_rec(id).mem = mem;
         let dt = self.spec.step_s;
         for m in &d.messages {
             match *m {
                 Message::SpeedAdvice { to, speed, state } => {
                     let to = to as VehicleId;
-                    let own = self.veh[to as usize].speed;
-                    self.lc
-                        .entry(to)
-                        .or_default()
+                    let v = &mut self.veh[to as usize];
+                    let own = v.speed;
+                    v.lc.get_or_insert_default()
                         .mem
                         .inform(speed, state, own, dt);
                 }
                 Message::KeepRoom { to, length } => {
-                    self.lc
-                        .entry(to as VehicleId)
-                        .or_default()
+                    self.veh[to as usize]
+                        .lc
+                        .get_or_insert_default()
                         .mem
                         .keep_room(length);
                 }
@@ -256,7 +291,7 @@ impl Simulation {
         self.move_to_lane(id, target);
         let target_index = self.lane_at(target as usize).index as usize;
         let offset = self.best_cache.store[best_i as usize][target_index].best_lane_offset;
-        if let Some(rec) = self.lc.get_mut(&id) {
+        if let Some(rec) = self.veh[id as usize].lc.as_deref_mut() {
             rec.best_lane_offset = offset;
         }
         self.metrics.lane_changes += 1;
@@ -285,16 +320,29 @@ impl Simulation {
         if let Some(b) = self.lane_brutto.get_mut(target as usize) {
             *b += occupancy;
         }
-        let q = &mut self.lane_veh[old as usize];
-        if let Some(i) = q.iter().position(|&o| o == id) {
-            q.remove(i);
+        if let Some(i) = self.index_in_lane(id, old) {
+            self.lane_veh[old as usize].remove(i);
         }
-        let q = &self.lane_veh[target as usize];
-        let at = q
-            .iter()
-            .position(|&o| self.veh[o as usize].pos < pos)
-            .unwrap_or(q.len());
+        // behind every vehicle at its position or ahead
+        let at = self.queue_index_behind(target, pos, |o, p| o < p);
         self.lane_veh[target as usize].insert(at, id);
+        let key = (route, rp as u32, target, vtype);
+        let new_route = match self.best_cache.after_change.get(&key) {
+            Some(&r) => r,
+            None => {
+                let r = self.route_after_change(route, rp, target, vtype);
+                self.best_cache.after_change.insert(key, r);
+                r
+            }
+        };
+        let v = &mut self.veh[id as usize];
+        v.lane = target;
+        v.route = new_route;
+    }
+
+    /// The route of a vehicle of type `vtype` on `route` that changes to `target` at lane `rp` of it: the same
+    /// lanes before, the path from `target` after.
+    fn route_after_change(&mut self, route: u32, rp: usize, target: LaneIdx, vtype: u16) -> u32 {
         let r = &self.routes[route as usize];
         let k = r.road_k[rp] as usize;
         let roads: Vec<usize> = r.roads.clone();
@@ -308,16 +356,13 @@ impl Simulation {
             store[best_at[j] as usize][i].next_link
         });
         lanes.extend(rest);
-        let new_route = self.add_lane_route(lanes, roads, dead_end);
-        let v = &mut self.veh[id as usize];
-        v.lane = target;
-        v.route = new_route;
+        self.add_lane_route(lanes, roads, dead_end)
     }
 
     /// `o` as the model sees it, at `gap`.
     fn other(&self, o: VehicleId, gap: f64) -> Other {
         let ov = &self.veh[o as usize];
-        let rec = self.lc.get(&o);
+        let rec = ov.lc.as_deref();
         Other {
             id: o as u64,
             gap,
@@ -341,7 +386,7 @@ impl Simulation {
     fn own_leader(&self, id: VehicleId) -> Option<Other> {
         let v = &self.veh[id as usize];
         let q = &self.lane_veh[v.lane as usize];
-        let qi = q.iter().position(|&o| o == id)?;
+        let qi = self.index_in_lane(id, v.lane)?;
         if qi > 0 {
             let o = q[qi - 1];
             return Some(self.other(o, self.gap_ahead_same_road(id, o)));
@@ -375,10 +420,7 @@ impl Simulation {
         let back = v.pos - v.length;
         let q = &self.lane_veh[n as usize];
         // front first: the last vehicle whose front is ahead of the back leads, the next one follows
-        let split = q
-            .iter()
-            .position(|&o| self.veh[o as usize].pos <= back)
-            .unwrap_or(q.len());
+        let split = self.queue_index_behind(n, back, |o, b| o <= b);
         let leader = if split > 0 {
             let o = q[split - 1];
             Some(self.other(o, self.gap_ahead_same_road(id, o)))
@@ -418,11 +460,48 @@ impl Simulation {
         NeighbourLane { leader, follower }
     }
 
+    /// The index in lane `l`'s queue (front first, positions falling) of its first vehicle whose position `p`
+    /// satisfies `behind(p, pos)` (the queue's length if none), by bisection: the pass asks this of every
+    /// vehicle, and a linear scan made it quadratic in the vehicles per lane.
+    fn queue_index_behind(&self, l: LaneIdx, pos: f64, behind: impl Fn(f64, f64) -> bool) -> usize {
+        let q = &self.lane_veh[l as usize];
+        let i = q.partition_point(|&o| !behind(self.veh[o as usize].pos, pos));
+        debug_assert_eq!(
+            Some(i),
+            q.iter()
+                .position(|&o| behind(self.veh[o as usize].pos, pos))
+                .or(Some(q.len())),
+            "lane {l} is not ordered front first"
+        );
+        i
+    }
+
+    /// Where `id` is in lane `l`'s queue.
+    fn index_in_lane(&self, id: VehicleId, l: LaneIdx) -> Option<usize> {
+        let q = &self.lane_veh[l as usize];
+        let pos = self.veh[id as usize].pos;
+        let from = self.queue_index_behind(l, pos, |o, p| o <= p);
+        let i = q
+            .iter()
+            .skip(from)
+            .take_while(|&&o| self.veh[o as usize].pos == pos)
+            .position(|&o| o == id)
+            .map(|i| from + i);
+        debug_assert_eq!(i, q.iter().position(|&o| o == id), "lane {l}");
+        i
+    }
+
+    /// The lane-change record of a vehicle in the pass (made at its start).
+    fn lc_rec(&mut self, id: VehicleId) -> &mut LcVeh {
+        self.veh[id as usize]
+            .lc
+            .as_deref_mut()
+            .expect("recorded at the pass's start")
+    }
+
     /// Per-vehicle lane-change records are dropped when a vehicle leaves.
     pub(super) fn forget_lc(&mut self, id: VehicleId) {
-        if self.net.multi_lane {
-            self.lc.remove(&id);
-        }
+        self.veh[id as usize].lc = None;
     }
 }
 

@@ -91,15 +91,15 @@ pub struct Simulation {
     max_length: f64,
     /// Per vehicle type, what the hot loop reads (cached from the spec and the IDM parameters).
     type_consts: Table<TypeConsts>,
-    /// Lane changing (networks with a road of several lanes only): the model and each vehicle's record.
+    /// Lane changing (networks with a road of several lanes only): the model (each vehicle's record is in `Veh`).
     lc_model: crate::lcmodels::Lc2013,
-    lc: std::collections::HashMap<VehicleId, lane_change::LcVeh>,
     /// Road sequences of the routes, numbered (routes that differ only in lanes share one).
     road_seqs: std::collections::HashMap<Vec<usize>, u32>,
     /// Best lanes computed so far, by (road sequence, index of the current road in it, vehicle type).
     best_cache: BestLanesCache,
     /// Per lane, the summed lengths with min gaps of its vehicles during the lane-change pass.
     lane_brutto: Vec<f64>,
+    lc_scratch: lane_change::LcScratch,
 }
 
 impl Simulation {
@@ -176,10 +176,10 @@ impl Simulation {
                 .collect(),
             types: Table(types),
             lc_model: lane_change::default_model(),
-            lc: std::collections::HashMap::new(),
             road_seqs: std::collections::HashMap::new(),
             best_cache: BestLanesCache::default(),
             lane_brutto: Vec::new(),
+            lc_scratch: Default::default(),
             net,
             spec,
         };

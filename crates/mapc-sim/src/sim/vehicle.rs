@@ -33,6 +33,9 @@ pub(super) struct Veh {
     pub(super) depart_speed: f64,
     pub(super) distance_m: f64,
     pub(super) free_flow_s: f64,
+    /// Its lane-change record (multi-lane networks only: made at its first lane-change pass, dropped when it
+    /// leaves).
+    pub(super) lc: Option<Box<lane_change::LcVeh>>,
 }
 
 #[derive(Clone, Debug)]
@@ -132,6 +135,7 @@ impl Simulation {
             depart_speed,
             distance_m: 0.0,
             free_flow_s,
+            lc: None,
         });
         id
     }

@@ -31,8 +31,10 @@ pub(super) fn maximum_safe_stop_speed(p: &IdmParams, gap: f64, headway: f64) -> 
     let t = headway;
     let s = p.dt;
     // h = n (n - 1) b s / 2 + n b t is the distance of n braking steps; n is the largest with h <= g
-    let n =
-        (0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s).floor();
+    // floor_exact: the same bits as `floor`, without the library call the baseline target makes for it
+    let n = crate::idm::floor_exact(
+        0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s,
+    );
     let h = 0.5 * n * (n - 1.0) * b * s + n * b * t;
     let r = (g - h) / (n * s + t);
     n * b + r

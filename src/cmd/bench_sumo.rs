@@ -1,0 +1,184 @@
+//! SUMO 1.8's command line on the scenario `mapc bench` measures, for the side-by-side speed figure: the scenario
+//! is exported (`mapc_sumo`, as `mapc export --sumo` does) and each seed runs as `sumo -c NAME.sumocfg --seed S
+//! --duration-log.statistics true`; its vehicle-steps are its own count (UPS x duration), its CPU time and peak
+//! memory the kernel's for the child process.
+
+use anyhow::{Context, bail};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// What SUMO did over the seeds.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SumoRuns {
+    pub binary: PathBuf,
+    /// First line of `sumo --version`.
+    pub version: String,
+    pub seeds: u64,
+    pub wall_s: f64,
+    /// User + system CPU time of the SUMO processes.
+    pub cpu_s: f64,
+    /// Vehicles moved, summed over steps and seeds (SUMO's "UPS" times its "Duration").
+    pub vehicle_steps: f64,
+    /// Largest resident memory of one SUMO run (MiB).
+    pub peak_rss_mib: f64,
+}
+
+/// Where SUMO is: `explicit` (an error when it is not there), else SUMO 1.8 in the virtual environment
+/// tools/sumo_check makes (`$MAPC_SUMO_VENV`, or `~/.cache/mapc/sumo-1.8.0`), else `sumo` on the PATH; none:
+/// `Ok(None)`. The pip package's Python launcher is replaced by the binary it starts, so that Python's start-up
+/// is not timed.
+pub fn find_sumo(explicit: Option<&Path>) -> anyhow::Result<Option<PathBuf>> {
+    if let Some(p) = explicit {
+        if !p.is_file() {
+            bail!("--sumo {}: no such file", p.display());
+        }
+        return Ok(Some(package_binary(p).unwrap_or_else(|| p.to_path_buf())));
+    }
+    let venv = std::env::var_os("MAPC_SUMO_VENV")
+        .map(PathBuf::from)
+        .or_else(|| {
+            let cache = std::env::var_os("XDG_CACHE_HOME")
+                .map(PathBuf::from)
+                .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cache")))?;
+            Some(cache.join("mapc/sumo-1.8.0"))
+        });
+    if let Some(launcher) = venv.map(|v| v.join("bin/sumo")).filter(|p| p.is_file()) {
+        return Ok(Some(package_binary(&launcher).unwrap_or(launcher)));
+    }
+    let on_path = std::env::var_os("PATH").and_then(|paths| {
+        std::env::split_paths(&paths)
+            .map(|d| d.join("sumo"))
+            .find(|p| p.is_file())
+    });
+    Ok(on_path.map(|p| package_binary(&p).unwrap_or(p)))
+}
+
+/// For the pip package's launcher `VENV/bin/sumo` (a Python script), the binary it runs,
+/// `VENV/lib/python3.*/site-packages/sumo/bin/sumo`.
+fn package_binary(launcher: &Path) -> Option<PathBuf> {
+    let head = std::fs::read(launcher).ok()?;
+    if !head.starts_with(b"#!") {
+        return None;
+    }
+    let lib = launcher.parent()?.parent()?.join("lib");
+    let mut found: Vec<PathBuf> = std::fs::read_dir(lib)
+        .ok()?
+        .filter_map(|e| e.ok())
+        .map(|e| e.path().join("site-packages/sumo/bin/sumo"))
+        .filter(|p| p.is_file())
+        .collect();
+    found.sort();
+    found.pop()
+}
+
+/// Export `rs` into `dir` and run SUMO on seeds `0..seeds`, one after another.
+pub fn run_sumo(
+    sumo: &Path,
+    rs: &mapc_scenario::ResolvedScenario,
+    dir: &Path,
+    seeds: u64,
+) -> anyhow::Result<SumoRuns> {
+    let version = Command::new(sumo)
+        .arg("--version")
+        .output()
+        .with_context(|| format!("running {} --version", sumo.display()))?;
+    let version = String::from_utf8_lossy(&version.stdout)
+        .lines()
+        .next()
+        .unwrap_or("")
+        .trim()
+        .to_string();
+    let summary = mapc_sumo::export_scenario(rs, dir)?;
+    let cfg = summary
+        .files
+        .iter()
+        .find(|f| f.ends_with(".sumocfg"))
+        .context("the export wrote no .sumocfg")?;
+    let before = children_usage();
+    let start = std::time::Instant::now();
+    let mut vehicle_steps = 0.0;
+    for seed in 0..seeds {
+        let out = Command::new(sumo)
+            .current_dir(dir)
+            .args(["-c", cfg, "--seed", &seed.to_string()])
+            .args(["--duration-log.statistics", "true", "--no-step-log", "true"])
+            .output()
+            .with_context(|| format!("running {}", sumo.display()))?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        if !out.status.success() {
+            bail!(
+                "{} -c {cfg} --seed {seed} failed ({}): {}",
+                sumo.display(),
+                out.status,
+                String::from_utf8_lossy(&out.stderr).trim()
+            );
+        }
+        vehicle_steps += moved_vehicles(&text).with_context(|| {
+            format!(
+                "SUMO's output has no `Duration:` and `UPS:` lines:\n{}",
+                text.trim()
+            )
+        })?;
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    let after = children_usage();
+    Ok(SumoRuns {
+        binary: sumo.to_path_buf(),
+        version,
+        seeds,
+        wall_s,
+        cpu_s: after.0 - before.0,
+        vehicle_steps,
+        peak_rss_mib: after.1,
+    })
+}
+
+/// Vehicles moved in one run, from `--duration-log.statistics`' `Duration: 1.03s` (or `830ms`) and
+/// `UPS: 64301.1` (vehicle updates per second of that duration).
+fn moved_vehicles(stdout: &str) -> Option<f64> {
+    let value = |key: &str| {
+        stdout
+            .lines()
+            .map(str::trim)
+            .find_map(|l| l.strip_prefix(key))
+            .map(str::trim)
+    };
+    let duration = value("Duration:")?;
+    let duration_s = match duration.strip_suffix("ms") {
+        Some(ms) => ms.trim().parse::<f64>().ok()? / 1000.0,
+        None => duration.strip_suffix('s')?.trim().parse::<f64>().ok()?,
+    };
+    let ups: f64 = value("UPS:")?.parse().ok()?;
+    Some(ups * duration_s)
+}
+
+/// CPU time (user + system, s) of this process's finished children, and the largest resident memory of one of
+/// them (MiB).
+fn children_usage() -> (f64, f64) {
+    // SAFETY: getrusage only writes the struct it is given
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut u) } != 0 {
+        return (f64::NAN, f64::NAN);
+    }
+    (cpu_seconds(&u), u.ru_maxrss as f64 / 1024.0)
+}
+
+/// User + system time of a usage record (s).
+pub fn cpu_seconds(u: &libc::rusage) -> f64 {
+    let tv = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    tv(u.ru_utime) + tv(u.ru_stime)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sumo_statistics_are_read_in_seconds_and_milliseconds() {
+        let out = "Performance: \n Duration: 1.50s\n Real time factor: 717.563\n UPS: 48000.0\nVehicles: \n";
+        assert_eq!(moved_vehicles(out), Some(72000.0));
+        let out = " Duration: 250ms\n UPS: 1000\n";
+        assert_eq!(moved_vehicles(out), Some(250.0));
+        assert_eq!(moved_vehicles("Simulation ended at time: 1001.00\n"), None);
+    }
+}
