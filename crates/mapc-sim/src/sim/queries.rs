@@ -284,15 +284,25 @@ impl Simulation {
                 speed: fv.speed,
             });
         }
-        // Search upstream: distance from the start of a lane to ego's back.
+        self.first_behind(id, v.lane, v.pos - v.length, max_dist)
+    }
+
+    /// The nearest vehicle behind the start of `lane` (on the connections into it and the lanes before them),
+    /// `back_from_start` m from `id`'s back, within `max_dist`.
+    pub(super) fn first_behind(
+        &self,
+        id: VehicleId,
+        lane: LaneIdx,
+        back_from_start: f64,
+        max_dist: f64,
+    ) -> Option<Neighbor> {
         let mut best: Option<Neighbor> = None;
-        let mut stack: Vec<(LaneIdx, f64)> = vec![(v.lane, v.pos - v.length)];
-        let mut visited = 0;
-        while let Some((lane, back_from_start)) = stack.pop() {
-            visited += 1;
-            if visited > 64 {
+        let mut stack: Vec<(LaneIdx, f64)> = vec![(lane, back_from_start)];
+        // a bound on the search, for safety against a cycle in a malformed network
+        for _ in 0..64 {
+            let Some((lane, back_from_start)) = stack.pop() else {
                 break;
-            }
+            };
             for (up, len) in self.upstream_lanes(lane) {
                 if let Some(&f) = self.lane_veh[up as usize].first() {
                     let fv = &self.veh[f as usize];

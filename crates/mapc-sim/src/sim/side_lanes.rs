@@ -100,41 +100,6 @@ impl Simulation {
         None
     }
 
-    /// The nearest vehicle behind the start of `lane` (on the connections into it and the lanes before them),
-    /// `back_from_start` m from `id`'s back, within `max_dist`.
-    fn first_behind(
-        &self,
-        id: VehicleId,
-        lane: LaneIdx,
-        back_from_start: f64,
-        max_dist: f64,
-    ) -> Option<Neighbor> {
-        let mut best: Option<Neighbor> = None;
-        let mut stack: Vec<(LaneIdx, f64)> = vec![(lane, back_from_start)];
-        // a bound on the search, for safety against a cycle in a malformed network
-        for _ in 0..64 {
-            let Some((lane, back_from_start)) = stack.pop() else {
-                break;
-            };
-            for (up, len) in self.upstream_lanes(lane) {
-                if let Some(&f) = self.lane_veh[up as usize].first() {
-                    let fv = &self.veh[f as usize];
-                    let gap = back_from_start + (len - fv.pos);
-                    if f != id && gap <= max_dist && best.is_none_or(|b| gap < b.gap_m) {
-                        best = Some(Neighbor {
-                            id: f,
-                            gap_m: gap,
-                            speed: fv.speed,
-                        });
-                    }
-                } else if back_from_start + len <= max_dist {
-                    stack.push((up, back_from_start + len));
-                }
-            }
-        }
-        best
-    }
-
     /// Whether another road joins the road that link `k` leads onto: some connection into any lane of that road
     /// comes from a different road. On one-lane roads this is exactly "the link has foes"; on multi-lane roads
     /// it also finds a merging road that ends on an acceleration lane of its own.
