@@ -91,25 +91,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     if accel {
         nodes.push((ACCELERATION_LANE_END, [x_end, 0.0]));
     }
-    let mut g = LaneGraph::new(
-        Source {
-            file: SIMPLE_MERGE.to_string(),
-            format: SourceFormat::Generator,
-        },
-        Projection::Plane { offset: [0.0, 0.0] },
-    );
-    g.junctions = nodes
-        .iter()
-        .enumerate()
-        .map(|(i, (name, pos))| Junction {
-            id: JunctionId(i as u32),
-            pos: *pos,
-            kind: JunctionKind::Through,
-            incoming: vec![],
-            outgoing: vec![],
-            provenance: with_sumo(name),
-        })
-        .collect();
+    let mut g = generated_graph(SIMPLE_MERGE, &nodes, with_sumo);
     let jid = |name: &str| JunctionId(nodes.iter().position(|(n, _)| *n == name).unwrap() as u32);
     let (main_priority, ramp_priority) = match p.major {
         MajorRoad::Ramp => (-1, 1),
@@ -321,25 +303,7 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
         ("drop", [p.upstream_m, 0.0]),
         ("end", [p.upstream_m + p.downstream_m, 0.0]),
     ];
-    let mut g = LaneGraph::new(
-        Source {
-            file: LANE_DROP.to_string(),
-            format: SourceFormat::Generator,
-        },
-        Projection::Plane { offset: [0.0, 0.0] },
-    );
-    g.junctions = nodes
-        .iter()
-        .enumerate()
-        .map(|(i, (name, pos))| Junction {
-            id: JunctionId(i as u32),
-            pos: *pos,
-            kind: JunctionKind::Through,
-            incoming: vec![],
-            outgoing: vec![],
-            provenance: provenance(name),
-        })
-        .collect();
+    let mut g = generated_graph(LANE_DROP, &nodes, provenance);
     let roads = [
         (LANE_DROP_UPSTREAM, 0, p.upstream_m, p.lanes_before),
         (LANE_DROP_DOWNSTREAM, 1, p.downstream_m, p.lanes_after),
@@ -386,6 +350,34 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
         .collect();
     g.rebuild_junction_links();
     Ok(g)
+}
+
+/// A generated network's graph with its junctions (named points, in order; roads are added by the caller).
+fn generated_graph(
+    generator: &str,
+    nodes: &[(&str, [f64; 2])],
+    provenance: impl Fn(&str) -> Provenance,
+) -> LaneGraph {
+    let mut g = LaneGraph::new(
+        Source {
+            file: generator.to_string(),
+            format: SourceFormat::Generator,
+        },
+        Projection::Plane { offset: [0.0, 0.0] },
+    );
+    g.junctions = nodes
+        .iter()
+        .enumerate()
+        .map(|(i, (name, pos))| Junction {
+            id: JunctionId(i as u32),
+            pos: *pos,
+            kind: JunctionKind::Through,
+            incoming: vec![],
+            outgoing: vec![],
+            provenance: provenance(name),
+        })
+        .collect();
+    g
 }
 
 #[cfg(test)]
