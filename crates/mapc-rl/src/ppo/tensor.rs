@@ -185,15 +185,9 @@ impl Model {
         2 * self.arch.act_dim + usize::from(self.arch.shared_value)
     }
 
-    /// Policy mean, log-std and value for one observation, in plain `f32` (no burn: ~50x cheaper per sample).
-    pub fn infer(&self, obs: &[f32], scratch: &mut Scratch) -> PolicyOutput {
-        let a = self.arch.act_dim;
-        let (pp, vp) = self.params.split_at(self.arch.policy_len());
-        let Scratch {
-            a: buf,
-            b: vbuf,
-            c: out,
-        } = scratch;
+    /// The policy net's forward pass for one observation into `out` (`buf`: the hidden layers' scratch).
+    fn policy_forward(&self, obs: &[f32], buf: &mut Vec<f32>, out: &mut Vec<f32>) {
+        let pp = &self.params[..self.arch.policy_len()];
         mlp_forward(
             pp,
             self.arch.obs_dim,
@@ -203,6 +197,18 @@ impl Model {
             buf,
             out,
         );
+    }
+
+    /// Policy mean, log-std and value for one observation, in plain `f32` (no burn: ~50x cheaper per sample).
+    pub fn infer(&self, obs: &[f32], scratch: &mut Scratch) -> PolicyOutput {
+        let a = self.arch.act_dim;
+        let vp = &self.params[self.arch.policy_len()..];
+        let Scratch {
+            a: buf,
+            b: vbuf,
+            c: out,
+        } = scratch;
+        self.policy_forward(obs, buf, out);
         let mean = out[..a].to_vec();
         let log_std = out[a..2 * a]
             .iter()
@@ -227,16 +233,7 @@ impl Model {
     pub fn value(&self, obs: &[f32], scratch: &mut Scratch) -> f32 {
         let Scratch { a: buf, c: out, .. } = scratch;
         if self.arch.shared_value {
-            let pp = &self.params[..self.arch.policy_len()];
-            mlp_forward(
-                pp,
-                self.arch.obs_dim,
-                &self.arch.hidden,
-                self.policy_outputs(),
-                obs,
-                buf,
-                out,
-            );
+            self.policy_forward(obs, buf, out);
             return out[2 * self.arch.act_dim];
         }
         let vp = &self.params[self.arch.policy_len()..];
