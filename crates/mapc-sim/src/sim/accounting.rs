@@ -62,6 +62,13 @@ impl Simulation {
         }
     }
 
+    /// The lane a vehicle drove before its current one on its route (`None` at its route's first lane).
+    fn previous_lane(&self, id: VehicleId) -> Option<LaneIdx> {
+        let v = &self.veh[id as usize];
+        let k = (v.route_pos as usize).checked_sub(1)?;
+        Some(self.routes[v.route as usize].lanes[k])
+    }
+
     /// Every pair of consecutive vehicles keeps a non-negative gap, on lanes, from connections into roads, and
     /// between vehicles on merging connections ordered by their distance to the merge point once the follower has
     /// reached the conflict point (before it the connections run side by side).
@@ -95,12 +102,25 @@ impl Simulation {
                 && let Some(&last) = q.last()
             {
                 let lv = &self.veh[last as usize];
+                let came_via = self.previous_lane(last);
                 for l in self.net.links.iter().filter(|l| l.to_lane as usize == li) {
                     if let Some(&f) = self.lane_veh[l.via_lane as usize].first() {
                         let fv = &self.veh[f as usize];
-                        let gap = lv.pos - lv.length
-                            + (self.lane_at(l.via_lane as usize).length - fv.pos);
-                        if gap < -EPS {
+                        let via_len = self.lane_at(l.via_lane as usize).length;
+                        let gap = lv.pos - lv.length + (via_len - fv.pos);
+                        // a leader whose tail still lies on a merging connection runs beside a follower on
+                        // this one until the follower reaches the conflict point
+                        let beside = came_via.is_some_and(|c| {
+                            c != l.via_lane
+                                && l.foes.iter().any(|&foe| {
+                                    let fl = self.link_at(foe as usize);
+                                    fl.via_lane == c
+                                        && via_len - fv.pos
+                                            > CONFLICT_POINT_SHARE
+                                                * via_len.fmin(self.lane_at(c as usize).length)
+                                })
+                        });
+                        if gap < -EPS && !beside {
                             return Err(err(last, f, gap));
                         }
                     }
