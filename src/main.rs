@@ -4,15 +4,14 @@
 // `mod cmd`), so no line reaches the terminal with a map's escape sequences in it, however it was built.
 macro_rules! println {
     () => { ::std::println!() };
-    ($($arg:tt)*) => { ::std::println!("{}", $crate::terminal::printable(&::std::format!($($arg)*))) };
+    ($($arg:tt)*) => { ::std::println!("{}", ::mapc_graph::terminal::printable(&::std::format!($($arg)*))) };
 }
 macro_rules! eprintln {
     () => { ::std::eprintln!() };
-    ($($arg:tt)*) => { ::std::eprintln!("{}", $crate::terminal::printable(&::std::format!($($arg)*))) };
+    ($($arg:tt)*) => { ::std::eprintln!("{}", ::mapc_graph::terminal::printable(&::std::format!($($arg)*))) };
 }
 
 mod cmd;
-mod terminal;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

@@ -141,6 +141,18 @@ def test_mapcs_errors_are_python_exceptions_with_mapcs_message(tmp_path):
         mapc.Policy(str(ROOT / "maps" / "i696.osm.pbf"))
 
 
+def test_map_text_in_an_error_is_shown_not_obeyed_by_the_terminal(tmp_path):
+    # a path (as any id or name from a map) holding an escape sequence that would retitle the terminal
+    bad = tmp_path / "hostile.toml"
+    bad.write_text('version = 1\nname = "x"\nhorizon_steps = 10\nflows = []\n[network]\n'
+                   'graph = "gone\\u001b]0;pwned\\u0007\\u202e.graph.json"\n[vehicle_types.human]\n')
+    with pytest.raises(mapc.MapcError) as err:
+        mapc.simulate(str(bad), seeds=1)
+    message = str(err.value)
+    assert "gone\\u001b]0;pwned\\u0007\\u202e.graph.json" in message
+    assert not any(ord(c) < 0x20 and c != "\n" or c == "\u202e" for c in message)
+
+
 def test_an_action_that_is_not_a_number_is_refused_naming_its_place():
     # the single env: the index in the action; the episode goes on as if the bad step had not been tried
     env, twin = mapc.make_env("simple_merge"), mapc.make_env("simple_merge")

@@ -22,6 +22,7 @@ pub mod io;
 pub mod lookup;
 pub mod model;
 pub mod projection;
+pub mod terminal;
 pub mod topology;
 pub mod validate;
 

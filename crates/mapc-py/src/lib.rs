@@ -38,9 +38,10 @@ create_exception!(
     "An error of mapc: bad input, named with its file and place."
 );
 
-/// A mapc error as the Python exception, with the whole chain of causes in its message.
+/// A mapc error as the Python exception, with the whole chain of causes in its message. Map text in it (ids,
+/// names) is written printable, as the binary prints it: a traceback shows it, never obeys it.
 pub(crate) fn mapc_error(e: impl std::fmt::Display) -> PyErr {
-    MapcError::new_err(e.to_string())
+    MapcError::new_err(mapc_graph::terminal::printable(&e.to_string()).into_owned())
 }
 
 /// A scenario file or built-in name, resolved and made into the simulator's spec.

@@ -1,7 +1,8 @@
 //! Text for the terminal. Maps come from the internet, and a road's name, class or id is whatever its author wrote:
 //! an escape sequence in it would retitle the window, clear the screen or rewrite earlier lines when printed, and a
 //! bidirectional override would show one id as another. Every line the binary prints passes through
-//! [`printable`], by the `println!` and `eprintln!` of `main.rs` that shadow the standard ones.
+//! [`printable`] (by the `println!` and `eprintln!` of its `main.rs` that shadow the standard ones), and so does
+//! the message of every error the Python package raises.
 
 use std::borrow::Cow;
 
