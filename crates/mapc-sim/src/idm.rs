@@ -40,8 +40,36 @@ pub(crate) fn floor_exact(x: f64) -> f64 {
         let t = x as i64 as f64;
         if t > x { t - 1.0 } else { t }
     } else {
-        x.floor()
+        library_floor(x)
     }
+}
+
+/// `x.ceil()`, bit for bit, without the library call (as [`floor_exact`]); the sign is copied from `x` so that
+/// a negative number above -1 gives -0, as the library's.
+#[inline(always)]
+pub(crate) fn ceil_exact(x: f64) -> f64 {
+    if x == 0.0 {
+        x
+    } else if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64 as f64;
+        (if t < x { t + 1.0 } else { t }).copysign(x)
+    } else {
+        library_ceil(x)
+    }
+}
+
+// The rare paths out of line: inlined, the library calls are speculated (executed before the test that selects
+// them) wherever the optimizer hoists the arithmetic around them.
+#[cold]
+#[inline(never)]
+fn library_floor(x: f64) -> f64 {
+    x.floor()
+}
+
+#[cold]
+#[inline(never)]
+fn library_ceil(x: f64) -> f64 {
+    x.ceil()
 }
 
 /// `f64::min` / `f64::max` as one compare-and-select, without the NaN fix-up sequence the baseline x86-64 target
@@ -664,7 +692,7 @@ mod tests {
     }
 
     #[test]
-    fn floor_exact_is_floor_bit_for_bit() {
+    fn floor_and_ceil_exact_are_the_library_bit_for_bit() {
         let mut xs = vec![
             0.0,
             -0.0,
@@ -702,6 +730,10 @@ mod tests {
         }
         for x in xs {
             assert_eq!(floor_exact(x).to_bits(), x.floor().to_bits(), "{x:e}");
+            assert_eq!(ceil_exact(x).to_bits(), x.ceil().to_bits(), "ceil {x:e}");
+            // the probabilities LC2013 rounds up (`x * 100000`), small ones included
+            let p = x * 1e-9;
+            assert_eq!(ceil_exact(p).to_bits(), p.ceil().to_bits(), "ceil {p:e}");
         }
     }
 

@@ -505,7 +505,7 @@ impl Simulation {
     }
 }
 
-/// The model every vehicle uses (SUMO 1.8's LC2013 defaults).
-pub(super) fn default_model() -> Lc2013 {
-    Lc2013::default()
+/// The model every vehicle uses (SUMO 1.8's LC2013 defaults), for steps of `dt` seconds.
+pub(super) fn default_model(dt: f64) -> Lc2013 {
+    Lc2013::default().for_step(dt)
 }

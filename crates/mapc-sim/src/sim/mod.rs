@@ -175,7 +175,7 @@ impl Simulation {
                 })
                 .collect(),
             types: Table(types),
-            lc_model: lane_change::default_model(),
+            lc_model: lane_change::default_model(dt),
             road_seqs: std::collections::HashMap::new(),
             best_cache: BestLanesCache::default(),
             lane_brutto: Vec::new(),

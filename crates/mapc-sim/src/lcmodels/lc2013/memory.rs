@@ -1,6 +1,7 @@
 //! A vehicle's LC2013 memory between steps, and what the simulator tells it (moves, changes, messages).
 
 use super::speed::max2;
+use crate::idm::ceil_exact;
 use super::{LOOK_AHEAD_MIN_SPEED, lca};
 
 /// A vehicle's memory between steps (SUMO keeps it in the model instance).
@@ -35,8 +36,9 @@ impl Lc2013Memory {
         self.leading_blocker_length = 0.0;
         self.left_space = 0.0;
         self.accel_advices.clear();
-        self.speed_gain_probability = (self.speed_gain_probability * 100000.0).ceil() * 0.00001;
-        self.keep_right_probability = (self.keep_right_probability * 100000.0).ceil() * 0.00001;
+        // ceil_exact: the same bits as `ceil`, without the library call
+        self.speed_gain_probability = ceil_exact(self.speed_gain_probability * 100000.0) * 0.00001;
+        self.keep_right_probability = ceil_exact(self.keep_right_probability * 100000.0) * 0.00001;
     }
 
     /// After a lane change (`best_lane_offset`: the new lane's): start afresh (SUMO's `changed`).

@@ -109,6 +109,41 @@ pub struct Lc2013 {
     change_prob_threshold_right: f64,
     /// `myChangeProbThresholdLeft`: 0.2 / lcSpeedGain = 0.2 by default.
     change_prob_threshold_left: f64,
+    /// The decay factors of the speed-gain wish for the step the simulator runs with.
+    decay: StepDecay,
+}
+
+/// SUMO's `pow(0.5, TS)` and `pow(0.8, TS)`, by which the speed-gain wish decays each step, for one step length
+/// `dt`, computed once ([`Lc2013::for_step`]): the library's `pow`, called per vehicle and step, was a tenth of
+/// the model's time. Another step length computes them per call, with the same expressions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct StepDecay {
+    dt: f64,
+    half: f64,
+    four_fifths: f64,
+}
+
+impl StepDecay {
+    fn new(dt: f64) -> Self {
+        StepDecay {
+            dt,
+            half: half_pow(dt),
+            four_fifths: four_fifths_pow(dt),
+        }
+    }
+}
+
+// Out of line and cold: inlined, the optimizer computes them for every vehicle, ahead of the test that needs them.
+#[cold]
+#[inline(never)]
+fn half_pow(dt: f64) -> f64 {
+    0.5f64.powf(dt)
+}
+
+#[cold]
+#[inline(never)]
+fn four_fifths_pow(dt: f64) -> f64 {
+    0.8f64.powf(dt)
 }
 
 impl Default for Lc2013 {
@@ -135,6 +170,31 @@ impl Lc2013 {
             params,
             change_prob_threshold_right,
             change_prob_threshold_left,
+            decay: StepDecay::new(0.0),
+        }
+    }
+
+    /// The model for a simulation that steps `dt` seconds (the decay factors computed once).
+    pub fn for_step(mut self, dt: f64) -> Self {
+        self.decay = StepDecay::new(dt);
+        self
+    }
+
+    /// `pow(0.5, dt)`.
+    fn half_pow(&self, dt: f64) -> f64 {
+        if dt == self.decay.dt {
+            self.decay.half
+        } else {
+            half_pow(dt)
+        }
+    }
+
+    /// `pow(0.8, dt)`.
+    fn four_fifths_pow(&self, dt: f64) -> f64 {
+        if dt == self.decay.dt {
+            self.decay.four_fifths
+        } else {
+            four_fifths_pow(dt)
         }
     }
 
@@ -428,7 +488,7 @@ impl Lc2013 {
             if this_lane_vsafe - 5.0 / 3.6 > neigh_lane_vsafe {
                 // the current lane is clearly faster than the right one
                 if mem.speed_gain_probability < 0.0 {
-                    mem.speed_gain_probability *= 0.5f64.powf(dt);
+                    mem.speed_gain_probability *= self.half_pow(dt);
                 }
             } else {
                 if mem.speed_gain_probability < 0.0 || relative_gain > 0.0 {
@@ -453,11 +513,11 @@ impl Lc2013 {
         } else {
             if this_lane_vsafe > neigh_lane_vsafe {
                 if mem.speed_gain_probability > 0.0 {
-                    mem.speed_gain_probability *= 0.5f64.powf(dt);
+                    mem.speed_gain_probability *= self.half_pow(dt);
                 }
             } else if this_lane_vsafe == neigh_lane_vsafe {
                 if mem.speed_gain_probability > 0.0 {
-                    mem.speed_gain_probability *= 0.8f64.powf(dt);
+                    mem.speed_gain_probability *= self.four_fifths_pow(dt);
                 }
             } else {
                 mem.speed_gain_probability += dt * relative_gain;
