@@ -255,6 +255,9 @@ impl Lc2013 {
 
     /// SUMO's `_wantsChange` for one side: the wish and its reason (or a reason to stay), plus the messages
     /// and speed advices of an urgent change.
+    // out of line: inlined into `decide`, the work of both sides was hoisted and done for every vehicle, most of
+    // which have a lane on one side only
+    #[inline(never)]
     fn wants_change(&self, mem: &mut Lc2013Memory, v: &SideView, msgs: &mut Vec<Message>) -> u32 {
         let s = v.s;
         let ego = &s.ego;
