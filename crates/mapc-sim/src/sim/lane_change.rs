@@ -214,45 +214,43 @@ impl Simulation {
                 leads_elsewhere: q.leads_elsewhere,
             }
         }));
-        let p = self.types[v.vtype as usize];
         let l = self.lane_at(lane as usize);
         let (l_right, l_left) = (l.right, l.left);
-        let ego = Ego {
-            speed: v.speed,
-            params: p,
-            length: v.length,
-            pos: v.pos,
-            lane_index: index,
-            lane_length: l.length,
-            lane_speed_limit: l.speed_limit,
-            max_speed: self.desired_speed(v, lane),
-        };
         // a vehicle whose back is still in the junction behind stays on its lane
         let may_change = v.pos >= v.length;
         let side_lane = |n: Option<LaneIdx>| n.filter(|_| may_change);
-        let right = side_lane(l_right).map(|n| self.neighbours(id, n, best));
-        let left = side_lane(l_left).map(|n| self.neighbours(id, n, best));
-        let leader = self.own_leader(id);
         let (last, first) = blocked[index];
-        let blocked_ahead = BlockedAhead {
-            last: last.map(|o| self.other(o, self.gap_ahead_same_road(id, o))),
-            first: first
-                .filter(|&f| Some(f) != last)
-                .map(|o| self.other(o, self.gap_ahead_same_road(id, o))),
-        };
+        // built in place, in one expression: moved between locals, its copies of the neighbours cost as much as
+        // the model's gap checks
         let s = Surroundings {
-            ego,
-            leader,
-            right,
-            left,
+            ego: Ego {
+                speed: v.speed,
+                params: self.types[v.vtype as usize],
+                length: v.length,
+                pos: v.pos,
+                lane_index: index,
+                lane_length: l.length,
+                lane_speed_limit: l.speed_limit,
+                max_speed: self.desired_speed(v, lane),
+            },
+            leader: self.own_leader(id),
+            right: side_lane(l_right).map(|n| self.neighbours(id, n, best)),
+            left: side_lane(l_left).map(|n| self.neighbours(id, n, best)),
             best_lanes,
-            blocked_ahead,
+            blocked_ahead: BlockedAhead {
+                last: last.map(|o| self.other(o, self.gap_ahead_same_road(id, o))),
+                first: first
+                    .filter(|&f| Some(f) != last)
+                    .map(|o| self.other(o, self.gap_ahead_same_road(id, o))),
+            },
             road_has_lane_changer: true,
         };
-        let model = self.lc_model;
-        let mut mem = std::mem::take(&mut self.lc_rec(id).mem);
-        let d = model.decide(&mut mem, &s);
-        self.lc_rec(id).mem = mem;
+        let mem = &mut self.veh[id as usize]
+            .lc
+            .as_deref_mut()
+            .expect("recorded at the pass's start")
+            .mem;
+        let d = self.lc_model.decide(mem, &s);
         let dt = self.spec.step_s;
         for m in &d.messages {
             match *m {
