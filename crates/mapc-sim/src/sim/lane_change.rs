@@ -83,14 +83,13 @@ impl Simulation {
         if l.left.is_none() && l.right.is_none() {
             return wanted;
         }
-        let params = self.types[vtype];
         let Some(rec) = self.veh[id as usize].lc.as_deref_mut() else {
             return wanted;
         };
         rec.mem.patch_speed(
             &self.lc_model,
             speed,
-            &params,
+            &self.types[vtype],
             desired,
             true,
             rec.best_lane_offset,
@@ -413,6 +412,8 @@ impl Simulation {
     /// Leader and follower of `id` on neighbour lane `n` of its road: the nearest vehicle whose front is ahead
     /// of `id`'s back, and the nearest behind (across the lane's end along its best continuation, and across its
     /// start through the connections into it).
+    // inlined: its two neighbours are then written where the model reads them, not copied there
+    #[inline(always)]
     fn neighbours(&self, id: VehicleId, n: LaneIdx, best: &[BestLane]) -> NeighbourLane {
         let v = &self.veh[id as usize];
         let back = v.pos - v.length;
