@@ -36,6 +36,17 @@ pub(super) struct LcScratch {
     dens: Vec<f64>,
     blocked: Vec<(Option<VehicleId>, Option<VehicleId>)>,
     best_lanes: Vec<LaneQ>,
+    next_occupation: NextOccupation,
+}
+
+/// The summed occupation of each lane's best continuation (SUMO's `nextOccupation`) for one entry of
+/// `BestLanesCache::store`: the lanes' occupations change only at the pass's start and when a vehicle changes
+/// lanes, so the vehicles visited one after another on a road and route share the sums in between.
+#[derive(Clone, Debug, Default)]
+struct NextOccupation {
+    /// The entry the sums are for; `None` once an occupation changed.
+    of: Option<u32>,
+    sums: Vec<f64>,
 }
 
 /// Best lanes by (road sequence, index of the current road in it, vehicle type): they depend on nothing else, so
@@ -131,6 +142,7 @@ impl Simulation {
             }
         }
         let mut scratch = std::mem::take(&mut self.lc_scratch);
+        scratch.next_occupation.of = None;
         for r in 0..self.net.road_lanes.len() {
             if self.net.road_lanes[r].len() < 2 {
                 continue;
@@ -141,6 +153,7 @@ impl Simulation {
                 dens,
                 blocked,
                 best_lanes,
+                next_occupation,
             } = &mut scratch;
             lanes.clear();
             lanes.extend_from_slice(&self.net.road_lanes[r]);
@@ -164,7 +177,7 @@ impl Simulation {
             blocked.clear();
             blocked.resize(lanes.len(), (None, None));
             for &id in cands.iter() {
-                let final_index = self.change_one(id, dens, blocked, best_lanes);
+                let final_index = self.change_one(id, dens, blocked, best_lanes, next_occupation);
                 let v = &self.veh[id as usize];
                 dens[final_index] += v.length + self.types[v.vtype as usize].min_gap;
             }
@@ -179,6 +192,7 @@ impl Simulation {
         dens: &[f64],
         blocked: &mut [(Option<VehicleId>, Option<VehicleId>)],
         best_lanes: &mut Vec<LaneQ>,
+        next_occupation: &mut NextOccupation,
     ) -> usize {
         let (route, route_pos, vtype) = {
             let v = &self.veh[id as usize];
@@ -200,19 +214,33 @@ impl Simulation {
         let best: &[BestLane] = &self.best_cache.store[best_i as usize];
         let v = &self.veh[id as usize];
         // SUMO's occupation: this pass's density on the lane plus the vehicles on its continuation
-        best_lanes.clear();
-        best_lanes.extend(best.iter().zip(dens).map(|(q, &d)| {
-            LaneQ {
-                length: q.length,
-                occupation: d + q
-                    .continuation
+        if next_occupation.of != Some(best_i) {
+            next_occupation.sums.clear();
+            next_occupation.sums.extend(best.iter().map(|q| {
+                q.continuation
                     .iter()
                     .map(|&c| self.lane_brutto[c as usize])
-                    .sum::<f64>(),
+                    .sum::<f64>()
+            }));
+            next_occupation.of = Some(best_i);
+        }
+        debug_assert!(best.iter().zip(&next_occupation.sums).all(|(q, &next)| {
+            let fresh: f64 = q
+                .continuation
+                .iter()
+                .map(|&c| self.lane_brutto[c as usize])
+                .sum();
+            fresh.to_bits() == next.to_bits()
+        }));
+        best_lanes.clear();
+        best_lanes.extend(best.iter().zip(dens).zip(&next_occupation.sums).map(
+            |((q, &d), &next)| LaneQ {
+                length: q.length,
+                occupation: d + next,
                 best_lane_offset: q.best_lane_offset,
                 leads_elsewhere: q.leads_elsewhere,
-            }
-        }));
+            },
+        ));
         let l = self.lane_at(lane as usize);
         let (l_right, l_left) = (l.right, l.left);
         // a vehicle whose back is still in the junction behind stays on its lane
@@ -286,6 +314,7 @@ impl Simulation {
         }
         .expect("the model changes only to an existing lane");
         self.move_to_lane(id, target);
+        next_occupation.of = None;
         let target_index = self.lane_at(target as usize).index as usize;
         let offset = self.best_cache.store[best_i as usize][target_index].best_lane_offset;
         if let Some(rec) = self.veh[id as usize].lc.as_deref_mut() {
@@ -297,7 +326,7 @@ impl Simulation {
     }
 
     /// Moves a vehicle to `target`, a neighbour lane of its road, at the same position, and follows the route
-    /// from there.
+    /// from there (the lanes' occupations change: within the pass, `NextOccupation` must be cleared after it).
     pub(super) fn move_to_lane(&mut self, id: VehicleId, target: LaneIdx) {
         let (old, pos, route, rp, vtype, occupancy) = {
             let v = &self.veh[id as usize];

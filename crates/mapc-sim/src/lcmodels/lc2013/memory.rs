@@ -1,8 +1,8 @@
 //! A vehicle's LC2013 memory between steps, and what the simulator tells it (moves, changes, messages).
 
 use super::speed::max2;
-use crate::idm::ceil_exact;
 use super::{LOOK_AHEAD_MIN_SPEED, lca};
+use crate::idm::ceil_exact;
 
 /// A vehicle's memory between steps (SUMO keeps it in the model instance).
 #[derive(Clone, Debug, Default, PartialEq)]
