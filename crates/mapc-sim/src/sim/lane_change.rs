@@ -247,9 +247,9 @@ impl Simulation {
         let may_change = v.pos >= v.length;
         let side_lane = |n: Option<LaneIdx>| n.filter(|_| may_change);
         let (last, first) = blocked[index];
-        // built in place, in one expression: moved between locals, its copies of the neighbours cost as much as
-        // the model's gap checks
-        let s = Surroundings {
+        // built in place, each neighbour written where the model reads it: moved between locals, the copies of
+        // the neighbours cost as much as the model's gap checks
+        let mut s = Surroundings {
             ego: Ego {
                 speed: v.speed,
                 params: self.types[v.vtype as usize],
@@ -260,18 +260,26 @@ impl Simulation {
                 lane_speed_limit: l.speed_limit,
                 max_speed: self.desired_speed(v, lane),
             },
-            leader: self.own_leader(id),
-            right: side_lane(l_right).map(|n| self.neighbours(id, n, best)),
-            left: side_lane(l_left).map(|n| self.neighbours(id, n, best)),
+            leader: None,
+            right: None,
+            left: None,
             best_lanes,
-            blocked_ahead: BlockedAhead {
-                last: last.map(|o| self.other(o, self.gap_ahead_same_road(id, o))),
-                first: first
-                    .filter(|&f| Some(f) != last)
-                    .map(|o| self.other(o, self.gap_ahead_same_road(id, o))),
-            },
+            blocked_ahead: BlockedAhead::default(),
             road_has_lane_changer: true,
         };
+        s.leader = self.own_leader(id);
+        if let Some(n) = side_lane(l_right) {
+            self.neighbours(id, n, best, s.right.insert(NeighbourLane::default()));
+        }
+        if let Some(n) = side_lane(l_left) {
+            self.neighbours(id, n, best, s.left.insert(NeighbourLane::default()));
+        }
+        if let Some(o) = last {
+            s.blocked_ahead.last = Some(self.other(o, self.gap_ahead_same_road(id, o)));
+        }
+        if let Some(o) = first.filter(|&f| Some(f) != last) {
+            s.blocked_ahead.first = Some(self.other(o, self.gap_ahead_same_road(id, o)));
+        }
         let mem = &mut self.veh[id as usize]
             .lc
             .as_deref_mut()
@@ -440,28 +448,29 @@ impl Simulation {
 
     /// Leader and follower of `id` on neighbour lane `n` of its road: the nearest vehicle whose front is ahead
     /// of `id`'s back, and the nearest behind (across the lane's end along its best continuation, and across its
-    /// start through the connections into it).
+    /// start through the connections into it), written into `out`.
     // inlined: its two neighbours are then written where the model reads them, not copied there
     #[inline(always)]
-    fn neighbours(&self, id: VehicleId, n: LaneIdx, best: &[BestLane]) -> NeighbourLane {
+    fn neighbours(&self, id: VehicleId, n: LaneIdx, best: &[BestLane], out: &mut NeighbourLane) {
         let v = &self.veh[id as usize];
         let back = v.pos - v.length;
         let q = &self.lane_veh[n as usize];
         // front first: the last vehicle whose front is ahead of the back leads, the next one follows
         let split = self.queue_index_behind(n, back, |o, b| o <= b);
-        let leader = if split > 0 {
+        if split > 0 {
             let o = q[split - 1];
-            Some(self.other(o, self.gap_ahead_same_road(id, o)))
+            out.leader = Some(self.other(o, self.gap_ahead_same_road(id, o)));
         } else {
             let nl = self.lane_at(n as usize);
-            best[nl.index as usize].next_link.and_then(|link| {
+            out.leader = best[nl.index as usize].next_link.and_then(|link| {
                 let lk = self.link_at(link as usize);
                 self.first_ahead(id, &[lk.via_lane, lk.to_lane], nl.length - v.pos)
-            })
-        };
-        let follower = if let Some(&o) = q.get(split) {
+            });
+        }
+        if let Some(&o) = q.get(split) {
             let ov = &self.veh[o as usize];
-            Some(self.other(o, back - ov.pos - self.types[ov.vtype as usize].min_gap))
+            out.follower =
+                Some(self.other(o, back - ov.pos - self.types[ov.vtype as usize].min_gap));
         } else {
             // behind the lane's start: the first vehicle on a connection into it, or on that connection's lane
             let mut found: Option<Other> = None;
@@ -483,9 +492,8 @@ impl Simulation {
                     }
                 }
             }
-            found
-        };
-        NeighbourLane { leader, follower }
+            out.follower = found;
+        }
     }
 
     /// The index in lane `l`'s queue (front first, positions falling) of its first vehicle whose position `p`
