@@ -34,6 +34,9 @@ pub(super) struct LcScratch {
     lanes: Vec<LaneIdx>,
     cands: Vec<VehicleId>,
     dens: Vec<f64>,
+    /// Per lane index: the vehicles visited so far in the pass that are on it now (at a vehicle's turn, mostly its
+    /// index in its lane's queue: the pass goes front to back).
+    visited: Vec<usize>,
     blocked: Vec<(Option<VehicleId>, Option<VehicleId>)>,
     best_lanes: Vec<LaneQ>,
     next_occupation: NextOccupation,
@@ -151,6 +154,7 @@ impl Simulation {
                 lanes,
                 cands,
                 dens,
+                visited,
                 blocked,
                 best_lanes,
                 next_occupation,
@@ -174,10 +178,14 @@ impl Simulation {
             });
             dens.clear();
             dens.resize(lanes.len(), 0.0);
+            visited.clear();
+            visited.resize(lanes.len(), 0);
             blocked.clear();
             blocked.resize(lanes.len(), (None, None));
             for &id in cands.iter() {
-                let final_index = self.change_one(id, dens, blocked, best_lanes, next_occupation);
+                let final_index =
+                    self.change_one(id, dens, visited, blocked, best_lanes, next_occupation);
+                visited[final_index] += 1;
                 let v = &self.veh[id as usize];
                 dens[final_index] += v.length + self.types[v.vtype as usize].min_gap;
             }
@@ -190,6 +198,7 @@ impl Simulation {
         &mut self,
         id: VehicleId,
         dens: &[f64],
+        visited: &[usize],
         blocked: &mut [(Option<VehicleId>, Option<VehicleId>)],
         best_lanes: &mut Vec<LaneQ>,
         next_occupation: &mut NextOccupation,
@@ -267,7 +276,7 @@ impl Simulation {
             blocked_ahead: BlockedAhead::default(),
             road_has_lane_changer: true,
         };
-        s.leader = self.own_leader(id);
+        s.leader = self.own_leader(id, visited[index]);
         if let Some(n) = side_lane(l_right) {
             self.neighbours(id, n, best, s.right.insert(NeighbourLane::default()));
         }
@@ -416,11 +425,16 @@ impl Simulation {
         ov.pos - ov.length - v.pos - self.types[v.vtype as usize].min_gap
     }
 
-    /// The leader on the own lane, or across its end along the route.
-    fn own_leader(&self, id: VehicleId) -> Option<Other> {
+    /// The leader on the own lane, or across its end along the route; `guess`: where `id` likely is in its lane's
+    /// queue (taken when it is there, else searched).
+    fn own_leader(&self, id: VehicleId, guess: usize) -> Option<Other> {
         let v = &self.veh[id as usize];
         let q = &self.lane_veh[v.lane as usize];
-        let qi = self.index_in_lane(id, v.lane)?;
+        let qi = if q.get(guess) == Some(&id) {
+            guess
+        } else {
+            self.index_in_lane(id, v.lane)?
+        };
         if qi > 0 {
             let o = q[qi - 1];
             return Some(self.other(o, self.gap_ahead_same_road(id, o)));
