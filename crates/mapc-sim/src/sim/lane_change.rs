@@ -166,19 +166,14 @@ impl Simulation {
             lanes.extend_from_slice(&self.net.road_lanes[r]);
             // SUMO's findCandidate: the largest position first; the right lane first on a tie
             cands.clear();
-            cands.extend(
-                lanes
-                    .iter()
-                    .flat_map(|&l| self.lane_veh[l as usize].iter().copied()),
-            );
-            cands.sort_by(|&a, &b| {
-                let (va, vb) = (&self.veh[a as usize], &self.veh[b as usize]);
-                vb.pos.total_cmp(&va.pos).then(
-                    self.lane_at(va.lane as usize)
-                        .index
-                        .cmp(&self.lane_at(vb.lane as usize).index),
-                )
-            });
+            if !self.merge_two_lanes(lanes, cands) {
+                cands.extend(
+                    lanes
+                        .iter()
+                        .flat_map(|&l| self.lane_veh[l as usize].iter().copied()),
+                );
+                cands.sort_by(|&a, &b| self.candidate_order(a, b));
+            }
             dens.clear();
             dens.resize(lanes.len(), 0.0);
             visited.clear();
@@ -194,6 +189,54 @@ impl Simulation {
             }
         }
         self.lc_scratch = scratch;
+    }
+
+    /// The candidates' order on a road of two lanes, by merging the lanes' queues (each front first) into
+    /// `cands`: the stable sort's order when each queue is ordered as the sort orders it. Returns false, leaving
+    /// `cands` empty, on another number of lanes or a queue out of that order (then the caller sorts).
+    fn merge_two_lanes(&self, lanes: &[LaneIdx], cands: &mut Vec<VehicleId>) -> bool {
+        let &[a, b] = lanes else { return false };
+        let qa: &[VehicleId] = &self.lane_veh[a as usize];
+        let qb: &[VehicleId] = &self.lane_veh[b as usize];
+        let pos = |o: VehicleId| self.veh[o as usize].pos;
+        let ordered = |q: &[VehicleId]| {
+            q.windows(2)
+                .all(|w| pos(w[0]).total_cmp(&pos(w[1])).is_ge())
+        };
+        if !ordered(qa) || !ordered(qb) {
+            return false;
+        }
+        // on a tie of positions, the lane of the lower index first
+        let a_first_on_tie = self.lane_at(a as usize).index < self.lane_at(b as usize).index;
+        let (mut i, mut j) = (0, 0);
+        while i < qa.len() && j < qb.len() {
+            let order = pos(qa[i]).total_cmp(&pos(qb[j]));
+            if order.is_gt() || (order.is_eq() && a_first_on_tie) {
+                cands.push(qa[i]);
+                i += 1;
+            } else {
+                cands.push(qb[j]);
+                j += 1;
+            }
+        }
+        cands.extend_from_slice(&qa[i..]);
+        cands.extend_from_slice(&qb[j..]);
+        debug_assert!({
+            let mut sorted: Vec<VehicleId> = qa.iter().chain(qb).copied().collect();
+            sorted.sort_by(|&x, &y| self.candidate_order(x, y));
+            sorted == *cands
+        });
+        true
+    }
+
+    /// SUMO's findCandidate order: the largest position first; the right lane first on a tie.
+    fn candidate_order(&self, a: VehicleId, b: VehicleId) -> std::cmp::Ordering {
+        let (va, vb) = (&self.veh[a as usize], &self.veh[b as usize]);
+        vb.pos.total_cmp(&va.pos).then(
+            self.lane_at(va.lane as usize)
+                .index
+                .cmp(&self.lane_at(vb.lane as usize).index),
+        )
     }
 
     /// One vehicle's turn; returns the index of the lane it ends on.
