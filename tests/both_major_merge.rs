@@ -19,7 +19,11 @@ fn vehicles_beside_each_other_at_a_both_major_merge_are_not_a_collision() {
         "-o",
         corridor.to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let out = run_mapc(&[
         "window",
         corridor.to_str().unwrap(),
@@ -29,7 +33,11 @@ fn vehicles_beside_each_other_at_a_both_major_merge_are_not_a_collision() {
         "-o",
         window.to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let out = run_mapc(&[
         "sim",
         "--scenario",
@@ -42,7 +50,14 @@ fn vehicles_beside_each_other_at_a_both_major_merge_are_not_a_collision() {
     assert!(out.status.success(), "{stderr}");
     assert!(!stderr.contains("collision"), "{stderr}");
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(report["runs"].as_array().map(Vec::len), Some(3), "{report:#}");
-    assert!(report["outflow"]["mean"].as_f64().unwrap() > 1000.0, "{report:#}");
+    assert_eq!(
+        report["runs"].as_array().map(Vec::len),
+        Some(3),
+        "{report:#}"
+    );
+    assert!(
+        report["outflow"]["mean"].as_f64().unwrap() > 1000.0,
+        "{report:#}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
