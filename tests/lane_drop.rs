@@ -3,15 +3,10 @@
 
 mod common;
 
-use common::{assert_success, mapc_command as mapc, scratch_dir};
+use common::{assert_success, mapc_command as mapc, mapc_json, scratch_dir};
 
 fn sim_json(scenario: &str, seeds: &str) -> serde_json::Value {
-    let out = mapc()
-        .args(["sim", "--scenario", scenario, "--seeds", seeds, "--json"])
-        .output()
-        .unwrap();
-    assert_success(&out);
-    serde_json::from_slice(&out.stdout).unwrap()
+    mapc_json(&["sim", "--scenario", scenario, "--seeds", seeds, "--json"])
 }
 
 /// Every vehicle that departs on the lane that ends must leave it by a strategic change before the drop, and no
