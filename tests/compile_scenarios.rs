@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 mod common;
 
-use common::{PAPER_VIA, check_golden, root, run_mapc};
+use common::{PAPER_VIA, check_golden, mapc_json, root, run_mapc};
 
 fn scratch(name: &str) -> PathBuf {
     common::scratch_dir(&format!("compile-{name}"))
@@ -20,13 +20,6 @@ fn mapc(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stdout).into_owned(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
-}
-
-fn mapc_json(args: &[&str]) -> Value {
-    let (code, stdout, stderr) = mapc(args);
-    assert_eq!(code, 0, "mapc {args:?} failed: {stderr}");
-    serde_json::from_str(&stdout)
-        .unwrap_or_else(|e| panic!("mapc {args:?}: not JSON ({e}): {stdout}"))
 }
 
 /// Compare with `tests/golden/<map>/<name>.json`, leaving out the paths of written files.

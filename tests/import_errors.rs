@@ -1,18 +1,12 @@
 //! Bad input to `mapc import`: one clear message naming the file and the place, exit code 2, never a panic.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use common::{fresh_path, mapc_command, root, scratch_dir};
+use std::path::{Path, PathBuf};
 
 fn scratch(name: &str, bytes: &[u8]) -> PathBuf {
-    // under target/ (Cargo's folder for integration tests' files), not the system's temporary folder
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("mapc-import-errors-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
+    let p = scratch_dir("import-errors").join(name);
     std::fs::write(&p, bytes).unwrap();
     p
 }
@@ -24,11 +18,8 @@ fn fails_with(file: &Path, expected: &[&str]) -> String {
 
 /// Run `mapc COMMAND FILE -o OUT`; expect exit 2, a message with every one of `expected`, and no OUT.
 fn command_fails_with(command: &str, file: &Path, expected: &[&str]) -> String {
-    let out_file = std::env::temp_dir().join(format!(
-        "mapc-import-errors-{}-never.graph.json",
-        std::process::id()
-    ));
-    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+    let out_file = fresh_path("import-errors-never").with_extension("graph.json");
+    let out = mapc_command()
         .args([
             command,
             file.to_str().unwrap(),
@@ -154,7 +145,7 @@ fn net_whose_connection_names_an_unknown_edge() {
 
 #[test]
 fn bad_options_are_errors_too() {
-    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+    let out = mapc_command()
         .args([
             "import",
             "maps/i696.osm",
@@ -168,7 +159,7 @@ fn bad_options_are_errors_too() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no road of the chosen highway classes"));
-    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+    let out = mapc_command()
         .args([
             "import",
             "maps/i696.osm",
@@ -207,7 +198,7 @@ fn a_duplicate_node_id_is_an_error_unless_it_is_the_same_node() {
     // The very same node twice is read, and counted.
     let twice = text.replacen(node, &format!("{node}{node}"), 1);
     let file = scratch("same_node_twice.osm", twice.as_bytes());
-    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+    let out = mapc_command()
         .args(["import", file.to_str().unwrap(), "--json", "-o"])
         .arg(file.with_extension("graph.json"))
         .output()
@@ -339,7 +330,7 @@ fn a_sumo_edge_with_a_gap_in_its_lane_indices_is_an_error() {
 #[test]
 fn a_graph_file_with_bad_lanes_is_an_error_naming_the_element() {
     let good = scratch("us_merge.graph.json", b"");
-    let out = Command::new(env!("CARGO_BIN_EXE_mapc"))
+    let out = mapc_command()
         .args([
             "import",
             root().join("maps/us_merge.net.xml").to_str().unwrap(),

@@ -3,15 +3,10 @@
 
 mod common;
 
-use common::{assert_success, mapc_command as mapc, scratch_dir};
+use common::{assert_success, mapc_command as mapc, mapc_json, scratch_dir};
 
 fn sim_json(scenario: &str, seeds: &str) -> serde_json::Value {
-    let out = mapc()
-        .args(["sim", "--scenario", scenario, "--seeds", seeds, "--json"])
-        .output()
-        .unwrap();
-    assert_success(&out);
-    serde_json::from_slice(&out.stdout).unwrap()
+    mapc_json(&["sim", "--scenario", scenario, "--seeds", seeds, "--json"])
 }
 
 /// Every vehicle that departs on the lane that ends must leave it by a strategic change before the drop, and no
@@ -97,6 +92,87 @@ fn a_depart_lane_the_road_does_not_have_is_refused_with_the_file_and_key() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
+    assert!(!dir.join("sumo").exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `depart_lane` `free` and `random`: the runs repeat whatever the thread count, and the SUMO export writes
+/// them as SUMO's `departLane` values.
+#[test]
+fn free_and_random_depart_lanes_run_deterministically_and_export_as_sumo_values() {
+    let dir = scratch_dir("depart-lane-modes");
+    for mode in ["free", "random"] {
+        let path = format!("scenarios/lane_drop_{mode}.toml");
+        let v = sim_json(&path, "2");
+        let one = mapc()
+            .args([
+                "sim",
+                "--scenario",
+                &path,
+                "--seeds",
+                "2",
+                "--json",
+                "--threads",
+                "1",
+            ])
+            .output()
+            .unwrap();
+        assert_success(&one);
+        let one: serde_json::Value = serde_json::from_slice(&one.stdout).unwrap();
+        assert_eq!(one["runs"], v["runs"], "{mode}");
+        for r in v["runs"].as_array().unwrap() {
+            assert!(r["departed"].as_u64().unwrap() > 800, "{mode}: {r}");
+        }
+        let out = dir.join(mode);
+        let export = mapc()
+            .args(["export", &path, "--sumo", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_success(&export);
+        let routes = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| p.to_string_lossy().ends_with(".rou.xml"))
+            .expect("a routes file");
+        let text = std::fs::read_to_string(routes).unwrap();
+        assert!(
+            text.contains(&format!("departLane=\"{mode}\"")),
+            "{mode}: {text}"
+        );
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A `depart_lane` that is none of SUMO's values mapc knows is refused when the scenario loads, naming the file,
+/// the key and the flow, exit code 2.
+#[test]
+fn an_unknown_depart_lane_is_refused_with_the_file_key_and_flow() {
+    let dir = scratch_dir("depart-lane-unknown");
+    let path = dir.join("unknown_lane.toml");
+    let mut scenario = mapc_scenario::Scenario::lane_drop();
+    scenario.flows[2].depart_lane = Some("allowed_free".into());
+    scenario.save(&path).unwrap();
+    for args in [
+        vec!["sim", "--scenario", path.to_str().unwrap()],
+        vec![
+            "export",
+            path.to_str().unwrap(),
+            "--sumo",
+            dir.join("sumo").to_str().unwrap(),
+        ],
+    ] {
+        let out = mapc().args(&args).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("unknown_lane.toml")
+                && err.contains("flows[2].depart_lane")
+                && err.contains("`lane2`")
+                && err.contains("`allowed_free`")
+                && err.lines().filter(|l| !l.trim().is_empty()).count() == 1,
+            "{err}"
+        );
+    }
     assert!(!dir.join("sumo").exists());
     std::fs::remove_dir_all(dir).unwrap();
 }

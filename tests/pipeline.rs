@@ -1,14 +1,13 @@
 //! End to end: `mapc pipeline` on the shipped I-696 map writes every stage's file and evaluates the shipped policy.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
+
+use common::{fresh_path, mapc_command};
 
 #[test]
 fn pipeline_runs_every_stage_on_the_real_map() {
-    let out = std::env::temp_dir().join(format!("mapc-pipeline-{}", std::process::id()));
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let run = Command::new(env!("CARGO_BIN_EXE_mapc"))
-        .current_dir(root)
+    let out = fresh_path("pipeline");
+    let run = mapc_command()
         .args(["pipeline", "--seeds", "3", "--json", "-o"])
         .arg(&out)
         .output()
@@ -57,10 +56,8 @@ fn pipeline_runs_every_stage_on_the_real_map() {
 
 #[test]
 fn pipeline_names_a_missing_map() {
-    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("mapc-pipeline-missing");
-    std::fs::remove_dir_all(&out).ok();
-    let run = Command::new(env!("CARGO_BIN_EXE_mapc"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let out = fresh_path("pipeline-missing");
+    let run = mapc_command()
         .args(["pipeline", "maps/nonesuch.osm", "-o"])
         .arg(&out)
         .output()
@@ -75,11 +72,8 @@ fn pipeline_names_a_missing_map() {
 /// corridor, cuts a window at every merge that fits, says so, and runs to the evaluation.
 #[test]
 fn pipeline_on_another_map_takes_the_default_corridor() {
-    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("mapc-pipeline-rongwu-{}", std::process::id()));
-    std::fs::remove_dir_all(&out).ok();
-    let run = Command::new(env!("CARGO_BIN_EXE_mapc"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let out = fresh_path("pipeline-rongwu");
+    let run = mapc_command()
         .args(["pipeline", "maps/rongwu.net.xml", "--seeds", "2", "-o"])
         .arg(&out)
         .output()
@@ -127,11 +121,8 @@ fn pipeline_on_another_map_takes_the_default_corridor() {
 /// cut with its lanes, vehicles changing lanes in the run, one lane drawn in the time-space diagram.
 #[test]
 fn pipeline_keeps_the_lanes_end_to_end() {
-    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("mapc-pipeline-lanes-{}", std::process::id()));
-    std::fs::remove_dir_all(&out).ok();
-    let run = Command::new(env!("CARGO_BIN_EXE_mapc"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let out = fresh_path("pipeline-lanes");
+    let run = mapc_command()
         .args([
             "pipeline",
             "--keep-lanes",

@@ -4,27 +4,9 @@
 
 mod common;
 
-use common::{assert_success, root, run_mapc, scratch_dir};
+use common::{assert_success, mapc_json as json_of, refused, root, run_mapc, scratch_dir};
 use serde_json::Value;
 use std::path::Path;
-
-fn json_of(args: &[&str]) -> Value {
-    let out = run_mapc(args);
-    assert_success(&out);
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
-/// Run and expect exit code 2 with a one-line message containing every one of `expected`.
-fn refused(args: &[&str], expected: &[&str]) -> String {
-    let out = run_mapc(args);
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert_eq!(out.status.code(), Some(2), "mapc {args:?}: {stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    for e in expected {
-        assert!(stderr.contains(e), "expected `{e}` in: {stderr}");
-    }
-    stderr
-}
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()

@@ -47,8 +47,7 @@ fn sim_json_has_mean_and_ci_per_metric() {
 
 #[test]
 fn sim_trace_writes_the_csv_header_and_rows() {
-    let dir = std::env::temp_dir().join(format!("mapc-sim-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch_dir("sim-cli-trace");
     let trace = dir.join("trace.csv");
     let out = mapc()
         .args([
@@ -164,13 +163,7 @@ fn bench_measures_sumo_beside_mapc_or_says_it_is_absent() {
 
 /// The shipped Simple Merge with `edit` applied to its text, written to a scratch file.
 fn edited_simple_merge(name: &str, edit: impl Fn(String) -> String) -> std::path::PathBuf {
-    let dir = common::scratch_dir(name);
-    let text = std::fs::read_to_string(common::root().join("scenarios/simple_merge.toml")).unwrap();
-    let edited = edit(text.clone());
-    assert_ne!(edited, text, "the edit changed nothing");
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, edited).unwrap();
-    path
+    common::edited_scenario("simple_merge.toml", name, edit)
 }
 
 /// `mapc ARGS` with its address space limited to 1 GiB (a machine has 24 GB: a run that grows with its demand

@@ -1,19 +1,12 @@
 //! `mapc render` and `mapc export` on the real I-696 map and the Simple Merge, and their errors.
 
 use mapc_viz::pngstats::read_png;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Output;
 
 mod common;
 
-use common::run_mapc as mapc;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mapc-viz-e2e-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{run_mapc as mapc, scratch_dir};
 
 fn json_of(out: &Output) -> serde_json::Value {
     assert!(
@@ -31,7 +24,7 @@ fn s(p: &Path) -> &str {
 
 #[test]
 fn i696_renders_to_a_real_png() {
-    let dir = temp_dir("i696-png");
+    let dir = scratch_dir("i696-png");
     let png = dir.join("i696.png");
     let summary = json_of(&mapc(&["render", "maps/i696.osm", "-o", s(&png), "--json"]));
     let merges = summary["merges"].as_u64().unwrap();
@@ -57,7 +50,7 @@ fn i696_renders_to_a_real_png() {
 
 #[test]
 fn i696_exports_to_geojson_in_michigan() {
-    let dir = temp_dir("i696-geojson");
+    let dir = scratch_dir("i696-geojson");
     let out = dir.join("i696.geojson");
     let summary = json_of(&mapc(&[
         "export",
@@ -106,7 +99,7 @@ fn i696_exports_to_geojson_in_michigan() {
 
 #[test]
 fn simple_merge_renders_svg_and_exports_local_metres() {
-    let dir = temp_dir("merge");
+    let dir = scratch_dir("merge");
     let svg = dir.join("merge.svg");
     let out = mapc(&[
         "render",
@@ -135,7 +128,7 @@ fn simple_merge_renders_svg_and_exports_local_metres() {
 
 #[test]
 fn bad_map_requests_exit_2_with_the_reason() {
-    let dir = temp_dir("bad");
+    let dir = scratch_dir("bad");
     let cases: [(Vec<String>, &str); 4] = [
         (
             vec![

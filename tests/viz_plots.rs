@@ -2,18 +2,11 @@
 
 use mapc_viz::pngstats::{count_near, read_png};
 use std::fmt::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 mod common;
 
-use common::run_mapc as mapc;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mapc-viz-e2e-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{run_mapc as mapc, scratch_dir};
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -46,7 +39,7 @@ fn wave_trace() -> String {
 
 #[test]
 fn timespace_diagram_shows_the_jam() {
-    let dir = temp_dir("ts");
+    let dir = scratch_dir("ts");
     let trace = dir.join("trace.csv");
     std::fs::write(&trace, wave_trace()).unwrap();
     let png = dir.join("ts.png");
@@ -83,7 +76,7 @@ fn timespace_diagram_shows_the_jam() {
 
 #[test]
 fn bad_traces_exit_2_naming_file_line_and_column() {
-    let dir = temp_dir("ts-bad");
+    let dir = scratch_dir("ts-bad");
     let trace = dir.join("trace.csv");
     let png = dir.join("ts.png");
     let mut text = wave_trace();
@@ -118,7 +111,7 @@ fn bad_traces_exit_2_naming_file_line_and_column() {
 
 #[test]
 fn training_curves_of_two_runs_with_a_baseline() {
-    let dir = temp_dir("training");
+    let dir = scratch_dir("training");
     for (run, rows) in [("a", 30), ("b", 20)] {
         let d = dir.join(run);
         std::fs::create_dir_all(&d).unwrap();

@@ -47,6 +47,17 @@ pub fn scratch_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// A path of this test process under Cargo's folder for integration tests' files with nothing there yet, for a
+/// command that makes its output folder itself.
+pub fn fresh_path(name: &str) -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mapc-test-{name}-{}", std::process::id()));
+    if path.exists() {
+        std::fs::remove_dir_all(&path).unwrap();
+    }
+    path
+}
+
 /// Whether golden files are being rewritten (`MAPC_BLESS=1`); never in CI.
 pub fn blessing() -> bool {
     let bless = std::env::var_os("MAPC_BLESS").is_some_and(|v| !v.is_empty() && v != "0");
@@ -87,4 +98,45 @@ pub fn assert_success(out: &Output) {
         "mapc failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// Run `mapc ARGS`, expect success, and read its standard output as JSON.
+pub fn mapc_json(args: &[&str]) -> serde_json::Value {
+    let out = run_mapc(args);
+    assert!(
+        out.status.success(),
+        "mapc {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "mapc {args:?}: not JSON ({e}): {}",
+            String::from_utf8_lossy(&out.stdout)
+        )
+    })
+}
+
+/// Run `mapc ARGS` and expect it refused: exit code 2, no panic, and every one of `expected` in its message,
+/// which is returned.
+pub fn refused(args: &[&str], expected: &[&str]) -> String {
+    let out = run_mapc(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "mapc {args:?}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    for e in expected {
+        assert!(stderr.contains(e), "expected `{e}` in: {stderr}");
+    }
+    stderr
+}
+
+/// The shipped scenario `scenarios/<shipped>` with `edit` applied to its text, written as `<name>.toml` in a
+/// scratch folder of its own (the edit must change something).
+pub fn edited_scenario(shipped: &str, name: &str, edit: impl Fn(String) -> String) -> PathBuf {
+    let dir = scratch_dir(name);
+    let text = std::fs::read_to_string(root().join("scenarios").join(shipped)).unwrap();
+    let edited = edit(text.clone());
+    assert_ne!(edited, text, "the edit changed nothing");
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, edited).unwrap();
+    path
 }

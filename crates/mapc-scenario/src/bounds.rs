@@ -14,19 +14,39 @@ pub fn entry_capacity_vph(step_s: f64) -> f64 {
 }
 
 /// The key of a flow's entry in [`check_demand`]: the road, or the road and lane for a flow that departs on one
-/// lane given by its index (each entry lane takes its own vehicle per step).
+/// lane given by its index (each entry lane takes its own vehicle per step), or the road's lanes together for a
+/// flow whose lane is chosen at insertion (`random`, `free`).
 pub fn entry_key(road: &str, depart_lane: Option<&str>) -> String {
+    if departs_on_any_lane(depart_lane) {
+        return format!("{road} (any lane)");
+    }
     match depart_lane.and_then(|l| l.parse::<u8>().ok()) {
         Some(lane) => format!("{road} lane {lane}"),
         None => road.to_string(),
     }
 }
 
+/// Whether a flow's `depart_lane` lets each vehicle enter on any lane of its road (`random`, `free`).
+pub fn departs_on_any_lane(depart_lane: Option<&str>) -> bool {
+    matches!(depart_lane, Some("random" | "free"))
+}
+
+/// How many lanes of its entry road a flow may depart on: all of them for `random` and `free`, else one.
+pub fn entry_lanes(depart_lane: Option<&str>, road_lanes: usize) -> u32 {
+    if departs_on_any_lane(depart_lane) {
+        road_lanes.max(1) as u32
+    } else {
+        1
+    }
+}
+
 /// One flow as the demand check sees it.
 pub struct FlowDemand<'a> {
     pub id: &'a str,
-    /// What identifies the entry road (flows with the same key share its one insertion per step).
+    /// What identifies the entry road (flows with the same key share its insertions per step).
     pub entry: String,
+    /// How many lanes the entry has, each taking one vehicle per step ([`entry_lanes`]).
+    pub lanes: u32,
     pub vehs_per_hour: f64,
 }
 
@@ -39,14 +59,15 @@ pub struct Refusal {
 
 /// Flows entering at the same road must together stay within one insertion per step.
 pub fn check_demand(flows: &[FlowDemand], step_s: f64) -> Result<(), Refusal> {
-    let capacity = entry_capacity_vph(step_s);
-    let mut per_entry: BTreeMap<&str, (f64, Vec<&str>)> = BTreeMap::new();
+    let mut per_entry: BTreeMap<&str, (f64, Vec<&str>, u32)> = BTreeMap::new();
     for f in flows {
         let e = per_entry.entry(&f.entry).or_default();
         e.0 += f.vehs_per_hour;
         e.1.push(f.id);
+        e.2 = e.2.max(f.lanes);
     }
-    for (entry, (total, ids)) in per_entry {
+    for (entry, (total, ids, lanes)) in per_entry {
+        let capacity = entry_capacity_vph(step_s) * lanes.max(1) as f64;
         // a relative tolerance: 7200 veh/h split over several flows may sum a hair above 7200
         if total > capacity * (1.0 + 1e-9) {
             let names = ids
@@ -62,8 +83,13 @@ pub fn check_demand(flows: &[FlowDemand], step_s: f64) -> Result<(), Refusal> {
             return Err(Refusal {
                 key: "flows".into(),
                 message: format!(
-                    "{what} at entry road {entry}, which takes at most one vehicle per {step_s} s step \
-                     ({capacity} veh/h); the rest could only wait to enter"
+                    "{what} at entry road {entry}, which takes at most {} per {step_s} s step \
+                     ({capacity} veh/h); the rest could only wait to enter",
+                    if lanes > 1 {
+                        format!("one vehicle per lane on its {lanes} lanes")
+                    } else {
+                        "one vehicle".to_string()
+                    }
                 ),
             });
         }
@@ -96,6 +122,7 @@ mod tests {
         FlowDemand {
             id,
             entry: entry.into(),
+            lanes: 1,
             vehs_per_hour: vph,
         }
     }
@@ -124,6 +151,28 @@ mod tests {
     }
 
     #[test]
+    fn a_flow_departing_on_any_lane_gets_every_lane_of_its_road() {
+        let key = entry_key("R1", Some("free"));
+        assert_eq!(key, entry_key("R1", Some("random")));
+        assert_ne!(key, entry_key("R1", None));
+        let flow = |vph| FlowDemand {
+            id: "main",
+            entry: key.clone(),
+            lanes: entry_lanes(Some("free"), 3),
+            vehs_per_hour: vph,
+        };
+        assert!(check_demand(&[flow(3.0 * 7200.0)], 0.5).is_ok());
+        let err = check_demand(&[flow(3.0 * 7200.0 + 1.0)], 0.5).unwrap_err();
+        assert!(
+            err.message.contains("one vehicle per lane on its 3 lanes")
+                && err.message.contains("21600 veh/h"),
+            "{err:?}"
+        );
+        assert_eq!(entry_lanes(Some("first"), 3), 1);
+        assert_eq!(entry_lanes(Some("2"), 3), 1);
+    }
+
+    #[test]
     fn flows_on_different_lanes_of_one_road_each_get_a_lane() {
         let lanes: Vec<String> = (0..5)
             .map(|l| entry_key("R1", Some(&l.to_string())))
@@ -133,6 +182,7 @@ mod tests {
             .map(|key| FlowDemand {
                 id: "main",
                 entry: key.clone(),
+                lanes: 1,
                 vehs_per_hour: 2000.0,
             })
             .collect();

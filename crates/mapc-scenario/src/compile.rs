@@ -317,6 +317,13 @@ fn bounded(
         .map(|f| crate::bounds::FlowDemand {
             id: &f.id,
             entry: crate::bounds::entry_key(&f.from, f.depart_lane.as_deref()),
+            lanes: crate::bounds::entry_lanes(
+                f.depart_lane.as_deref(),
+                g.find_roads(&f.from)
+                    .ok()
+                    .and_then(|r| g.road(*r.first()?))
+                    .map_or(1, |r| r.lanes.len()),
+            ),
             vehs_per_hour: f.vehs_per_hour,
         })
         .collect();

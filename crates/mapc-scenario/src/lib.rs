@@ -15,8 +15,9 @@
 //! - **fitted window** (`--fit`): a window cut shorter than its source where the map has less (a 194 m ramp,
 //!   530 m before the merge), each length down to a floor (half the source's by default).
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
-//! - **entry capacity**: one vehicle per step per entry road (`bounds.rs`); demand above it is refused, like a
-//!   horizon past 48 h.
+//! - **entry capacity**: one vehicle per step per entry road, per entry lane for flows departing on a lane index,
+//!   per lane of the road for `random` and `free` (`bounds.rs`); demand above it is refused, like a horizon past
+//!   48 h.
 //! - **allowed range**: every number of a scenario (times, counts, speeds, lengths, driver parameters) lies in
 //!   one (`ranges.rs`), checked on loading; outside it, the key, the value and the range are named.
 //! - **fill time**: the free-flow travel time of the longest route (`timing.rs`); a horizon that leaves too little
@@ -372,6 +373,19 @@ impl ResolvedScenario {
                 }
                 None => None,
             };
+            if let Some(text) = f.depart_lane.as_deref()
+                && !DEPART_LANE_WORDS.contains(&text)
+                && text.parse::<u32>().is_err()
+            {
+                return Err(invalid(
+                    format!("flows[{i}].depart_lane"),
+                    format!(
+                        "flow `{}`: depart_lane `{text}` is not `first`, `best`, `random`, `free` or a lane index \
+                         (0 = rightmost)",
+                        f.id
+                    ),
+                ));
+            }
             if let Some(lane) = f.depart_lane.as_deref().and_then(|l| l.parse::<u32>().ok()) {
                 let lanes = graph.road(from).map_or(0, |r| r.lanes.len());
                 if lane as usize >= lanes {
@@ -396,6 +410,10 @@ impl ResolvedScenario {
             .map(|(f, (from, _))| bounds::FlowDemand {
                 id: &f.id,
                 entry: bounds::entry_key(&from.to_string(), f.depart_lane.as_deref()),
+                lanes: bounds::entry_lanes(
+                    f.depart_lane.as_deref(),
+                    graph.road(*from).map_or(1, |r| r.lanes.len()),
+                ),
                 vehs_per_hour: f.vehs_per_hour,
             })
             .collect();

@@ -15,6 +15,8 @@
 //!   entry road and only counts once inserted. Past 1024 waiting at an entry, further ones are only counted and
 //!   built when they reach the front (`waiting.rs`); records of vehicles long gone are dropped in long runs
 //!   (`vehicle_table.rs`), so memory follows the road, not the demand or the horizon.
+//! - **depart lane**: the entry road's lane a flow's vehicles enter on (SUMO's `departLane`): fixed for the flow
+//!   (`first`, `best`, an index), or chosen at each insertion attempt (`random`, `free`: `sim/lane_choice.rs`).
 //! - **measure point**: a merge whose flow (vehicles entering the road after it) is counted per hour of measured
 //!   time, like the flow past the corridor's end; both besides the paper's whole-horizon outflow.
 //! - **regime**: per merge, the major road, the humans' speed near it against free flow and the queue before it

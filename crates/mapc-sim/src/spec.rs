@@ -70,7 +70,7 @@ pub struct FlowSpec {
     pub depart_lane: DepartLane,
 }
 
-/// SUMO's `departLane` of a flow (those a flow's whole demand can use one entry lane for).
+/// SUMO's `departLane` of a flow.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum DepartLane {
     /// The rightmost lane (SUMO 1.8's default `first`).
@@ -81,30 +81,43 @@ pub enum DepartLane {
     Best,
     /// This lane (0 = rightmost).
     Index(u8),
+    /// A lane of the entry road drawn uniformly from the run's random numbers at every insertion attempt (SUMO's
+    /// `random`).
+    Random,
+    /// The entry road's lane with the least brutto occupancy when the vehicle is inserted, the rightmost on a
+    /// tie (SUMO 1.8's `free` with the default depart position).
+    Free,
 }
 
 impl DepartLane {
-    /// From a scenario's text: `first`, `best` or a lane index.
+    /// From a scenario's text: `first`, `best`, `random`, `free` or a lane index.
     pub fn parse(text: &str) -> Result<DepartLane, String> {
         match text {
             "first" => Ok(DepartLane::First),
             "best" => Ok(DepartLane::Best),
+            "random" => Ok(DepartLane::Random),
+            "free" => Ok(DepartLane::Free),
             _ => text.parse::<u8>().map(DepartLane::Index).map_err(|_| {
                 format!(
-                    "depart_lane `{text}` is not `first`, `best` or a lane index (`random` and `free` are not \
-                     supported yet)"
+                    "depart_lane `{text}` is not `first`, `best`, `random`, `free` or a lane index (0 = rightmost)"
                 )
             }),
         }
     }
 
-    /// The entry road's lane index, or `None` for the best lane.
+    /// The entry road's lane index, or `None` for the best lane; for `random` and `free`, whose lane is chosen
+    /// at each insertion attempt, the rightmost (the lane the vehicle is created on while it waits).
     pub fn start_lane(self) -> Option<u8> {
         match self {
-            DepartLane::First => Some(0),
+            DepartLane::First | DepartLane::Random | DepartLane::Free => Some(0),
             DepartLane::Best => None,
             DepartLane::Index(i) => Some(i),
         }
+    }
+
+    /// Whether the lane is chosen when the vehicle is inserted (`random`, `free`) rather than once for the flow.
+    pub fn chosen_at_insertion(self) -> bool {
+        matches!(self, DepartLane::Random | DepartLane::Free)
     }
 }
 
@@ -251,10 +264,17 @@ impl SimSpec {
                     &f.from.to_string(),
                     match f.depart_lane {
                         DepartLane::Index(lane) => Some(lane.to_string()),
+                        DepartLane::Random => Some("random".to_string()),
+                        DepartLane::Free => Some("free".to_string()),
                         _ => None,
                     }
                     .as_deref(),
                 ),
+                lanes: if f.depart_lane.chosen_at_insertion() {
+                    self.graph.road(f.from).map_or(1, |r| r.lanes.len()) as u32
+                } else {
+                    1
+                },
                 vehs_per_hour: f.vehs_per_hour,
             })
             .collect();

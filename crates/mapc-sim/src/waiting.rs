@@ -55,6 +55,16 @@ impl EntryQueue {
         self.built.pop_front();
     }
 
+    /// The `i`-th built vehicle from the front.
+    pub(crate) fn built_at(&self, i: usize) -> Option<VehicleId> {
+        self.built.get(i).copied()
+    }
+
+    /// Takes out the `i`-th built vehicle (it entered ahead of those before it, on another lane).
+    pub(crate) fn remove_built(&mut self, i: usize) {
+        self.built.remove(i);
+    }
+
     /// The vehicle built for what [`EntryQueue::take_counted`] gave: now the front of the queue.
     pub(crate) fn push_taken(&mut self, id: VehicleId) {
         debug_assert!(self.built.is_empty());

@@ -165,6 +165,8 @@ fn depart_lane(graph: &LaneGraph, f: &FlowSpec) -> String {
         DepartLane::First => "first".into(),
         DepartLane::Best => "best".into(),
         DepartLane::Index(i) => i.to_string(),
+        DepartLane::Random => "random".into(),
+        DepartLane::Free => "free".into(),
     }
 }
 

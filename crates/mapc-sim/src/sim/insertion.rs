@@ -1,5 +1,6 @@
 //! Departures: flows' vehicles created when due and inserted at their entry lane where SUMO's insertion check
-//! allows (at most one per entry lane and step).
+//! allows (at most one per entry lane and step); flows whose lane is chosen at insertion wait at their road
+//! (`lane_choice.rs`).
 
 use super::*;
 
@@ -28,6 +29,17 @@ impl Simulation {
                 if !(depart <= now + 1e-9) || depart >= flow.end_s {
                     break;
                 }
+                if let Some(fl) = &self.flow_lanes[f] {
+                    let re = fl.entry as usize;
+                    if self.road_entries[re].queue.builds_next() {
+                        let id = self.build_flow_vehicle(f);
+                        self.road_entries[re].queue.push_built(id);
+                    } else {
+                        self.road_entries[re].queue.push_counted(f);
+                    }
+                    self.flow_next[f] += 1;
+                    continue;
+                }
                 let entry = self.routes[self.flow_route[f] as usize].lanes[0];
                 let ei = self.entry_lanes.iter().position(|&l| l == entry).unwrap();
                 if self.pending[ei].builds_next() {
@@ -39,6 +51,10 @@ impl Simulation {
                 self.flow_next[f] += 1;
             }
         }
+        // lanes where an insertion failed in this step: no later vehicle is tried there (SUMO's failed-insertion
+        // memory; lanes chosen at insertion are tried after the fixed ones)
+        let mut refused = std::mem::take(&mut self.refused_lanes);
+        refused.clear();
         for ei in 0..self.entry_lanes.len() {
             loop {
                 let id = match self.pending[ei].front_built() {
@@ -56,10 +72,15 @@ impl Simulation {
                 if self.try_insert(id) {
                     self.pending[ei].pop_built();
                 } else {
+                    refused.push(self.entry_lanes[ei]);
                     break;
                 }
             }
         }
+        for re in 0..self.road_entries.len() {
+            self.insert_at_road(re, &mut refused);
+        }
+        self.refused_lanes = refused;
     }
 
     /// A new vehicle of flow `f` (pending until inserted).

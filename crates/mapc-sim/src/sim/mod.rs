@@ -6,6 +6,7 @@ mod accounting;
 mod insertion;
 mod junction;
 mod lane_change;
+mod lane_choice;
 mod lookahead;
 mod moves;
 mod planning;
@@ -14,6 +15,8 @@ mod side_lanes;
 mod table;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_depart_lane;
 #[cfg(test)]
 mod tests_lanes;
 #[cfg(test)]
@@ -74,8 +77,15 @@ pub struct Simulation {
     /// Per entry lane, the vehicles waiting to be inserted, in departure order.
     pending: Vec<EntryQueue>,
     entry_lanes: Vec<LaneIdx>,
+    /// Vehicles of flows whose lane is chosen at insertion (`random`, `free`), waiting at their entry road.
+    road_entries: Vec<lane_choice::RoadEntry>,
+    /// The entry lanes where an insertion failed in this step (kept to reuse its allocation).
+    refused_lanes: Vec<LaneIdx>,
     flow_next: Vec<u64>,
+    /// Per flow, its route (for `random` and `free`: the one from the rightmost lane, until a lane is chosen).
     flow_route: Vec<u32>,
+    /// Per flow whose lane is chosen at insertion, where its vehicles wait and its route from each lane.
+    flow_lanes: Vec<Option<lane_choice::FlowLanes>>,
     in_region: Table<bool>,
     rng: StdRng,
     step: u64,
@@ -134,9 +144,12 @@ impl Simulation {
                 .collect(),
             pending: Vec::new(),
             entry_lanes: Vec::new(),
+            road_entries: Vec::new(),
+            refused_lanes: Vec::new(),
             lane_order: Vec::new(),
             flow_next: vec![0; spec.flows.len()],
             flow_route: Vec::new(),
+            flow_lanes: Vec::new(),
             in_region: Table(vec![true; net.lanes.len()]),
             routes: Table(Vec::new()),
             route_index: std::collections::HashMap::new(),
@@ -218,6 +231,37 @@ impl Simulation {
             }
             let r = sim.add_route(flow.from, flow.to, flow.depart_lane.start_lane())?;
             sim.flow_route.push(r);
+            if flow.depart_lane.chosen_at_insertion() {
+                let lanes = sim.spec.graph.road(flow.from).map_or(0, |r| r.lanes.len());
+                let routes = (0..lanes)
+                    .map(|i| sim.add_route(flow.from, flow.to, Some(i as u8)))
+                    .collect::<Result<Vec<u32>, SimError>>()?;
+                let starts: Vec<LaneIdx> = routes
+                    .iter()
+                    .map(|&r| sim.routes[r as usize].lanes[0])
+                    .collect();
+                let entry = match sim
+                    .road_entries
+                    .iter()
+                    .position(|e| e.lanes == starts && e.mode == flow.depart_lane)
+                {
+                    Some(e) => e,
+                    None => {
+                        sim.road_entries.push(lane_choice::RoadEntry {
+                            mode: flow.depart_lane,
+                            lanes: starts,
+                            queue: EntryQueue::default(),
+                        });
+                        sim.road_entries.len() - 1
+                    }
+                };
+                sim.flow_lanes.push(Some(lane_choice::FlowLanes {
+                    entry: entry as u32,
+                    routes,
+                }));
+                continue;
+            }
+            sim.flow_lanes.push(None);
             let entry = sim.routes[r as usize].lanes[0];
             if !sim.entry_lanes.contains(&entry) {
                 sim.entry_lanes.push(entry);

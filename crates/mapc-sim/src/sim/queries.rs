@@ -414,7 +414,8 @@ impl Simulation {
 
     /// Vehicles waiting at their entry roads.
     pub fn waiting_to_enter(&self) -> usize {
-        self.pending.iter().map(|q| q.len() as usize).sum()
+        let at_roads: u64 = self.road_entries.iter().map(|e| e.queue.len()).sum();
+        self.pending.iter().map(|q| q.len() as usize).sum::<usize>() + at_roads as usize
     }
 
     /// Append this step's rows to a trace ([`crate::TRACE_HEADER`]).

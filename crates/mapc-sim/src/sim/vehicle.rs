@@ -107,20 +107,13 @@ impl Simulation {
         } else {
             t.speed_factor
         };
-        let route_lanes = &self.routes[route as usize].lanes;
-        let free_flow_s: f64 = route_lanes
-            .iter()
-            .map(|&l| {
-                let lane = self.lane_at(l as usize);
-                lane.length / (lane.speed_limit * factor).fmin(t.max_speed)
-            })
-            .sum();
+        let free_flow_s = self.free_flow_time(route, factor, t.max_speed);
         let id = self.veh.len() as VehicleId;
         self.veh.push(Veh {
             vtype: vtype as u16,
             controlled: t.controlled,
             status: VehicleStatus::Pending,
-            lane: route_lanes[0],
+            lane: self.routes[route as usize].lanes[0],
             pos: 0.0,
             speed: 0.0,
             length: t.length,
@@ -138,6 +131,34 @@ impl Simulation {
             lc: None,
         });
         id
+    }
+
+    /// The time to drive `route` at the speed a driver of this speed factor and top speed keeps on each lane.
+    fn free_flow_time(&self, route: u32, factor: f64, max_speed: f64) -> f64 {
+        self.routes[route as usize]
+            .lanes
+            .iter()
+            .map(|&l| {
+                let lane = self.lane_at(l as usize);
+                lane.length / (lane.speed_limit * factor).fmin(max_speed)
+            })
+            .sum()
+    }
+
+    /// Give a waiting vehicle another route (its depart lane chosen at insertion).
+    pub(super) fn set_route(&mut self, id: VehicleId, route: u32) {
+        let v = &self.veh[id as usize];
+        debug_assert_eq!(v.status, VehicleStatus::Pending);
+        if v.route == route {
+            return;
+        }
+        let max_speed = self.type_consts[v.vtype as usize].max_speed;
+        let free_flow_s = self.free_flow_time(route, v.speed_factor, max_speed);
+        let lane = self.routes[route as usize].lanes[0];
+        let v = &mut self.veh[id as usize];
+        v.route = route;
+        v.lane = lane;
+        v.free_flow_s = free_flow_s;
     }
 
     /// Put a vehicle into the network at the back of `lane`.
