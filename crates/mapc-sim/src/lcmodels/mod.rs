@@ -207,9 +207,10 @@ impl Other {
     }
 }
 
-/// The neighbours on a lane next to the ego's: the nearest vehicle ahead of the ego's back and the nearest
-/// behind it (SUMO's `getRealLeader` / `getRealFollower`, which look across the lane's ends; a vehicle that would
-/// be both is only the leader).
+/// The neighbours on a lane next to the ego's: the nearest vehicle whose front is ahead of the ego's front and
+/// the nearest at or behind it, which may drive alongside with a negative gap (SUMO's `getRealLeader` /
+/// `getRealFollower`: the lane changer's last vehicle visited on that lane and its next; across the lane's end
+/// only within the ego's braking distance; a vehicle that would be both is only the leader).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NeighbourLane {
     pub leader: Option<Other>,

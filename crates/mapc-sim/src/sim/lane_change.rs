@@ -11,9 +11,6 @@ use crate::lcmodels::{
 };
 use std::collections::HashMap;
 
-/// How far ahead the leader of a lane is searched across its end (m).
-const LEADER_SEARCH_M: f64 = 300.0;
-
 /// A vehicle's lane-change record between steps.
 #[derive(Clone, Debug, Default)]
 pub(super) struct LcVeh {
@@ -57,7 +54,7 @@ struct NextOccupation {
 #[derive(Clone, Debug, Default)]
 pub(super) struct BestLanesCache {
     index: HashMap<(u32, u32, u16), u32>,
-    store: Vec<Vec<BestLane>>,
+    pub(super) store: Vec<Vec<BestLane>>,
     /// The route after a lane change, by (route, lane of it changed from, lane changed to, vehicle type).
     after_change: HashMap<(u32, u32, LaneIdx, u16), u32>,
 }
@@ -80,7 +77,9 @@ impl Simulation {
     }
 
     /// LC2013's `patch_speed` for a vehicle's next speed between `min` and `max` (`wanted`: the car-following
-    /// speed); on one-lane roads the speed stays `wanted`.
+    /// speed). A lane with no neighbour (a one-lane road, or a junction connection: the SUMO export writes each as
+    /// an internal edge of one lane) has no lane changer in SUMO, whose `patchSpeed` then clears the memory as
+    /// after a change: the speed-gain and keep-right wishes do not survive a junction.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn patch_lc_speed(
         &mut self,
@@ -94,9 +93,7 @@ impl Simulation {
         max: f64,
     ) -> f64 {
         let l = self.lane_at(lane as usize);
-        if l.left.is_none() && l.right.is_none() {
-            return wanted;
-        }
+        let has_lane_changer = l.left.is_some() || l.right.is_some();
         let Some(rec) = self.veh[id as usize].lc.as_deref_mut() else {
             return wanted;
         };
@@ -105,7 +102,7 @@ impl Simulation {
             speed,
             &self.types[vtype],
             desired,
-            true,
+            has_lane_changer,
             rec.best_lane_offset,
             min,
             wanted,
@@ -473,7 +470,7 @@ impl Simulation {
 
     /// The leader on the own lane, or across its end along the route; `guess`: where `id` likely is in its lane's
     /// queue (taken when it is there, else searched).
-    fn own_leader(&self, id: VehicleId, guess: usize) -> Option<Other> {
+    pub(super) fn own_leader(&self, id: VehicleId, guess: usize) -> Option<Other> {
         let v = &self.veh[id as usize];
         let q = &self.lane_veh[v.lane as usize];
         let qi = if q.get(guess) == Some(&id) {
@@ -490,33 +487,58 @@ impl Simulation {
         self.first_ahead(id, lanes, self.lane_at(v.lane as usize).length - v.pos)
     }
 
-    /// The last vehicle on the first occupied lane of `lanes` (which start `seen` m ahead of `id`'s front).
+    /// The last vehicle on the first occupied lane of `lanes` (which start `seen` m ahead of `id`'s front), looked
+    /// for as SUMO's lane changer does past the end of a lane (`getRealLeader`, `getLeaderOnConsecutive`): only
+    /// when the end lies within the ego's braking distance plus min gap, and on the lanes that start within it
+    /// (and the road lane after a junction connection); a vehicle farther ahead is no leader for lane changing.
     fn first_ahead(&self, id: VehicleId, lanes: &[LaneIdx], mut seen: f64) -> Option<Other> {
-        let min_gap = self.types[self.veh[id as usize].vtype as usize].min_gap;
+        let v = &self.veh[id as usize];
+        let p = &self.types[v.vtype as usize];
+        let mut dist = p.brake_gap(v.speed, p.decel, p.tau) + p.min_gap;
+        if seen > dist {
+            return None;
+        }
         for &l in lanes {
-            if seen > LEADER_SEARCH_M {
-                break;
-            }
             if let Some(&o) = self.lane_veh[l as usize].last() {
                 let ov = &self.veh[o as usize];
-                return Some(self.other(o, seen + ov.pos - ov.length - min_gap));
+                return Some(self.other(o, seen + ov.pos - ov.length - p.min_gap));
+            }
+            let lane_max = self.desired_speed(v, l);
+            if lane_max < v.speed {
+                dist = p.brake_gap(lane_max, p.decel, p.tau);
             }
             seen += self.lane_at(l as usize).length;
+            if seen > dist && !matches!(self.lane_at(l as usize).kind, LaneKind::Via(_)) {
+                break;
+            }
         }
         None
     }
 
-    /// Leader and follower of `id` on neighbour lane `n` of its road: the nearest vehicle whose front is ahead
-    /// of `id`'s back, and the nearest behind (across the lane's end along its best continuation, and across its
-    /// start through the connections into it), written into `out`.
+    /// Leader and follower of `id` on neighbour lane `n` of its road, as SUMO's lane changer finds them, written
+    /// into `out`: the leader is the nearest vehicle already visited in this pass (front ahead of `id`'s front),
+    /// the follower the next one, even when it drives alongside (then its gap is negative); across the lane's end
+    /// along its best continuation, and across its start through the connections into it.
     // inlined: its two neighbours are then written where the model reads them, not copied there
     #[inline(always)]
-    fn neighbours(&self, id: VehicleId, n: LaneIdx, best: &[BestLane], out: &mut NeighbourLane) {
+    pub(super) fn neighbours(
+        &self,
+        id: VehicleId,
+        n: LaneIdx,
+        best: &[BestLane],
+        out: &mut NeighbourLane,
+    ) {
         let v = &self.veh[id as usize];
         let back = v.pos - v.length;
         let q = &self.lane_veh[n as usize];
-        // front first: the last vehicle whose front is ahead of the back leads, the next one follows
-        let split = self.queue_index_behind(n, back, |o, b| o <= b);
+        // front first; at the ego's very position, a vehicle on the lane to the right was visited first (the pass
+        // takes the rightmost lane on a tie) and leads, one on the lane to the left follows
+        let n_is_right = self.lane_at(n as usize).index < self.lane_at(v.lane as usize).index;
+        let split = if n_is_right {
+            self.queue_index_behind(n, v.pos, |o, p| o < p)
+        } else {
+            self.queue_index_behind(n, v.pos, |o, p| o <= p)
+        };
         if split > 0 {
             let o = q[split - 1];
             out.leader = Some(self.other(o, self.gap_ahead_same_road(id, o)));

@@ -18,6 +18,8 @@ mod tests;
 #[cfg(test)]
 mod tests_depart_lane;
 #[cfg(test)]
+mod tests_lane_change_view;
+#[cfg(test)]
 mod tests_lanes;
 #[cfg(test)]
 mod tests_side_lanes;
