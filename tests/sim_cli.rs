@@ -409,9 +409,9 @@ fn two_lane_merge_changes_lanes_and_reports_them() {
         .iter()
         .map(|r| r["lane_changes"].as_u64().unwrap())
         .collect();
-    assert_eq!(changes, vec![144, 134, 143], "{v}");
+    assert_eq!(changes, vec![160, 153, 159], "{v}");
     let mean = v["lane_changes"]["mean"].as_f64().unwrap();
-    assert!((mean - 421.0 / 3.0).abs() < 1e-9, "{mean}");
+    assert!((mean - 472.0 / 3.0).abs() < 1e-9, "{mean}");
     assert!(v["lane_changes_per_veh_km"]["mean"].as_f64().unwrap() > 0.1);
     // one-lane roads change no lanes
     let one = mapc()
