@@ -484,21 +484,55 @@ impl Simulation {
         }
         let r = &self.routes[v.route as usize];
         let lanes = &r.lanes.0[v.route_pos as usize + 1..];
-        self.first_ahead(id, lanes, self.lane_at(v.lane as usize).length - v.pos)
+        self.first_ahead(
+            id,
+            lanes.iter().copied(),
+            self.lane_at(v.lane as usize).length - v.pos,
+        )
+    }
+
+    /// The lanes ahead along a lane's best continuation (`roads`, its road lanes), from its link `first` on:
+    /// each junction connection, then the road lane it leads to.
+    fn continuation_lanes<'a>(
+        &'a self,
+        first: LinkIdx,
+        roads: &'a [LaneIdx],
+    ) -> impl Iterator<Item = LaneIdx> + 'a {
+        let mut link = Some(first);
+        // roads[0] is the lane `first` leads to
+        let mut next = 1;
+        std::iter::from_fn(move || {
+            let lk = self.link_at(link.take()? as usize);
+            link = roads.get(next).and_then(|&to| {
+                self.lane_at(lk.to_lane as usize)
+                    .out_links
+                    .iter()
+                    .copied()
+                    .find(|&k| self.link_at(k as usize).to_lane == to)
+            });
+            next += 1;
+            Some([lk.via_lane, lk.to_lane])
+        })
+        .flatten()
     }
 
     /// The last vehicle on the first occupied lane of `lanes` (which start `seen` m ahead of `id`'s front), looked
     /// for as SUMO's lane changer does past the end of a lane (`getRealLeader`, `getLeaderOnConsecutive`): only
     /// when the end lies within the ego's braking distance plus min gap, and on the lanes that start within it
     /// (and the road lane after a junction connection); a vehicle farther ahead is no leader for lane changing.
-    fn first_ahead(&self, id: VehicleId, lanes: &[LaneIdx], mut seen: f64) -> Option<Other> {
+    fn first_ahead(
+        &self,
+        id: VehicleId,
+        lanes: impl IntoIterator<Item = LaneIdx>,
+        mut seen: f64,
+    ) -> Option<Other> {
         let v = &self.veh[id as usize];
         let p = &self.types[v.vtype as usize];
         let mut dist = p.brake_gap(v.speed, p.decel, p.tau) + p.min_gap;
         if seen > dist {
             return None;
         }
-        for &l in lanes {
+        for l in lanes {
             if let Some(&o) = self.lane_veh[l as usize].last() {
                 let ov = &self.veh[o as usize];
                 return Some(self.other(o, seen + ov.pos - ov.length - p.min_gap));
@@ -544,9 +578,10 @@ impl Simulation {
             out.leader = Some(self.other(o, self.gap_ahead_same_road(id, o)));
         } else {
             let nl = self.lane_at(n as usize);
-            out.leader = best[nl.index as usize].next_link.and_then(|link| {
-                let lk = self.link_at(link as usize);
-                self.first_ahead(id, &[lk.via_lane, lk.to_lane], nl.length - v.pos)
+            let nq = &best[nl.index as usize];
+            out.leader = nq.next_link.and_then(|link| {
+                let lanes = self.continuation_lanes(link, &nq.continuation);
+                self.first_ahead(id, lanes, nl.length - v.pos)
             });
         }
         if let Some(&o) = q.get(split) {

@@ -165,3 +165,81 @@ fn the_memory_is_cleared_on_a_junction_connection_and_kept_on_a_road_with_lanes(
         }
     }
 }
+
+#[test]
+fn a_neighbour_leader_is_looked_for_along_the_lanes_best_continuation_past_a_short_road() {
+    // the I-210 window: the acceleration lane's road (92 m) is followed by an 8 m road, then R196; near its end a
+    // neighbour lane's leader may lie two roads ahead, within the braking distance (getLeaderOnConsecutive)
+    let rs = mapc_scenario::ResolvedScenario::load("../../scenarios/i210_window_lanes.toml")
+        .expect("scenario file");
+    let mut sim = Simulation::from_spec(spec_from_scenario(&rs).unwrap(), 0).unwrap();
+    let mut two_roads_ahead = 0;
+    for _ in 0..400 {
+        sim.step().unwrap();
+        let ids: Vec<VehicleId> = sim.active_ids().filter(|&id| on_road(&sim, id)).collect();
+        for id in ids {
+            let (route, route_pos, vtype, lane) = {
+                let v = &sim.veh[id as usize];
+                (v.route, v.route_pos, v.vtype, v.lane)
+            };
+            let k = sim.routes[route as usize].road_k[route_pos as usize] as usize;
+            let best_i = sim.best_lanes_at(route, k, vtype);
+            let best = sim.best_cache.store[best_i as usize].clone();
+            let own = sim.lane_at(lane as usize);
+            for n in [own.right, own.left].into_iter().flatten() {
+                let v = &sim.veh[id as usize];
+                let nl = sim.lane_at(n as usize);
+                if sim.lane_veh[n as usize]
+                    .iter()
+                    .any(|&o| sim.veh[o as usize].pos > v.pos)
+                {
+                    continue;
+                }
+                let Some(link) = best[nl.index as usize].next_link else {
+                    continue;
+                };
+                let first = sim.link_at(link as usize);
+                let next_two = [first.via_lane, first.to_lane];
+                let mut got = NeighbourLane::default();
+                sim.neighbours(id, n, &best, &mut got);
+                let Some(l) = got.leader else {
+                    continue;
+                };
+                let ol = sim.veh[l.id as usize].lane;
+                if ol == n || next_two.contains(&ol) {
+                    continue;
+                }
+                // by hand: the connections and road lanes of the continuation with the distance to each's start
+                let cont = &best[nl.index as usize].continuation;
+                let mut chain = vec![(first.via_lane, nl.length - v.pos)];
+                let mut start = nl.length - v.pos + sim.lane_at(first.via_lane as usize).length;
+                for (j, &c) in cont.iter().enumerate() {
+                    chain.push((c, start));
+                    start += sim.lane_at(c as usize).length;
+                    let Some(&to) = cont.get(j + 1) else { break };
+                    let k = sim
+                        .lane_at(c as usize)
+                        .out_links
+                        .iter()
+                        .copied()
+                        .find(|&k| sim.link_at(k as usize).to_lane == to)
+                        .unwrap();
+                    let via = sim.link_at(k as usize).via_lane;
+                    chain.push((via, start));
+                    start += sim.lane_at(via as usize).length;
+                }
+                let &(_, seen) = chain
+                    .iter()
+                    .find(|&&(c, _)| c == ol)
+                    .expect("on the continuation");
+                let ov = &sim.veh[l.id as usize];
+                let min_gap = sim.types[v.vtype as usize].min_gap;
+                assert!((l.gap - (seen + ov.pos - ov.length - min_gap)).abs() < 1e-9);
+                let p = &sim.types[v.vtype as usize];
+                assert!(nl.length - v.pos <= p.brake_gap(v.speed, p.decel, p.tau) + p.min_gap);
+                two_roads_ahead += 1;
+            }
+        }
+    }
+    assert!(two_roads_ahead > 0);
+}
