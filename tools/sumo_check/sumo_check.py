@@ -146,8 +146,19 @@ def _mean(values):
     return dict(mean=m, ci95=ci, std=sd, n=len(values))
 
 
+def _sumo_lane_changes_per_veh(r):
+    """SUMO's lane changes per vehicle as its --lanechange-output counts them (every change, as mapc counts its
+    own). The TraCI count (a vehicle on the same road in another lane from one step to the next) misses the
+    changes made in the step a vehicle enters a road; it stands in for runs recorded before the output was read."""
+    reasons = r.get("lane_changes_by_reason")
+    if not reasons:
+        return r[LANE_CHANGES]
+    return sum(reasons.values()) / r["departed"] if r["departed"] else 0.0
+
+
 def summary_of_runs(runs, points):
-    out = {key: _mean([r[key] for r in runs]) for key, _ in METRICS}
+    out = {key: _mean([r[key] for r in runs]) for key, _ in METRICS if key != LANE_CHANGES}
+    out[LANE_CHANGES] = _mean([_sumo_lane_changes_per_veh(r) for r in runs])
     for key, _ in points:
         if key.startswith("lc_"):
             out[key] = _mean([_per_veh_reason(r, key) for r in runs])
