@@ -9,6 +9,20 @@ fn sim_json(scenario: &str, seeds: &str) -> serde_json::Value {
     mapc_json(&["sim", "--scenario", scenario, "--seeds", seeds, "--json"])
 }
 
+/// The same on one thread, to compare with the default thread count.
+fn sim_json_one_thread(scenario: &str, seeds: &str) -> serde_json::Value {
+    mapc_json(&[
+        "sim",
+        "--scenario",
+        scenario,
+        "--seeds",
+        seeds,
+        "--json",
+        "--threads",
+        "1",
+    ])
+}
+
 /// Every vehicle that departs on the lane that ends must leave it by a strategic change before the drop, and no
 /// vehicle collides or is left at the lane's end: the run's strategic changes are at least the vehicles of that
 /// lane that got past the drop, and the lane changes by reason add up to the lane changes.
@@ -33,21 +47,7 @@ fn lane_drop_sends_the_ending_lane_over_by_strategic_changes() {
         assert!(outflow > 2000.0, "{r}");
     }
     // the same seeds give the same run, whatever the thread count
-    let one = mapc()
-        .args([
-            "sim",
-            "--scenario",
-            "lane_drop",
-            "--seeds",
-            "3",
-            "--json",
-            "--threads",
-            "1",
-        ])
-        .output()
-        .unwrap();
-    assert_success(&one);
-    let one: serde_json::Value = serde_json::from_slice(&one.stdout).unwrap();
+    let one = sim_json_one_thread("lane_drop", "3");
     assert_eq!(one["runs"], v["runs"]);
 }
 
@@ -104,21 +104,7 @@ fn free_and_random_depart_lanes_run_deterministically_and_export_as_sumo_values(
     for mode in ["free", "random"] {
         let path = format!("scenarios/lane_drop_{mode}.toml");
         let v = sim_json(&path, "2");
-        let one = mapc()
-            .args([
-                "sim",
-                "--scenario",
-                &path,
-                "--seeds",
-                "2",
-                "--json",
-                "--threads",
-                "1",
-            ])
-            .output()
-            .unwrap();
-        assert_success(&one);
-        let one: serde_json::Value = serde_json::from_slice(&one.stdout).unwrap();
+        let one = sim_json_one_thread(&path, "2");
         assert_eq!(one["runs"], v["runs"], "{mode}");
         for r in v["runs"].as_array().unwrap() {
             assert!(r["departed"].as_u64().unwrap() > 800, "{mode}: {r}");

@@ -3,12 +3,24 @@
 //! memory cleared on a lane without a lane changer (a junction connection). On the two-lane merge.
 
 use super::*;
+use crate::best_lanes::BestLane;
 use crate::lcmodels::NeighbourLane;
 use crate::scenario::spec_from_scenario;
 
 fn two_lane_merge(seed: u64) -> Simulation {
     let rs = mapc_scenario::ResolvedScenario::load("two_lane_merge").expect("built-in scenario");
     Simulation::from_spec(spec_from_scenario(&rs).expect("simulator spec"), seed).unwrap()
+}
+
+/// The best lanes the pass hands LC2013 for `id` where it is now.
+fn best_lanes_now(sim: &mut Simulation, id: VehicleId) -> Vec<BestLane> {
+    let (route, route_pos, vtype) = {
+        let v = &sim.veh[id as usize];
+        (v.route, v.route_pos, v.vtype)
+    };
+    let k = sim.routes[route as usize].road_k[route_pos as usize] as usize;
+    let best_i = sim.best_lanes_at(route, k, vtype);
+    sim.best_cache.store[best_i as usize].clone()
 }
 
 fn on_road(sim: &Simulation, id: VehicleId) -> bool {
@@ -26,14 +38,8 @@ fn a_neighbour_alongside_is_the_follower_not_the_leader() {
         sim.step().unwrap();
         let ids: Vec<VehicleId> = sim.active_ids().filter(|&id| on_road(&sim, id)).collect();
         for id in ids {
-            let (route, route_pos, vtype, lane) = {
-                let v = &sim.veh[id as usize];
-                (v.route, v.route_pos, v.vtype, v.lane)
-            };
-            let k = sim.routes[route as usize].road_k[route_pos as usize] as usize;
-            let best_i = sim.best_lanes_at(route, k, vtype);
-            let best = sim.best_cache.store[best_i as usize].clone();
-            let own = sim.lane_at(lane as usize);
+            let best = best_lanes_now(&mut sim, id);
+            let own = sim.lane_at(sim.veh[id as usize].lane as usize);
             for n in [own.right, own.left].into_iter().flatten() {
                 let mut got = NeighbourLane::default();
                 sim.neighbours(id, n, &best, &mut got);
@@ -178,14 +184,8 @@ fn a_neighbour_leader_is_looked_for_along_the_lanes_best_continuation_past_a_sho
         sim.step().unwrap();
         let ids: Vec<VehicleId> = sim.active_ids().filter(|&id| on_road(&sim, id)).collect();
         for id in ids {
-            let (route, route_pos, vtype, lane) = {
-                let v = &sim.veh[id as usize];
-                (v.route, v.route_pos, v.vtype, v.lane)
-            };
-            let k = sim.routes[route as usize].road_k[route_pos as usize] as usize;
-            let best_i = sim.best_lanes_at(route, k, vtype);
-            let best = sim.best_cache.store[best_i as usize].clone();
-            let own = sim.lane_at(lane as usize);
+            let best = best_lanes_now(&mut sim, id);
+            let own = sim.lane_at(sim.veh[id as usize].lane as usize);
             for n in [own.right, own.left].into_iter().flatten() {
                 let v = &sim.veh[id as usize];
                 let nl = sim.lane_at(n as usize);
