@@ -320,11 +320,14 @@ impl Simulation {
             road_has_lane_changer: true,
         };
         s.leader = self.own_leader(id, visited[index]);
+        // the vehicles visited so far on a side lane are, mostly, those ahead of the split there
         if let Some(n) = side_lane(l_right) {
-            self.neighbours(id, n, best, s.right.insert(NeighbourLane::default()));
+            let guess = index.checked_sub(1).map_or(usize::MAX, |i| visited[i]);
+            self.neighbours(id, n, best, guess, s.right.insert(NeighbourLane::default()));
         }
         if let Some(n) = side_lane(l_left) {
-            self.neighbours(id, n, best, s.left.insert(NeighbourLane::default()));
+            let guess = visited.get(index + 1).copied().unwrap_or(usize::MAX);
+            self.neighbours(id, n, best, guess, s.left.insert(NeighbourLane::default()));
         }
         if let Some(o) = last {
             s.blocked_ahead.last = Some(self.other(o, self.gap_ahead_same_road(id, o)));
@@ -552,7 +555,8 @@ impl Simulation {
     /// Leader and follower of `id` on neighbour lane `n` of its road, as SUMO's lane changer finds them, written
     /// into `out`: the leader is the nearest vehicle already visited in this pass (front ahead of `id`'s front),
     /// the follower the next one, even when it drives alongside (then its gap is negative); across the lane's end
-    /// along its best continuation, and across its start through the connections into it.
+    /// along its best continuation, and across its start through the connections into it. `guess`: the likely
+    /// index of the split in `n`'s queue (taken when right, else searched).
     // inlined: its two neighbours are then written where the model reads them, not copied there
     #[inline(always)]
     pub(super) fn neighbours(
@@ -560,6 +564,7 @@ impl Simulation {
         id: VehicleId,
         n: LaneIdx,
         best: &[BestLane],
+        guess: usize,
         out: &mut NeighbourLane,
     ) {
         let v = &self.veh[id as usize];
@@ -569,9 +574,9 @@ impl Simulation {
         // takes the rightmost lane on a tie) and leads, one on the lane to the left follows
         let n_is_right = self.lane_at(n as usize).index < self.lane_at(v.lane as usize).index;
         let split = if n_is_right {
-            self.queue_index_behind(n, v.pos, |o, p| o < p)
+            self.queue_index_behind_near(n, v.pos, guess, |o, p| o < p)
         } else {
-            self.queue_index_behind(n, v.pos, |o, p| o <= p)
+            self.queue_index_behind_near(n, v.pos, guess, |o, p| o <= p)
         };
         if split > 0 {
             let o = q[split - 1];
@@ -627,6 +632,28 @@ impl Simulation {
             "lane {l} is not ordered front first"
         );
         i
+    }
+
+    /// [`Self::queue_index_behind`], checked first at `guess`: the index there when the vehicle before it (if any)
+    /// is not behind and the one at it (if any) is, the one index that satisfies both in an ordered queue.
+    #[inline(always)]
+    fn queue_index_behind_near(
+        &self,
+        l: LaneIdx,
+        pos: f64,
+        guess: usize,
+        behind: impl Fn(f64, f64) -> bool,
+    ) -> usize {
+        let q = &self.lane_veh[l as usize];
+        let is_behind = |i: usize| behind(self.veh[q[i] as usize].pos, pos);
+        if guess <= q.len()
+            && (guess == 0 || !is_behind(guess - 1))
+            && (guess == q.len() || is_behind(guess))
+        {
+            debug_assert_eq!(guess, self.queue_index_behind(l, pos, &behind));
+            return guess;
+        }
+        self.queue_index_behind(l, pos, behind)
     }
 
     /// Where `id` is in lane `l`'s queue.
