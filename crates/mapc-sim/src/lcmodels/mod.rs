@@ -182,7 +182,7 @@ impl Ego {
 
 /// Another vehicle: a leader or follower on the ego's lane or a neighbour lane, or a blocked vehicle ahead.
 #[derive(Clone, Copy, Debug)]
-pub struct Other {
+pub struct Other<'a> {
     /// The simulator's id for it; messages are addressed with it, and it tells vehicles apart.
     pub id: u64,
     /// Gap to the ego (see the module glossary); for a blocked vehicle ahead ([`Surroundings::blocked_ahead`]),
@@ -191,7 +191,9 @@ pub struct Other {
     pub speed: f64,
     /// Its acceleration in the last step (SUMO's `getAcceleration`).
     pub accel: f64,
-    pub params: IdmParams,
+    /// Its type's car-following parameters, borrowed from the simulator's table (copied, they cost more than the
+    /// model's gap checks).
+    pub params: &'a IdmParams,
     pub length: f64,
     /// Its own highest speed on its lane (SUMO's `getVehicleMaxSpeed`).
     pub max_speed: f64,
@@ -201,7 +203,7 @@ pub struct Other {
     pub lc_state: u32,
 }
 
-impl Other {
+impl Other<'_> {
     pub fn length_with_gap(&self) -> f64 {
         self.length + self.params.min_gap
     }
@@ -212,9 +214,9 @@ impl Other {
 /// `getRealFollower`: the lane changer's last vehicle visited on that lane and its next; across the lane's end
 /// only within the ego's braking distance; a vehicle that would be both is only the leader).
 #[derive(Clone, Copy, Debug, Default)]
-pub struct NeighbourLane {
-    pub leader: Option<Other>,
-    pub follower: Option<Other>,
+pub struct NeighbourLane<'a> {
+    pub leader: Option<Other<'a>>,
+    pub follower: Option<Other<'a>>,
 }
 
 /// One lane of the ego's road as the route sees it (SUMO's `MSVehicle::LaneQ`, from `updateBestLanes`, which
@@ -240,26 +242,26 @@ pub struct LaneQ {
 pub struct Surroundings<'a> {
     pub ego: Ego,
     /// The leader on the ego's lane (across its end).
-    pub leader: Option<Other>,
+    pub leader: Option<Other<'a>>,
     /// The lane to the right, if it exists and the vehicle may use it (SUMO's `mayChange(-1)`).
-    pub right: Option<NeighbourLane>,
+    pub right: Option<NeighbourLane<'a>>,
     /// The lane to the left, if it exists and the vehicle may use it.
-    pub left: Option<NeighbourLane>,
+    pub left: Option<NeighbourLane<'a>>,
     /// One entry per lane of the road, by lane index.
     pub best_lanes: &'a [LaneQ],
     /// Vehicles ahead on a neighbour lane that urgently want into the ego's lane but were blocked, as recorded
     /// in this pass: the last recorded and the first (SUMO's `lastBlocked`, `firstBlocked`; `first` only when it
     /// is another vehicle than `last`).
-    pub blocked_ahead: BlockedAhead,
+    pub blocked_ahead: BlockedAhead<'a>,
     /// The road has more than one lane (SUMO's `hasLaneChanger`); on single-lane roads the memory is cleared.
     pub road_has_lane_changer: bool,
 }
 
 /// See [`Surroundings::blocked_ahead`].
 #[derive(Clone, Copy, Debug, Default)]
-pub struct BlockedAhead {
-    pub last: Option<Other>,
-    pub first: Option<Other>,
+pub struct BlockedAhead<'a> {
+    pub last: Option<Other<'a>>,
+    pub first: Option<Other<'a>>,
 }
 
 /// Something a model asks of another vehicle.

@@ -319,21 +319,36 @@ impl Simulation {
             blocked_ahead: BlockedAhead::default(),
             road_has_lane_changer: true,
         };
-        s.leader = self.own_leader(id, visited[index]);
+        let types = &self.types;
+        s.leader = self.own_leader(types, id, visited[index]);
         // the vehicles visited so far on a side lane are, mostly, those ahead of the split there
         if let Some(n) = side_lane(l_right) {
             let guess = index.checked_sub(1).map_or(usize::MAX, |i| visited[i]);
-            self.neighbours(id, n, best, guess, s.right.insert(NeighbourLane::default()));
+            self.neighbours(
+                types,
+                id,
+                n,
+                best,
+                guess,
+                s.right.insert(NeighbourLane::default()),
+            );
         }
         if let Some(n) = side_lane(l_left) {
             let guess = visited.get(index + 1).copied().unwrap_or(usize::MAX);
-            self.neighbours(id, n, best, guess, s.left.insert(NeighbourLane::default()));
+            self.neighbours(
+                types,
+                id,
+                n,
+                best,
+                guess,
+                s.left.insert(NeighbourLane::default()),
+            );
         }
         if let Some(o) = last {
-            s.blocked_ahead.last = Some(self.other(o, self.gap_ahead_same_road(id, o)));
+            s.blocked_ahead.last = Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
         }
         if let Some(o) = first.filter(|&f| Some(f) != last) {
-            s.blocked_ahead.first = Some(self.other(o, self.gap_ahead_same_road(id, o)));
+            s.blocked_ahead.first = Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
         }
         let mem = &mut self.veh[id as usize]
             .lc
@@ -449,7 +464,9 @@ impl Simulation {
     }
 
     /// `o` as the model sees it, at `gap`.
-    fn other(&self, o: VehicleId, gap: f64) -> Other {
+    /// `types` is `self.types`, passed apart so that the neighbours borrow only it while the pass writes the
+    /// vehicle's memory.
+    fn other<'t>(&self, types: &'t Table<IdmParams>, o: VehicleId, gap: f64) -> Other<'t> {
         let ov = &self.veh[o as usize];
         let rec = ov.lc.as_deref();
         Other {
@@ -457,7 +474,7 @@ impl Simulation {
             gap,
             speed: ov.speed,
             accel: rec.map_or(0.0, |r| r.accel),
-            params: self.types[ov.vtype as usize],
+            params: &types[ov.vtype as usize],
             length: ov.length,
             max_speed: self.desired_speed(ov, ov.lane),
             stopped: false,
@@ -473,7 +490,12 @@ impl Simulation {
 
     /// The leader on the own lane, or across its end along the route; `guess`: where `id` likely is in its lane's
     /// queue (taken when it is there, else searched).
-    pub(super) fn own_leader(&self, id: VehicleId, guess: usize) -> Option<Other> {
+    pub(super) fn own_leader<'t>(
+        &self,
+        types: &'t Table<IdmParams>,
+        id: VehicleId,
+        guess: usize,
+    ) -> Option<Other<'t>> {
         let v = &self.veh[id as usize];
         let q = &self.lane_veh[v.lane as usize];
         let qi = if q.get(guess) == Some(&id) {
@@ -483,11 +505,12 @@ impl Simulation {
         };
         if qi > 0 {
             let o = q[qi - 1];
-            return Some(self.other(o, self.gap_ahead_same_road(id, o)));
+            return Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
         }
         let r = &self.routes[v.route as usize];
         let lanes = &r.lanes.0[v.route_pos as usize + 1..];
         self.first_ahead(
+            types,
             id,
             lanes.iter().copied(),
             self.lane_at(v.lane as usize).length - v.pos,
@@ -523,12 +546,13 @@ impl Simulation {
     /// for as SUMO's lane changer does past the end of a lane (`getRealLeader`, `getLeaderOnConsecutive`): only
     /// when the end lies within the ego's braking distance plus min gap, and on the lanes that start within it
     /// (and the road lane after a junction connection); a vehicle farther ahead is no leader for lane changing.
-    fn first_ahead(
+    fn first_ahead<'t>(
         &self,
+        types: &'t Table<IdmParams>,
         id: VehicleId,
         lanes: impl IntoIterator<Item = LaneIdx>,
         mut seen: f64,
-    ) -> Option<Other> {
+    ) -> Option<Other<'t>> {
         let v = &self.veh[id as usize];
         let p = &self.types[v.vtype as usize];
         let mut dist = p.brake_gap(v.speed, p.decel, p.tau) + p.min_gap;
@@ -538,7 +562,7 @@ impl Simulation {
         for l in lanes {
             if let Some(&o) = self.lane_veh[l as usize].last() {
                 let ov = &self.veh[o as usize];
-                return Some(self.other(o, seen + ov.pos - ov.length - p.min_gap));
+                return Some(self.other(types, o, seen + ov.pos - ov.length - p.min_gap));
             }
             let lane_max = self.desired_speed(v, l);
             if lane_max < v.speed {
@@ -559,13 +583,14 @@ impl Simulation {
     /// index of the split in `n`'s queue (taken when right, else searched).
     // inlined: its two neighbours are then written where the model reads them, not copied there
     #[inline(always)]
-    pub(super) fn neighbours(
+    pub(super) fn neighbours<'t>(
         &self,
+        types: &'t Table<IdmParams>,
         id: VehicleId,
         n: LaneIdx,
         best: &[BestLane],
         guess: usize,
-        out: &mut NeighbourLane,
+        out: &mut NeighbourLane<'t>,
     ) {
         let v = &self.veh[id as usize];
         let back = v.pos - v.length;
@@ -580,19 +605,22 @@ impl Simulation {
         };
         if split > 0 {
             let o = q[split - 1];
-            out.leader = Some(self.other(o, self.gap_ahead_same_road(id, o)));
+            out.leader = Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
         } else {
             let nl = self.lane_at(n as usize);
             let nq = &best[nl.index as usize];
             out.leader = nq.next_link.and_then(|link| {
                 let lanes = self.continuation_lanes(link, &nq.continuation);
-                self.first_ahead(id, lanes, nl.length - v.pos)
+                self.first_ahead(types, id, lanes, nl.length - v.pos)
             });
         }
         if let Some(&o) = q.get(split) {
             let ov = &self.veh[o as usize];
-            out.follower =
-                Some(self.other(o, back - ov.pos - self.types[ov.vtype as usize].min_gap));
+            out.follower = Some(self.other(
+                types,
+                o,
+                back - ov.pos - self.types[ov.vtype as usize].min_gap,
+            ));
         } else {
             // behind the lane's start: the first vehicle on a connection into it, or on that connection's lane
             let mut found: Option<Other> = None;
@@ -610,7 +638,7 @@ impl Simulation {
                 if let Some((o, dist)) = cand {
                     let gap = dist - self.types[self.veh[o as usize].vtype as usize].min_gap;
                     if found.is_none_or(|f| gap < f.gap) {
-                        found = Some(self.other(o, gap));
+                        found = Some(self.other(types, o, gap));
                     }
                 }
             }

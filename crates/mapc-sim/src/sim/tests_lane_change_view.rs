@@ -42,7 +42,7 @@ fn a_neighbour_alongside_is_the_follower_not_the_leader() {
             let own = sim.lane_at(sim.veh[id as usize].lane as usize);
             for n in [own.right, own.left].into_iter().flatten() {
                 let mut got = NeighbourLane::default();
-                sim.neighbours(id, n, &best, usize::MAX, &mut got);
+                sim.neighbours(&sim.types, id, n, &best, usize::MAX, &mut got);
                 let v = &sim.veh[id as usize];
                 let n_is_right = sim.lane_at(n as usize).index < own.index;
                 // by hand: the pass visits the largest position first, the right lane first on a tie; the leader
@@ -111,7 +111,7 @@ fn a_leader_past_the_lane_end_is_seen_only_within_the_braking_distance() {
                 .iter()
                 .take(2)
                 .find_map(|&l| sim.lane_veh[l as usize].last().copied());
-            let got = sim.own_leader(id, usize::MAX);
+            let got = sim.own_leader(&sim.types, id, usize::MAX);
             if seen > reach {
                 // SUMO's getRealLeader: beyond the braking distance plus min gap there is no leader to change for
                 assert!(
@@ -201,7 +201,7 @@ fn a_neighbour_leader_is_looked_for_along_the_lanes_best_continuation_past_a_sho
                 let first = sim.link_at(link as usize);
                 let next_two = [first.via_lane, first.to_lane];
                 let mut got = NeighbourLane::default();
-                sim.neighbours(id, n, &best, usize::MAX, &mut got);
+                sim.neighbours(&sim.types, id, n, &best, usize::MAX, &mut got);
                 let Some(l) = got.leader else {
                     continue;
                 };

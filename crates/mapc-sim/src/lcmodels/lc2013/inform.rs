@@ -69,7 +69,7 @@ impl Lc2013 {
             let overtake_dist = overtake_distance(
                 nv.gap,
                 ego.length,
-                (&nv.params, nv.length_with_gap()),
+                (nv.params, nv.length_with_gap()),
                 nv.speed,
                 ego.speed,
             );

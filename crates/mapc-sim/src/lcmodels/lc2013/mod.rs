@@ -156,7 +156,7 @@ impl Default for Lc2013 {
 struct SideView<'s, 'a> {
     s: &'s Surroundings<'a>,
     side: Side,
-    lane: &'s super::NeighbourLane,
+    lane: &'s super::NeighbourLane<'a>,
     blocked: u32,
 }
 
@@ -596,9 +596,9 @@ impl Lc2013 {
     }
 }
 
-impl BlockedAhead {
+impl<'a> BlockedAhead<'a> {
     /// SUMO's `firstBlocked`, which is `lastBlocked` when only one was recorded.
-    fn first_or_last(&self) -> Option<Other> {
+    fn first_or_last(&self) -> Option<Other<'a>> {
         self.first.or(self.last)
     }
 }

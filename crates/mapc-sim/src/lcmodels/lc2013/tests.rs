@@ -26,13 +26,15 @@ fn ego(lane_index: usize, pos: f64, speed: f64) -> Ego {
     }
 }
 
-fn other(id: u64, gap: f64, speed: f64) -> Other {
+static HUMAN: std::sync::LazyLock<IdmParams> = std::sync::LazyLock::new(human);
+
+fn other(id: u64, gap: f64, speed: f64) -> Other<'static> {
     Other {
         id,
         gap,
         speed,
         accel: 0.0,
-        params: human(),
+        params: &HUMAN,
         length: 5.0,
         max_speed: 30.0,
         stopped: false,
@@ -50,7 +52,7 @@ fn lane(length: f64, best_lane_offset: i32) -> LaneQ {
     }
 }
 
-fn free() -> Option<NeighbourLane> {
+fn free() -> Option<NeighbourLane<'static>> {
     Some(NeighbourLane::default())
 }
 
@@ -538,7 +540,7 @@ fn an_acceleration_lane_merge_is_negotiated_through_messages() {
             mem: Lc2013Memory::default(),
         },
     ];
-    let view = |c: &Car, other_car: &Car, ahead: bool| -> Other {
+    let view = |c: &Car, other_car: &Car, ahead: bool| -> Other<'static> {
         let gap = if ahead {
             other_car.pos - 5.0 - c.pos - p.min_gap
         } else {
