@@ -20,8 +20,9 @@ pub(super) struct LcVeh {
     accel: f64,
     /// Its lane's best-lane offset at the last pass (read when its speed is patched).
     pub(super) best_lane_offset: i32,
-    /// The best lanes it used last: (route, road index in it, index in `BestLanesCache::store`); the cache is
-    /// asked again only when it enters a new road or its route changes.
+    /// The best lanes it used last: (its route's road sequence, road index in it, index in
+    /// `BestLanesCache::store`), the cache's own key but for the type; the cache is asked again only when it
+    /// enters a new road (a lane change keeps the road sequence).
     best_memo: Option<(u32, u32, u32)>,
 }
 
@@ -250,12 +251,13 @@ impl Simulation {
             let v = &self.veh[id as usize];
             (v.route, v.route_pos, v.vtype)
         };
-        let k = self.routes[route as usize].road_k[route_pos as usize];
+        let r = &self.routes[route as usize];
+        let (k, roads_id) = (r.road_k[route_pos as usize], r.roads_id);
         let best_i = match self.lc_rec(id).best_memo {
-            Some((r, rk, i)) if r == route && rk == k => i,
+            Some((seq, rk, i)) if seq == roads_id && rk == k => i,
             _ => {
                 let i = self.best_lanes_at(route, k as usize, vtype);
-                self.lc_rec(id).best_memo = Some((route, k, i));
+                self.lc_rec(id).best_memo = Some((roads_id, k, i));
                 i
             }
         };
