@@ -37,6 +37,10 @@ pub(super) struct LcScratch {
     visited: Vec<usize>,
     blocked: Vec<(Option<VehicleId>, Option<VehicleId>)>,
     best_lanes: Vec<LaneQ>,
+    /// The entry of `BestLanesCache::store` that `best_lanes` was built from, with the occupations as they are
+    /// now; `None` on a new road (its densities start again) or when `next_occupation` was recomputed. Between
+    /// two vehicles that share it only one lane's density changes, and only that entry is rewritten.
+    best_lanes_of: Option<u32>,
     next_occupation: NextOccupation,
 }
 
@@ -158,6 +162,7 @@ impl Simulation {
                 visited,
                 blocked,
                 best_lanes,
+                best_lanes_of,
                 next_occupation,
             } = &mut scratch;
             lanes.clear();
@@ -178,12 +183,24 @@ impl Simulation {
             visited.resize(lanes.len(), 0);
             blocked.clear();
             blocked.resize(lanes.len(), (None, None));
+            *best_lanes_of = None;
             for &id in cands.iter() {
-                let final_index =
-                    self.change_one(id, dens, visited, blocked, best_lanes, next_occupation);
+                let final_index = self.change_one(
+                    id,
+                    dens,
+                    visited,
+                    blocked,
+                    best_lanes,
+                    best_lanes_of,
+                    next_occupation,
+                );
                 visited[final_index] += 1;
                 let v = &self.veh[id as usize];
                 dens[final_index] += v.length + self.types[v.vtype as usize].min_gap;
+                if best_lanes_of.is_some() {
+                    best_lanes[final_index].occupation =
+                        dens[final_index] + next_occupation.sums[final_index];
+                }
             }
         }
         self.lc_scratch = scratch;
@@ -245,6 +262,7 @@ impl Simulation {
         visited: &[usize],
         blocked: &mut [(Option<VehicleId>, Option<VehicleId>)],
         best_lanes: &mut Vec<LaneQ>,
+        best_lanes_of: &mut Option<u32>,
         next_occupation: &mut NextOccupation,
     ) -> usize {
         let (route, route_pos, vtype) = {
@@ -277,6 +295,7 @@ impl Simulation {
                     .sum::<f64>()
             }));
             next_occupation.of = Some(best_i);
+            *best_lanes_of = None;
         }
         debug_assert!(best.iter().zip(&next_occupation.sums).all(|(q, &next)| {
             let fresh: f64 = q
@@ -286,15 +305,29 @@ impl Simulation {
                 .sum();
             fresh.to_bits() == next.to_bits()
         }));
-        best_lanes.clear();
-        best_lanes.extend(best.iter().zip(dens).zip(&next_occupation.sums).map(
-            |((q, &d), &next)| LaneQ {
-                length: q.length,
-                occupation: d + next,
-                best_lane_offset: q.best_lane_offset,
-                leads_elsewhere: q.leads_elsewhere,
-            },
-        ));
+        let lane_q = |((q, &d), &next): ((&BestLane, &f64), &f64)| LaneQ {
+            length: q.length,
+            occupation: d + next,
+            best_lane_offset: q.best_lane_offset,
+            leads_elsewhere: q.leads_elsewhere,
+        };
+        if *best_lanes_of != Some(best_i) {
+            best_lanes.clear();
+            best_lanes.extend(best.iter().zip(dens).zip(&next_occupation.sums).map(lane_q));
+            *best_lanes_of = Some(best_i);
+        }
+        debug_assert!(
+            best.iter()
+                .zip(dens)
+                .zip(&next_occupation.sums)
+                .map(lane_q)
+                .zip(best_lanes.iter())
+                .all(|(a, b)| a.occupation.to_bits() == b.occupation.to_bits()
+                    && a.length.to_bits() == b.length.to_bits()
+                    && a.best_lane_offset == b.best_lane_offset
+                    && a.leads_elsewhere == b.leads_elsewhere)
+                && best_lanes.len() == best.len()
+        );
         let l = self.lane_at(lane as usize);
         let (l_right, l_left) = (l.right, l.left);
         // a vehicle whose back is still in the junction behind stays on its lane
@@ -395,6 +428,7 @@ impl Simulation {
         .expect("the model changes only to an existing lane");
         self.move_to_lane(id, target);
         next_occupation.of = None;
+        *best_lanes_of = None;
         let target_index = self.lane_at(target as usize).index as usize;
         let offset = self.best_cache.store[best_i as usize][target_index].best_lane_offset;
         if let Some(rec) = self.veh[id as usize].lc.as_deref_mut() {
