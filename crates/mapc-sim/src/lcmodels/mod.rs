@@ -155,10 +155,11 @@ impl Reason {
 
 /// The ego vehicle, as the lane-change model sees it after this step's move.
 #[derive(Clone, Copy, Debug)]
-pub struct Ego {
+pub struct Ego<'a> {
     pub speed: f64,
-    /// Car-following parameters; `params.dt` is the step (SUMO's `TS`, and the action step).
-    pub params: IdmParams,
+    /// Car-following parameters, borrowed from the simulator's type table; `params.dt` is the step (SUMO's
+    /// `TS`, and the action step).
+    pub params: &'a IdmParams,
     /// Vehicle length (m); `params.min_gap` completes SUMO's `getLengthWithGap`.
     pub length: f64,
     /// Front position on its lane (m from the lane's start).
@@ -174,7 +175,7 @@ pub struct Ego {
     pub max_speed: f64,
 }
 
-impl Ego {
+impl Ego<'_> {
     pub fn length_with_gap(&self) -> f64 {
         self.length + self.params.min_gap
     }
@@ -240,7 +241,7 @@ pub struct LaneQ {
 /// What the model is given for one vehicle in the lane-change pass.
 #[derive(Clone, Debug)]
 pub struct Surroundings<'a> {
-    pub ego: Ego,
+    pub ego: Ego<'a>,
     /// The leader on the ego's lane (across its end).
     pub leader: Option<Other<'a>>,
     /// The lane to the right, if it exists and the vehicle may use it (SUMO's `mayChange(-1)`).

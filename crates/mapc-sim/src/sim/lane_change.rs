@@ -339,7 +339,7 @@ impl Simulation {
         let mut s = Surroundings {
             ego: Ego {
                 speed: v.speed,
-                params: self.types[v.vtype as usize],
+                params: &self.types[v.vtype as usize],
                 length: v.length,
                 pos: v.pos,
                 lane_index: index,

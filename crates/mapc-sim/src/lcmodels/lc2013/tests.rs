@@ -13,10 +13,10 @@ fn human() -> IdmParams {
     IdmParams::new(2.6, 4.5, 9.0, 1.0, 2.5, 4.0, DT)
 }
 
-fn ego(lane_index: usize, pos: f64, speed: f64) -> Ego {
+fn ego(lane_index: usize, pos: f64, speed: f64) -> Ego<'static> {
     Ego {
         speed,
-        params: human(),
+        params: &HUMAN,
         length: 5.0,
         pos,
         lane_index,
@@ -56,7 +56,7 @@ fn free() -> Option<NeighbourLane<'static>> {
     Some(NeighbourLane::default())
 }
 
-fn around<'a>(ego: Ego, best_lanes: &'a [LaneQ]) -> Surroundings<'a> {
+fn around<'a>(ego: Ego<'a>, best_lanes: &'a [LaneQ]) -> Surroundings<'a> {
     let n = best_lanes.len();
     Surroundings {
         ego,
