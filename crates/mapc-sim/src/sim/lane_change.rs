@@ -36,12 +36,18 @@ pub(super) struct LcScratch {
     /// index in its lane's queue: the pass goes front to back).
     visited: Vec<usize>,
     blocked: Vec<(Option<VehicleId>, Option<VehicleId>)>,
-    best_lanes: Vec<LaneQ>,
-    /// The entry of `BestLanesCache::store` that `best_lanes` was built from, with the occupations as they are
-    /// now; `None` on a new road (its densities start again) or when `next_occupation` was recomputed. Between
-    /// two vehicles that share it only one lane's density changes, and only that entry is rewritten.
-    best_lanes_of: Option<u32>,
+    best_lanes: LanesView,
     next_occupation: NextOccupation,
+}
+
+/// The lanes as LC2013 sees them (`Surroundings::best_lanes`), kept between the vehicles of a road.
+#[derive(Clone, Debug, Default)]
+struct LanesView {
+    lanes: Vec<LaneQ>,
+    /// The entry of `BestLanesCache::store` that `lanes` was built from, with the occupations as they are now;
+    /// `None` on a new road (its densities start again) or when `NextOccupation` was recomputed. Between two
+    /// vehicles that share it only one lane's density changes, and only that lane is rewritten.
+    of: Option<u32>,
 }
 
 /// The summed occupation of each lane's best continuation (SUMO's `nextOccupation`) for one entry of
@@ -162,7 +168,6 @@ impl Simulation {
                 visited,
                 blocked,
                 best_lanes,
-                best_lanes_of,
                 next_occupation,
             } = &mut scratch;
             lanes.clear();
@@ -183,22 +188,15 @@ impl Simulation {
             visited.resize(lanes.len(), 0);
             blocked.clear();
             blocked.resize(lanes.len(), (None, None));
-            *best_lanes_of = None;
+            best_lanes.of = None;
             for &id in cands.iter() {
-                let final_index = self.change_one(
-                    id,
-                    dens,
-                    visited,
-                    blocked,
-                    best_lanes,
-                    best_lanes_of,
-                    next_occupation,
-                );
+                let final_index =
+                    self.change_one(id, dens, visited, blocked, best_lanes, next_occupation);
                 visited[final_index] += 1;
                 let v = &self.veh[id as usize];
                 dens[final_index] += v.length + self.types[v.vtype as usize].min_gap;
-                if best_lanes_of.is_some() {
-                    best_lanes[final_index].occupation =
+                if best_lanes.of.is_some() {
+                    best_lanes.lanes[final_index].occupation =
                         dens[final_index] + next_occupation.sums[final_index];
                 }
             }
@@ -261,8 +259,7 @@ impl Simulation {
         dens: &[f64],
         visited: &[usize],
         blocked: &mut [(Option<VehicleId>, Option<VehicleId>)],
-        best_lanes: &mut Vec<LaneQ>,
-        best_lanes_of: &mut Option<u32>,
+        best_lanes: &mut LanesView,
         next_occupation: &mut NextOccupation,
     ) -> usize {
         let (route, route_pos, vtype) = {
@@ -295,7 +292,7 @@ impl Simulation {
                     .sum::<f64>()
             }));
             next_occupation.of = Some(best_i);
-            *best_lanes_of = None;
+            best_lanes.of = None;
         }
         debug_assert!(best.iter().zip(&next_occupation.sums).all(|(q, &next)| {
             let fresh: f64 = q
@@ -311,22 +308,24 @@ impl Simulation {
             best_lane_offset: q.best_lane_offset,
             leads_elsewhere: q.leads_elsewhere,
         };
-        if *best_lanes_of != Some(best_i) {
-            best_lanes.clear();
-            best_lanes.extend(best.iter().zip(dens).zip(&next_occupation.sums).map(lane_q));
-            *best_lanes_of = Some(best_i);
+        if best_lanes.of != Some(best_i) {
+            best_lanes.lanes.clear();
+            best_lanes
+                .lanes
+                .extend(best.iter().zip(dens).zip(&next_occupation.sums).map(lane_q));
+            best_lanes.of = Some(best_i);
         }
         debug_assert!(
             best.iter()
                 .zip(dens)
                 .zip(&next_occupation.sums)
                 .map(lane_q)
-                .zip(best_lanes.iter())
+                .zip(best_lanes.lanes.iter())
                 .all(|(a, b)| a.occupation.to_bits() == b.occupation.to_bits()
                     && a.length.to_bits() == b.length.to_bits()
                     && a.best_lane_offset == b.best_lane_offset
                     && a.leads_elsewhere == b.leads_elsewhere)
-                && best_lanes.len() == best.len()
+                && best_lanes.lanes.len() == best.len()
         );
         let l = self.lane_at(lane as usize);
         let (l_right, l_left) = (l.right, l.left);
@@ -350,7 +349,7 @@ impl Simulation {
             leader: None,
             right: None,
             left: None,
-            best_lanes,
+            best_lanes: &best_lanes.lanes,
             blocked_ahead: BlockedAhead::default(),
             road_has_lane_changer: true,
         };
@@ -428,7 +427,7 @@ impl Simulation {
         .expect("the model changes only to an existing lane");
         self.move_to_lane(id, target);
         next_occupation.of = None;
-        *best_lanes_of = None;
+        best_lanes.of = None;
         let target_index = self.lane_at(target as usize).index as usize;
         let offset = self.best_cache.store[best_i as usize][target_index].best_lane_offset;
         if let Some(rec) = self.veh[id as usize].lc.as_deref_mut() {
