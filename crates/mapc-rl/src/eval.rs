@@ -16,7 +16,7 @@ use crate::env::merge::{MergeEnv, MergeEnvConfig};
 use crate::env::obs::ObsNorm;
 use crate::env::windows::WindowsEnv;
 use crate::error::RlError;
-use crate::eval_windows::run_windows_episode;
+use crate::eval_windows::CentralizedEnv;
 use crate::ppo::gae::EpisodeEnd;
 use crate::ppo::tensor::Model;
 use crate::ppo::tensor::Scratch;
@@ -259,9 +259,11 @@ impl PolicyDriver {
         };
         match self {
             PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
-                run_windows_policy(ck, spec, cfg, seeds, mode)
+                run_centralized_policy::<WindowsEnv>(ck, spec, cfg, seeds, mode)
             }
-            PolicyDriver::Centralized(cfg) => run_policy(ck, spec, cfg, seeds, mode),
+            PolicyDriver::Centralized(cfg) => {
+                run_centralized_policy::<MergeEnv>(ck, spec, cfg, seeds, mode)
+            }
             PolicyDriver::Distributed(cfg) => run_distributed_policy(ck, spec, cfg, seeds, mode),
         }
     }
@@ -281,9 +283,11 @@ impl PolicyDriver {
         };
         match self {
             PolicyDriver::Centralized(cfg) if !spec.control_windows.is_empty() => {
-                trace_windows_policy(ck, spec, cfg, seed, mode, out)
+                trace_centralized_policy::<WindowsEnv>(ck, spec, cfg, seed, mode, out)
             }
-            PolicyDriver::Centralized(cfg) => trace_policy(ck, spec, cfg, seed, mode, out),
+            PolicyDriver::Centralized(cfg) => {
+                trace_centralized_policy::<MergeEnv>(ck, spec, cfg, seed, mode, out)
+            }
             PolicyDriver::Distributed(cfg) => {
                 trace_distributed_policy(ck, spec, cfg, seed, mode, out)
             }
@@ -353,42 +357,33 @@ fn measured(sim: Option<&mapc_sim::Simulation>) -> RunMetrics {
     sim.expect("an episode resets its environment").metrics()
 }
 
-/// Runs the policy on `spec` for each seed (in parallel, results in seed order).
-pub fn run_policy(
+/// Runs a centralized policy on `spec` for each seed (in parallel, results in seed order): on its one control
+/// region (`E` = [`MergeEnv`]) or on every window of a several-window scenario (`E` = [`WindowsEnv`]).
+pub fn run_centralized_policy<E: CentralizedEnv>(
     ck: &Checkpoint,
     spec: &SimSpec,
     cfg: &MergeEnvConfig,
     seeds: &[u64],
     mode: ActionMode,
 ) -> Result<Vec<RunMetrics>, RlError> {
-    let horizon = MergeEnv::new(spec.clone(), cfg.clone())?.horizon();
-    let make_env = || MergeEnv::new(spec.clone(), cfg.clone()).expect("validated above");
-    measured_runs(&make_env, horizon, seeds, mode, |env, scratch, settings| {
-        crate::rollout::run_episode(env, &ck.state.model, scratch, settings)?;
-        Ok(measured(env.simulation()))
-    })
+    let horizon = E::build(spec.clone(), cfg.clone())?.episode_steps();
+    let make_env = || E::build(spec.clone(), cfg.clone()).expect("validated above");
+    measured_runs(
+        &make_env,
+        horizon,
+        seeds,
+        mode,
+        |env: &mut E, scratch, settings| {
+            env.run_policy_episode(&ck.state.model, scratch, settings, &mut |_| Ok(()))?;
+            Ok(measured(env.sim()))
+        },
+    )
 }
 
-/// Runs a centralized policy on every window of a several-window scenario for each seed (in parallel, results in
-/// seed order).
-pub fn run_windows_policy(
-    ck: &Checkpoint,
-    spec: &SimSpec,
-    cfg: &MergeEnvConfig,
-    seeds: &[u64],
-    mode: ActionMode,
-) -> Result<Vec<RunMetrics>, RlError> {
-    let horizon = WindowsEnv::new(spec.clone(), cfg.clone())?.horizon();
-    let make_env = || WindowsEnv::new(spec.clone(), cfg.clone()).expect("validated above");
-    measured_runs(&make_env, horizon, seeds, mode, |env, scratch, settings| {
-        run_windows_episode(env, &ck.state.model, scratch, settings, &mut |_| Ok(()))?;
-        Ok(measured(env.simulation()))
-    })
-}
-
-/// Runs the policy on one seed (mean or sampled actions, the same episode as [`run_policy`] gives for that
-/// seed) and writes every step's vehicles as trace CSV rows (`mapc_sim::TRACE_HEADER`, without the header).
-pub fn trace_policy(
+/// Runs a centralized policy on one seed (mean or sampled actions, the same episode as
+/// [`run_centralized_policy`] gives for that seed) and writes every step's vehicles as trace CSV rows
+/// (`mapc_sim::TRACE_HEADER`, without the header).
+pub fn trace_centralized_policy<E: CentralizedEnv>(
     ck: &Checkpoint,
     spec: &SimSpec,
     cfg: &MergeEnvConfig,
@@ -396,35 +391,13 @@ pub fn trace_policy(
     mode: ActionMode,
     out: &mut impl std::io::Write,
 ) -> Result<EpisodeMetrics, RlError> {
-    let mut env = MergeEnv::new(spec.clone(), cfg.clone())?;
-    let settings = trace_settings(seed, env.horizon(), mode);
-    let ep = crate::rollout::run_episode_observed(
-        &mut env,
+    let mut env = E::build(spec.clone(), cfg.clone())?;
+    let settings = trace_settings(seed, env.episode_steps(), mode);
+    env.run_policy_episode(
         &ck.state.model,
         &mut crate::ppo::tensor::Scratch::default(),
         settings,
-        &mut |env: &MergeEnv| write_sim_rows(env.simulation(), out),
-    )?;
-    Ok(ep.metrics)
-}
-
-/// [`trace_policy`] on a several-window scenario (the same episode as the evaluation gives for that seed).
-pub fn trace_windows_policy(
-    ck: &Checkpoint,
-    spec: &SimSpec,
-    cfg: &MergeEnvConfig,
-    seed: u64,
-    mode: ActionMode,
-    out: &mut impl std::io::Write,
-) -> Result<EpisodeMetrics, RlError> {
-    let mut env = WindowsEnv::new(spec.clone(), cfg.clone())?;
-    let settings = trace_settings(seed, env.horizon(), mode);
-    run_windows_episode(
-        &mut env,
-        &ck.state.model,
-        &mut crate::ppo::tensor::Scratch::default(),
-        settings,
-        &mut |env| write_sim_rows(env.simulation(), out),
+        &mut |env: &E| write_sim_rows(env.sim(), out),
     )
 }
 
@@ -587,7 +560,7 @@ fn agent_episodes<'m>(
     collect_agents_with(&factory, policy_of, &pairs, horizon, mode, record)
 }
 
-/// [`trace_policy`] for a distributed policy (the same episode as [`run_distributed_policy`] gives).
+/// [`trace_centralized_policy`] for a distributed policy (the same episode as [`run_distributed_policy`] gives).
 pub fn trace_distributed_policy(
     ck: &Checkpoint,
     spec: &SimSpec,
