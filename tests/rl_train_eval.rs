@@ -722,3 +722,48 @@ fn the_robust_policy_is_deployed_only_where_the_main_road_yields() {
     );
     assert_eq!(three["merges"].as_array().unwrap().len(), 3, "{three}");
 }
+
+/// policies/merge_robust_congested.json is merge_robust's policy under the rule `simple-merge-regime`: the main
+/// road yields, the humans congest the merge, one lane per road (docs/results.md, "Multi-lane windows"). In the
+/// multi-lane I-696 window, where merge_robust's right-of-way rule drives and loses, its AVs drive as humans, bit
+/// for bit, and the report says why; in the one-lane I-696 window, congested, it drives as merge_robust does.
+#[test]
+fn the_simple_merge_regime_leaves_the_multi_lane_window_to_the_humans_and_keeps_the_jammed_one() {
+    let eval = |policy: &str, scenario: &str, extra: &[&str]| -> serde_json::Value {
+        let out = mapc()
+            .args(["eval", "--seeds", "2", "--json", "--scenario", scenario])
+            .args(["--policy", policy])
+            .args(extra)
+            .current_dir(common::root())
+            .output()
+            .unwrap();
+        common::assert_success(&out);
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let congested = "policies/merge_robust_congested.json";
+    let lanes = eval(congested, "scenarios/i696_window_lanes.toml", &[]);
+    assert_eq!(lanes["deploy"], "simple_merge_regime", "{lanes}");
+    assert_eq!(lanes["outflow"], lanes["baseline"]["outflow"], "{lanes}");
+    let reason = lanes["withheld"][0]["reason"].as_str().unwrap();
+    assert!(reason.contains("has 3 lanes"), "{lanes}");
+    // the congestion alone withholds it too: it flows
+    let dense = eval(
+        congested,
+        "scenarios/i696_window_lanes.toml",
+        &["--deploy", "main-road-yields-congested"],
+    );
+    let reason = dense["withheld"][0]["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("is dense under humans, not congested"),
+        "{dense}"
+    );
+    let one_lane = eval(congested, "scenarios/i696_window.toml", &[]);
+    assert!(one_lane.get("withheld").is_none(), "{one_lane}");
+    let robust = eval(
+        "policies/merge_robust.json",
+        "scenarios/i696_window.toml",
+        &[],
+    );
+    assert_eq!(one_lane["outflow"], robust["outflow"]);
+    assert_ne!(one_lane["outflow"], one_lane["baseline"]["outflow"]);
+}

@@ -114,7 +114,8 @@ def evaluate(
     deploy: Optional[str] = None,
 ) -> Dict[str, Any]:
     """A policy against the humans on the same seeds: what ``mapc eval --json`` prints. ``deploy`` overrides
-    where the policy drives (``"everywhere"`` or ``"main-road-yields"``, as ``mapc eval --deploy``)."""
+    where the policy drives (``"everywhere"``, ``"main-road-yields"``, ``"main-road-yields-congested"`` or
+    ``"simple-merge-regime"``, as ``mapc eval --deploy``)."""
     return json.loads(
         _evaluate(os.fspath(policy), os.fspath(scenario), seeds, first_seed, sample, baseline, deploy)
     )

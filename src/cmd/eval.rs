@@ -41,7 +41,10 @@ pub struct Args {
     pub trace: Option<PathBuf>,
     /// Where the policy drives, overriding its own rule: `everywhere`, or `main-road-yields` (only windows whose
     /// merge makes the main road yield, the Simple Merge's regime, or for a distributed policy only AVs whose next
-    /// merge is one; the others are left to the humans). Default: the policy file's rule, else everywhere.
+    /// merge is one; the others are left to the humans), or `main-road-yields-congested` (of those, only merges
+    /// that the regime report's human runs find congested: a merge that flows or is only dense is left to the
+    /// humans, and the report says why), or `simple-merge-regime` (of those, only merges with one lane on every
+    /// road in and out). Default: the policy file's rule, else everywhere.
     #[arg(long)]
     pub deploy: Option<mapc_rl::deploy::Deploy>,
 }

@@ -147,7 +147,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 /// Seeds of the observed pass that reports the merges' regime.
-pub const REGIME_SEEDS: usize = 3;
+pub use mapc_sim::REGIME_SEEDS;
 
 /// The merges' regime, a line each.
 pub fn print_regime(regime: &mapc_sim::RegimeReport) {

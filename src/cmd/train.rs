@@ -126,7 +126,9 @@ pub struct Args {
     pub init: Option<PathBuf>,
     /// The merges the policy is meant for, written into its files (`mapc eval` follows it): `everywhere`, or
     /// `main-road-yields` (only merges where the main road yields, the Simple Merge's regime; a centralized policy
-    /// then drives only such windows; a distributed one trains and drives only AVs whose next merge is one).
+    /// then drives only such windows; a distributed one trains and drives only AVs whose next merge is one), or
+    /// `main-road-yields-congested` (those of them that the humans congest, by the regime report's human runs),
+    /// or `simple-merge-regime` (those with one lane on every road in and out, as the Simple Merge).
     #[arg(long, conflicts_with = "resume")]
     pub deploy: Option<mapc_rl::deploy::Deploy>,
     /// Also keep every checkpoint written, as RUN/checkpoints/iteration-NNNNN.json (`mapc eval --policy` reads

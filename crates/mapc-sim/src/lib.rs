@@ -82,7 +82,10 @@ pub use metrics::{
     t_quantile_975,
 };
 pub use network::Network;
-pub use regime::{MergePriority, RegimeReport, merge_priorities, merge_regimes};
+pub use regime::{
+    Congestion, MergePriority, MergeRegime, REGIME_SEEDS, RegimeReport, merge_priorities,
+    merge_regimes,
+};
 pub use scenario::{run_baseline, spec_from_scenario};
 pub use sim::{
     MergeFoe, Neighbor, SideNeighbors, Simulation, VehicleId, VehicleStatus, VehicleView,

@@ -10,6 +10,9 @@ use mapc_graph::{JunctionId, RoadId};
 use rayon::prelude::*;
 use serde::Serialize;
 
+/// Seeds of the all-human runs a regime report observes (`mapc sim` and `mapc window` print it; a deployment
+/// rule that asks for congestion reads it), `0..REGIME_SEEDS`.
+pub const REGIME_SEEDS: usize = 3;
 /// Vehicles this close before the merge count for the speed near it (m).
 pub const NEAR_MERGE_M: f64 = 200.0;
 /// A vehicle slower than this is queueing (m/s; 18 km/h).
