@@ -161,11 +161,15 @@ pub fn evaluate(
     let driver =
         PolicyDriver::for_scenario(ck, policy_file, scenario, Some(scenario_n_av.unwrap_or(5)))?;
     let deployment = deployed_spec(ck, &driver, spec)?;
-    let runs = driver.run_deployed(ck, spec, &deployment, seeds, mode)?;
     let human = if baseline {
         Some(run_human(spec, seeds)?)
     } else {
         None
+    };
+    let runs = match (&deployment.spec, &human) {
+        // the rule leaves every AV to the humans: the policy's runs are the baseline's, not run twice
+        (None, Some(human)) => human.clone(),
+        _ => driver.run_deployed(ck, spec, &deployment, seeds, mode)?,
     };
     let (merges, end_flow) = flow_reports(spec, &runs, human.as_deref());
     let episodes = |v: &[RunMetrics]| -> Vec<EpisodeMetrics> { v.iter().map(Into::into).collect() };
