@@ -767,3 +767,31 @@ fn the_simple_merge_regime_leaves_the_multi_lane_window_to_the_humans_and_keeps_
     assert_eq!(one_lane["outflow"], robust["outflow"]);
     assert_ne!(one_lane["outflow"], one_lane["baseline"]["outflow"]);
 }
+
+/// policies/two_lane_merge_jam_lanes_outflow.json (trained with the adjacent lanes in the congested two-lane merge)
+/// carries `main-road-yields-congested`: it drives there, and leaves the dense two-lane merge it was not trained in
+/// to the humans, naming its regime (docs/results.md, "Multi-lane windows").
+#[test]
+fn the_congested_two_lane_policy_drives_only_where_the_humans_congest_the_merge() {
+    let eval = |scenario: &str| -> serde_json::Value {
+        let out = mapc()
+            .args(["eval", "--seeds", "2", "--json", "--scenario", scenario])
+            .args(["--policy", "policies/two_lane_merge_jam_lanes_outflow.json"])
+            .current_dir(common::root())
+            .output()
+            .unwrap();
+        common::assert_success(&out);
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let jam = eval("scenarios/two_lane_merge_jam_av.toml");
+    assert_eq!(jam["deploy"], "main_road_yields_congested", "{jam}");
+    assert!(jam.get("withheld").is_none(), "{jam}");
+    assert_ne!(jam["outflow"], jam["baseline"]["outflow"], "{jam}");
+    let dense = eval("scenarios/two_lane_merge_av.toml");
+    assert_eq!(dense["outflow"], dense["baseline"]["outflow"], "{dense}");
+    let reason = dense["withheld"][0]["reason"].as_str().unwrap();
+    assert!(
+        reason.starts_with("merge J2 (center) is dense under humans, not congested"),
+        "{dense}"
+    );
+}
