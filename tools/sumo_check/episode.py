@@ -40,27 +40,30 @@ def run_episode(traci, manifest, export_dir, seed, policy=None, label="sumo_chec
     finally:
         conn.close()
     start_s = (manifest["setup_steps"] + manifest["warmup_steps"]) * manifest["step_s"]
-    result["lane_changes_by_reason"] = lane_change_reasons(lc_file, start_s)
+    result["lane_changes_by_reason"], result["lane_changes_output"] = lane_change_reasons(lc_file, start_s)
     os.remove(lc_file)
     os.rmdir(lc_dir)
     return result
 
 
 def lane_change_reasons(path, start_s):
-    """Lane changes in SUMO's --lanechange-output after `start_s` (the horizon), by reason."""
+    """Lane changes in SUMO's --lanechange-output after `start_s` (the horizon): by reason (the first of ours the
+    `reason` attribute names: SUMO writes its flags in this order), and all of them, whatever their reason."""
     import xml.etree.ElementTree as ET
     counts = dict.fromkeys(REASONS, 0)
+    total = 0
     for _, el in ET.iterparse(path):
         if el.tag != "change":
             continue
         if float(el.get("time")) > start_s + 1e-9:
+            total += 1
             reason = el.get("reason", "")
             for sumo_name, ours in SUMO_REASONS:
                 if sumo_name in reason:
                     counts[ours] += 1
                     break
         el.clear()
-    return counts
+    return counts, total
 
 
 def _episode(conn, tc, manifest, policy):

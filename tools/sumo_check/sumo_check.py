@@ -150,10 +150,14 @@ def _sumo_lane_changes_per_veh(r):
     """SUMO's lane changes per vehicle as its --lanechange-output counts them (every change, as mapc counts its
     own). The TraCI count (a vehicle on the same road in another lane from one step to the next) misses the
     changes made in the step a vehicle enters a road; it stands in for runs recorded before the output was read."""
-    reasons = r.get("lane_changes_by_reason")
-    if not reasons:
+    if "lane_changes_output" in r:
+        total = r["lane_changes_output"]
+    elif r.get("lane_changes_by_reason"):
+        # runs saved before the total was kept: LC2013 gives every change one of the four reasons
+        total = sum(r["lane_changes_by_reason"].values())
+    else:
         return r[LANE_CHANGES]
-    return sum(reasons.values()) / r["departed"] if r["departed"] else 0.0
+    return total / r["departed"] if r["departed"] else 0.0
 
 
 def summary_of_runs(runs, points):

@@ -384,7 +384,7 @@ mod tests {
     }
 
     /// The multi-lane I-696 window makes its main road yield, as the one-lane window does, but it flows (dense
-    /// under humans, docs/results.md "Multi-lane windows", where merge_robust lost 7.5 % by the right of way
+    /// under humans, docs/results.md "Multi-lane windows", where merge_robust lost 7.8 % by the right of way
     /// alone): the congested rule leaves it to the humans and says why, and keeps the one-lane window and the
     /// Simple Merge, congested, where the policy gains.
     #[test]
