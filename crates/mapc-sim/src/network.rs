@@ -294,19 +294,52 @@ impl Network {
         to: Option<RoadId>,
     ) -> Result<Vec<LaneIdx>, SimError> {
         let roads = self.route_roads(g, from, to)?;
-        let first = self.best_lanes(&roads, 0.0);
+        let (mut part, mut dead_end) = self.best_lane_path(self.start_lane(&roads), &roads, 0.0);
+        // A lane that ends on the way (one gained and dropped again far down a corridor) is left by a lane change
+        // on its road: the line goes on from the nearest lane of that road that continues, in its place.
+        let (mut lanes, mut base) = (Vec::new(), 0);
+        while dead_end {
+            let k = base + part.iter().filter(|&&l| self.road_of(l).is_some()).count() - 1;
+            let ending = part.pop().expect("a path holds its start");
+            lanes.append(&mut part);
+            let i = self.lanes[ending as usize].index as usize;
+            let next = self.best_lanes(&roads[k..], 0.0);
+            let Some(j) = (0..next.len())
+                .filter(|&j| next[j].next_link.is_some())
+                .min_by_key(|&j| (j.abs_diff(i), j))
+            else {
+                return Err(SimError::Network(format!(
+                    "no connection from {} to {}",
+                    self.road_ids[roads[k]],
+                    self.road_ids[roads[k + 1]]
+                )));
+            };
+            (part, dead_end) = self.best_lane_path(self.road_lanes[roads[k]][j], &roads[k..], 0.0);
+            base = k;
+        }
+        lanes.append(&mut part);
+        Ok(lanes)
+    }
+
+    /// The lanes a vehicle drives on the lane [`Network::route`] starts on, without changing lanes; `true` where
+    /// they stop at a lane that does not continue on the route (the vehicle must change lanes before its end).
+    pub fn route_without_changes(
+        &self,
+        g: &LaneGraph,
+        from: RoadId,
+        to: Option<RoadId>,
+    ) -> Result<(Vec<LaneIdx>, Vec<usize>, bool), SimError> {
+        let roads = self.route_roads(g, from, to)?;
+        let (lanes, dead_end) = self.best_lane_path(self.start_lane(&roads), &roads, 0.0);
+        Ok((lanes, roads, dead_end))
+    }
+
+    /// The rightmost of the first road's lanes that go furthest on `roads`.
+    fn start_lane(&self, roads: &[usize]) -> LaneIdx {
+        let first = self.best_lanes(roads, 0.0);
         let top = first.iter().map(|q| q.length).fold(f64::MIN, f64::max);
         let start = first.iter().position(|q| q.length == top).unwrap_or(0);
-        let (lanes, dead_end) = self.best_lane_path(self.road_lanes[roads[0]][start], &roads, 0.0);
-        if dead_end {
-            let k = lanes.iter().filter(|&&l| self.road_of(l).is_some()).count();
-            return Err(SimError::Network(format!(
-                "no connection from {} to {}",
-                self.road_ids[roads[k - 1]],
-                self.road_ids[roads[k]]
-            )));
-        }
-        Ok(lanes)
+        self.road_lanes[roads[0]][start]
     }
 
     /// The roads (indices into `LaneGraph::roads`) of the route from `from` to `to` (see [`Network::route`]).

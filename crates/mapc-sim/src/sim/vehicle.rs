@@ -246,9 +246,9 @@ impl Simulation {
         lane: Option<u8>,
     ) -> Result<u32, SimError> {
         let Some(lane) = lane else {
-            let lanes = self.net.route(&self.spec.graph, from, to)?;
-            let roads = self.net.route_roads(&self.spec.graph, from, to)?;
-            return Ok(self.add_lane_route(lanes, roads, false));
+            let (lanes, roads, dead_end) =
+                self.net.route_without_changes(&self.spec.graph, from, to)?;
+            return Ok(self.add_lane_route(lanes, roads, dead_end));
         };
         let roads = self.net.route_roads(&self.spec.graph, from, to)?;
         let Some(&start) = self.net.road_lanes[roads[0]].get(lane as usize) else {
