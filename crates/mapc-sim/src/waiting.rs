@@ -5,8 +5,9 @@
 //! whose queues stay shorter draws the same numbers in the same order: every recorded result does (the paper's
 //! scenarios cannot even reach it: all their main-road demand over the 1000 s horizon is 556 vehicles; 100 human
 //! seeds of the Simple Merge queue at most 144, of the I-696 window 3). Beyond that the
-//! queue only counts vehicles per flow and builds each one when it reaches the front, so a demand the road cannot
-//! take costs a counter, not a vehicle record per departure.
+//! queue only counts vehicles per flow and builds each one when it is first tried (at the front, or, with lanes
+//! chosen at insertion, behind vehicles refused on their lanes in that step), so a demand the road cannot take
+//! costs a counter, not a vehicle record per departure.
 
 use crate::sim::VehicleId;
 use std::collections::VecDeque;
@@ -65,15 +66,16 @@ impl EntryQueue {
         self.built.remove(i);
     }
 
-    /// The vehicle built for what [`EntryQueue::take_counted`] gave: now the front of the queue.
+    /// The vehicle built for what [`EntryQueue::take_counted`] gave: now the last built one, ahead of every
+    /// counted one.
     pub(crate) fn push_taken(&mut self, id: VehicleId) {
-        debug_assert!(self.built.is_empty());
         self.built.push_back(id);
     }
 
-    /// Takes the front counted vehicle's flow (to be built now); only when no built vehicle is waiting.
+    /// Takes the front counted vehicle's flow (to be built now): when no built vehicle is waiting, or (lanes
+    /// chosen at insertion) when every built one was refused in this step and the next may try another lane.
     pub(crate) fn take_counted(&mut self) -> Option<usize> {
-        debug_assert!(self.built.is_empty());
+        debug_assert!(self.built.len() < BUILT_WAITING_CAP);
         let (flow, n) = self.counted.front_mut()?;
         let flow = *flow;
         *n -= 1;

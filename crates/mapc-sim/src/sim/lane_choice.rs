@@ -102,7 +102,9 @@ impl Simulation {
             let q = &mut self.road_entries[re].queue;
             let id = match q.built_at(i) {
                 Some(id) => id,
-                None if i == 0 => match q.take_counted() {
+                // every built vehicle before `i` was refused: the next counted one is built behind them and tries
+                // its own lane
+                None => match q.take_counted() {
                     Some(f) => {
                         let id = self.build_flow_vehicle(f);
                         self.road_entries[re].queue.push_taken(id);
@@ -110,7 +112,6 @@ impl Simulation {
                     }
                     None => break,
                 },
-                None => break,
             };
             let k = self.choose_lane(re);
             let lane = self.road_entries[re].lanes[k];

@@ -125,3 +125,41 @@ fn random_departs_on_every_lane_alike_and_repeats_with_its_seed() {
     let (_, order3, _) = lanes_of_departures(4);
     assert_ne!(order, order3);
 }
+
+/// A demand far beyond what the road takes: past [`crate::waiting::BUILT_WAITING_CAP`] waiting vehicles the queue
+/// only counts them and builds each when it is tried, and still a random vehicle refused on its lane lets the ones
+/// behind it try theirs, so a step ends with a queue left only once every lane of the road refused a vehicle.
+#[test]
+fn random_vehicles_behind_a_refused_one_try_their_lanes_past_the_built_cap() {
+    let mut spec = lane_drop_spec(DepartLane::Random);
+    spec.flows[0].vehs_per_hour = 21_600.0; // the most the entry check allows: a vehicle per lane and step
+    let mut sim = Simulation::from_spec(spec, 1).unwrap();
+    let lanes = entry_lanes(&sim);
+    // fill the queue past the cap, then let its built part drain (it keeps only vehicles refused in a step)
+    let mut steps = 0;
+    while sim.road_entries[0].queue.built_at(8).is_some()
+        || sim.waiting_to_enter() <= crate::waiting::BUILT_WAITING_CAP
+    {
+        sim.step().unwrap();
+        steps += 1;
+        assert!(steps < 5000, "the built part never drained");
+    }
+    let mut entered_on = [0usize; 3];
+    for _ in 0..200 {
+        sim.step().unwrap();
+        assert!(sim.waiting_to_enter() > crate::waiting::BUILT_WAITING_CAP);
+        for l in &lanes {
+            assert!(sim.refused_lanes.contains(l), "lane {l} never tried");
+        }
+        for &id in &sim.departed_last {
+            let k = lanes
+                .iter()
+                .position(|&l| l == sim.veh[id as usize].lane)
+                .unwrap();
+            entered_on[k] += 1;
+        }
+    }
+    // every lane takes vehicles (the middle one fewest: the ending right lane's vehicles merge into it)
+    assert!(entered_on.iter().all(|&n| n > 0), "{entered_on:?}");
+    assert!(entered_on.iter().sum::<usize>() > 100, "{entered_on:?}");
+}
