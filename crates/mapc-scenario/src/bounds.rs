@@ -43,10 +43,14 @@ pub fn entry_lanes(depart_lane: Option<&str>, road_lanes: usize) -> u32 {
 /// One flow as the demand check sees it.
 pub struct FlowDemand<'a> {
     pub id: &'a str,
-    /// What identifies the entry road (flows with the same key share its insertions per step).
+    /// What identifies the entry (flows with the same key share its insertions per step): [`entry_key`].
     pub entry: String,
     /// How many lanes the entry has, each taking one vehicle per step ([`entry_lanes`]).
     pub lanes: u32,
+    /// The entry road, whatever lane the flow departs on: all its flows together share its lanes.
+    pub road: String,
+    /// How many lanes the entry road has.
+    pub road_lanes: u32,
     pub vehs_per_hour: f64,
 }
 
@@ -57,44 +61,65 @@ pub struct Refusal {
     pub message: String,
 }
 
-/// Flows entering at the same road must together stay within one insertion per step.
+/// Flows entering at the same entry (road, lane or the road's lanes together) must together stay within one
+/// insertion per lane and step, and so must all the flows of one road whatever lanes they depart on (a `first`
+/// flow and a `free` one on a two-lane road share its two lanes).
 pub fn check_demand(flows: &[FlowDemand], step_s: f64) -> Result<(), Refusal> {
     let mut per_entry: BTreeMap<&str, (f64, Vec<&str>, u32)> = BTreeMap::new();
+    let mut per_road: BTreeMap<&str, (f64, Vec<&str>, u32)> = BTreeMap::new();
     for f in flows {
         let e = per_entry.entry(&f.entry).or_default();
         e.0 += f.vehs_per_hour;
         e.1.push(f.id);
         e.2 = e.2.max(f.lanes);
+        let r = per_road.entry(&f.road).or_default();
+        r.0 += f.vehs_per_hour;
+        r.1.push(f.id);
+        r.2 = r.2.max(f.road_lanes);
     }
-    for (entry, (total, ids, lanes)) in per_entry {
-        let capacity = entry_capacity_vph(step_s) * lanes.max(1) as f64;
-        // a relative tolerance: 7200 veh/h split over several flows may sum a hair above 7200
-        if total > capacity * (1.0 + 1e-9) {
-            let names = ids
-                .iter()
-                .map(|id| format!("`{id}`"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            let what = if ids.len() == 1 {
-                format!("flow {names} asks for {total} veh/h")
-            } else {
-                format!("flows {names} ask for {total} veh/h in all")
-            };
-            return Err(Refusal {
-                key: "flows".into(),
-                message: format!(
-                    "{what} at entry road {entry}, which takes at most {} per {step_s} s step \
-                     ({capacity} veh/h); the rest could only wait to enter",
-                    if lanes > 1 {
-                        format!("one vehicle per lane on its {lanes} lanes")
-                    } else {
-                        "one vehicle".to_string()
-                    }
-                ),
-            });
+    for groups in [per_entry, per_road] {
+        for (entry, (total, ids, lanes)) in groups {
+            within_capacity(entry, total, &ids, lanes, step_s)?;
         }
     }
     Ok(())
+}
+
+/// Refuses `total` veh/h of the flows `ids` at `entry` beyond one vehicle per lane of its `lanes` and step.
+fn within_capacity(
+    entry: &str,
+    total: f64,
+    ids: &[&str],
+    lanes: u32,
+    step_s: f64,
+) -> Result<(), Refusal> {
+    let capacity = entry_capacity_vph(step_s) * lanes.max(1) as f64;
+    // a relative tolerance: 7200 veh/h split over several flows may sum a hair above 7200
+    if total <= capacity * (1.0 + 1e-9) {
+        return Ok(());
+    }
+    let names = ids
+        .iter()
+        .map(|id| format!("`{id}`"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let what = if ids.len() == 1 {
+        format!("flow {names} asks for {total} veh/h")
+    } else {
+        format!("flows {names} ask for {total} veh/h in all")
+    };
+    Err(Refusal {
+        key: "flows".into(),
+        message: format!(
+            "{what} at entry road {entry}, which takes at most {} per {step_s} s step \
+             ({capacity} veh/h); the rest could only wait to enter",
+            if lanes > 1 {
+                format!("one vehicle per lane on its {lanes} lanes")
+            } else {
+                "one vehicle".to_string()
+            }
+        ),
+    })
 }
 
 /// Warm-up plus horizon must stay within [`MAX_SIMULATED_S`].
@@ -118,11 +143,14 @@ pub fn check_horizon(warmup_steps: u64, horizon_steps: u64, step_s: f64) -> Resu
 mod tests {
     use super::*;
 
+    /// A flow departing on one lane of a road as wide as the entry's lanes need.
     fn flow<'a>(id: &'a str, entry: &str, vph: f64) -> FlowDemand<'a> {
         FlowDemand {
             id,
             entry: entry.into(),
             lanes: 1,
+            road: entry.into(),
+            road_lanes: 8,
             vehs_per_hour: vph,
         }
     }
@@ -159,6 +187,8 @@ mod tests {
             id: "main",
             entry: key.clone(),
             lanes: entry_lanes(Some("free"), 3),
+            road: "R1".into(),
+            road_lanes: 3,
             vehs_per_hour: vph,
         };
         assert!(check_demand(&[flow(3.0 * 7200.0)], 0.5).is_ok());
@@ -183,6 +213,8 @@ mod tests {
                 id: "main",
                 entry: key.clone(),
                 lanes: 1,
+                road: "R1".into(),
+                road_lanes: 5,
                 vehs_per_hour: 2000.0,
             })
             .collect();
@@ -192,6 +224,62 @@ mod tests {
         assert_eq!(road, "R1");
         let one: Vec<FlowDemand> = (0..5).map(|_| flow("main", &road, 2000.0)).collect();
         assert!(check_demand(&one, 0.5).is_err());
+    }
+
+    #[test]
+    fn flows_departing_differently_on_one_road_share_its_lanes() {
+        let on_two_lanes = |id, depart_lane: Option<&str>, vph| FlowDemand {
+            id,
+            entry: entry_key("R1", depart_lane),
+            lanes: entry_lanes(depart_lane, 2),
+            road: "R1".into(),
+            road_lanes: 2,
+            vehs_per_hour: vph,
+        };
+        let fits = [
+            on_two_lanes("first", Some("first"), 7200.0),
+            on_two_lanes("free", Some("free"), 7200.0),
+        ];
+        assert!(check_demand(&fits, 0.5).is_ok());
+        // each entry within its own lanes, the road's two lanes asked for three lanes' worth
+        let over = [
+            on_two_lanes("first", Some("first"), 7200.0),
+            on_two_lanes("free", Some("free"), 14400.0),
+        ];
+        let err = check_demand(&over, 0.5).unwrap_err();
+        assert_eq!(
+            err.message,
+            "flows `first`, `free` ask for 21600 veh/h in all at entry road R1, which takes at most one vehicle \
+             per lane on its 2 lanes per 0.5 s step (14400 veh/h); the rest could only wait to enter"
+        );
+        let over = [
+            on_two_lanes("lane0", Some("0"), 7200.0),
+            on_two_lanes("lane1", Some("1"), 7200.0),
+            on_two_lanes("random", Some("random"), 1.0),
+        ];
+        assert!(check_demand(&over, 0.5).is_err());
+    }
+
+    /// The lane drop's three-lane entry with a `free` flow taking all its lanes and a `first` flow beside it.
+    #[test]
+    fn a_scenario_mixing_depart_lanes_beyond_its_road_is_refused_with_file_flows_and_road() {
+        let mut scenario = crate::Scenario::lane_drop();
+        scenario.flows.truncate(2);
+        scenario.flows[0].depart_lane = Some("free".into());
+        scenario.flows[0].vehs_per_hour = 21600.0;
+        scenario.flows[1].depart_lane = Some("first".into());
+        let resolve = |s: &crate::Scenario| {
+            crate::ResolvedScenario::resolve(s.clone(), std::path::Path::new("."), "mixed.toml")
+        };
+        let err = resolve(&scenario).err().expect("refused").to_string();
+        assert!(
+            err.starts_with(
+                "mixed.toml: flows: flows `lane0`, `lane1` ask for 23100 veh/h in all at entry road"
+            ) && err.contains("on its 3 lanes per 0.5 s step (21600 veh/h)"),
+            "{err}"
+        );
+        scenario.flows[0].vehs_per_hour = 21600.0 - 1500.0;
+        assert!(resolve(&scenario).is_ok());
     }
 
     #[test]

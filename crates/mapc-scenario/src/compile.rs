@@ -314,17 +314,20 @@ fn bounded(
     let flows: Vec<crate::bounds::FlowDemand> = scenario
         .flows
         .iter()
-        .map(|f| crate::bounds::FlowDemand {
-            id: &f.id,
-            entry: crate::bounds::entry_key(&f.from, f.depart_lane.as_deref()),
-            lanes: crate::bounds::entry_lanes(
-                f.depart_lane.as_deref(),
-                g.find_roads(&f.from)
-                    .ok()
-                    .and_then(|r| g.road(*r.first()?))
-                    .map_or(1, |r| r.lanes.len()),
-            ),
-            vehs_per_hour: f.vehs_per_hour,
+        .map(|f| {
+            let road_lanes = g
+                .find_roads(&f.from)
+                .ok()
+                .and_then(|r| g.road(*r.first()?))
+                .map_or(1, |r| r.lanes.len());
+            crate::bounds::FlowDemand {
+                id: &f.id,
+                entry: crate::bounds::entry_key(&f.from, f.depart_lane.as_deref()),
+                lanes: crate::bounds::entry_lanes(f.depart_lane.as_deref(), road_lanes),
+                road: f.from.clone(),
+                road_lanes: road_lanes as u32,
+                vehs_per_hour: f.vehs_per_hour,
+            }
         })
         .collect();
     crate::bounds::check_demand(&flows, scenario.step_s).map_err(|r| {

@@ -407,14 +407,16 @@ impl ResolvedScenario {
             .flows
             .iter()
             .zip(&flow_roads)
-            .map(|(f, (from, _))| bounds::FlowDemand {
-                id: &f.id,
-                entry: bounds::entry_key(&from.to_string(), f.depart_lane.as_deref()),
-                lanes: bounds::entry_lanes(
-                    f.depart_lane.as_deref(),
-                    graph.road(*from).map_or(1, |r| r.lanes.len()),
-                ),
-                vehs_per_hour: f.vehs_per_hour,
+            .map(|(f, (from, _))| {
+                let road_lanes = graph.road(*from).map_or(1, |r| r.lanes.len());
+                bounds::FlowDemand {
+                    id: &f.id,
+                    entry: bounds::entry_key(&from.to_string(), f.depart_lane.as_deref()),
+                    lanes: bounds::entry_lanes(f.depart_lane.as_deref(), road_lanes),
+                    road: from.to_string(),
+                    road_lanes: road_lanes as u32,
+                    vehs_per_hour: f.vehs_per_hour,
+                }
             })
             .collect();
         bounds::check_demand(&demand, scenario.step_s)

@@ -275,6 +275,8 @@ impl SimSpec {
                 } else {
                     1
                 },
+                road: f.from.to_string(),
+                road_lanes: self.graph.road(f.from).map_or(1, |r| r.lanes.len()) as u32,
                 vehs_per_hour: f.vehs_per_hour,
             })
             .collect();
