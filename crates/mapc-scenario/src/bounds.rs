@@ -271,7 +271,7 @@ mod tests {
         let resolve = |s: &crate::Scenario| {
             crate::ResolvedScenario::resolve(s.clone(), std::path::Path::new("."), "mixed.toml")
         };
-        let err = resolve(&scenario).err().expect("refused").to_string();
+        let err = resolve(&scenario).expect_err("refused").to_string();
         assert!(
             err.starts_with(
                 "mixed.toml: flows: flows `lane0`, `lane1` ask for 23100 veh/h in all at entry road"

@@ -22,6 +22,8 @@ mod tests_lane_change_view;
 #[cfg(test)]
 mod tests_lanes;
 #[cfg(test)]
+mod tests_overlap;
+#[cfg(test)]
 mod tests_side_lanes;
 mod vehicle;
 
