@@ -9,8 +9,9 @@ fn sim_json(scenario: &str, seeds: &str) -> serde_json::Value {
     mapc_json(&["sim", "--scenario", scenario, "--seeds", seeds, "--json"])
 }
 
-/// The same on one thread, to compare with the default thread count.
-fn sim_json_one_thread(scenario: &str, seeds: &str) -> serde_json::Value {
+/// The same on `threads` threads (given, not the machine's count: a one-core runner would compare one thread
+/// with itself).
+fn sim_json_on_threads(scenario: &str, seeds: &str, threads: &str) -> serde_json::Value {
     mapc_json(&[
         "sim",
         "--scenario",
@@ -19,7 +20,7 @@ fn sim_json_one_thread(scenario: &str, seeds: &str) -> serde_json::Value {
         seeds,
         "--json",
         "--threads",
-        "1",
+        threads,
     ])
 }
 
@@ -47,8 +48,10 @@ fn lane_drop_sends_the_ending_lane_over_by_strategic_changes() {
         assert!(outflow > 2000.0, "{r}");
     }
     // the same seeds give the same run, whatever the thread count
-    let one = sim_json_one_thread("lane_drop", "3");
+    let one = sim_json_on_threads("lane_drop", "3", "1");
+    let two = sim_json_on_threads("lane_drop", "3", "2");
     assert_eq!(one["runs"], v["runs"]);
+    assert_eq!(two["runs"], v["runs"]);
 }
 
 /// One-lane roads change no lanes, for any reason.
@@ -103,8 +106,8 @@ fn free_and_random_depart_lanes_run_deterministically_and_export_as_sumo_values(
     let dir = scratch_dir("depart-lane-modes");
     for mode in ["free", "random"] {
         let path = format!("scenarios/lane_drop_{mode}.toml");
-        let v = sim_json(&path, "2");
-        let one = sim_json_one_thread(&path, "2");
+        let v = sim_json_on_threads(&path, "2", "2");
+        let one = sim_json_on_threads(&path, "2", "1");
         assert_eq!(one["runs"], v["runs"], "{mode}");
         for r in v["runs"].as_array().unwrap() {
             assert!(r["departed"].as_u64().unwrap() > 800, "{mode}: {r}");
