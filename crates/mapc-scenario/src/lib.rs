@@ -25,6 +25,7 @@
 
 pub mod bounds;
 pub mod compile;
+mod depart_lane;
 pub mod distribution;
 pub mod generator;
 pub mod model;
@@ -34,6 +35,7 @@ pub mod timing;
 pub mod transform;
 pub mod window;
 
+pub use depart_lane::DepartLane;
 pub use model::*;
 
 use mapc_graph::{JunctionId, LaneGraph, RoadId};
@@ -373,17 +375,14 @@ impl ResolvedScenario {
                 }
                 None => None,
             };
+            // a lane index too large for a lane is refused below with the road's lanes named
             if let Some(text) = f.depart_lane.as_deref()
-                && !DEPART_LANE_WORDS.contains(&text)
+                && let Err(message) = DepartLane::parse(text)
                 && text.parse::<u32>().is_err()
             {
                 return Err(invalid(
                     format!("flows[{i}].depart_lane"),
-                    format!(
-                        "flow `{}`: depart_lane `{text}` is not `first`, `best`, `random`, `free` or a lane index \
-                         (0 = rightmost)",
-                        f.id
-                    ),
+                    format!("flow `{}`: {message}", f.id),
                 ));
             }
             if let Some(lane) = f.depart_lane.as_deref().and_then(|l| l.parse::<u32>().ok()) {

@@ -233,14 +233,11 @@ pub struct Flow {
     pub begin_s: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub end_s: Option<f64>,
-    /// SUMO's `departLane`: one of [`DEPART_LANE_WORDS`] (`first`, the rightmost lane, is the default) or a
-    /// lane index (0 = rightmost).
+    /// SUMO's `departLane` as [`crate::DepartLane::parse`] reads it: `first` (the rightmost lane, the default),
+    /// `best`, `random`, `free` or a lane index (0 = rightmost).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depart_lane: Option<String>,
 }
-
-/// The words a flow's `depart_lane` may be besides a lane index: SUMO 1.8's `departLane` values mapc simulates.
-pub const DEPART_LANE_WORDS: [&str; 4] = ["first", "best", "random", "free"];
 
 /// Vehicles on the network at t = 0, evenly spaced along the network's roads.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -70,56 +70,7 @@ pub struct FlowSpec {
     pub depart_lane: DepartLane,
 }
 
-/// SUMO's `departLane` of a flow.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum DepartLane {
-    /// The rightmost lane (SUMO 1.8's default `first`).
-    #[default]
-    First,
-    /// The rightmost of the lanes that go furthest on the route (SUMO's `best`, without its tie-break on free
-    /// space).
-    Best,
-    /// This lane (0 = rightmost).
-    Index(u8),
-    /// A lane of the entry road drawn uniformly from the run's random numbers at every insertion attempt (SUMO's
-    /// `random`).
-    Random,
-    /// The entry road's lane with the least brutto occupancy when the vehicle is inserted, the rightmost on a
-    /// tie (SUMO 1.8's `free` with the default depart position).
-    Free,
-}
-
-impl DepartLane {
-    /// From a scenario's text: `first`, `best`, `random`, `free` or a lane index.
-    pub fn parse(text: &str) -> Result<DepartLane, String> {
-        match text {
-            "first" => Ok(DepartLane::First),
-            "best" => Ok(DepartLane::Best),
-            "random" => Ok(DepartLane::Random),
-            "free" => Ok(DepartLane::Free),
-            _ => text.parse::<u8>().map(DepartLane::Index).map_err(|_| {
-                format!(
-                    "depart_lane `{text}` is not `first`, `best`, `random`, `free` or a lane index (0 = rightmost)"
-                )
-            }),
-        }
-    }
-
-    /// The entry road's lane index, or `None` for the best lane; for `random` and `free`, whose lane is chosen
-    /// at each insertion attempt, the rightmost (the lane the vehicle is created on while it waits).
-    pub fn start_lane(self) -> Option<u8> {
-        match self {
-            DepartLane::First | DepartLane::Random | DepartLane::Free => Some(0),
-            DepartLane::Best => None,
-            DepartLane::Index(i) => Some(i),
-        }
-    }
-
-    /// Whether the lane is chosen when the vehicle is inserted (`random`, `free`) rather than once for the flow.
-    pub fn chosen_at_insertion(self) -> bool {
-        matches!(self, DepartLane::Random | DepartLane::Free)
-    }
-}
+pub use mapc_scenario::DepartLane;
 
 /// A vehicle present at time 0, standing on `road` with its front at `pos_m`.
 #[derive(Clone, Debug, PartialEq)]
@@ -255,6 +206,7 @@ impl SimSpec {
                 )));
             }
         }
+        let road_lanes = |road: RoadId| self.graph.road(road).map_or(1, |r| r.lanes.len());
         let demand: Vec<mapc_scenario::bounds::FlowDemand> = self
             .flows
             .iter()
@@ -262,21 +214,14 @@ impl SimSpec {
                 id: &f.id,
                 entry: mapc_scenario::bounds::entry_key(
                     &f.from.to_string(),
-                    match f.depart_lane {
-                        DepartLane::Index(lane) => Some(lane.to_string()),
-                        DepartLane::Random => Some("random".to_string()),
-                        DepartLane::Free => Some("free".to_string()),
-                        _ => None,
-                    }
-                    .as_deref(),
+                    Some(&f.depart_lane.sumo_value()),
                 ),
-                lanes: if f.depart_lane.chosen_at_insertion() {
-                    self.graph.road(f.from).map_or(1, |r| r.lanes.len()) as u32
-                } else {
-                    1
-                },
+                lanes: mapc_scenario::bounds::entry_lanes(
+                    Some(&f.depart_lane.sumo_value()),
+                    road_lanes(f.from),
+                ),
                 road: f.from.to_string(),
-                road_lanes: self.graph.road(f.from).map_or(1, |r| r.lanes.len()) as u32,
+                road_lanes: road_lanes(f.from) as u32,
                 vehs_per_hour: f.vehs_per_hour,
             })
             .collect();

@@ -6,7 +6,7 @@
 use crate::names::SumoNames;
 use crate::xml::{element, num, start};
 use mapc_graph::{LaneGraph, RoadId};
-use mapc_sim::{DepartLane, FlowSpec, Network, SimError, SimSpec};
+use mapc_sim::{FlowSpec, Network, SimError, SimSpec};
 
 /// IDM's integration sub-step in SUMO 1.8 (not settable there as a duration).
 const SUMO_IDM_STEPPING_S: f64 = 0.25;
@@ -161,13 +161,7 @@ fn depart_lane(graph: &LaneGraph, f: &FlowSpec) -> String {
     if lanes <= 1 {
         return "free".into();
     }
-    match f.depart_lane {
-        DepartLane::First => "first".into(),
-        DepartLane::Best => "best".into(),
-        DepartLane::Index(i) => i.to_string(),
-        DepartLane::Random => "random".into(),
-        DepartLane::Free => "free".into(),
-    }
+    f.depart_lane.sumo_value()
 }
 
 /// The `.sumocfg`: the files, the step, and the options of the paper's runs (REFERENCE.md): no teleporting,
