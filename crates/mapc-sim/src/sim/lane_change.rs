@@ -133,8 +133,7 @@ impl Simulation {
         brutto.resize(self.net.lanes.len(), 0.0);
         for (l, q) in self.lane_veh.iter().enumerate() {
             for &id in q.iter() {
-                let v = &self.veh[id as usize];
-                brutto[l] += v.length + self.types[v.vtype as usize].min_gap;
+                brutto[l] += self.brutto_length(id);
             }
         }
         self.lane_brutto = brutto;
@@ -193,8 +192,7 @@ impl Simulation {
                 let final_index =
                     self.change_one(id, dens, visited, blocked, best_lanes, next_occupation);
                 visited[final_index] += 1;
-                let v = &self.veh[id as usize];
-                dens[final_index] += v.length + self.types[v.vtype as usize].min_gap;
+                dens[final_index] += self.brutto_length(id);
                 if best_lanes.of.is_some() {
                     best_lanes.lanes[final_index].occupation =
                         dens[final_index] + next_occupation.sums[final_index];
@@ -443,7 +441,7 @@ impl Simulation {
     pub(super) fn move_to_lane(&mut self, id: VehicleId, target: LaneIdx) {
         let (old, pos, route, rp, vtype, occupancy) = {
             let v = &self.veh[id as usize];
-            let occupancy = v.length + self.types[v.vtype as usize].min_gap;
+            let occupancy = self.brutto_length(id);
             (
                 v.lane,
                 v.pos,

@@ -55,8 +55,7 @@ impl Simulation {
         let on_lane = &self.lane_veh[lane as usize];
         let mut sum = 0.0;
         for &id in on_lane.iter() {
-            let v = &self.veh[id as usize];
-            sum += v.length + self.types[v.vtype as usize].min_gap;
+            sum += self.brutto_length(id);
         }
         // the tail of a vehicle that has just left the lane onto a connection (SUMO counts one partial occupier)
         let mut fraction: f64 = 0.0;

@@ -232,6 +232,13 @@ impl Simulation {
         Ok(id)
     }
 
+    /// What a vehicle takes of its lane in SUMO's brutto occupancy: its length with its min gap.
+    #[inline]
+    pub(super) fn brutto_length(&self, id: VehicleId) -> f64 {
+        let v = &self.veh[id as usize];
+        v.length + self.types[v.vtype as usize].min_gap
+    }
+
     pub(super) fn desired_speed(&self, v: &Veh, lane: LaneIdx) -> f64 {
         (self.lane_at(lane as usize).speed_limit * v.speed_factor)
             .fmin(self.type_consts[v.vtype as usize].max_speed)
