@@ -30,60 +30,73 @@ fn on_road(sim: &Simulation, id: VehicleId) -> bool {
     )
 }
 
+/// Steps `sim` `steps` times and after each step calls `f` for every vehicle on a road and each lane beside it,
+/// with the best lanes the pass hands LC2013 for that vehicle.
+fn each_side_lane(
+    sim: &mut Simulation,
+    steps: usize,
+    mut f: impl FnMut(&Simulation, VehicleId, LaneIdx, &[BestLane]),
+) {
+    for _ in 0..steps {
+        sim.step().unwrap();
+        let ids: Vec<VehicleId> = sim.active_ids().filter(|&id| on_road(sim, id)).collect();
+        for id in ids {
+            let best = best_lanes_now(sim, id);
+            let own = sim.lane_at(sim.veh[id as usize].lane as usize);
+            for n in [own.right, own.left].into_iter().flatten() {
+                f(sim, id, n, &best);
+            }
+        }
+    }
+}
+
 #[test]
 fn a_neighbour_alongside_is_the_follower_not_the_leader() {
     let mut sim = two_lane_merge(3);
     let (mut leaders, mut followers, mut alongside) = (0, 0, 0);
-    for _ in 0..500 {
-        sim.step().unwrap();
-        let ids: Vec<VehicleId> = sim.active_ids().filter(|&id| on_road(&sim, id)).collect();
-        for id in ids {
-            let best = best_lanes_now(&mut sim, id);
-            let own = sim.lane_at(sim.veh[id as usize].lane as usize);
-            for n in [own.right, own.left].into_iter().flatten() {
-                let mut got = NeighbourLane::default();
-                sim.neighbours(&sim.types, id, n, &best, usize::MAX, &mut got);
-                let v = &sim.veh[id as usize];
-                let n_is_right = sim.lane_at(n as usize).index < own.index;
-                // by hand: the pass visits the largest position first, the right lane first on a tie; the leader
-                // is the nearest vehicle visited before the ego, the follower the nearest after it
-                let visited_before = |p: f64| p > v.pos || (p == v.pos && n_is_right);
-                let on_lane = sim.lane_veh[n as usize]
-                    .iter()
-                    .map(|&o| (o, &sim.veh[o as usize]));
-                let ahead = on_lane
-                    .clone()
-                    .filter(|(_, o)| visited_before(o.pos))
-                    .min_by(|a, b| a.1.pos.total_cmp(&b.1.pos));
-                let behind = on_lane
-                    .filter(|(_, o)| !visited_before(o.pos))
-                    .max_by(|a, b| a.1.pos.total_cmp(&b.1.pos));
-                let min_gap = sim.types[v.vtype as usize].min_gap;
-                if let Some((o, ov)) = ahead {
-                    let l = got.leader.expect("a leader on the lane");
-                    assert_eq!(
-                        (l.id, l.gap),
-                        (o as u64, ov.pos - ov.length - v.pos - min_gap)
-                    );
-                    leaders += 1;
-                }
-                if let Some((o, ov)) = behind {
-                    let f = got.follower.expect("a follower on the lane");
-                    let f_min_gap = sim.types[ov.vtype as usize].min_gap;
-                    assert_eq!(
-                        (f.id, f.gap),
-                        (o as u64, v.pos - v.length - ov.pos - f_min_gap)
-                    );
-                    followers += 1;
-                    if ov.pos > v.pos - v.length {
-                        // its front beside the ego: a follower that overlaps, which blocks the change
-                        assert!(f.gap < 0.0);
-                        alongside += 1;
-                    }
-                }
+    each_side_lane(&mut sim, 500, |sim, id, n, best| {
+        let mut got = NeighbourLane::default();
+        sim.neighbours(&sim.types, id, n, best, usize::MAX, &mut got);
+        let v = &sim.veh[id as usize];
+        let n_is_right =
+            sim.lane_at(n as usize).index < sim.lane_at(sim.veh[id as usize].lane as usize).index;
+        // by hand: the pass visits the largest position first, the right lane first on a tie; the leader
+        // is the nearest vehicle visited before the ego, the follower the nearest after it
+        let visited_before = |p: f64| p > v.pos || (p == v.pos && n_is_right);
+        let on_lane = sim.lane_veh[n as usize]
+            .iter()
+            .map(|&o| (o, &sim.veh[o as usize]));
+        let ahead = on_lane
+            .clone()
+            .filter(|(_, o)| visited_before(o.pos))
+            .min_by(|a, b| a.1.pos.total_cmp(&b.1.pos));
+        let behind = on_lane
+            .filter(|(_, o)| !visited_before(o.pos))
+            .max_by(|a, b| a.1.pos.total_cmp(&b.1.pos));
+        let min_gap = sim.types[v.vtype as usize].min_gap;
+        if let Some((o, ov)) = ahead {
+            let l = got.leader.expect("a leader on the lane");
+            assert_eq!(
+                (l.id, l.gap),
+                (o as u64, ov.pos - ov.length - v.pos - min_gap)
+            );
+            leaders += 1;
+        }
+        if let Some((o, ov)) = behind {
+            let f = got.follower.expect("a follower on the lane");
+            let f_min_gap = sim.types[ov.vtype as usize].min_gap;
+            assert_eq!(
+                (f.id, f.gap),
+                (o as u64, v.pos - v.length - ov.pos - f_min_gap)
+            );
+            followers += 1;
+            if ov.pos > v.pos - v.length {
+                // its front beside the ego: a follower that overlaps, which blocks the change
+                assert!(f.gap < 0.0);
+                alongside += 1;
             }
         }
-    }
+    });
     assert!(
         leaders > 1000 && followers > 1000 && alongside > 100,
         "{leaders} {followers} {alongside}"
@@ -180,66 +193,58 @@ fn a_neighbour_leader_is_looked_for_along_the_lanes_best_continuation_past_a_sho
         .expect("scenario file");
     let mut sim = Simulation::from_spec(spec_from_scenario(&rs).unwrap(), 0).unwrap();
     let mut two_roads_ahead = 0;
-    for _ in 0..400 {
-        sim.step().unwrap();
-        let ids: Vec<VehicleId> = sim.active_ids().filter(|&id| on_road(&sim, id)).collect();
-        for id in ids {
-            let best = best_lanes_now(&mut sim, id);
-            let own = sim.lane_at(sim.veh[id as usize].lane as usize);
-            for n in [own.right, own.left].into_iter().flatten() {
-                let v = &sim.veh[id as usize];
-                let nl = sim.lane_at(n as usize);
-                if sim.lane_veh[n as usize]
-                    .iter()
-                    .any(|&o| sim.veh[o as usize].pos > v.pos)
-                {
-                    continue;
-                }
-                let Some(link) = best[nl.index as usize].next_link else {
-                    continue;
-                };
-                let first = sim.link_at(link as usize);
-                let next_two = [first.via_lane, first.to_lane];
-                let mut got = NeighbourLane::default();
-                sim.neighbours(&sim.types, id, n, &best, usize::MAX, &mut got);
-                let Some(l) = got.leader else {
-                    continue;
-                };
-                let ol = sim.veh[l.id as usize].lane;
-                if ol == n || next_two.contains(&ol) {
-                    continue;
-                }
-                // by hand: the connections and road lanes of the continuation with the distance to each's start
-                let cont = &best[nl.index as usize].continuation;
-                let mut chain = vec![(first.via_lane, nl.length - v.pos)];
-                let mut start = nl.length - v.pos + sim.lane_at(first.via_lane as usize).length;
-                for (j, &c) in cont.iter().enumerate() {
-                    chain.push((c, start));
-                    start += sim.lane_at(c as usize).length;
-                    let Some(&to) = cont.get(j + 1) else { break };
-                    let k = sim
-                        .lane_at(c as usize)
-                        .out_links
-                        .iter()
-                        .copied()
-                        .find(|&k| sim.link_at(k as usize).to_lane == to)
-                        .unwrap();
-                    let via = sim.link_at(k as usize).via_lane;
-                    chain.push((via, start));
-                    start += sim.lane_at(via as usize).length;
-                }
-                let &(_, seen) = chain
-                    .iter()
-                    .find(|&&(c, _)| c == ol)
-                    .expect("on the continuation");
-                let ov = &sim.veh[l.id as usize];
-                let min_gap = sim.types[v.vtype as usize].min_gap;
-                assert!((l.gap - (seen + ov.pos - ov.length - min_gap)).abs() < 1e-9);
-                let p = &sim.types[v.vtype as usize];
-                assert!(nl.length - v.pos <= p.brake_gap(v.speed, p.decel, p.tau) + p.min_gap);
-                two_roads_ahead += 1;
-            }
+    each_side_lane(&mut sim, 400, |sim, id, n, best| {
+        let v = &sim.veh[id as usize];
+        let nl = sim.lane_at(n as usize);
+        if sim.lane_veh[n as usize]
+            .iter()
+            .any(|&o| sim.veh[o as usize].pos > v.pos)
+        {
+            return;
         }
-    }
+        let Some(link) = best[nl.index as usize].next_link else {
+            return;
+        };
+        let first = sim.link_at(link as usize);
+        let next_two = [first.via_lane, first.to_lane];
+        let mut got = NeighbourLane::default();
+        sim.neighbours(&sim.types, id, n, best, usize::MAX, &mut got);
+        let Some(l) = got.leader else {
+            return;
+        };
+        let ol = sim.veh[l.id as usize].lane;
+        if ol == n || next_two.contains(&ol) {
+            return;
+        }
+        // by hand: the connections and road lanes of the continuation with the distance to each's start
+        let cont = &best[nl.index as usize].continuation;
+        let mut chain = vec![(first.via_lane, nl.length - v.pos)];
+        let mut start = nl.length - v.pos + sim.lane_at(first.via_lane as usize).length;
+        for (j, &c) in cont.iter().enumerate() {
+            chain.push((c, start));
+            start += sim.lane_at(c as usize).length;
+            let Some(&to) = cont.get(j + 1) else { break };
+            let k = sim
+                .lane_at(c as usize)
+                .out_links
+                .iter()
+                .copied()
+                .find(|&k| sim.link_at(k as usize).to_lane == to)
+                .unwrap();
+            let via = sim.link_at(k as usize).via_lane;
+            chain.push((via, start));
+            start += sim.lane_at(via as usize).length;
+        }
+        let &(_, seen) = chain
+            .iter()
+            .find(|&&(c, _)| c == ol)
+            .expect("on the continuation");
+        let ov = &sim.veh[l.id as usize];
+        let min_gap = sim.types[v.vtype as usize].min_gap;
+        assert!((l.gap - (seen + ov.pos - ov.length - min_gap)).abs() < 1e-9);
+        let p = &sim.types[v.vtype as usize];
+        assert!(nl.length - v.pos <= p.brake_gap(v.speed, p.decel, p.tau) + p.min_gap);
+        two_roads_ahead += 1;
+    });
     assert!(two_roads_ahead > 0);
 }
