@@ -14,6 +14,22 @@ fn mapc_with<const N: usize>(
     mapc().args(args).arg(path).output().unwrap()
 }
 
+/// `mapc eval --json` of `policy` on `scenario` over `seeds` seeds (paths from the repository root).
+fn eval_json(policy: &str, scenario: &str, seeds: &str, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "eval",
+        "--seeds",
+        seeds,
+        "--json",
+        "--scenario",
+        scenario,
+        "--policy",
+        policy,
+    ];
+    args.extend_from_slice(extra);
+    common::mapc_json(&args)
+}
+
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("mapc-rl-e2e-{}-{name}", std::process::id()));
     std::fs::remove_dir_all(&d).ok();
@@ -565,18 +581,8 @@ fn the_shipped_shared_reward_policy_beats_the_humans_and_transfers() {
     // policies/simple_merge_distributed_shared.json (docs/results.md, trained with --reward-share 0.5
     // --count-waiting): +18.2 % over 100 seeds and +9.0 % zero-shot in the I-696 window; on seeds 0-4 (mean
     // actions: the same numbers every run) 1827.36 veh/h, +17.4 %, and +6.5 % in the window
-    let policy = common::root().join("policies/simple_merge_distributed_shared.json");
-    let eval = |scenario: &str| -> serde_json::Value {
-        let out = mapc()
-            .args(["eval", "--seeds", "5", "--json", "--scenario"])
-            .arg(common::root().join(scenario))
-            .arg("--policy")
-            .arg(&policy)
-            .output()
-            .unwrap();
-        common::assert_success(&out);
-        serde_json::from_slice(&out.stdout).unwrap()
-    };
+    let policy = "policies/simple_merge_distributed_shared.json";
+    let eval = |scenario: &str| eval_json(policy, scenario, "5", &[]);
     let merge = eval("scenarios/simple_merge.toml");
     let change = merge["comparison"]["outflow_change_pct"].as_f64().unwrap();
     assert!(change > 14.0, "{merge}");
@@ -676,16 +682,8 @@ fn a_merge_distribution_trains_from_a_policy_and_resumes_exactly() {
 /// it gains; a window of a several-window scenario outside that regime is named, and its merge still measured.
 #[test]
 fn the_robust_policy_is_deployed_only_where_the_main_road_yields() {
-    let eval = |scenario: &str, extra: &[&str]| -> serde_json::Value {
-        let out = mapc()
-            .args(["eval", "--seeds", "3", "--json", "--scenario", scenario])
-            .args(["--policy", "policies/merge_robust.json"])
-            .args(extra)
-            .current_dir(common::root())
-            .output()
-            .unwrap();
-        common::assert_success(&out);
-        serde_json::from_slice(&out.stdout).unwrap()
+    let eval = |scenario: &str, extra: &[&str]| {
+        eval_json("policies/merge_robust.json", scenario, "3", extra)
     };
     let arizona = eval("scenarios/merges/arizona_5134463770.toml", &[]);
     assert_eq!(
@@ -729,17 +727,8 @@ fn the_robust_policy_is_deployed_only_where_the_main_road_yields() {
 /// for bit, and the report says why; in the one-lane I-696 window, congested, it drives as merge_robust does.
 #[test]
 fn the_simple_merge_regime_leaves_the_multi_lane_window_to_the_humans_and_keeps_the_jammed_one() {
-    let eval = |policy: &str, scenario: &str, extra: &[&str]| -> serde_json::Value {
-        let out = mapc()
-            .args(["eval", "--seeds", "2", "--json", "--scenario", scenario])
-            .args(["--policy", policy])
-            .args(extra)
-            .current_dir(common::root())
-            .output()
-            .unwrap();
-        common::assert_success(&out);
-        serde_json::from_slice(&out.stdout).unwrap()
-    };
+    let eval =
+        |policy: &str, scenario: &str, extra: &[&str]| eval_json(policy, scenario, "2", extra);
     let congested = "policies/merge_robust_congested.json";
     let lanes = eval(congested, "scenarios/i696_window_lanes.toml", &[]);
     assert_eq!(lanes["deploy"], "simple_merge_regime", "{lanes}");
@@ -773,15 +762,13 @@ fn the_simple_merge_regime_leaves_the_multi_lane_window_to_the_humans_and_keeps_
 /// to the humans, naming its regime (docs/results.md, "Multi-lane windows").
 #[test]
 fn the_congested_two_lane_policy_drives_only_where_the_humans_congest_the_merge() {
-    let eval = |scenario: &str| -> serde_json::Value {
-        let out = mapc()
-            .args(["eval", "--seeds", "2", "--json", "--scenario", scenario])
-            .args(["--policy", "policies/two_lane_merge_jam_lanes_outflow.json"])
-            .current_dir(common::root())
-            .output()
-            .unwrap();
-        common::assert_success(&out);
-        serde_json::from_slice(&out.stdout).unwrap()
+    let eval = |scenario: &str| {
+        eval_json(
+            "policies/two_lane_merge_jam_lanes_outflow.json",
+            scenario,
+            "2",
+            &[],
+        )
     };
     let jam = eval("scenarios/two_lane_merge_jam_av.toml");
     assert_eq!(jam["deploy"], "main_road_yields_congested", "{jam}");
