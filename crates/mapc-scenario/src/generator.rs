@@ -179,15 +179,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
                 name: Some(name.to_string()),
                 ref_: None,
                 priority,
-                lanes: (0..lanes)
-                    .map(|index| Lane {
-                        index,
-                        speed_mps: p.speed_limit_mps,
-                        width_m: LANE_WIDTH_M,
-                        length_m,
-                        end: None,
-                    })
-                    .collect(),
+                lanes: uniform_lanes(lanes, p.speed_limit_mps, length_m),
                 geometry: vec![nodes[jid(from).0 as usize].1, nodes[jid(to).0 as usize].1],
                 length_m,
                 provenance: with_sumo(name),
@@ -319,15 +311,7 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
             name: Some(name.to_string()),
             ref_: None,
             priority: 1,
-            lanes: (0..lanes)
-                .map(|index| Lane {
-                    index,
-                    speed_mps: p.speed_limit_mps,
-                    width_m: LANE_WIDTH_M,
-                    length_m,
-                    end: None,
-                })
-                .collect(),
+            lanes: uniform_lanes(lanes, p.speed_limit_mps, length_m),
             geometry: vec![nodes[from as usize].1, nodes[from as usize + 1].1],
             length_m,
             provenance: provenance(name),
@@ -350,6 +334,19 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
         .collect();
     g.rebuild_junction_links();
     Ok(g)
+}
+
+/// `n` lanes of one road, all alike, none ending.
+fn uniform_lanes(n: u8, speed_mps: f64, length_m: f64) -> Vec<Lane> {
+    (0..n)
+        .map(|index| Lane {
+            index,
+            speed_mps,
+            width_m: LANE_WIDTH_M,
+            length_m,
+            end: None,
+        })
+        .collect()
 }
 
 /// A generated network's graph with its junctions (named points, in order; roads are added by the caller).
