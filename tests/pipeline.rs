@@ -4,6 +4,21 @@ mod common;
 
 use common::{fresh_path, mapc_command};
 
+/// The last JSON document the pipeline prints is the evaluation against the human baseline, on `seeds` seeds,
+/// with both outflows plausible.
+fn assert_the_evaluation_ran(stdout: &str, seeds: u64) {
+    let start = stdout.rfind("\n{\n").map_or(0, |i| i + 1);
+    let eval: serde_json::Value =
+        serde_json::from_str(&stdout[start..]).expect("eval JSON at the end");
+    assert_eq!(eval["seeds"], seeds);
+    let policy = eval["outflow"]["mean"].as_f64().unwrap();
+    let human = eval["baseline"]["outflow"]["mean"].as_f64().unwrap();
+    assert!(
+        policy > 500.0 && human > 500.0,
+        "policy {policy}, human {human}"
+    );
+}
+
 #[test]
 fn pipeline_runs_every_stage_on_the_real_map() {
     let out = fresh_path("pipeline");
@@ -40,17 +55,7 @@ fn pipeline_runs_every_stage_on_the_real_map() {
             && !stderr.contains("is not the paper's I-696 map"),
         "{stderr}"
     );
-    // The last JSON document printed is the evaluation against the human baseline.
-    let start = stdout.rfind("\n{\n").map_or(0, |i| i + 1);
-    let eval: serde_json::Value =
-        serde_json::from_str(&stdout[start..]).expect("eval JSON at the end");
-    assert_eq!(eval["seeds"], 3);
-    let policy = eval["outflow"]["mean"].as_f64().unwrap();
-    let human = eval["baseline"]["outflow"]["mean"].as_f64().unwrap();
-    assert!(
-        policy > 500.0 && human > 500.0,
-        "policy {policy}, human {human}"
-    );
+    assert_the_evaluation_ran(&stdout, 3);
     std::fs::remove_dir_all(&out).unwrap();
 }
 
@@ -176,15 +181,6 @@ fn pipeline_keeps_the_lanes_end_to_end() {
     assert!(lanes.len() >= 3, "{lanes:?}");
     let changed = seen.values().filter(|l| l.len() > 1).count();
     assert!(changed > 50, "{changed} vehicles changed lanes on a road");
-    let start = stdout.rfind("\n{\n").map_or(0, |i| i + 1);
-    let eval: serde_json::Value =
-        serde_json::from_str(&stdout[start..]).expect("eval JSON at the end");
-    assert_eq!(eval["seeds"], 2);
-    let policy = eval["outflow"]["mean"].as_f64().unwrap();
-    let human = eval["baseline"]["outflow"]["mean"].as_f64().unwrap();
-    assert!(
-        policy > 500.0 && human > 500.0,
-        "policy {policy}, human {human}"
-    );
+    assert_the_evaluation_ran(&stdout, 2);
     std::fs::remove_dir_all(&out).unwrap();
 }
