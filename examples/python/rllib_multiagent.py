@@ -69,7 +69,7 @@ def main():
         .env_runners(num_env_runners=a.env_runners, rollout_fragment_length="auto")
         # one policy shared by every agent
         .multi_agent(policies={"shared"}, policy_mapping_fn=lambda agent_id, episode, **kw: "shared")
-        # the paper's distributed PPO (REFERENCE.md sec. 5)
+        # the paper's distributed PPO (docs/reference.md sec. 5)
         .training(lr=5e-4, gamma=0.998, lambda_=0.95, clip_param=0.2, entropy_coeff=1e-3,
                   train_batch_size_per_learner=a.batch, minibatch_size=min(4096, a.batch), num_epochs=10, kl_coeff=0.01,
                   vf_loss_coeff=0.5)

@@ -58,7 +58,7 @@ def main():
                      normalize_actions=False)
         .env_runners(num_env_runners=a.env_runners, num_envs_per_env_runner=a.envs_per_runner,
                      gym_env_vectorize_mode=mapc.rllib.VECTORIZE_MODE, rollout_fragment_length="auto")
-        # the paper's centralized PPO (REFERENCE.md sec. 5) at mapc's fast preset's batch
+        # the paper's centralized PPO (docs/reference.md sec. 5) at mapc's fast preset's batch
         .training(lr=5e-4, gamma=0.99, lambda_=0.97, clip_param=0.3, train_batch_size_per_learner=a.batch,
                   minibatch_size=1000, num_epochs=8, kl_coeff=0.2, kl_target=0.01, entropy_coeff=0.0,
                   vf_clip_param=1e8)

@@ -100,7 +100,7 @@ def main():
     p.add_argument("--out", default=None, help="folder for the trained model: SB3's zip and a mapc policy file")
     a = p.parse_args()
     env = Sb3VecEnv(a.scenario, a.num_envs, a.reward, seed=1000 + a.seed)
-    # the paper's centralized PPO where SB3 has the knob (REFERENCE.md sec. 5): [100, 50, 25] tanh, separate
+    # the paper's centralized PPO where SB3 has the knob (docs/reference.md sec. 5): [100, 50, 25] tanh, separate
     # value net, lr 5e-4, gamma 0.99, lambda 0.97, clip 0.3, 10 epochs; a smaller batch, as mapc's fast preset
     model = PPO("MlpPolicy", env, learning_rate=5e-4, n_steps=1500, batch_size=1000, n_epochs=8, gamma=0.99,
                 gae_lambda=0.97, clip_range=0.3, ent_coef=0.0, seed=a.seed, verbose=0, device="cpu",

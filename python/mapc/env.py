@@ -27,7 +27,7 @@ def _action_bytes(action: Any, size: int) -> bytes:
 
 
 def _spaces(native: Any) -> Tuple[spaces.Box, spaces.Box]:
-    # observations are clipped to [-1, 1] (REFERENCE.md sec. 5); actions are accelerations in m/s^2
+    # observations are clipped to [-1, 1] (docs/reference.md sec. 5); actions are accelerations in m/s^2
     lo, hi = native.action_bounds
     obs = spaces.Box(-1.0, 1.0, shape=(native.obs_dim,), dtype=np.float32)
     act = spaces.Box(np.float32(lo), np.float32(hi), shape=(native.act_dim,), dtype=np.float32)

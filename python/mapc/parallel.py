@@ -30,7 +30,7 @@ class MergeParallelEnv(ParallelEnv):
         self.possible_agents: List[str] = [f"av_{i}" for i in range(self._native.max_agents)]
         self.agents: List[str] = []
         lo, hi = self._native.action_bounds
-        # the distributed observation is not clipped (REFERENCE.md sec. 5)
+        # the distributed observation is not clipped (docs/reference.md sec. 5)
         self._obs_space = spaces.Box(-np.inf, np.inf, shape=(self._native.obs_dim,), dtype=np.float32)
         self._act_space = spaces.Box(np.float32(lo), np.float32(hi), shape=(1,), dtype=np.float32)
         self._next_seed = int(seed)

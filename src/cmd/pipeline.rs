@@ -15,7 +15,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The paper's I-696 corridor: M-5 into I-96 westbound, joined by I-696 (REFERENCE.md sec. 6).
+/// The paper's I-696 corridor: M-5 into I-96 westbound, joined by I-696 (docs/reference.md sec. 6).
 const I696_VIA: [&str; 3] = ["osm-way:59440544", "osm-way:8667198", "osm-way:8708084"];
 /// Where I-696 (way 124433709) joins the corridor.
 const I696_MERGE: &str = "osm:61862553";

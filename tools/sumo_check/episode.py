@@ -1,4 +1,4 @@
-"""One SUMO 1.8 episode of an exported scenario, the way the paper's Flow code ran it (REFERENCE.md sec. 2):
+"""One SUMO 1.8 episode of an exported scenario, the way the paper's Flow code ran it (docs/reference.md sec. 2):
 sumo with the export's sumocfg and the seed, the set-up steps (the initial vehicles enter in the second), then the
 horizon; every vehicle gets speed mode 9 when it departs, and on a one-lane network lane-change mode 512 (on a
 network with a road of several lanes SUMO's default mode, LC2013 as mapc drives it); the mean speed of the vehicles

@@ -98,7 +98,7 @@ impl Episode {
     }
 }
 
-/// The centralized merge-control environment (REFERENCE.md sec. 5) on one scenario.
+/// The centralized merge-control environment (docs/reference.md sec. 5) on one scenario.
 #[pyclass(module = "mapc._mapc")]
 pub struct Env {
     episode: Episode,

@@ -425,7 +425,7 @@ mod tests {
             .map(|n| g.road(g.find_roads(n).unwrap()[0]).unwrap().length_m)
             .sum();
         assert_eq!((main_before, ramp), (600.0, 200.0));
-        // REFERENCE.md sec. 1: the total lane length the original code normalises by.
+        // docs/reference.md sec. 1: the total lane length the original code normalises by.
         assert!(
             (g.total_lane_length_m() - 947.68).abs() < 1e-9,
             "{}",

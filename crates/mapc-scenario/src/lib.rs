@@ -98,7 +98,7 @@ pub struct ResolvedWindow {
 }
 
 impl Scenario {
-    /// The paper's Simple Merge exactly (REFERENCE.md sec. 1).
+    /// The paper's Simple Merge exactly (docs/reference.md sec. 1).
     pub fn simple_merge() -> Scenario {
         let human = VehicleType::default();
         let av = VehicleType {

@@ -448,7 +448,7 @@ mod tests {
     }
 }
 
-/// The paper's corridor on the real map (REFERENCE.md sec. 6).
+/// The paper's corridor on the real map (docs/reference.md sec. 6).
 #[cfg(test)]
 mod real_map_tests {
     use super::*;

@@ -75,7 +75,7 @@ fn same_seed_same_metrics_different_seed_different() {
     assert_ne!(a, c);
 }
 
-/// SUMO 1.8 on the Simple Merge over 100 seeds (REFERENCE.md sec. 3).
+/// SUMO 1.8 on the Simple Merge over 100 seeds (docs/reference.md sec. 3).
 const SUMO_OUTFLOW: f64 = 1559.3;
 const SUMO_INFLOW: f64 = 1726.3;
 const SUMO_SPEED: f64 = 7.251;

@@ -164,7 +164,7 @@ fn depart_lane(graph: &LaneGraph, f: &FlowSpec) -> String {
     f.depart_lane.sumo_value()
 }
 
-/// The `.sumocfg`: the files, the step, and the options of the paper's runs (REFERENCE.md): no teleporting,
+/// The `.sumocfg`: the files, the step, and the options of the paper's runs (docs/reference.md): no teleporting,
 /// collisions checked inside junctions but not acted on, no min gap in the collision check; with `multi_lane`,
 /// lane changes done in one step (`lanechange.duration` 0, SUMO 1.8's default, written out as mapc's LC2013
 /// assumes it) by each vehicle type's default model, LC2013.

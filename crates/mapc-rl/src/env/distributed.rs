@@ -116,7 +116,7 @@ impl Features {
 }
 
 /// The distributed reward `(1 - done) 0.1 (-eta1 + eta2 * mean speed / V) + done * bonus`: the paper's eq. 3 with
-/// the step terms at the scale its code used (`eta1 * -0.1 + eta2 * 0.1 * mean speed / V`, REFERENCE.md sec. 5),
+/// the step terms at the scale its code used (`eta1 * -0.1 + eta2 * 0.1 * mean speed / V`, docs/reference.md sec. 5),
 /// so the exit bonus outweighs the time penalty of a normal trip (about -0.09 per step over 100-200 steps).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AgentReward {

@@ -103,7 +103,7 @@ impl PpoConfig {
 
     /// The paper's distributed hyperparameters (its appendix A.2): gamma 0.998, lambda 0.95, clip 0.2, entropy
     /// 1e-3, minibatch 4096, 60 000 simulation steps (30 episodes) per iteration, value loss 0.5, KL 0.01, and
-    /// the original code's learning rate 5e-4 -> 1e-4 at 1M steps -> 1e-5 at 4M -> 1e-6 at 8M (REFERENCE.md
+    /// the original code's learning rate 5e-4 -> 1e-4 at 1M steps -> 1e-5 at 4M -> 1e-6 at 8M (docs/reference.md
     /// sec. 5; the paper says only "piecewise linearly decreasing"), and the value as one more output of the
     /// policy net (its shared value layers).
     pub fn distributed() -> Self {
