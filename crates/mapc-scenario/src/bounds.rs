@@ -1,11 +1,22 @@
-//! What a scenario may ask of the simulator: demand that its entry roads can take and a horizon of sane length.
-//! Both bound a run's work and memory, so an absurd number (a typo such as `vehs_per_hour = 1e9`) is refused
-//! with the flow or key named instead of running until the machine runs out of memory.
+//! What a scenario may ask of the simulator: demand that its entry roads can take, a horizon and a warm-up of sane
+//! length, and a bounded amount of work (steps, and steps times the vehicles on the network). They bound a run's
+//! work and memory, so an absurd number (a typo such as `vehs_per_hour = 1e9` or `step_s = 0.001` over two days)
+//! is refused with the flow or key named instead of running for hours or until the machine runs out of memory.
 
 use std::collections::BTreeMap;
 
 /// The longest simulated time a scenario may ask for (warm-up plus horizon): two days.
 pub const MAX_SIMULATED_S: f64 = 48.0 * 3600.0;
+/// The longest warm-up: six hours of simulated time (a 500 km corridor at 30 m/s fills in under five; the
+/// shipped scenarios warm up for at most 500 s).
+pub const MAX_WARMUP_S: f64 = 6.0 * 3600.0;
+/// The most steps (warm-up plus horizon) of one run, whatever its step: two days at 0.1 s (each step costs
+/// time even on an empty network; the shipped scenarios take 3000 at most).
+pub const MAX_STEPS: u64 = 1_728_000;
+/// The most vehicle-steps (steps times the vehicles expected on the network, [`expected_vehicles`]) of one run:
+/// a thousand times the largest shipped scenario's (the whole I-696 corridor, about a million), some three minutes
+/// of one core (docs/perf.md: 5.7 million vehicle-steps a second).
+pub const MAX_VEHICLE_STEPS: f64 = 1e9;
 
 /// The most vehicles per hour one entry lane can take: the simulator inserts at most one vehicle per entry lane
 /// and step (SUMO's insertion), so demand above this can only pile up.
@@ -122,9 +133,22 @@ fn within_capacity(
     })
 }
 
-/// Warm-up plus horizon must stay within [`MAX_SIMULATED_S`].
+/// The warm-up must stay within [`MAX_WARMUP_S`], warm-up plus horizon within [`MAX_SIMULATED_S`] and
+/// [`MAX_STEPS`].
 pub fn check_horizon(warmup_steps: u64, horizon_steps: u64, step_s: f64) -> Result<(), Refusal> {
-    let total_s = (warmup_steps + horizon_steps) as f64 * step_s;
+    let warmup_s = warmup_steps as f64 * step_s;
+    if warmup_s > MAX_WARMUP_S {
+        return Err(Refusal {
+            key: "warmup_steps".into(),
+            message: format!(
+                "{warmup_steps} steps of {step_s} s ({:.1} h) exceed the limit of {:.0} h of warm-up",
+                warmup_s / 3600.0,
+                MAX_WARMUP_S / 3600.0
+            ),
+        });
+    }
+    let steps = warmup_steps.saturating_add(horizon_steps);
+    let total_s = steps as f64 * step_s;
     if total_s > MAX_SIMULATED_S {
         return Err(Refusal {
             key: "horizon_steps".into(),
@@ -136,7 +160,48 @@ pub fn check_horizon(warmup_steps: u64, horizon_steps: u64, step_s: f64) -> Resu
             ),
         });
     }
+    if steps > MAX_STEPS {
+        return Err(Refusal {
+            key: "horizon_steps".into(),
+            message: format!(
+                "warm-up and horizon ({warmup_steps} + {horizon_steps} steps of step_s = {step_s} s) exceed the \
+                 limit of {MAX_STEPS} steps of one run; raise step_s or shorten the run"
+            ),
+        });
+    }
     Ok(())
+}
+
+/// The vehicles a scenario keeps on its network at free flow: its initial vehicles plus its flows (veh/h in all)
+/// over the free-flow travel time of its longest route (`fill_s`), by Little's law. Congestion keeps more, but
+/// only up to the network's capacity; this is the estimate [`check_work`] bounds.
+pub fn expected_vehicles(initial: u32, total_vehs_per_hour: f64, fill_s: f64) -> f64 {
+    initial as f64 + total_vehs_per_hour / 3600.0 * fill_s
+}
+
+/// [`check_work`] of scenario `sc`, whose longest route takes `fill_s` at free flow.
+pub fn check_scenario_work(sc: &crate::Scenario, fill_s: f64) -> Result<(), Refusal> {
+    let initial = sc.initial_vehicles.as_ref().map_or(0, |iv| iv.count);
+    let vehs_per_hour = sc.flows.iter().map(|f| f.vehs_per_hour).sum();
+    let steps = sc.warmup_steps as u64 + sc.horizon_steps as u64;
+    check_work(steps, expected_vehicles(initial, vehs_per_hour, fill_s))
+}
+
+/// The run's steps times its [`expected_vehicles`] must stay within [`MAX_VEHICLE_STEPS`].
+pub fn check_work(steps: u64, expected_vehicles: f64) -> Result<(), Refusal> {
+    let work = steps as f64 * expected_vehicles;
+    if work <= MAX_VEHICLE_STEPS {
+        return Ok(());
+    }
+    Err(Refusal {
+        key: "horizon_steps".into(),
+        message: format!(
+            "warm-up and horizon ({steps} steps) times the {expected_vehicles:.0} vehicles its flows and initial \
+             vehicles keep on the network at free flow make {work:.2e} vehicle-steps, beyond the limit of \
+             {MAX_VEHICLE_STEPS:.0e} of one run; raise step_s, shorten warmup_steps or horizon_steps, or lower the \
+             flows"
+        ),
+    })
 }
 
 #[cfg(test)]
@@ -288,5 +353,81 @@ mod tests {
         assert!(check_horizon(0, 345_600, 0.5).is_ok());
         let err = check_horizon(10, 345_600, 0.5).unwrap_err();
         assert!(err.message.contains("48 h"), "{err:?}");
+    }
+
+    #[test]
+    fn a_warmup_beyond_six_hours_is_refused_with_its_key() {
+        assert!(check_horizon(43_200, 2000, 0.5).is_ok());
+        let err = check_horizon(230_200, 2000, 0.5).unwrap_err();
+        assert_eq!(err.key, "warmup_steps");
+        assert_eq!(
+            err.message,
+            "230200 steps of 0.5 s (32.0 h) exceed the limit of 6 h of warm-up"
+        );
+    }
+
+    #[test]
+    fn steps_beyond_the_limit_are_refused_whatever_the_step() {
+        assert!(check_horizon(0, 1_000_000, 0.1).is_ok());
+        // two days at 1 ms: within the simulated time, 1.7e8 steps
+        let err = check_horizon(0, 172_800_000, 0.001).unwrap_err();
+        assert_eq!(err.key, "horizon_steps");
+        assert!(
+            err.message.contains("step_s = 0.001 s") && err.message.contains("1728000 steps"),
+            "{err:?}"
+        );
+    }
+
+    #[test]
+    fn work_beyond_the_limit_names_the_vehicle_steps() {
+        // the Simple Merge: 2000 veh/h over a 23 s fill, 2000 steps
+        let vehicles = expected_vehicles(0, 2000.0, 700.0 / 30.0);
+        assert!((vehicles - 12.96).abs() < 0.01, "{vehicles}");
+        assert!(check_work(2000, vehicles).is_ok());
+        let err = check_work(MAX_STEPS, 2000.0).unwrap_err();
+        assert!(
+            err.message.contains("2000 vehicles")
+                && err.message.contains("3.46e9 vehicle-steps")
+                && err.message.contains("limit of 1e9"),
+            "{err:?}"
+        );
+    }
+}
+
+#[cfg(test)]
+mod shipped_tests {
+    use super::*;
+    use crate::ResolvedScenario;
+
+    /// Every shipped scenario is well within the bounds on time, steps and work (a tenth of the work's).
+    #[test]
+    fn every_shipped_scenario_is_well_within_the_bounds() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+        let mut names: Vec<String> = ["simple_merge", "two_lane_merge", "lane_drop"]
+            .map(String::from)
+            .to_vec();
+        for sub in [dir.clone(), dir.join("merges"), dir.join("fitted")] {
+            for e in std::fs::read_dir(sub).unwrap() {
+                let p = e.unwrap().path();
+                if p.extension().is_some_and(|x| x == "toml")
+                    && mapc_graph::filekind::sniff_path(&p) == Some(mapc_graph::MapcFile::Scenario)
+                {
+                    names.push(p.display().to_string());
+                }
+            }
+        }
+        assert!(names.len() > 20, "{names:?}");
+        for name in names {
+            let rs = ResolvedScenario::load(&name).unwrap_or_else(|e| panic!("{e}"));
+            let sc = &rs.scenario;
+            let fill_s = crate::timing::HorizonFit::of_resolved(&rs).fill_s;
+            let steps = sc.warmup_steps as u64 + sc.horizon_steps as u64;
+            let initial = sc.initial_vehicles.as_ref().map_or(0, |iv| iv.count);
+            let vph = sc.flows.iter().map(|f| f.vehs_per_hour).sum();
+            let work = steps as f64 * expected_vehicles(initial, vph, fill_s);
+            eprintln!("{name}: {steps} steps, {work:.3e} vehicle-steps");
+            assert!(work < MAX_VEHICLE_STEPS / 10.0, "{name}: {work}");
+            assert!(steps < MAX_STEPS / 10, "{name}: {steps}");
+        }
     }
 }

@@ -44,6 +44,9 @@ pub enum CompileError {
     },
     #[error("{0}")]
     Demand(String),
+    /// The picked timing out of the scenario's bounds (a corridor too slow to fill within the warm-up's limit).
+    #[error("{0}")]
+    Timing(String),
     #[error("{path}: --junction {junction}: {error}")]
     Junction {
         path: PathBuf,
@@ -305,7 +308,8 @@ fn output_names(output: &Path) -> (String, String, PathBuf) {
 }
 
 /// Refuses demand the source's step cannot insert (before anything is written) and picks a warm-up when the
-/// corridor is longer than the source's timing allows.
+/// corridor is longer than the source's timing allows (refused, before anything is written, beyond the
+/// scenario's bounds).
 fn bounded(
     scenario: &mut crate::Scenario,
     g: &LaneGraph,
@@ -336,7 +340,12 @@ fn bounded(
             r.message
         ))
     })?;
-    Ok(crate::timing::fit_to_corridor(scenario, g, entries))
+    crate::timing::fit_to_corridor(scenario, g, entries).map_err(|r| {
+        CompileError::Timing(format!(
+            "the window's {}: {} (nothing written)",
+            r.key, r.message
+        ))
+    })
 }
 
 /// Writes the graph and the scenario and loads the scenario back.

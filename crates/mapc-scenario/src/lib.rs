@@ -426,6 +426,11 @@ impl ResolvedScenario {
                     scenario.step_s,
                 )
             })
+            .and_then(|()| {
+                let entries: Vec<RoadId> = flow_roads.iter().map(|&(from, _)| from).collect();
+                let fill_s = timing::HorizonFit::of(&scenario, &graph, &entries).fill_s;
+                bounds::check_scenario_work(&scenario, fill_s)
+            })
             .map_err(|r| invalid(r.key, r.message))?;
         if let Some(iv) = &scenario.initial_vehicles
             && !scenario.vehicle_types.contains_key(&iv.vehicle_type)

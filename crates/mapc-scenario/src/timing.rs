@@ -4,6 +4,7 @@
 //! longest route (the *fill time*), the check `mapc sim`/`mapc eval` warn with, the warm-up and horizon `mapc
 //! window` picks for a long corridor, and the default measurement points (the controlled region's merges).
 
+use crate::bounds::{self, Refusal};
 use crate::{ResolvedScenario, Scenario};
 use mapc_graph::{JunctionId, LaneGraph, RoadId};
 use std::collections::HashMap;
@@ -153,14 +154,30 @@ pub struct PickedTiming {
 
 /// When the scenario's warm-up leaves too much of its horizon before the first vehicles can reach the end, give
 /// it a warm-up of the fill time with a margin (so measurement starts on a filled corridor) and keep the
-/// source's measured horizon; `None` when the scenario fits as it is (the paper's scenarios always do).
+/// source's measured horizon; `None` when the scenario fits as it is (the paper's scenarios always do). Refused
+/// when the timing it ends with is beyond the scenario's bounds (a corridor too slow to fill within the longest
+/// warm-up, too much work: [`bounds::check_horizon`], [`bounds::check_scenario_work`]).
 pub fn fit_to_corridor(
     sc: &mut Scenario,
     g: &LaneGraph,
     entries: &[RoadId],
-) -> Option<PickedTiming> {
+) -> Result<Option<PickedTiming>, Refusal> {
     let fit = HorizonFit::of(sc, g, entries);
-    fit.warning()?;
+    let picked = fit.warning().map(|_| pick_warmup(sc, &fit));
+    bounds::check_horizon(sc.warmup_steps as u64, sc.horizon_steps as u64, sc.step_s)
+        .and_then(|()| bounds::check_scenario_work(sc, fit.fill_s))
+        .map_err(|r| Refusal {
+            key: r.key,
+            message: format!(
+                "{} (the corridor's longest route takes {:.0} s at free flow)",
+                r.message, fit.fill_s
+            ),
+        })?;
+    Ok(picked)
+}
+
+/// Gives `sc` a warm-up of its fill time with a margin.
+fn pick_warmup(sc: &mut Scenario, fit: &HorizonFit) -> PickedTiming {
     let warmup_s = picked_warmup_s(fit.fill_s);
     let warmup_steps = (warmup_s / sc.step_s).ceil() as u32;
     let note = format!(
@@ -170,12 +187,12 @@ pub fn fit_to_corridor(
         fit.fill_s, fit.warmup_s, fit.horizon_s, fit.horizon_s
     );
     sc.warmup_steps = warmup_steps;
-    Some(PickedTiming {
+    PickedTiming {
         fill_s: fit.fill_s,
         warmup_steps,
         horizon_steps: sc.horizon_steps,
         note,
-    })
+    }
 }
 
 #[cfg(test)]
@@ -191,7 +208,7 @@ mod tests {
         assert_eq!(fit.warning(), None);
         let mut sc = rs.scenario.clone();
         let entries: Vec<RoadId> = rs.flow_roads.iter().map(|r| r.0).collect();
-        assert_eq!(fit_to_corridor(&mut sc, &rs.graph, &entries), None);
+        assert_eq!(fit_to_corridor(&mut sc, &rs.graph, &entries), Ok(None));
         assert_eq!(sc, rs.scenario);
         // its one merge is the measured point
         assert_eq!(rs.measure_junctions.len(), 1);
@@ -209,9 +226,31 @@ mod tests {
                 .unwrap()
                 .contains("no vehicle can reach the end")
         );
-        let picked = fit_to_corridor(&mut sc, &rs.graph, &entries).unwrap();
+        let picked = fit_to_corridor(&mut sc, &rs.graph, &entries)
+            .unwrap()
+            .unwrap();
         assert_eq!(picked.warmup_steps, 200); // 1.25 x 23 s rounded up to 100 s
         assert_eq!(sc.warmup_steps, 200);
         assert_eq!(HorizonFit::of(&sc, &rs.graph, &entries).warning(), None);
+    }
+
+    #[test]
+    fn a_corridor_too_slow_to_fill_within_the_longest_warmup_is_refused() {
+        let rs = ResolvedScenario::load("simple_merge").unwrap();
+        let entries: Vec<RoadId> = rs.flow_roads.iter().map(|r| r.0).collect();
+        let mut g = rs.graph.clone();
+        // 700 m of main road at 1 mm/s: a fill time of 700 000 s
+        for lane in g.roads.iter_mut().flat_map(|r| r.lanes.iter_mut()) {
+            lane.speed_mps = 1e-3;
+        }
+        let mut sc = rs.scenario.clone();
+        let refusal = fit_to_corridor(&mut sc, &g, &entries).unwrap_err();
+        assert_eq!(refusal.key, "warmup_steps");
+        assert!(
+            refusal.message.ends_with(
+                "exceed the limit of 6 h of warm-up (the corridor's longest route takes 700000 s at free flow)"
+            ),
+            "{refusal:?}"
+        );
     }
 }

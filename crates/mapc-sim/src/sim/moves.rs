@@ -145,10 +145,20 @@ impl Simulation {
                 self.lane_veh[lane as usize].remove(0);
                 let mut v_pos = v.pos;
                 let mut rp = v.route_pos as usize;
-                // a fast vehicle may cross a short connection in one step
+                // a fast vehicle (or a long step) may cross several short lanes in one step
                 let mut arrived = false;
-                while v_pos > self.lane_at(r.lanes[rp] as usize).length {
-                    v_pos -= self.lane_at(r.lanes[rp] as usize).length;
+                loop {
+                    let length = self.lane_at(r.lanes[rp] as usize).length;
+                    if v_pos <= length {
+                        break;
+                    }
+                    if rp + 1 >= r.lanes.len() {
+                        // past the end of a dead end's lane (an arrival ended the loop on entering a last lane
+                        // that continues): it stops there and waits for a gap
+                        v_pos = length;
+                        break;
+                    }
+                    v_pos -= length;
                     rp += 1;
                     self.measure.entered(r.lanes[rp], id);
                     if rp + 1 >= r.lanes.len()
