@@ -258,3 +258,85 @@ fn every_numeric_flag_has_a_range() {
         assert!(err.contains("invalid value"), "{args:?}: {err}");
     }
 }
+
+/// The characters of a terminal's control channel: C0 but the line break, DEL, C1, and the bidirectional
+/// embeddings, overrides and isolates.
+fn steering(text: &str) -> Vec<char> {
+    text.chars()
+        .filter(|&c| {
+            (c.is_control() && c != '\n')
+                || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+        })
+        .collect()
+}
+
+#[test]
+fn scenario_text_and_bad_flag_values_reach_the_terminal_escaped() {
+    let path = common::edited_scenario("simple_merge.toml", "hostile-name", |t| {
+        t.replacen("name = \"", "name = \"\u{9b}31m\u{202e}", 1)
+    });
+    let out = run_mapc(&["scenario", "show", path.to_str().unwrap()]);
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(steering(&stdout), vec![], "{stdout}");
+    assert!(stdout.contains("\\u202e"), "{stdout}");
+    // clap echoes a bad value in its message
+    let err = refused(&["sim", "--seeds", "1\u{202e}\u{1b}[2J"], &["--seeds"]);
+    assert_eq!(steering(&err), vec![], "{err}");
+    assert!(err.contains("\\u202e"), "{err}");
+    // help and version still go to standard output with success
+    for flag in ["--help", "--version"] {
+        let out = run_mapc(&[flag]);
+        assert_eq!(out.status.code(), Some(0), "{flag}");
+        assert!(!out.stdout.is_empty() && out.stderr.is_empty(), "{flag}");
+    }
+    let out = run_mapc(&["sim", "--no-such-flag"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn a_missing_file_is_named_once_with_its_cause_once() {
+    for args in [
+        &["eval", "--policy", "no/such.json", "--seeds", "1"][..],
+        &["view", "no/such.toml"],
+        &["plot", "training", "no/such", "-o", "x.png"],
+        &["train", "--resume", "no/such"],
+    ] {
+        let err = refused(args, &["no/such", "No such file or directory"]);
+        assert_eq!(
+            err.matches("No such file or directory").count(),
+            1,
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn a_trace_that_cannot_be_written_names_its_file() {
+    let dir = scratch_dir("trace-too-large");
+    let trace = dir.join("trace.csv");
+    // files may grow to 1 block (the shell's unit) and a longer write fails (SIGXFSZ ignored), as on a full disk
+    let out = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -f 1 && trap '' XFSZ && exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_mapc"))
+        .args(["sim", "--seeds", "1", "--trace"])
+        .arg(&trace)
+        .current_dir(common::root())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains(trace.to_str().unwrap()), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        0,
+        "nothing is left"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

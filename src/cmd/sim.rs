@@ -196,6 +196,13 @@ pub fn write_trace_file(
         })
     });
     if let Some(e) = failure {
+        // the file system's own refusal (a full disk) names the file; the simulator's or the policy's stays as is
+        let os_error = e
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.get_ref().is_none());
+        if os_error {
+            return Err(e.context(format!("writing the trace {}", path.display())));
+        }
         return Err(e);
     }
     written.with_context(|| format!("writing the trace {}", path.display()))
