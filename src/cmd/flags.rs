@@ -20,10 +20,11 @@ pub const MAX_THREADS: u64 = 1024;
 pub const MAX_PIXELS: u64 = 20_000;
 /// A lane index (`--lane`): below the most lanes a road may have.
 pub const LANE_INDEX: RangeInclusive<u64> = 0..=(mapc_scenario::ranges::LANES.hi as u64 - 1);
-/// A demand in veh/h given on the command line (the scenario's own check then holds it to the entry's capacity).
+/// A demand or a flow in veh/h given on the command line: a number, not negative (a window's own check then holds
+/// a demand to its entry's capacity, which it names).
 pub const DEMAND_VPH: Range = Range {
     lo: 0.0,
-    hi: 1e6,
+    hi: 1e12,
     unit: "veh/h",
 };
 
