@@ -10,6 +10,9 @@ macro_rules! eprintln {
     () => { ::std::eprintln!() };
     ($($arg:tt)*) => { ::std::eprintln!("{}", ::mapc_graph::terminal::printable(&::std::format!($($arg)*))) };
 }
+macro_rules! print {
+    ($($arg:tt)*) => { ::std::print!("{}", ::mapc_graph::terminal::printable(&::std::format!($($arg)*))) };
+}
 
 mod cmd;
 
@@ -86,14 +89,45 @@ pub(crate) fn run_command_line(words: &[String]) -> anyhow::Result<()> {
 fn main() -> ExitCode {
     restore_default_sigpipe();
     keep_freed_memory();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage(&e),
+    };
     match dispatch(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             // Bad input is the usual cause; every message names the file and the place.
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", message(&e));
             ExitCode::from(2)
         }
+    }
+}
+
+/// An error and its causes, each fact once: most of the workspace's errors already print their cause after the
+/// file's name (`{path}: {source}`), so a cause whose text the message holds already is left out.
+fn message(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text = format!("{text}: {cause}");
+        }
+    }
+    text
+}
+
+/// What clap has to say about the command line (help, version or a usage error), through `printable` like every
+/// other line: a bad flag's value is echoed in the message, and it may hold escape sequences. Help and version go
+/// to standard output with exit code 0, a usage error to standard error with 2.
+fn usage(e: &clap::Error) -> ExitCode {
+    let text = e.render().to_string();
+    let text = text.strip_suffix('\n').unwrap_or(&text);
+    if e.use_stderr() {
+        eprintln!("{text}");
+        ExitCode::from(2)
+    } else {
+        println!("{text}");
+        ExitCode::SUCCESS
     }
 }
 

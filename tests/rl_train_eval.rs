@@ -542,7 +542,7 @@ fn distributed_flags_are_checked() {
                 .arg(tmp("bad-share")),
         );
         assert!(
-            err.contains("--reward-share must lie in [0, 1]"),
+            err.contains("--reward-share") && err.contains("outside the allowed range [0, 1]"),
             "{bad}: {err}"
         );
     }

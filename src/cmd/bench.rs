@@ -14,21 +14,21 @@ pub struct Args {
     /// Scenario file, or a built-in scenario name (simple_merge).
     #[arg(long, default_value = super::sim::DEFAULT_SCENARIO)]
     pub scenario: String,
-    /// Seeds run one after another on one core for the vehicle-steps figure.
-    #[arg(long, default_value_t = 20)]
+    /// Seeds run one after another on one core for the vehicle-steps figure (1 to 100 000).
+    #[arg(long, default_value_t = 20, value_parser = super::flags::seeds())]
     pub single_core_seeds: u64,
-    /// Seeds of the parallel baseline.
-    #[arg(long, default_value_t = 100)]
+    /// Seeds of the parallel baseline (1 to 100 000).
+    #[arg(long, default_value_t = 100, value_parser = super::flags::seeds())]
     pub seeds: u64,
-    /// Threads of the parallel baseline.
-    #[arg(long, default_value_t = 2)]
+    /// Threads of the parallel baseline (1 to 1024).
+    #[arg(long, default_value_t = 2, value_parser = super::flags::threads())]
     pub threads: usize,
     /// SUMO binary to compare with (default: SUMO 1.8 where tools/sumo_check installs it, `$MAPC_SUMO_VENV` or
     /// `~/.cache/mapc/sumo-1.8.0`, else `sumo` on the PATH).
     #[arg(long, value_name = "PATH", conflicts_with = "no_sumo")]
     pub sumo: Option<std::path::PathBuf>,
-    /// Seeds SUMO runs one after another (it is some 20 times slower than mapc).
-    #[arg(long, default_value_t = 5)]
+    /// Seeds SUMO runs one after another (it is some 20 times slower than mapc; 1 to 100 000).
+    #[arg(long, default_value_t = 5, value_parser = super::flags::seeds())]
     pub sumo_seeds: u64,
     /// Measure mapc only.
     #[arg(long)]
@@ -38,7 +38,7 @@ pub struct Args {
     pub json: bool,
     /// Benchmark training instead: this many iterations of `mapc train --preset paper --reward outflow` on the
     /// scenario (a fresh run in a temporary directory, on `--threads` threads).
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::count::<u64>(1..=*mapc_rl::limits::ITERATIONS.end()))]
     pub train: Option<u64>,
 }
 
@@ -46,10 +46,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(iters) = args.train {
         return bench_training(&args, iters);
     }
-    anyhow::ensure!(
-        args.single_core_seeds >= 1 && args.seeds >= 1,
-        "seed counts must be at least 1"
-    );
     let rs = super::sim::load_scenario(&args.scenario)?;
     let spec = spec_from_scenario(&rs)?;
 
@@ -204,7 +200,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// `--train N`: N iterations of the paper preset, timed; the preset's full run extrapolated from their mean.
 fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
     use clap::Parser;
-    anyhow::ensure!(iters >= 1, "--train needs at least 1 iteration");
     let dir = std::env::temp_dir().join(format!("mapc-bench-train-{}", std::process::id()));
     std::fs::remove_dir_all(&dir).ok();
     #[derive(Parser)]

@@ -18,10 +18,11 @@ pub struct Args {
     /// Scenario: `simple_merge` or a scenario file (a window from `mapc window` for zero-shot transfer).
     #[arg(long, default_value = "simple_merge")]
     pub scenario: String,
-    /// Number of seeds (0, 1, ..., N-1 from --first-seed).
-    #[arg(long, default_value_t = 100)]
+    /// Number of seeds (0, 1, ..., N-1 from --first-seed), 1 to 100 000.
+    #[arg(long, default_value_t = 100, value_parser = super::flags::seeds())]
     pub seeds: u64,
-    #[arg(long, default_value_t = 0)]
+    /// First seed (at most 2^64 - 1 - 100 000, so that every seed fits in 64 bits).
+    #[arg(long, default_value_t = 0, value_parser = super::flags::first_seed())]
     pub first_seed: u64,
     /// Sample actions from the Gaussian instead of taking its mean.
     #[arg(long)]
@@ -29,8 +30,8 @@ pub struct Args {
     /// Skip the human baseline.
     #[arg(long)]
     pub no_baseline: bool,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
+    /// Worker threads, 1 to 1024 (default: all cores).
+    #[arg(long, value_parser = super::flags::threads())]
     pub threads: Option<usize>,
     /// Print the report as JSON.
     #[arg(long)]
@@ -55,9 +56,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .num_threads(t)
             .build_global()
             .ok();
-    }
-    if args.seeds == 0 {
-        anyhow::bail!("--seeds must be at least 1");
     }
     let file = policy_file(&args.policy);
     let mut ck = Checkpoint::load(&file)?;

@@ -4,6 +4,7 @@ pub mod bench;
 mod bench_sumo;
 pub mod eval;
 pub mod export;
+pub mod flags;
 pub mod import;
 pub mod junctions;
 pub mod pipeline;

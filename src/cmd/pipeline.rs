@@ -39,14 +39,14 @@ pub struct Args {
     /// The Simple Merge policy evaluated zero-shot in the window.
     #[arg(long, default_value = "policies/simple_merge_outflow.json")]
     pub policy: PathBuf,
-    /// Seeds for the baseline and the evaluation.
-    #[arg(long, default_value_t = 100)]
+    /// Seeds for the baseline and the evaluation (1 to 100 000).
+    #[arg(long, default_value_t = 100, value_parser = super::flags::seeds())]
     pub seeds: u64,
     /// Keep every lane of the corridor (`mapc simplify --keep-lanes`): the whole job multi-lane, with lane changes.
     #[arg(long)]
     pub keep_lanes: bool,
     /// Draw only lane N (0 rightmost) in the time-space diagram; default every lane.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = super::flags::lane())]
     pub lane: Option<u8>,
     /// Print each step's output as JSON.
     #[arg(long)]

@@ -25,17 +25,17 @@ pub struct TimespaceArgs {
     #[arg(long, default_value = "main", value_name = "FILTER")]
     pub road_filter: RoadFilter,
     /// Top of the speed colour scale, m/s (default: the fastest sample, rounded up to 5).
-    #[arg(long, value_name = "MPS")]
+    #[arg(long, value_name = "MPS", value_parser = super::flags::within::<f64>(mapc_scenario::ranges::DRIVING_SPEED_MPS))]
     pub speed_max: Option<f64>,
     /// Leave out samples before this time, s (a warm-up).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", value_parser = super::flags::within::<f64>(mapc_scenario::ranges::FLOW_TIME_S))]
     pub start: Option<f64>,
     /// Draw only lane N of each road (0 rightmost; default: all lanes).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = super::flags::lane())]
     pub lane: Option<u8>,
-    #[arg(long, default_value_t = 1400, value_name = "PX")]
+    #[arg(long, default_value_t = 1400, value_name = "PX", value_parser = super::flags::pixels())]
     pub width: u32,
-    #[arg(long, default_value_t = 800, value_name = "PX")]
+    #[arg(long, default_value_t = 800, value_name = "PX", value_parser = super::flags::pixels())]
     pub height: u32,
     /// Title (default: the trace's file name and what is shown).
     #[arg(long)]
@@ -54,14 +54,14 @@ pub struct TrainingArgs {
     #[arg(short = 'o', long = "output", value_name = "FILE")]
     pub output: PathBuf,
     /// Draw the all-human baseline's outflow, veh/h, as a dashed line on the outflow panel.
-    #[arg(long, value_name = "VEH_PER_H")]
+    #[arg(long, value_name = "VEH_PER_H", value_parser = super::flags::within::<f64>(super::flags::DEMAND_VPH))]
     pub baseline_outflow: Option<f64>,
     /// What goes across: iteration, env_steps or wall_s.
     #[arg(long, default_value = "iteration")]
     pub x: XAxis,
-    #[arg(long, default_value_t = 1800, value_name = "PX")]
+    #[arg(long, default_value_t = 1800, value_name = "PX", value_parser = super::flags::pixels())]
     pub width: u32,
-    #[arg(long, default_value_t = 900, value_name = "PX")]
+    #[arg(long, default_value_t = 900, value_name = "PX", value_parser = super::flags::pixels())]
     pub height: u32,
     #[arg(long)]
     pub title: Option<String>,
@@ -78,12 +78,6 @@ pub fn run(c: Command) -> anyhow::Result<()> {
 }
 
 fn timespace(a: TimespaceArgs) -> anyhow::Result<()> {
-    if let Some(v) = a.speed_max {
-        anyhow::ensure!(
-            v.is_finite() && v > 0.0,
-            "--speed-max must be a positive number of m/s, not {v}"
-        );
-    }
     let options = TimeSpaceOptions {
         filter: a.road_filter,
         width_px: a.width,
@@ -113,12 +107,6 @@ fn timespace(a: TimespaceArgs) -> anyhow::Result<()> {
 }
 
 fn training(a: TrainingArgs) -> anyhow::Result<()> {
-    if let Some(b) = a.baseline_outflow {
-        anyhow::ensure!(
-            b.is_finite() && b >= 0.0,
-            "--baseline-outflow must be a number of veh/h, not {b}"
-        );
-    }
     let options = TrainingPlotOptions {
         baseline_outflow: a.baseline_outflow,
         x: a.x,

@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(long, value_name = "SCENARIO")]
     pub window: Option<String>,
     /// Picture width in pixels; the height follows from the map's shape.
-    #[arg(long, default_value_t = 1600, value_name = "PX")]
+    #[arg(long, default_value_t = 1600, value_name = "PX", value_parser = super::flags::pixels())]
     pub width: u32,
     /// Junctions to label and ring, whatever their kind (mapc, OSM `osm:NODE` or SUMO ids), comma separated.
     #[arg(long, value_delimiter = ',', value_name = "JUNCTIONS")]

@@ -20,14 +20,14 @@ pub struct Args {
     /// Scenario file, or a built-in scenario name (simple_merge).
     #[arg(long, default_value = DEFAULT_SCENARIO)]
     pub scenario: String,
-    /// Number of seeds (seeds first_seed .. first_seed + N).
-    #[arg(long, default_value_t = 100)]
+    /// Number of seeds (seeds first_seed .. first_seed + N), 1 to 100 000.
+    #[arg(long, default_value_t = 100, value_parser = super::flags::seeds())]
     pub seeds: u64,
-    /// First seed.
-    #[arg(long, default_value_t = 0)]
+    /// First seed (at most 2^64 - 1 - 100 000, so that every seed fits in 64 bits).
+    #[arg(long, default_value_t = 0, value_parser = super::flags::first_seed())]
     pub first_seed: u64,
-    /// Worker threads (default: all cores). Results do not depend on it.
-    #[arg(long)]
+    /// Worker threads, 1 to 1024 (default: all cores). Results do not depend on it.
+    #[arg(long, value_parser = super::flags::threads())]
     pub threads: Option<usize>,
     /// Write the first seed's trajectories as CSV (time_s, vehicle_id, vehicle_type, road, pos_on_road_m,
     /// corridor_x_m, speed_mps, controlled).
@@ -49,7 +49,6 @@ pub fn load_scenario(name: &str) -> anyhow::Result<ResolvedScenario> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    anyhow::ensure!(args.seeds >= 1, "--seeds must be at least 1");
     let rs = load_scenario(&args.scenario)?;
     let spec = spec_from_scenario(&rs).with_context(|| format!("scenario `{}`", rs.origin))?;
     let fit = mapc_scenario::timing::HorizonFit::of_resolved(&rs);
@@ -197,6 +196,13 @@ pub fn write_trace_file(
         })
     });
     if let Some(e) = failure {
+        // the file system's own refusal (a full disk) names the file; the simulator's or the policy's stays as is
+        let os_error = e
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.get_ref().is_none());
+        if os_error {
+            return Err(e.context(format!("writing the trace {}", path.display())));
+        }
         return Err(e);
     }
     written.with_context(|| format!("writing the trace {}", path.display()))

@@ -15,7 +15,7 @@ pub struct RouteArgs {
     #[arg(long = "via", value_name = "ID")]
     pub via: Vec<String>,
     /// Keep merging roads at most this long (metres) instead of back to where they start in the map.
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = super::flags::within::<f64>(mapc_scenario::ranges::ROAD_LENGTH_M))]
     pub feeder_length: Option<f64>,
     /// Keep diverging roads as exits (up to their next junction) instead of dropping them.
     #[arg(long)]

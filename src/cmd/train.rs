@@ -38,13 +38,13 @@ pub struct Args {
     #[arg(long)]
     pub features: Option<String>,
     /// Distributed: weight of the selfish time penalty.
-    #[arg(long, default_value_t = 0.9, requires = "distributed")]
+    #[arg(long, default_value_t = 0.9, requires = "distributed", value_parser = super::flags::within::<f64>(mapc_rl::limits::REWARD_WEIGHT))]
     pub eta1: f64,
     /// Distributed: weight of the collaborative average speed.
-    #[arg(long, default_value_t = 0.1, requires = "distributed")]
+    #[arg(long, default_value_t = 0.1, requires = "distributed", value_parser = super::flags::within::<f64>(mapc_rl::limits::REWARD_WEIGHT))]
     pub eta2: f64,
     /// Distributed: reward in the step an agent leaves.
-    #[arg(long, default_value_t = 20.0, requires = "distributed")]
+    #[arg(long, default_value_t = 20.0, requires = "distributed", value_parser = super::flags::within::<f64>(mapc_rl::limits::EXIT_BONUS))]
     pub exit_bonus: f64,
     /// Distributed: count the vehicles waiting to enter in the reward's mean speed, as standing (not in the
     /// paper; closes the loophole of holding back the entry).
@@ -57,7 +57,8 @@ pub struct Args {
         long,
         default_value_t = 0.0,
         requires = "distributed",
-        conflicts_with = "resume"
+        conflicts_with = "resume",
+        value_parser = super::flags::within::<f64>(mapc_rl::limits::REWARD_SHARE)
     )]
     pub reward_share: f64,
     /// The value function: `shared` (one more output of the policy net, so both train the same hidden layers:
@@ -66,7 +67,7 @@ pub struct Args {
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub value_net: Option<ValueNet>,
     /// Training iterations (overrides the preset / config).
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::count::<u64>(mapc_rl::limits::ITERATIONS))]
     pub iters: Option<u64>,
     /// Run directory (checkpoint.json, progress.csv).
     #[arg(short = 'o', long)]
@@ -86,40 +87,40 @@ pub struct Args {
     #[arg(long)]
     pub seed: Option<u64>,
     /// Adam learning rate [5e-4]; replaces the distributed presets' schedule by this constant rate.
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::within::<f32>(mapc_rl::limits::LR))]
     pub lr: Option<f32>,
     /// Environment steps per iteration [paper: 40000; fast: 12000].
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::count::<usize>(mapc_rl::limits::TRAIN_BATCH_SIZE))]
     pub batch: Option<usize>,
     /// SGD minibatch size in environment steps [paper: 128; fast: 1000].
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::count::<usize>(mapc_rl::limits::MINIBATCH))]
     pub minibatch: Option<usize>,
     /// SGD passes over each iteration's batch [paper: 10; fast: 8].
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::count::<usize>(mapc_rl::limits::EPOCHS))]
     pub epochs: Option<usize>,
     /// Discount factor [0.99].
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::within::<f32>(mapc_rl::limits::GAMMA))]
     pub gamma: Option<f32>,
     /// GAE lambda [0.97].
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::within::<f32>(mapc_rl::limits::LAMBDA))]
     pub lambda: Option<f32>,
     /// PPO's surrogate clip parameter [0.3].
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::within::<f32>(mapc_rl::limits::CLIP))]
     pub clip: Option<f32>,
     /// Initial KL penalty coefficient, adapted every iteration [0.2].
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::within::<f32>(mapc_rl::limits::KL_COEFF))]
     pub kl_coeff: Option<f32>,
     /// Target KL divergence per iteration [0.01].
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::within::<f32>(mapc_rl::limits::KL_TARGET))]
     pub kl_target: Option<f32>,
     /// Episode length in steps (default: the scenario's horizon).
-    #[arg(long)]
+    #[arg(long, value_parser = super::flags::count::<usize>(mapc_rl::limits::HORIZON))]
     pub horizon: Option<usize>,
     /// Controlled AVs of a centralized policy (default: the scenario's N_AV, 5 on Simple Merge).
-    #[arg(long, conflicts_with = "distributed")]
+    #[arg(long, conflicts_with = "distributed", value_parser = super::flags::count::<usize>(mapc_rl::limits::N_AV))]
     pub n_av: Option<usize>,
     /// Write a checkpoint every K iterations (and at the end).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = super::flags::count::<u64>(1..=u64::MAX))]
     pub checkpoint_every: u64,
     /// Start a new centralized run from this policy's weights (a fresh optimiser; the architectures must agree).
     #[arg(long, conflicts_with_all = ["resume", "distributed"])]
@@ -139,8 +140,8 @@ pub struct Args {
     /// return or speed (RLlib Tune's `checkpoint_score_attr`). A resumed run keeps its own.
     #[arg(long, value_enum)]
     pub best_by: Option<BestByArg>,
-    /// Worker threads for rollouts (default: all cores).
-    #[arg(long)]
+    /// Worker threads for rollouts, 1 to 1024 (default: all cores).
+    #[arg(long, value_parser = super::flags::threads())]
     pub threads: Option<usize>,
     /// Print the final iteration's figures as JSON (no progress bar).
     #[arg(long)]
@@ -289,42 +290,6 @@ fn read_config(path: &Path, base: PpoConfig) -> anyhow::Result<PpoConfig> {
     Ok(c)
 }
 
-fn validate(c: &PpoConfig) -> anyhow::Result<()> {
-    if c.hidden.is_empty() || c.hidden.contains(&0) {
-        bail!("hidden layer sizes must be positive, got {:?}", c.hidden);
-    }
-    for (name, v) in [
-        ("lr", c.lr),
-        ("gamma", c.gamma),
-        ("lambda", c.lambda),
-        ("clip", c.clip),
-    ] {
-        if !(v > 0.0 && v.is_finite()) {
-            bail!("{name} must be a positive number, got {v}");
-        }
-    }
-    for (i, &(steps, lr)) in c.lr_schedule.iter().enumerate() {
-        if !(lr > 0.0 && lr.is_finite()) {
-            bail!("lr_schedule point {i}: the rate must be a positive number, got {lr}");
-        }
-        if i > 0 && steps <= c.lr_schedule[i - 1].0 {
-            bail!(
-                "lr_schedule point {i}: steps must increase, got {steps} after {}",
-                c.lr_schedule[i - 1].0
-            );
-        }
-    }
-    if c.minibatch == 0
-        || c.epochs == 0
-        || c.train_batch_size == 0
-        || c.horizon == 0
-        || c.grad_slices == 0
-    {
-        bail!("minibatch, epochs, batch, horizon and grad_slices must be at least 1");
-    }
-    Ok(())
-}
-
 pub fn run(args: Args) -> anyhow::Result<()> {
     let json = args.json;
     let (run, last) = train(args)?;
@@ -368,7 +333,11 @@ pub fn train(args: Args) -> anyhow::Result<(TrainRun, Option<IterationStats>)> {
         if args.horizon.is_none() {
             config.horizon = sc.spec.horizon_steps as usize;
         }
-        validate(&config)?;
+        // the flags are checked as they are parsed; a preset or a config file's keys here
+        mapc_rl::limits::check_config(&config, "").map_err(|e| match &args.config {
+            Some(p) => anyhow::anyhow!("{}: {e}", p.display()),
+            None => anyhow::anyhow!("hyperparameters: {e}"),
+        })?;
         let n_av = args.n_av.or(sc.n_av).unwrap_or(5);
         let mut spec = PolicySpec::centralized(&args.scenario, reward.name(), n_av);
         if !args.distributed
@@ -387,21 +356,6 @@ pub fn train(args: Args) -> anyhow::Result<(TrainRun, Option<IterationStats>)> {
         if args.distributed {
             let features = Features::parse(args.features.as_deref().unwrap_or("full"))
                 .map_err(anyhow::Error::msg)?;
-            for (name, v) in [
-                ("eta1", args.eta1),
-                ("eta2", args.eta2),
-                ("exit-bonus", args.exit_bonus),
-            ] {
-                if !v.is_finite() {
-                    bail!("--{name} must be a number, got {v}");
-                }
-            }
-            if !(0.0..=1.0).contains(&args.reward_share) {
-                bail!(
-                    "--reward-share must lie in [0, 1], got {}",
-                    args.reward_share
-                );
-            }
             spec = PolicySpec::distributed(
                 &args.scenario,
                 n_av,

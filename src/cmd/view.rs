@@ -38,11 +38,11 @@ pub struct Args {
     #[arg(long, default_value_t = 0, requires = "serve")]
     pub port: u16,
     /// Stop serving after this many requests (for scripts and tests).
-    #[arg(long, requires = "serve", hide = true)]
+    #[arg(long, requires = "serve", hide = true, value_parser = super::flags::count::<usize>(1..=u64::MAX))]
     pub max_requests: Option<usize>,
     /// Vehicle-steps a page holds before only every k-th step is kept (default: 1 200 000 in a file, about
     /// 13 MB; 6 000 000 served).
-    #[arg(long, value_name = "ROWS")]
+    #[arg(long, value_name = "ROWS", value_parser = super::flags::count::<usize>(1..=u64::MAX))]
     pub max_rows: Option<usize>,
     /// Print what the page holds as JSON.
     #[arg(long)]
@@ -50,7 +50,6 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    anyhow::ensure!(args.max_rows != Some(0), "--max-rows must be at least 1");
     let mut page = if super::render::names_scenario(&args.target) {
         scenario_page(&args)?
     } else {

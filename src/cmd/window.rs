@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long)]
     pub fit: bool,
     /// With --fit: the shortest a fitted length may be, as a fraction of the source's (default 0.5).
-    #[arg(long, value_name = "FRACTION", requires = "fit")]
+    #[arg(long, value_name = "FRACTION", requires = "fit", value_parser = super::flags::within::<f64>(super::flags::FIT_FLOOR))]
     pub fit_floor: Option<f64>,
     /// Main road before merge J in its window, if not the source's (`J=METRES`, repeatable): windows cut
     /// shorter upstream to fit between close merges.
@@ -61,13 +61,13 @@ pub struct Args {
     #[arg(long, value_name = "PNG")]
     pub render: Option<PathBuf>,
     /// Total main-road demand in veh/h (split among vehicle types as in the source); default the source's.
-    #[arg(long, value_name = "VPH")]
+    #[arg(long, value_name = "VPH", value_parser = super::flags::within::<f64>(super::flags::DEMAND_VPH))]
     pub main_vph: Option<f64>,
     /// Total merging-road demand in veh/h; default the source's.
-    #[arg(long, value_name = "VPH")]
+    #[arg(long, value_name = "VPH", value_parser = super::flags::within::<f64>(super::flags::DEMAND_VPH))]
     pub merge_vph: Option<f64>,
     /// Controlled AVs at once; default the source's.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = super::flags::count::<u32>(super::flags::WINDOW_N_AV))]
     pub n_av: Option<u32>,
     /// How a raw map is simplified first (ignored for a corridor graph). Without --via the main road is the
     /// longest route through the junction.

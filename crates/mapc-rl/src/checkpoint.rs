@@ -220,33 +220,10 @@ impl Checkpoint {
                 ),
             });
         }
-        if let Some(d) = &ck.spec.distributed
-            && (d.features.obs_dim() != ck.spec.obs_dim || ck.spec.act_dim != 1)
-        {
-            return Err(RlError::Format {
-                path: path.into(),
-                msg: format!(
-                    "a distributed policy with features `{}` reads {} values and sets 1 acceleration, but its \
-                     spec says {} and {}",
-                    d.features.name(),
-                    d.features.obs_dim(),
-                    ck.spec.obs_dim,
-                    ck.spec.act_dim
-                ),
-            });
-        }
-        let arch = &ck.state.model.arch;
-        if ck.state.model.params.len() != arch.param_len()
-            || arch.obs_dim != ck.spec.obs_dim
-            || arch.act_dim != ck.spec.act_dim
-            || ck.state.adam.m.len() != ck.state.model.params.len()
-            || ck.state.adam.v.len() != ck.state.model.params.len()
-        {
-            return Err(RlError::Format {
-                path: path.into(),
-                msg: "parameter count does not match the network sizes".into(),
-            });
-        }
+        crate::limits::check_checkpoint(&ck).map_err(|msg| RlError::Format {
+            path: path.into(),
+            msg,
+        })?;
         Ok(ck)
     }
 }

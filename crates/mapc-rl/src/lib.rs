@@ -38,6 +38,7 @@ pub mod env;
 pub mod error;
 pub mod eval;
 pub mod eval_windows;
+pub mod limits;
 pub mod log;
 pub mod ppo;
 pub mod rng;
