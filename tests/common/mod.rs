@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 pub mod browser;
+pub mod mutate;
 
 /// The `--via` flags that route `maps/i696.osm` along the paper's I-696 corridor (the three ways of its main road).
 pub const PAPER_VIA: [&str; 6] = [
