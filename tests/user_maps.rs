@@ -1,8 +1,57 @@
-//! What a user meets running mapc on a map of their own: help that sets nothing up and says what the commands do.
+//! What a user meets running mapc on a map of their own: `mapc view`'s figures on a thinned replay, and help that
+//! sets nothing up and says what the commands do.
 
 mod common;
 
-use common::{assert_success, fresh_path, root, run_mapc};
+use common::{assert_success, fresh_path, mapc_json, root, run_mapc};
+
+/// A replay thinned to every 3rd step drops the run's last frames: the figures shown are still the run's.
+#[test]
+fn a_thinned_replay_shows_the_runs_figures_and_says_every_3rd_step() {
+    let dir = fresh_path("view-thinned");
+    std::fs::create_dir_all(&dir).unwrap();
+    let page = dir.join("replay.html");
+    let page = page.to_str().unwrap();
+    let sim = mapc_json(&[
+        "sim",
+        "--scenario",
+        "simple_merge",
+        "--seeds",
+        "1",
+        "--first-seed",
+        "3",
+        "--json",
+    ]);
+    let run = &sim["runs"][0];
+    let whole = mapc_json(&["view", "simple_merge", "--seed", "3", "-o", page, "--json"]);
+    let steps = whole["panes"][0]["vehicle_steps"].as_u64().unwrap();
+    let max_rows = (steps / 3 + 1).to_string();
+    let args = [
+        "view",
+        "simple_merge",
+        "--seed",
+        "3",
+        "--max-rows",
+        &max_rows,
+        "-o",
+        page,
+    ];
+    let thinned = mapc_json(&[&args[..], &["--json"]].concat());
+    let pane = &thinned["panes"][0];
+    assert_eq!(pane["decimation"], 3);
+    for (shown, measured) in [
+        ("outflow_veh_h", "outflow_veh_h"),
+        ("inflow_veh_h", "inflow_veh_h"),
+        ("avg_speed_mps", "avg_speed_mps"),
+    ] {
+        assert_eq!(pane[shown], run[measured], "{shown}: {pane} against {run}");
+    }
+    let out = run_mapc(&args);
+    assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("(every 3rd step kept)"), "{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
 
 /// `sumo_check --help` prints its usage with the standard library only: no SUMO environment is made for it.
 #[test]
