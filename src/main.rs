@@ -91,10 +91,27 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             // Bad input is the usual cause; every message names the file and the place.
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_text(&e));
             ExitCode::from(2)
         }
     }
+}
+
+/// The error and its causes joined as `{:#}` joins them, less a cause that the text before it already ends
+/// with: an error that shows its source in its own message (`{path}: {source}`) would say it twice.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let part = cause.to_string();
+        if text.ends_with(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
 }
 
 /// Training frees and reallocates the same megabyte-sized tensors thousands of times per iteration. glibc's

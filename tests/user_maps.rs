@@ -1,9 +1,67 @@
-//! What a user meets running mapc on a map of their own: `mapc view`'s figures on a thinned replay, and help that
+//! What a user meets running mapc on a map of their own: the pipeline from any folder with a policy that does not
+//! lose on other maps, errors that say their cause once, `mapc view`'s figures on a thinned replay, and help that
 //! sets nothing up and says what the commands do.
 
 mod common;
 
-use common::{assert_success, fresh_path, mapc_json, root, run_mapc};
+use common::{assert_success, fresh_path, mapc_json, refused, root, run_mapc};
+
+/// Run from a folder outside the repository on a map that is not the paper's: the shipped policy is found, it is
+/// the one whose rule leaves unlike merges to the humans, and the pipeline says why.
+#[test]
+fn the_pipeline_runs_from_any_folder_with_the_policy_that_never_loses() {
+    let elsewhere = fresh_path("pipeline-elsewhere");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    let map = root().join("maps/rongwu.net.xml");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .current_dir(&elsewhere)
+        .arg("pipeline")
+        .arg(&map)
+        .args(["--seeds", "2", "-o", "out"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "pipeline failed:\n{stderr}");
+    assert!(
+        stderr.contains("merge_robust_congested")
+            && stderr.contains("leaves the others to the humans"),
+        "{stderr}"
+    );
+    let policy = elsewhere.join("out/merge_robust_congested.json");
+    assert_eq!(
+        std::fs::read(&policy).unwrap(),
+        std::fs::read(root().join("policies/merge_robust_congested.json")).unwrap()
+    );
+    assert!(
+        stderr.contains("$ mapc eval --policy out/merge_robust_congested.json"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&elsewhere).unwrap();
+}
+
+/// An error that carries its cause in its own message (`{path}: {source}`) says the cause once.
+#[test]
+fn a_missing_file_is_said_once() {
+    for args in [
+        &[
+            "eval",
+            "--policy",
+            "nonesuch.json",
+            "--scenario",
+            "simple_merge",
+            "--seeds",
+            "1",
+        ][..],
+        &["import", "nonesuch.osm", "-o", "nonesuch.graph.json"][..],
+    ] {
+        let stderr = refused(args, &["nonesuch."]);
+        assert_eq!(
+            stderr.matches("No such file or directory").count(),
+            1,
+            "{stderr}"
+        );
+    }
+}
 
 /// A replay thinned to every 3rd step drops the run's last frames: the figures shown are still the run's.
 #[test]
