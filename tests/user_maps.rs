@@ -1,10 +1,68 @@
-//! What a user meets running mapc on a map of their own: the pipeline from any folder with a policy that does not
-//! lose on other maps, errors that say their cause once, `mapc view`'s figures on a thinned replay, and help that
-//! sets nothing up and says what the commands do.
+//! What a user meets running mapc on a map of their own: a report that says first when an entry cannot take its
+//! demand, the pipeline from any folder with a policy that does not lose on other maps, errors that say their
+//! cause once, `mapc view`'s figures on a thinned replay, and help that sets nothing up and says what the commands
+//! do.
 
 mod common;
 
-use common::{assert_success, fresh_path, mapc_json, refused, root, run_mapc};
+use common::{assert_success, edited_scenario, fresh_path, mapc_json, refused, root, run_mapc};
+use serde_json::Value;
+
+/// The Simple Merge with 4000 human veh/h on its one-lane main road: far more than the road takes.
+fn blocked_simple_merge(name: &str) -> String {
+    let path = edited_scenario("simple_merge.toml", name, |t| {
+        t.replace("vehs_per_hour = 1800.0", "vehs_per_hour = 4000.0")
+    });
+    path.to_str().unwrap().to_string()
+}
+
+/// The entry of `entries` on `road`.
+fn entry<'a>(entries: &'a Value, road: &str) -> &'a Value {
+    entries
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["road"] == road)
+        .unwrap_or_else(|| panic!("no entry {road} in {entries}"))
+}
+
+#[test]
+fn a_blocked_entry_is_said_first_with_its_demand_and_what_it_took() {
+    let scenario = blocked_simple_merge("blocked-entry");
+    let out = run_mapc(&["sim", "--scenario", &scenario, "--seeds", "2"]);
+    assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    // the line after the title, before any figure
+    let second = text.lines().nth(1).unwrap_or_default();
+    assert!(
+        second.contains("entry R0 took") && second.contains("vehicles that wanted to depart"),
+        "{text}"
+    );
+    // the ramp takes its 200 veh/h
+    assert!(!text.contains("entry R2 took"), "{text}");
+
+    let v = mapc_json(&["sim", "--scenario", &scenario, "--seeds", "2", "--json"]);
+    for entries in [&v["entries"], &v["regime"]["entries"]] {
+        let main = entry(entries, "R0");
+        let (demand, inserted, waiting) = (
+            main["demand"].as_f64().unwrap(),
+            main["inserted"].as_f64().unwrap(),
+            main["waiting"].as_f64().unwrap(),
+        );
+        assert_eq!(main["blocked"], true, "{main}");
+        // 4200 veh/h over 1000 s is about 1167 vehicles; the road takes about 2000 veh/h
+        assert!(demand > 1100.0 && demand < 1200.0, "{main}");
+        assert!(waiting > 400.0, "{main}");
+        assert_eq!(demand, inserted + waiting, "{main}");
+        assert_eq!(entry(entries, "R2")["blocked"], false, "{entries}");
+    }
+    // per run too, counted by the simulator
+    let run = entry(&v["runs"][0]["entries"], "R0");
+    assert_eq!(
+        run["demand"].as_u64().unwrap(),
+        run["inserted"].as_u64().unwrap() + run["waiting"].as_u64().unwrap()
+    );
+}
 
 /// Run from a folder outside the repository on a map that is not the paper's: the shipped policy is found, it is
 /// the one whose rule leaves unlike merges to the humans, and the pipeline says why.
