@@ -19,7 +19,8 @@ pub struct RunMetrics {
     pub avg_speed_mps: f64,
     /// Mean time from entering to leaving, over the vehicles that left.
     pub mean_travel_time_s: f64,
-    /// Mean of travel time minus the time at each driver's desired speed, over the vehicles that left.
+    /// Mean of travel time minus the time at each driver's desired speed over its whole route (past a lane's dead
+    /// end, as it drives on after changing lanes), over the vehicles that left.
     pub mean_delay_s: f64,
     pub arrived: u64,
     pub departed: u64,
