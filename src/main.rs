@@ -32,11 +32,11 @@ enum Command {
     Import(cmd::import::Args),
     /// List a map's junctions (merges, diverges) with their roads.
     Junctions(cmd::junctions::Args),
-    /// Export a map as GeoJSON.
+    /// Export a map as GeoJSON, or a map or scenario as SUMO 1.8 inputs (--sumo).
     Export(cmd::export::Args),
     /// Draw a map as PNG or SVG.
     Render(cmd::render::Args),
-    /// Reduce a highway to a single-lane corridor with its merging roads.
+    /// Reduce a highway to a corridor with its merging roads: one lane per road, or every lane with --keep-lanes.
     Simplify(cmd::simplify::Args),
     /// Cut a window around a merge, matched to a source scenario's lengths.
     Window(cmd::window::Args),

@@ -7,6 +7,12 @@
 //! simplify`'s default route and a window is cut at every merge of it that fits (`mapc window --all --fit`); the
 //! pipeline says which it chose.
 //!
+//! The policy evaluated is built into mapc, so the pipeline runs from any folder: the Simple Merge policy on the
+//! paper's map (its results as published), `merge_robust_congested` on any other, whose rule drives the AVs only at
+//! merges in the Simple Merge's regime and leaves the others to the humans (the Simple Merge policy, which has no
+//! rule, loses on merges unlike the one it was trained on). The copy used is written to the output folder, so the
+//! printed commands run as shown.
+//!
 //! With `--keep-lanes` the same job runs multi-lane: the corridor keeps every lane (`mapc simplify
 //! --keep-lanes`), the window is cut from it with its lanes, vehicles change lanes (LC2013), the time-space
 //! diagram draws every lane (or `--lane N`), and the outputs are named `<map>_lanes*` so that they sit beside the
@@ -19,6 +25,24 @@ use std::time::Instant;
 const I696_VIA: [&str; 3] = ["osm-way:59440544", "osm-way:8667198", "osm-way:8708084"];
 /// Where I-696 (way 124433709) joins the corridor.
 const I696_MERGE: &str = "osm:61862553";
+
+/// A shipped policy, built into the binary.
+struct ShippedPolicy {
+    file_name: &'static str,
+    bytes: &'static [u8],
+}
+
+/// The paper's policy, evaluated on the paper's map.
+const PAPER_POLICY: ShippedPolicy = ShippedPolicy {
+    file_name: "simple_merge_outflow.json",
+    bytes: include_bytes!("../../policies/simple_merge_outflow.json"),
+};
+/// The policy for any other map: its rule (`simple-merge-regime`) leaves every merge unlike the Simple Merge's to
+/// the humans.
+const OTHER_MAP_POLICY: ShippedPolicy = ShippedPolicy {
+    file_name: "merge_robust_congested.json",
+    bytes: include_bytes!("../../policies/merge_robust_congested.json"),
+};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -36,9 +60,12 @@ pub struct Args {
     /// every merge that fits (`mapc window --all --fit`) on any other.
     #[arg(long)]
     pub junction: Option<String>,
-    /// The Simple Merge policy evaluated zero-shot in the window.
-    #[arg(long, default_value = "policies/simple_merge_outflow.json")]
-    pub policy: PathBuf,
+    /// The policy evaluated zero-shot in the window; default: one built into mapc (written to the output folder),
+    /// the Simple Merge policy (policies/simple_merge_outflow.json) on the paper's I-696 map,
+    /// policies/merge_robust_congested.json on any other (its rule leaves merges unlike the Simple Merge's to the
+    /// humans).
+    #[arg(long)]
+    pub policy: Option<PathBuf>,
     /// Seeds for the baseline and the evaluation (1 to 100 000).
     #[arg(long, default_value_t = 100, value_parser = super::flags::seeds())]
     pub seeds: u64,
@@ -99,9 +126,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (None, true) => Some(I696_MERGE.to_string()),
         (None, false) => None,
     };
+    let policy = match &args.policy {
+        Some(p) => p.clone(),
+        None => {
+            let shipped = if paper_map {
+                PAPER_POLICY
+            } else {
+                OTHER_MAP_POLICY
+            };
+            let path = out.join(shipped.file_name);
+            mapc_graph::write_atomically(&path, shipped.bytes)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            path
+        }
+    };
+    let policy = path_text(&policy);
     if !paper_map {
         eprintln!(
-            "\npipeline: {map} is not the paper's I-696 map (its --via roads and --junction merge apply there only), so: {}; {}",
+            "\npipeline: {map} is not the paper's I-696 map (its --via roads and --junction merge apply there only), so: {}; {}; {}",
             if via.is_empty() {
                 "the corridor is `mapc simplify`'s default route".to_string()
             } else {
@@ -111,6 +153,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 Some(j) => format!("the window is cut at --junction {j}"),
                 None => "a window is cut at every merge of it that fits, fitted to what the map has (`mapc window --all --fit`)"
                     .to_string(),
+            },
+            if args.policy.is_some() {
+                format!("the policy is --policy {policy}")
+            } else {
+                format!(
+                    "the policy is mapc's merge_robust_congested ({policy}): its rule drives the AVs only at merges \
+                     like the Simple Merge's (the main road yields, the humans congest it, one lane on every road) and \
+                     leaves the others to the humans, where the Simple Merge policy, trained on one merge, loses"
+                )
             }
         );
     }
@@ -162,7 +213,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "view",
         &window,
         "--policy",
-        &path_text(&args.policy),
+        &policy,
         "--compare",
         "-o",
         &file(format!("{stem}_window_replay.html")),
@@ -170,7 +221,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     steps.push(cmd(&[
         "eval",
         "--policy",
-        &path_text(&args.policy),
+        &policy,
         "--scenario",
         &window,
         "--seeds",

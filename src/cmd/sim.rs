@@ -97,6 +97,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "{} — all-human baseline, {} seeds ({:.2} s)",
             rs.origin, s.seeds, wall_s
         );
+        // first, as every figure below is of the vehicles that got in
+        for line in mapc_sim::EntrySummary::blocked_lines(&s.entries, s.seeds) {
+            println!("  {line}");
+        }
         let row = |name: &str, m: &MeanCi, unit: &str| {
             // one seed has a mean but neither an interval nor a spread
             if m.n < 2 {
@@ -137,7 +141,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         for m in &s.merges {
             row(&format!("past {}", m.name), &m.flow, "veh/h");
         }
-        print_regime(&regime);
+        // the blocked entries are said above, from every seed
+        print_regime_lines(regime.seeds, &regime.merge_lines());
         if let Some(p) = &args.trace {
             println!("  trace of seed {} written to {}", seeds[0], p.display());
         }
@@ -148,13 +153,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// Seeds of the observed pass that reports the merges' regime.
 pub use mapc_sim::REGIME_SEEDS;
 
-/// The merges' regime, a line each.
+/// The blocked entries and the merges' regime, a line each.
 pub fn print_regime(regime: &mapc_sim::RegimeReport) {
-    if regime.merges.is_empty() && regime.lines().is_empty() {
+    print_regime_lines(regime.seeds, &regime.lines());
+}
+
+fn print_regime_lines(seeds: usize, lines: &[String]) {
+    if lines.is_empty() {
         return;
     }
-    println!("  regime ({} seeds):", regime.seeds);
-    for line in regime.lines() {
+    println!("  regime ({seeds} seeds):");
+    for line in lines {
         println!("    {line}");
     }
 }

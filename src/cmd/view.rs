@@ -7,7 +7,7 @@ use mapc_rl::eval::{PolicyDriver, human_spec};
 use mapc_rl::rollout::ActionMode;
 use mapc_scenario::ResolvedScenario;
 use mapc_sim::{SimSpec, TRACE_HEADER, spec_from_scenario};
-use mapc_viz::view::{self, Clock, Replay, ViewPage, WindowMark};
+use mapc_viz::view::{self, Clock, Replay, RunTotals, ViewPage, WindowMark};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -94,7 +94,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             p.vehicles,
             p.vehicle_steps,
             if p.decimation > 1 {
-                format!(" (every {}th step kept)", p.decimation)
+                format!(" ({})", view::kept_steps(p.decimation))
             } else {
                 String::new()
             },
@@ -151,13 +151,12 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
     }
     match &args.policy {
         None => {
-            let rows = trace(|w| {
-                mapc_sim::trace_run(&spec, seed, w)
-                    .map(|_| ())
-                    .map_err(Into::into)
-            })?;
-            page.replays
-                .push(read(rows, clock, &format!("simulation, seed {seed}"))?);
+            page.replays.push(simulated_replay(
+                &spec,
+                seed,
+                clock,
+                &format!("simulation, seed {seed}"),
+            )?);
             page.subtitle = format!(
                 "{}; every vehicle drives as its type says (no policy)",
                 resolved.origin
@@ -172,13 +171,22 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
             if args.compare {
                 page.replays.push(human_replay(&spec, seed, clock)?);
             }
+            let mut measured = None;
             let rows = trace(|w| {
-                driver.trace(&ck, &spec, seed, ActionMode::Mean, w)?;
+                measured = Some(driver.trace(&ck, &spec, seed, ActionMode::Mean, w)?);
                 Ok(())
             })
             .with_context(|| format!("running {} on seed {seed}", file.display()))?;
             let label = format!("policy {}, seed {seed}", file.display());
-            page.replays.push(read(rows, clock, &label)?);
+            let mut replay = read(rows, clock, &label)?;
+            if let Some(m) = measured {
+                replay.totals = RunTotals {
+                    outflow_veh_h: m.outflow,
+                    inflow_veh_h: m.inflow,
+                    avg_speed_mps: m.speed,
+                };
+            }
+            page.replays.push(replay);
             // where the policy's deployment rule leaves the AVs to drive as humans, the page says so
             let withheld: Vec<String> = mapc_rl::eval::deployed_spec(&ck, &driver, &spec)?
                 .withheld
@@ -253,13 +261,35 @@ fn windows(resolved: &ResolvedScenario) -> Vec<WindowMark> {
 }
 
 fn human_replay(spec: &SimSpec, seed: u64, clock: Clock) -> anyhow::Result<Replay> {
-    let humans = human_spec(spec);
+    simulated_replay(
+        &human_spec(spec),
+        seed,
+        clock,
+        &format!("humans only, seed {seed}"),
+    )
+}
+
+/// A run of `spec` on `seed`, with the simulator's metrics (not the frames', which a decimated page thins).
+fn simulated_replay(
+    spec: &SimSpec,
+    seed: u64,
+    clock: Clock,
+    label: &str,
+) -> anyhow::Result<Replay> {
+    let mut measured = None;
     let rows = trace(|w| {
-        mapc_sim::trace_run(&humans, seed, w)
-            .map(|_| ())
-            .map_err(Into::into)
+        measured = Some(mapc_sim::trace_run(spec, seed, w)?);
+        Ok(())
     })?;
-    read(rows, clock, &format!("humans only, seed {seed}"))
+    let mut replay = read(rows, clock, label)?;
+    if let Some(m) = measured {
+        replay.totals = RunTotals {
+            outflow_veh_h: m.outflow_veh_h,
+            inflow_veh_h: m.inflow_veh_h,
+            avg_speed_mps: m.avg_speed_mps,
+        };
+    }
+    Ok(replay)
 }
 
 /// A trace written in memory, header first.

@@ -78,8 +78,8 @@ mod waiting;
 pub use idm::IdmParams;
 pub use measure::{MeasurePoint, Passage};
 pub use metrics::{
-    BaselineReport, LaneChangeReasons, MeanCi, MergeFlow, RunMetrics, Summary, run_baseline_spec,
-    t_quantile_975,
+    BaselineReport, EntryCounts, EntrySummary, LaneChangeReasons, MeanCi, MergeFlow, RunMetrics,
+    Summary, run_baseline_spec, t_quantile_975,
 };
 pub use network::Network;
 pub use regime::{

@@ -4,6 +4,7 @@
 use crate::SimError;
 use crate::sim::Simulation;
 use crate::spec::SimSpec;
+use mapc_graph::RoadId;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -18,7 +19,8 @@ pub struct RunMetrics {
     pub avg_speed_mps: f64,
     /// Mean time from entering to leaving, over the vehicles that left.
     pub mean_travel_time_s: f64,
-    /// Mean of travel time minus the time at each driver's desired speed, over the vehicles that left.
+    /// Mean of travel time minus the time at each driver's desired speed over its whole route (past a lane's dead
+    /// end, as it drives on after changing lanes), over the vehicles that left.
     pub mean_delay_s: f64,
     pub arrived: u64,
     pub departed: u64,
@@ -40,6 +42,93 @@ pub struct RunMetrics {
     /// `lane_changes` by the lane-change model's reason (their sum is `lane_changes`).
     #[serde(default)]
     pub lane_changes_by_reason: LaneChangeReasons,
+    /// What each entry road took of its demand over the whole run (warm-up included).
+    #[serde(default)]
+    pub entries: Vec<EntryCounts>,
+}
+
+/// One entry road's demand over a run: the vehicles due to depart there, inserted or still waiting at the end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct EntryCounts {
+    pub road: RoadId,
+    /// Vehicles of the flows from this road whose departure time has come.
+    pub demand: u64,
+    /// Of them, those that entered the network.
+    pub inserted: u64,
+    /// The others: still waiting to enter at the end of the run.
+    pub waiting: u64,
+}
+
+/// An entry is blocked when more than this share of its demand is still waiting at the end of a run ...
+const BLOCKED_WAITING_SHARE: f64 = 0.05;
+/// ... and at least this many vehicles (a vehicle or two due in the last steps wait at any entry).
+const BLOCKED_WAITING_MIN: f64 = 5.0;
+
+/// One entry road's demand, mean over seeds, and whether the entry could not take it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EntrySummary {
+    pub road: RoadId,
+    pub demand: f64,
+    pub inserted: f64,
+    pub waiting: f64,
+    /// The entry took much less than its demand (a share of it still waiting at the end): the run's figures
+    /// measure what got in, not the demand.
+    pub blocked: bool,
+}
+
+impl EntrySummary {
+    /// Per entry road (in the order of the first run), the means over `runs`.
+    pub fn of(runs: &[RunMetrics]) -> Vec<EntrySummary> {
+        let Some(first) = runs.first() else {
+            return Vec::new();
+        };
+        let n = runs.len() as f64;
+        first
+            .entries
+            .iter()
+            .map(|e| {
+                let mean = |count: fn(&EntryCounts) -> u64| {
+                    runs.iter()
+                        .filter_map(|r| r.entries.iter().find(|x| x.road == e.road))
+                        .map(|x| count(x) as f64)
+                        .sum::<f64>()
+                        / n
+                };
+                let (demand, waiting) = (mean(|x| x.demand), mean(|x| x.waiting));
+                EntrySummary {
+                    road: e.road,
+                    demand,
+                    inserted: mean(|x| x.inserted),
+                    waiting,
+                    blocked: waiting > BLOCKED_WAITING_SHARE * demand
+                        && waiting >= BLOCKED_WAITING_MIN,
+                }
+            })
+            .collect()
+    }
+
+    /// For people: `entry R3 took 394 of the 2100 vehicles that wanted to depart there; 1706 still wait to enter
+    /// at the end ...`.
+    pub fn line(&self, seeds: usize) -> String {
+        format!(
+            "entry {} took {:.0} of the {:.0} vehicles that wanted to depart there; {:.0} still wait to enter at \
+             the end (mean over {seeds} seed{}): the figures measure what got in, not the demand",
+            self.road,
+            self.inserted,
+            self.demand,
+            self.waiting,
+            if seeds == 1 { "" } else { "s" }
+        )
+    }
+
+    /// The lines of the blocked entries among `entries`.
+    pub fn blocked_lines(entries: &[EntrySummary], seeds: usize) -> Vec<String> {
+        entries
+            .iter()
+            .filter(|e| e.blocked)
+            .map(|e| e.line(seeds))
+            .collect()
+    }
 }
 
 /// Lane changes by why the lane-change model made them (SUMO's `--lanechange-output` reasons).
@@ -195,6 +284,8 @@ pub struct BaselineReport {
     /// Lane changes per run and per vehicle-km (0 on networks of one-lane roads).
     pub lane_changes: MeanCi,
     pub lane_changes_per_veh_km: MeanCi,
+    /// Per entry road, its demand over the run and what it took (mean over seeds).
+    pub entries: Vec<EntrySummary>,
     pub wall_s: f64,
     pub runs: Vec<RunMetrics>,
 }
@@ -244,6 +335,7 @@ impl BaselineReport {
             merges,
             lane_changes,
             lane_changes_per_veh_km,
+            entries: EntrySummary::of(&runs),
             wall_s,
             runs,
         }

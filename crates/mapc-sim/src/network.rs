@@ -294,9 +294,19 @@ impl Network {
         to: Option<RoadId>,
     ) -> Result<Vec<LaneIdx>, SimError> {
         let roads = self.route_roads(g, from, to)?;
-        let (mut part, mut dead_end) = self.best_lane_path(self.start_lane(&roads), &roads, 0.0);
-        // A lane that ends on the way (one gained and dropped again far down a corridor) is left by a lane change
-        // on its road: the line goes on from the nearest lane of that road that continues, in its place.
+        let (part, dead_end) = self.best_lane_path(self.start_lane(&roads), &roads, 0.0);
+        self.past_dead_ends(&roads, part, dead_end)
+    }
+
+    /// `part`, a lane path from the start of `roads` that stops at a dead end where `dead_end`, on to the end of
+    /// `roads`: a lane that ends on the way (one gained and dropped again far down a corridor) is left by a lane
+    /// change on its road, so the line goes on from the nearest lane of that road that continues, in its place.
+    pub fn past_dead_ends(
+        &self,
+        roads: &[usize],
+        mut part: Vec<LaneIdx>,
+        mut dead_end: bool,
+    ) -> Result<Vec<LaneIdx>, SimError> {
         let (mut lanes, mut base) = (Vec::new(), 0);
         while dead_end {
             let k = base + part.iter().filter(|&&l| self.road_of(l).is_some()).count() - 1;

@@ -4,6 +4,7 @@
 //! worth transferring to a merge in a similar regime; this tells the user which one a scenario is in.
 
 use crate::SimError;
+use crate::metrics::{EntrySummary, RunMetrics};
 use crate::sim::Simulation;
 use crate::spec::SimSpec;
 use mapc_graph::{JunctionId, RoadId};
@@ -97,12 +98,22 @@ pub struct RegimeReport {
     pub merges: Vec<MergeRegime>,
     /// Vehicles waiting to enter at the end of the run, mean over seeds (demand the entries could not take).
     pub waiting_to_enter: f64,
+    /// Per entry road, its demand and what it took, mean over seeds.
+    pub entries: Vec<EntrySummary>,
 }
 
 impl RegimeReport {
-    /// A line per merge for people: `merge J3: the merging road R7 has priority; dense (main R5 at 61% of free
-    /// flow, queue 40 m mean / 180 m max; merging R7 ...)`.
+    /// For people: first a line per blocked entry (its figures would otherwise read as a merge's free flow),
+    /// then [`RegimeReport::merge_lines`].
     pub fn lines(&self) -> Vec<String> {
+        let mut out = EntrySummary::blocked_lines(&self.entries, self.seeds);
+        out.extend(self.merge_lines());
+        out
+    }
+
+    /// A line per merge: `merge J3: the merging road R7 has priority; dense (main R5 at 61% of free flow, queue
+    /// 40 m mean / 180 m max; merging R7 ...)`; then the backlog, where no entry is blocked.
+    pub fn merge_lines(&self) -> Vec<String> {
         let mut out = Vec::new();
         for m in &self.merges {
             let prio: Vec<String> = m
@@ -139,7 +150,7 @@ impl RegimeReport {
                 parts.join("; ")
             ));
         }
-        if self.waiting_to_enter >= 1.0 {
+        if self.waiting_to_enter >= 1.0 && !self.entries.iter().any(|e| e.blocked) {
             out.push(format!(
                 "{:.0} vehicles on average were still waiting to enter at the end of a run (many: demand above \
                  what the entries take)",
@@ -171,7 +182,7 @@ struct Acc {
 /// Runs the humans (controlled vehicles drive as humans) over `seeds` in parallel and observes every measured
 /// merge of `spec` after the warm-up.
 pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimError> {
-    let runs: Vec<(Vec<Vec<Acc>>, usize)> = seeds
+    let runs: Vec<(Vec<Vec<Acc>>, usize, RunMetrics)> = seeds
         .par_iter()
         .map(|&seed| observe(spec, seed))
         .collect::<Result<_, _>>()?;
@@ -195,7 +206,7 @@ pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimE
         let mut out = Vec::new();
         for (a, &(road, lane, major)) in roads.iter().enumerate() {
             let mut acc = Acc::default();
-            for (run, _) in &runs {
+            for (run, _, _) in &runs {
                 let r = &run[m][a];
                 acc.speed_sum += r.speed_sum;
                 acc.speed_n += r.speed_n;
@@ -233,11 +244,13 @@ pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimE
             congestion: Congestion::of(worst),
         });
     }
-    let waiting = runs.iter().map(|(_, w)| *w as f64).sum::<f64>() / runs.len().max(1) as f64;
+    let waiting = runs.iter().map(|(_, w, _)| *w as f64).sum::<f64>() / runs.len().max(1) as f64;
+    let metrics: Vec<RunMetrics> = runs.into_iter().map(|(_, _, m)| m).collect();
     Ok(RegimeReport {
         seeds: seeds.len(),
         merges,
         waiting_to_enter: waiting,
+        entries: EntrySummary::of(&metrics),
     })
 }
 
@@ -325,8 +338,8 @@ fn approaches(sim: &Simulation) -> Vec<Vec<(RoadId, u32, bool)>> {
         .collect()
 }
 
-/// One seed: per measure point and approach, the sums; and the vehicles still waiting at the end.
-fn observe(spec: &SimSpec, seed: u64) -> Result<(Vec<Vec<Acc>>, usize), SimError> {
+/// One seed: per measure point and approach, the sums; the vehicles still waiting at the end; the run's figures.
+fn observe(spec: &SimSpec, seed: u64) -> Result<(Vec<Vec<Acc>>, usize, RunMetrics), SimError> {
     let mut sim = Simulation::from_spec(spec.clone(), seed)?;
     let shape = approaches(&sim);
     let mut acc: Vec<Vec<Acc>> = shape
@@ -383,7 +396,7 @@ fn observe(spec: &SimSpec, seed: u64) -> Result<(Vec<Vec<Acc>>, usize), SimError
         }
         sim.step()?;
     }
-    Ok((acc, sim.waiting_to_enter()))
+    Ok((acc, sim.waiting_to_enter(), sim.metrics()))
 }
 
 /// The queue from the merge back: vehicles (distance to the merge, speed, length), nearest first, slower than
@@ -411,6 +424,40 @@ mod tests {
         assert_eq!(queue_length(&[(1.0, 0.0, 5.0), (8.0, 20.0, 5.0)]), 6.0);
         assert_eq!(queue_length(&[(1.0, 0.0, 5.0), (80.0, 0.0, 5.0)]), 6.0);
         assert_eq!(queue_length(&[(50.0, 0.0, 5.0)]), 0.0);
+    }
+
+    /// 4000 veh/h of humans on the one-lane main road, which takes about 2000: the report says so first (its
+    /// merge would read as flowing, the queue being at the entry), per entry road.
+    #[test]
+    fn a_blocked_entry_comes_first_in_the_report() {
+        let mut spec = crate::tests::simple_merge_spec();
+        let main = spec.flows[0].from;
+        for f in spec.flows.iter_mut().filter(|f| f.from == main) {
+            f.vehs_per_hour *= 2.0;
+        }
+        let r = merge_regimes(&spec, &[0]).unwrap();
+        let lines = r.lines();
+        assert!(
+            lines[0].starts_with(&format!("entry {main} took")),
+            "{lines:?}"
+        );
+        assert_eq!(
+            lines
+                .iter()
+                .filter(|l| l.contains("still wait to enter"))
+                .count(),
+            1
+        );
+        let e = r.entries.iter().find(|e| e.road == main).unwrap();
+        assert!(e.blocked && e.waiting > 300.0, "{e:?}");
+        assert_eq!(e.demand, e.inserted + e.waiting);
+        // the whole backlog is the blocked entry's: not said twice
+        assert!(
+            !lines
+                .iter()
+                .any(|l| l.contains("on average were still waiting")),
+            "{lines:?}"
+        );
     }
 
     #[test]

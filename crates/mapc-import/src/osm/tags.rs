@@ -11,6 +11,9 @@ const KMH: f64 = 1.0 / 3.6;
 const KNOT: f64 = 0.514_444;
 /// A speed limit above this (300 km/h) is a mistake in the data, not a road.
 pub const MAX_PLAUSIBLE_SPEED_MPS: f64 = 300.0 / 3.6;
+/// The limit of a road tagged `maxspeed=none` (no limit, as on much of the German Autobahn): netconvert's
+/// `osm.speedlimit-none` default in SUMO 1.8, 39.4444 m/s (142 km/h).
+pub const SPEED_LIMIT_NONE_MPS: f64 = 39.4444;
 /// Two consecutive nodes of a road further apart than this (10 km) are counted as `long_segment`: real highway
 /// geometry has a node every few hundred metres at most, so this is a misplaced node.
 pub const LONG_SEGMENT_M: f64 = 10_000.0;
@@ -231,6 +234,9 @@ pub(super) fn speeds(way: &OsmWay, warnings: &mut Warnings) -> (f64, f64) {
     let t = &way.tags;
     let mut read = |key: &str, v: &Option<String>| -> Option<f64> {
         let text = v.as_deref()?;
+        if text.trim() == "none" {
+            return Some(SPEED_LIMIT_NONE_MPS);
+        }
         match parse_maxspeed(text) {
             None => {
                 warnings.add(

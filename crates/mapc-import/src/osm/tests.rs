@@ -17,6 +17,23 @@ fn maxspeed_units() {
 }
 
 #[test]
+fn no_speed_limit_is_netconverts_speedlimit_none() {
+    let mut w = Warnings::default();
+    let autobahn = way(1, &[], &[("highway", "motorway"), ("maxspeed", "none")]);
+    assert_eq!(speeds(&autobahn, &mut w), (39.4444, 39.4444));
+    let one_way = way(
+        2,
+        &[],
+        &[("highway", "primary"), ("maxspeed:forward", "none")],
+    );
+    let (forward, backward) = speeds(&one_way, &mut w);
+    assert_eq!(forward, 39.4444);
+    assert!(backward < forward);
+    // a number is read, not a warning
+    assert!(w.is_empty(), "{w:?}");
+}
+
+#[test]
 fn degrees_are_checked() {
     assert_eq!(parse_degrees("-83.4877071", 180.0).unwrap(), -834_877_071);
     assert!(

@@ -59,6 +59,7 @@ impl Simulation {
                 .iter()
                 .map(|&c| 3600.0 * c as f64 / secs)
                 .collect(),
+            entries: self.entry_counts(),
         }
     }
 

@@ -418,6 +418,45 @@ impl Simulation {
         self.pending.iter().map(|q| q.len() as usize).sum::<usize>() + at_roads as usize
     }
 
+    /// Per entry road of the flows (in the order of their first flow): the vehicles due to depart there since the
+    /// start of the run (warm-up included), and how many of them still wait to enter; the others were inserted.
+    pub fn entry_counts(&self) -> Vec<crate::metrics::EntryCounts> {
+        use crate::metrics::EntryCounts;
+        fn at(out: &mut Vec<EntryCounts>, road: RoadId) -> &mut EntryCounts {
+            let i = match out.iter().position(|e| e.road == road) {
+                Some(i) => i,
+                None => {
+                    out.push(EntryCounts {
+                        road,
+                        demand: 0,
+                        inserted: 0,
+                        waiting: 0,
+                    });
+                    out.len() - 1
+                }
+            };
+            &mut out[i]
+        }
+        let mut out = Vec::new();
+        for (flow, &due) in self.spec.flows.iter().zip(&self.flow_next) {
+            at(&mut out, flow.from).demand += due;
+        }
+        let at_lanes = self.entry_lanes.iter().zip(&self.pending);
+        let at_roads = self
+            .road_entries
+            .iter()
+            .filter_map(|e| Some((e.lanes.first()?, &e.queue)));
+        for (&lane, queue) in at_lanes.chain(at_roads) {
+            if let Some(r) = self.net.road_of(lane) {
+                at(&mut out, self.net.road_ids[r]).waiting += queue.len();
+            }
+        }
+        for e in &mut out {
+            e.inserted = e.demand.saturating_sub(e.waiting);
+        }
+        out
+    }
+
     /// Append this step's rows to a trace ([`crate::TRACE_HEADER`]).
     pub fn write_trace_rows(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
         for id in self.active_ids() {

@@ -255,3 +255,29 @@ fn vehicle_views_say_the_lane_index_on_the_road() {
     }
     assert_eq!(seen.into_iter().collect::<Vec<_>>(), [0, 1, 2]);
 }
+
+/// A route that stops at a lane's dead end (the ramp's, on the acceleration lane) gives its vehicles the whole
+/// route's time at their desired speed, past the dead end as they drive on after changing lanes, for their delay.
+#[test]
+fn the_free_flow_time_of_a_dead_end_route_covers_the_whole_route() {
+    let sim = Simulation::from_spec(two_lane_merge_spec(), 0).unwrap();
+    let (r, route) = sim
+        .routes
+        .iter()
+        .enumerate()
+        .find(|(_, r)| r.dead_end)
+        .expect("a route onto the acceleration lane");
+    let whole = sim
+        .net
+        .past_dead_ends(&route.roads, route.lanes.0.clone(), true)
+        .unwrap();
+    let at_limits = |lanes: &[LaneIdx]| {
+        lanes
+            .iter()
+            .map(|&l| sim.net.lanes[l as usize].length / sim.net.lanes[l as usize].speed_limit)
+            .sum::<f64>()
+    };
+    let free = sim.free_flow_time(r as u32, 1.0, f64::INFINITY);
+    assert_eq!(free, at_limits(&whole));
+    assert!(free > at_limits(&route.lanes) + 1.0, "{free}");
+}

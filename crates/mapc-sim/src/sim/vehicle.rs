@@ -52,6 +52,8 @@ pub(super) struct Route {
     /// The lanes stop at a lane that does not continue on the route: the vehicle must change lanes before its
     /// end, or stop there.
     pub(super) dead_end: bool,
+    /// For a dead end, the lanes on to the route's end past it ([`Network::past_dead_ends`]); else empty.
+    pub(super) whole_lanes: Vec<LaneIdx>,
 }
 
 /// Values of one vehicle type that do not change during a run.
@@ -133,10 +135,12 @@ impl Simulation {
         id
     }
 
-    /// The time to drive `route` at the speed a driver of this speed factor and top speed keeps on each lane.
-    fn free_flow_time(&self, route: u32, factor: f64, max_speed: f64) -> f64 {
-        self.routes[route as usize]
-            .lanes
+    /// The time to drive `route` at the speed a driver of this speed factor and top speed keeps on each lane,
+    /// to its end (past a dead end, as on the lanes the vehicle changes to).
+    pub(super) fn free_flow_time(&self, route: u32, factor: f64, max_speed: f64) -> f64 {
+        let r = &self.routes[route as usize];
+        let lanes: &[LaneIdx] = if r.dead_end { &r.whole_lanes } else { &r.lanes };
+        lanes
             .iter()
             .map(|&l| {
                 let lane = self.lane_at(l as usize);
@@ -291,6 +295,14 @@ impl Simulation {
         self.route_index.insert((lanes.clone(), roads.clone()), idx);
         let next_seq = self.road_seqs.len() as u32;
         let roads_id = *self.road_seqs.entry(roads.clone()).or_insert(next_seq);
+        let whole_lanes = if dead_end {
+            // a network with no way on is refused when its routes are made; the lanes as they are otherwise
+            self.net
+                .past_dead_ends(&roads, lanes.clone(), true)
+                .unwrap_or_else(|_| lanes.clone())
+        } else {
+            Vec::new()
+        };
         self.routes.push(Route {
             lanes: Table(lanes),
             start_m: Table(start_m),
@@ -298,6 +310,7 @@ impl Simulation {
             roads,
             road_k,
             dead_end,
+            whole_lanes,
         });
         idx
     }

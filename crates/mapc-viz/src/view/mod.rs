@@ -20,7 +20,7 @@ mod serve;
 
 pub use network::{NetworkView, WindowMark, provenance_text};
 pub use page::{Delivery, content_security_policy, embed_json, hash_source};
-pub use replay::{Clock, Replay, Track};
+pub use replay::{Clock, Replay, RunTotals, Track};
 pub use serve::serve;
 
 use crate::VizError;
@@ -69,7 +69,7 @@ pub struct PaneSummary {
     pub vehicles: usize,
     pub vehicle_steps: usize,
     pub decimation: usize,
-    /// The metrics over the whole run, as the page shows them at the last frame.
+    /// The run's metrics over its whole measured time ([`Replay::totals`]).
     pub outflow_veh_h: f64,
     pub inflow_veh_h: f64,
     pub avg_speed_mps: f64,
@@ -123,9 +123,9 @@ impl ViewPage {
                     vehicles: r.tracks.len(),
                     vehicle_steps: r.rows(),
                     decimation: r.decimation,
-                    outflow_veh_h: r.outflow_vph.last().copied().unwrap_or(0.0).into(),
-                    inflow_veh_h: r.inflow_vph.last().copied().unwrap_or(0.0).into(),
-                    avg_speed_mps: r.avg_speed_mps.last().copied().unwrap_or(0.0).into(),
+                    outflow_veh_h: r.totals.outflow_veh_h,
+                    inflow_veh_h: r.totals.inflow_veh_h,
+                    avg_speed_mps: r.totals.avg_speed_mps,
                 })
                 .collect(),
             bytes,
@@ -250,6 +250,7 @@ fn replay_json(
         "frames": r.on_road.len(),
         "warmup_frames": (r.clock.warmup_steps as usize).div_ceil(r.decimation),
         "decimation": r.decimation,
+        "kept": kept_steps(r.decimation),
         "lanes": lanes,
         "types": types,
         "vehicles": {
@@ -272,6 +273,27 @@ fn replay_json(
             "on_road": b64(&r.on_road),
         },
     }))
+}
+
+/// What a decimated replay keeps, in words (`every 92nd step kept`; empty when every step is kept).
+pub fn kept_steps(decimation: usize) -> String {
+    if decimation > 1 {
+        format!("every {} step kept", ordinal(decimation))
+    } else {
+        String::new()
+    }
+}
+
+/// `1st`, `2nd`, `3rd`, `4th`, `11th`, `12th`, `13th`, `21st`, `92nd`, `111th` ...
+pub fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
 }
 
 /// Numbers that travel as little-endian bytes.
@@ -306,4 +328,26 @@ fn b64<T: LeBytes>(xs: &[T]) -> String {
         x.put(&mut bytes);
     }
     base64::engine::general_purpose::STANDARD.encode(bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ordinals_take_their_english_suffix() {
+        let words: Vec<String> = [1, 2, 3, 4, 11, 12, 13, 21, 22, 23, 92, 101, 111, 112]
+            .into_iter()
+            .map(ordinal)
+            .collect();
+        assert_eq!(
+            words,
+            [
+                "1st", "2nd", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "23rd", "92nd",
+                "101st", "111th", "112th"
+            ]
+        );
+        assert_eq!(kept_steps(1), "");
+        assert_eq!(kept_steps(92), "every 92nd step kept");
+    }
 }

@@ -62,6 +62,17 @@ pub struct Replay {
     pub on_road: Vec<u32>,
     /// Every `decimation`-th frame is kept (1: all).
     pub decimation: usize,
+    /// The run's metrics: the simulator's where the replay was run (set by the caller), else those of every frame
+    /// of the trace (kept before any decimation, which may drop the last frames).
+    pub totals: RunTotals,
+}
+
+/// A run's metrics over its whole measured time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RunTotals {
+    pub outflow_veh_h: f64,
+    pub inflow_veh_h: f64,
+    pub avg_speed_mps: f64,
 }
 
 /// The largest lane index the packing holds.
@@ -234,6 +245,7 @@ impl Replay {
             avg_speed_mps: Vec::new(),
             on_road: vec![0; frames],
             decimation: 1,
+            totals: RunTotals::default(),
         };
         let mut speed_sum = vec![0.0f64; frames];
         let mut exits = vec![0u32; frames + 1];
@@ -267,6 +279,12 @@ impl Replay {
             }
         }
         r.fill_metrics(&speed_sum, &exits, &entries);
+        let last = |v: &[f32]| v.last().copied().map_or(0.0, f64::from);
+        r.totals = RunTotals {
+            outflow_veh_h: last(&r.outflow_vph),
+            inflow_veh_h: last(&r.inflow_vph),
+            avg_speed_mps: last(&r.avg_speed_mps),
+        };
         r
     }
 

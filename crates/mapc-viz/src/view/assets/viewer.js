@@ -362,7 +362,7 @@ function render() {
   if (DATA.replays.length) {
     const r = DATA.replays[0];
     $("slider").value = player.frame;
-    const kept = r.decimation > 1 ? ` (every ${r.decimation}th step kept)` : "";
+    const kept = r.kept ? ` (${r.kept})` : "";
     $("clock").textContent = `t = ${fmt(r.start_s + player.frame * r.step_s, 1)} s / ${fmt(r.start_s + (r.frames - 1) * r.step_s, 0)} s${kept}`;
   }
   status.dataset.framesDrawn = stats.framesDrawn;

@@ -1,0 +1,217 @@
+//! What a user meets running mapc on a map of their own: a report that says first when an entry cannot take its
+//! demand, the pipeline from any folder with a policy that does not lose on other maps, errors that say their
+//! cause once, `mapc view`'s figures on a thinned replay, and help that sets nothing up and says what the commands
+//! do.
+
+mod common;
+
+use common::{assert_success, edited_scenario, fresh_path, mapc_json, refused, root, run_mapc};
+use serde_json::Value;
+
+/// The Simple Merge with 4000 human veh/h on its one-lane main road: far more than the road takes.
+fn blocked_simple_merge(name: &str) -> String {
+    let path = edited_scenario("simple_merge.toml", name, |t| {
+        t.replace("vehs_per_hour = 1800.0", "vehs_per_hour = 4000.0")
+    });
+    path.to_str().unwrap().to_string()
+}
+
+/// The entry of `entries` on `road`.
+fn entry<'a>(entries: &'a Value, road: &str) -> &'a Value {
+    entries
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["road"] == road)
+        .unwrap_or_else(|| panic!("no entry {road} in {entries}"))
+}
+
+#[test]
+fn a_blocked_entry_is_said_first_with_its_demand_and_what_it_took() {
+    let scenario = blocked_simple_merge("blocked-entry");
+    let out = run_mapc(&["sim", "--scenario", &scenario, "--seeds", "2"]);
+    assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    // the line after the title, before any figure
+    let second = text.lines().nth(1).unwrap_or_default();
+    assert!(
+        second.contains("entry R0 took") && second.contains("vehicles that wanted to depart"),
+        "{text}"
+    );
+    // the ramp takes its 200 veh/h
+    assert!(!text.contains("entry R2 took"), "{text}");
+
+    let v = mapc_json(&["sim", "--scenario", &scenario, "--seeds", "2", "--json"]);
+    for entries in [&v["entries"], &v["regime"]["entries"]] {
+        let main = entry(entries, "R0");
+        let (demand, inserted, waiting) = (
+            main["demand"].as_f64().unwrap(),
+            main["inserted"].as_f64().unwrap(),
+            main["waiting"].as_f64().unwrap(),
+        );
+        assert_eq!(main["blocked"], true, "{main}");
+        // 4200 veh/h over 1000 s is about 1167 vehicles; the road takes about 2000 veh/h
+        assert!(demand > 1100.0 && demand < 1200.0, "{main}");
+        assert!(waiting > 400.0, "{main}");
+        assert_eq!(demand, inserted + waiting, "{main}");
+        assert_eq!(entry(entries, "R2")["blocked"], false, "{entries}");
+    }
+    // per run too, counted by the simulator
+    let run = entry(&v["runs"][0]["entries"], "R0");
+    assert_eq!(
+        run["demand"].as_u64().unwrap(),
+        run["inserted"].as_u64().unwrap() + run["waiting"].as_u64().unwrap()
+    );
+}
+
+/// Run from a folder outside the repository on a map that is not the paper's: the shipped policy is found, it is
+/// the one whose rule leaves unlike merges to the humans, and the pipeline says why.
+#[test]
+fn the_pipeline_runs_from_any_folder_with_the_policy_that_never_loses() {
+    let elsewhere = fresh_path("pipeline-elsewhere");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    let map = root().join("maps/rongwu.net.xml");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_mapc"))
+        .current_dir(&elsewhere)
+        .arg("pipeline")
+        .arg(&map)
+        .args(["--seeds", "2", "-o", "out"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "pipeline failed:\n{stderr}");
+    assert!(
+        stderr.contains("merge_robust_congested")
+            && stderr.contains("leaves the others to the humans"),
+        "{stderr}"
+    );
+    let policy = elsewhere.join("out/merge_robust_congested.json");
+    assert_eq!(
+        std::fs::read(&policy).unwrap(),
+        std::fs::read(root().join("policies/merge_robust_congested.json")).unwrap()
+    );
+    assert!(
+        stderr.contains("$ mapc eval --policy out/merge_robust_congested.json"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&elsewhere).unwrap();
+}
+
+/// An error that carries its cause in its own message (`{path}: {source}`) says the cause once.
+#[test]
+fn a_missing_file_is_said_once() {
+    for args in [
+        &[
+            "eval",
+            "--policy",
+            "nonesuch.json",
+            "--scenario",
+            "simple_merge",
+            "--seeds",
+            "1",
+        ][..],
+        &["import", "nonesuch.osm", "-o", "nonesuch.graph.json"][..],
+    ] {
+        let stderr = refused(args, &["nonesuch."]);
+        assert_eq!(
+            stderr.matches("No such file or directory").count(),
+            1,
+            "{stderr}"
+        );
+    }
+}
+
+/// A replay thinned to every 3rd step drops the run's last frames: the figures shown are still the run's.
+#[test]
+fn a_thinned_replay_shows_the_runs_figures_and_says_every_3rd_step() {
+    let dir = fresh_path("view-thinned");
+    std::fs::create_dir_all(&dir).unwrap();
+    let page = dir.join("replay.html");
+    let page = page.to_str().unwrap();
+    let sim = mapc_json(&[
+        "sim",
+        "--scenario",
+        "simple_merge",
+        "--seeds",
+        "1",
+        "--first-seed",
+        "3",
+        "--json",
+    ]);
+    let run = &sim["runs"][0];
+    let whole = mapc_json(&["view", "simple_merge", "--seed", "3", "-o", page, "--json"]);
+    let steps = whole["panes"][0]["vehicle_steps"].as_u64().unwrap();
+    let max_rows = (steps / 3 + 1).to_string();
+    let args = [
+        "view",
+        "simple_merge",
+        "--seed",
+        "3",
+        "--max-rows",
+        &max_rows,
+        "-o",
+        page,
+    ];
+    let thinned = mapc_json(&[&args[..], &["--json"]].concat());
+    let pane = &thinned["panes"][0];
+    assert_eq!(pane["decimation"], 3);
+    for (shown, measured) in [
+        ("outflow_veh_h", "outflow_veh_h"),
+        ("inflow_veh_h", "inflow_veh_h"),
+        ("avg_speed_mps", "avg_speed_mps"),
+    ] {
+        assert_eq!(pane[shown], run[measured], "{shown}: {pane} against {run}");
+    }
+    let out = run_mapc(&args);
+    assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("(every 3rd step kept)"), "{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `sumo_check --help` prints its usage with the standard library only: no SUMO environment is made for it.
+#[test]
+fn sumo_checks_help_sets_nothing_up() {
+    let venv = fresh_path("sumo-venv");
+    let out = std::process::Command::new(root().join("tools/sumo_check/sumo_check"))
+        .arg("--help")
+        .env("MAPC_SUMO_VENV", &venv)
+        // were anything installed, it would fail at once rather than reach for the network
+        .env("PIP_NO_INDEX", "1")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("usage:") && stdout.contains("baseline"),
+        "{stdout}"
+    );
+    assert!(!venv.exists(), "a virtual environment was made for --help");
+}
+
+#[test]
+fn the_help_says_what_simplify_and_export_do() {
+    let out = run_mapc(&["--help"]);
+    assert_success(&out);
+    let help = String::from_utf8_lossy(&out.stdout);
+    let line = |command: &str| {
+        help.lines()
+            .find(|l| l.trim_start().starts_with(command))
+            .unwrap_or_else(|| panic!("no {command} in {help}"))
+            .to_string()
+    };
+    let simplify = line("simplify");
+    assert!(
+        !simplify.contains("single-lane") && simplify.contains("--keep-lanes"),
+        "{simplify}"
+    );
+    let export = line("export");
+    assert!(
+        export.contains("GeoJSON") && export.contains("SUMO"),
+        "{export}"
+    );
+}
