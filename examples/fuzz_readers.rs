@@ -30,11 +30,12 @@ enum Kind {
     Policy,
 }
 
-const KINDS: [(Kind, &str, &str); 6] = [
+const KINDS: [(Kind, &str, &str); 7] = [
     (Kind::SumoNet, "sumo-net", "maps/simple_merge.net.xml"),
     (Kind::OsmXml, "osm-xml", "maps/a2_braunschweig.osm"),
     (Kind::OsmPbf, "osm-pbf", "maps/i696.osm.pbf"),
     (Kind::Scenario, "scenario", "scenarios/simple_merge.toml"),
+    (Kind::Scenario, "scenario-lanes", "scenarios/i210_window_lanes.toml"),
     (Kind::Graph, "graph", "scenarios/i696_window.graph.json"),
     (Kind::Policy, "policy", "policies/simple_merge_distributed.json"),
 ];
@@ -68,10 +69,11 @@ fn read(kind: Kind, input: &[u8], scratch: &Path) -> Result<(), String> {
         Kind::Scenario => {
             let scenario = mapc_scenario::Scenario::from_toml(text()?, Path::new("s.toml"))
                 .map_err(|e| e.to_string())?;
-            let rs = mapc_scenario::ResolvedScenario::resolve(scenario, Path::new("."), "s.toml")
+            let rs = mapc_scenario::ResolvedScenario::resolve(scenario, Path::new("scenarios"), "s.toml")
                 .map_err(|e| e.to_string())?;
             let mut spec = mapc_sim::spec_from_scenario(&rs).map_err(|e| e.to_string())?;
-            // a short run: the point is what the simulator does with what the reader let through
+            // a short run (a graph named by the scenario is looked for in scenarios/): the point is what the
+            // simulator does with what the reader let through
             spec.horizon_steps = spec.horizon_steps.min(400);
             spec.warmup_steps = spec.warmup_steps.min(100);
             mapc_sim::Simulation::from_spec(spec, 0)
