@@ -271,8 +271,8 @@ fn apply_flags(c: &mut PpoConfig, a: &Args) {
 }
 
 fn read_config(path: &Path, base: PpoConfig) -> anyhow::Result<PpoConfig> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text = mapc_graph::input::read_to_string(path)
+        .with_context(|| format!("reading {}", path.display()))?;
     // Keys absent from the file keep the preset's values.
     let mut table: toml::Table =
         toml::from_str(&text).with_context(|| format!("{}", path.display()))?;

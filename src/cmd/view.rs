@@ -137,7 +137,7 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
     };
     let seed = args.seed;
     if let Some(path) = &args.trace {
-        let file = std::fs::File::open(path)
+        let file = mapc_graph::input::open(path)
             .with_context(|| format!("reading the trace {}", path.display()))?;
         let label = format!("trace {}", path.display());
         page.replays.push(Replay::read(

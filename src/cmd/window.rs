@@ -7,7 +7,7 @@ use super::window_fit::{WindowLengths, corridor_before_m};
 use anyhow::Context;
 use mapc_graph::LaneGraph;
 use mapc_scenario::compile::{
-    WindowsOptions, WrittenWindows, corridor_of, write_window, write_windows,
+    WindowsOptions, WrittenWindows, corridor_of, prepare_window, write_windows,
 };
 use mapc_scenario::window::{CutRegion, DemandOverride, Fit, Lengths, WindowRequest};
 use std::path::PathBuf;
@@ -96,8 +96,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         None
     };
-    let first = args.junction.first().cloned().unwrap_or_default();
-    let corridor = corridor_of(&args.map, &first, &args.route.options())?;
+    let corridor = corridor_of(
+        &args.map,
+        args.junction.first().map(String::as_str),
+        &args.route.options(),
+    )?;
     let output = args
         .output
         .clone()
@@ -112,7 +115,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.junction.len() != 1 || args.all || args.join || !args.upstream_m.is_empty() {
         return run_several(&args, &corridor, &output, &demand, fit);
     }
-    let written = write_window(
+    let (written, files) = prepare_window(
         &corridor,
         &args.map,
         WindowRequest::at(&args.junction[0]).fitted(fit),
@@ -120,6 +123,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &output,
         &demand,
     )?;
+    // a short human run of what is written: which regime each merge is in under this demand; run before writing,
+    // so that a scenario the simulator refuses is not left behind
+    let regime = {
+        let spec = mapc_sim::spec_from_scenario(&files.resolved)?;
+        let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
+        mapc_sim::merge_regimes(&spec, &seeds)?
+    };
+    files.write()?;
     let cut = &written.cut;
     let render = match &args.render {
         Some(png) => {
@@ -137,15 +148,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         None => None,
     };
-    // a short human run of what was written: which regime each merge is in under this demand
     let multi_lane = cut.graph.roads.iter().any(|r| r.lanes.len() > 1);
-    let regime = {
-        let resolved =
-            mapc_scenario::ResolvedScenario::load(&written.scenario.display().to_string())?;
-        let spec = mapc_sim::spec_from_scenario(&resolved)?;
-        let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
-        mapc_sim::merge_regimes(&spec, &seeds)?
-    };
     let lengths = WindowLengths {
         lengths: Lengths {
             upstream_m: cut.upstream_m,

@@ -20,13 +20,14 @@ pub enum GraphFileError {
     },
     #[error("{path}: not a mapc graph file ({found}, expected `{FORMAT_NAME}`)")]
     NotAGraph { path: PathBuf, found: String },
-    /// A road's lanes or a lane connection that cannot be: a gap in the lane numbering, a connection to a lane
-    /// or road the graph lacks.
+    /// A graph that breaks what mapc's importers guarantee: ids repeated or out of order, a road and its
+    /// junctions that do not name each other, a lane numbering with a gap, a connection to a lane or road the graph
+    /// lacks, a length, speed or width no road has. `place` is `line N, ` where the element is found in the file;
     /// `problem` names the element first (`road R3: ...`, `connection 12 (...): ...`).
-    #[error("{path}: line {line}, {problem}")]
-    Lanes {
+    #[error("{path}: {place}{problem}")]
+    Invalid {
         path: PathBuf,
-        line: usize,
+        place: String,
         problem: String,
     },
     #[error(
@@ -47,6 +48,54 @@ pub fn write_atomically_with(
     path: &Path,
     body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
 ) -> std::io::Result<()> {
+    let tmp = written_temporary(path, body)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// Several files that belong together (a scenario and its graph) written all or none: every one is written to
+/// its temporary first, and only when all are complete are they renamed into place. A path that is a directory
+/// is refused before anything is written. The error names the path that failed.
+pub fn write_all_atomically(files: &[(&Path, &[u8])]) -> Result<(), (PathBuf, std::io::Error)> {
+    for (path, _) in files {
+        if path.is_dir() {
+            return Err((
+                path.to_path_buf(),
+                std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory"),
+            ));
+        }
+    }
+    let mut temporaries = Vec::new();
+    let remove_all = |temporaries: &[PathBuf]| {
+        for t in temporaries {
+            let _ = std::fs::remove_file(t);
+        }
+    };
+    for (path, bytes) in files {
+        match written_temporary(path, |w| w.write_all(bytes)) {
+            Ok(tmp) => temporaries.push(tmp),
+            Err(e) => {
+                remove_all(&temporaries);
+                return Err((path.to_path_buf(), e));
+            }
+        }
+    }
+    for (k, ((path, _), tmp)) in files.iter().zip(&temporaries).enumerate() {
+        if let Err(e) = std::fs::rename(tmp, path) {
+            remove_all(&temporaries[k..]);
+            return Err((path.to_path_buf(), e));
+        }
+    }
+    Ok(())
+}
+
+/// The temporary beside `path` that `body` wrote and that was flushed to disk, ready to be renamed; on any error
+/// it is removed. Temporaries of earlier writes to `path` whose writer was killed are removed first.
+fn written_temporary(
+    path: &Path,
+    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
+) -> std::io::Result<PathBuf> {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -56,18 +105,65 @@ pub fn write_atomically_with(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let tmp = dir.join(format!(".{file_name}.{}.tmp", std::process::id()));
+    remove_stale_temporaries(dir, &file_name);
+    let tmp = dir.join(temporary_name(&file_name, std::process::id()));
     let result = (|| {
         let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
         body(&mut w)?;
         let f = w.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        f.sync_all()
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    match result {
+        Ok(()) => Ok(tmp),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
     }
-    result
+}
+
+/// The hidden temporary a process writes `file_name` through: `.NAME.PID.tmp`.
+fn temporary_name(file_name: &str, pid: u32) -> String {
+    format!(".{file_name}.{pid}.tmp")
+}
+
+/// A temporary older than this is stale whatever its writer (its process id may have been reused).
+const STALE_TEMPORARY_AGE: std::time::Duration = std::time::Duration::from_secs(24 * 3600);
+
+/// Remove the temporaries of `file_name` in `dir` that a killed writer left: those of this naming whose process
+/// no longer runs, or older than [`STALE_TEMPORARY_AGE`]. A temporary another running process is writing is kept.
+fn remove_stale_temporaries(dir: &Path, file_name: &str) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let prefix = format!(".{file_name}.");
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(&prefix))
+            .and_then(|rest| rest.strip_suffix(".tmp"))
+            .and_then(|pid| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let old = entry
+            .metadata()
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age > STALE_TEMPORARY_AGE);
+        if pid != std::process::id() && (old || !process_runs(pid)) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
+/// Whether process `pid` runs; where that cannot be told (no `/proc`), it is taken to run, and only the age of
+/// its temporaries makes them stale.
+fn process_runs(pid: u32) -> bool {
+    let proc = Path::new("/proc");
+    !proc.join("self").exists() || proc.join(pid.to_string()).exists()
 }
 
 impl LaneGraph {
@@ -83,7 +179,7 @@ impl LaneGraph {
     }
 
     pub fn load(path: &Path) -> Result<LaneGraph, GraphFileError> {
-        let text = std::fs::read_to_string(path).map_err(|source| GraphFileError::Io {
+        let text = crate::input::read_to_string(path).map_err(|source| GraphFileError::Io {
             path: path.to_path_buf(),
             source,
         })?;
@@ -126,21 +222,36 @@ impl LaneGraph {
             });
         }
         let graph: LaneGraph = serde_json::from_str(text).map_err(parse_err)?;
-        match lane_problem(&graph, text) {
-            Some((line, element, message)) => Err(GraphFileError::Lanes {
+        match graph_problem(&graph, text) {
+            Some((line, problem)) => Err(GraphFileError::Invalid {
                 path: path.to_path_buf(),
-                line,
-                problem: format!("{element}: {message}"),
+                place: line.map(|l| format!("line {l}, ")).unwrap_or_default(),
+                problem,
             }),
             None => Ok(graph),
         }
     }
 }
 
-/// The first lane problem of a parsed graph, with the line of `text` where its element starts: a road whose lanes
-/// are not numbered 0, 1, 2, ..., a connection naming a road or lane the graph lacks.
-fn lane_problem(g: &LaneGraph, text: &str) -> Option<(usize, String, String)> {
+/// The first problem of a parsed graph, with the line of `text` where its element starts when it is found: ids
+/// repeated or out of order first (lookups by id rely on them), then the lanes and connections, then every other
+/// invariant ([`LaneGraph::invariant_violations`]).
+fn graph_problem(g: &LaneGraph, text: &str) -> Option<(Option<usize>, String)> {
     let line_at = |byte: usize| text[..byte.min(text.len())].matches('\n').count() + 1;
+    let line_of_id = |id: &str| text.find(&format!("\"id\": \"{id}\"")).map(line_at);
+    let violations = g.invariant_violations();
+    let first_violation = || {
+        let v = violations.first()?;
+        // every violation names its element first: `road R3 ...`, `junction J2 ...`
+        let id = v.split_whitespace().nth(1).unwrap_or("");
+        Some((line_of_id(id), v.clone()))
+    };
+    if violations
+        .first()
+        .is_some_and(|v| v.contains("appears twice") || v.contains("sorted by id"))
+    {
+        return first_violation();
+    }
     for r in &g.roads {
         let why = if r.lanes.is_empty() {
             Some("has no lanes".to_string())
@@ -148,9 +259,8 @@ fn lane_problem(g: &LaneGraph, text: &str) -> Option<(usize, String, String)> {
             crate::validate::lane_numbering_problem(&r.lanes)
         };
         if let Some(why) = why {
-            let needle = format!("\"id\": \"{}\"", r.id);
-            let line = text.find(&needle).map_or(1, line_at);
-            return Some((line, format!("road {}", r.id), format!("the road {why}")));
+            let line = line_of_id(&r.id.to_string());
+            return Some((line, format!("road {}: the road {why}", r.id)));
         }
     }
     // The n-th connection object is the n-th `"from_road"` after the `"connections"` key.
@@ -180,16 +290,15 @@ fn lane_problem(g: &LaneGraph, text: &str) -> Option<(usize, String, String)> {
         };
         if let Some(message) = problem {
             return Some((
-                start.map_or(1, line_at),
+                Some(start.map_or(1, line_at)),
                 format!(
-                    "connection {n} ({} lane {} -> {} lane {} at {})",
+                    "connection {n} ({} lane {} -> {} lane {} at {}): {message}",
                     c.from_road, c.from_lane, c.to_road, c.to_lane, c.junction
                 ),
-                message,
             ));
         }
     }
-    None
+    first_violation()
 }
 
 #[cfg(test)]
@@ -216,5 +325,104 @@ mod tests {
         write_atomically_with(&path, |w| w.write_all(b"a,b\n1,2\n")).unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "a,b\n1,2\n");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_killed_writers_temporary_is_removed_by_the_next_write_and_a_live_ones_kept() {
+        let dir = std::env::temp_dir().join(format!("mapc-io-stale-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("big.graph.json");
+        // no process has pid u32::MAX - 1 (Linux caps pids far lower); pid 1 always runs
+        let dead = dir.join(temporary_name("big.graph.json", u32::MAX - 1));
+        let live = dir.join(temporary_name("big.graph.json", 1));
+        let other = dir.join(temporary_name("other.json", u32::MAX - 1));
+        for t in [&dead, &live, &other] {
+            std::fs::write(t, b"half").unwrap();
+        }
+        write_atomically(&path, b"{}").unwrap();
+        assert!(!dead.exists(), "a dead writer's temporary is left");
+        assert_eq!(live.exists(), Path::new("/proc/self").exists());
+        assert!(
+            other.exists(),
+            "another file's temporary is not this write's to remove"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn files_written_together_are_all_or_none() {
+        let dir = std::env::temp_dir().join(format!("mapc-io-together-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("taken")).unwrap();
+        let graph = dir.join("w.graph.json");
+        let (failed, _) = write_all_atomically(&[
+            (graph.as_path(), b"{}".as_slice()),
+            (dir.join("taken").as_path(), b"x".as_slice()),
+        ])
+        .unwrap_err();
+        assert_eq!(failed, dir.join("taken"));
+        let mut names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        names.sort();
+        assert_eq!(names, vec![std::ffi::OsString::from("taken")]);
+        let toml = dir.join("w.toml");
+        write_all_atomically(&[(graph.as_path(), b"{}"), (toml.as_path(), b"a = 1")]).unwrap();
+        assert_eq!(std::fs::read_to_string(&toml).unwrap(), "a = 1");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The tiny merge's JSON with one edit, loaded: the error's text.
+    fn load_edited(edit: impl Fn(&mut serde_json::Value)) -> String {
+        let mut v = serde_json::to_value(crate::tests::tiny_merge()).unwrap();
+        edit(&mut v);
+        let text = serde_json::to_string_pretty(&v).unwrap();
+        LaneGraph::from_json(&text, Path::new("bad.graph.json"))
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn a_graph_that_breaks_what_the_importers_guarantee_is_refused_naming_the_element() {
+        use serde_json::json;
+        let cases: [(&str, Box<dyn Fn(&mut serde_json::Value)>); 6] = [
+            (
+                "road R2 names missing junction J9",
+                Box::new(|v| v["roads"][2]["to"] = json!("J9")),
+            ),
+            (
+                "junction J3 lists missing road R7",
+                Box::new(|v| v["junctions"][3]["incoming"] = json!(["R2", "R7"])),
+            ),
+            (
+                "road R1 has length_m -1",
+                Box::new(|v| v["roads"][1]["length_m"] = json!(-1.0)),
+            ),
+            (
+                "road R0 lane 0 speed_mps 1e-300 is outside [0.1, 1000] m/s",
+                Box::new(|v| v["roads"][0]["lanes"][0]["speed_mps"] = json!(1e-300)),
+            ),
+            (
+                "road R1 appears twice",
+                Box::new(|v| v["roads"][2]["id"] = json!("R1")),
+            ),
+            (
+                "connection R0 -> R2 at J2: via_length_m -1 is outside [0, 1e6] m",
+                Box::new(|v| v["connections"][0]["via_length_m"] = json!(-1.0)),
+            ),
+        ];
+        for (expected, edit) in cases {
+            let err = load_edited(edit);
+            assert!(err.starts_with("bad.graph.json: "), "{err}");
+            assert!(err.contains(expected), "expected `{expected}` in: {err}");
+        }
+        let err = load_edited(|v| v["connections"][0]["via_length_m"] = json!(null));
+        assert!(
+            err.starts_with("bad.graph.json: line ") && err.contains("null"),
+            "{err}"
+        );
+        // the line of the road is named
+        let err = load_edited(|v| v["roads"][1]["length_m"] = json!(-1.0));
+        assert!(err.starts_with("bad.graph.json: line "), "{err}");
     }
 }

@@ -18,8 +18,10 @@
 pub mod filekind;
 pub mod ids;
 pub mod index;
+pub mod input;
 pub mod io;
 pub mod lookup;
+pub mod markup;
 pub mod model;
 pub mod projection;
 pub mod terminal;
@@ -29,7 +31,7 @@ pub mod validate;
 pub use filekind::MapcFile;
 pub use ids::{JunctionId, RoadId};
 pub use index::RoadIndex;
-pub use io::{GraphFileError, write_atomically, write_atomically_with};
+pub use io::{GraphFileError, write_all_atomically, write_atomically, write_atomically_with};
 pub use lookup::LookupError;
 pub use model::*;
 pub use projection::Projection;
@@ -70,7 +72,7 @@ impl LaneGraph {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use std::path::Path;
 

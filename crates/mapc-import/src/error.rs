@@ -87,7 +87,7 @@ impl Located<'_> {
     pub fn error(&self, e: ParseError) -> ImportError {
         let (line, column) = match self {
             // Reading the file again only happens on the error path, so the happy path stays streaming.
-            Located::File(p) => match std::fs::read(p) {
+            Located::File(p) => match mapc_graph::input::read(p) {
                 Ok(text) => line_and_column(&text, e.byte),
                 Err(_) => (0, 0),
             },

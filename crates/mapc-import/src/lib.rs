@@ -147,7 +147,8 @@ pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
             "is a directory, not a map file",
         ));
     }
-    if meta.len() == 0 {
+    // a device or a FIFO has no length: read it (up to the input cap) to tell what it is
+    if meta.is_file() && meta.len() == 0 {
         return Err(ImportError::Empty {
             path: path.to_path_buf(),
         });
@@ -186,8 +187,8 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, Im
         format: format.source_format(),
     };
     let located = Located::File(path);
-    let open = || -> Result<BufReader<std::fs::File>, ParseError> {
-        std::fs::File::open(path)
+    let open = || -> Result<BufReader<mapc_graph::input::Capped<std::fs::File>>, ParseError> {
+        mapc_graph::input::open(path)
             .map(|f| BufReader::with_capacity(1 << 16, f))
             .map_err(|e| ParseError::new(0, None, format!("cannot open: {e}")))
     };
@@ -198,7 +199,7 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, Im
                 .map_err(|m| ImportError::unsupported(path, m))?
         }
         MapFormat::OsmPbf => {
-            let bytes = std::fs::read(path).map_err(|e| ImportError::io(path, e))?;
+            let bytes = mapc_graph::input::read(path).map_err(|e| ImportError::io(path, e))?;
             let data =
                 osm_pbf::read(&bytes, &options.highways).map_err(|e| binary_error(path, e))?;
             osm::build_graph(data, source, options)

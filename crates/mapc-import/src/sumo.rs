@@ -4,6 +4,7 @@
 
 use crate::error::ParseError;
 use crate::xml::{Item, XmlStream, attrs, describe};
+use mapc_graph::validate::{LANE_SPEED_MPS, LANE_WIDTH_M, MAX_LENGTH_M, outside};
 use mapc_graph::{
     Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance,
     RightOfWay, Road, RoadId, Source, Warnings,
@@ -249,6 +250,16 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                                 "lane `{}` has speed 0 (a normal or internal lane needs a positive speed limit)",
                                 lane.id
                             )));
+                        }
+                        // what no road has would be fed on to every later stage (a speed of 1e-300 m/s makes
+                        // a warm-up of days); the graph loader refuses the same
+                        let problems = [
+                            outside("speed", lane.speed, LANE_SPEED_MPS, "m/s"),
+                            outside("width", lane.width, LANE_WIDTH_M, "m"),
+                            outside("length", lane.length, [0.0, MAX_LENGTH_M], "m"),
+                        ];
+                        if let Some(why) = problems.into_iter().flatten().next() {
+                            return Err(el.err(format!("lane `{}`: {why}", lane.id)));
                         }
                         if lane.speed > MAX_PLAUSIBLE_SPEED_MPS {
                             net.notes.push((

@@ -87,7 +87,7 @@ pub fn window(
     via: Vec<String>,
 ) -> PyResult<String> {
     let corridor =
-        corridor_of(&map, junction, &options(via, None, None, false)).map_err(mapc_error)?;
+        corridor_of(&map, Some(junction), &options(via, None, None, false)).map_err(mapc_error)?;
     let demand = DemandOverride {
         main_vph,
         merge_vph,

@@ -184,7 +184,7 @@ impl Checkpoint {
     }
 
     pub fn load(path: &Path) -> Result<Self, RlError> {
-        let bytes = std::fs::read(path).map_err(|e| RlError::Io {
+        let bytes = mapc_graph::input::read(path).map_err(|e| RlError::Io {
             path: path.into(),
             source: e,
         })?;

@@ -2,6 +2,7 @@
 //! simplified to a corridor, a window cut and written as a scenario beside its graph and checked by reading it
 //! back, and the JSON reports both print.
 
+use crate::compile_files::CheckedFiles;
 use crate::simplify::{
     MergeSummary, Simplified, corridor_complex_junctions, corridor_merges, no_merge_warning,
     simplify,
@@ -53,8 +54,13 @@ pub enum CompileError {
         junction: String,
         error: mapc_graph::LookupError,
     },
-    #[error("the written scenario {path} does not load back: {error}")]
+    #[error("the scenario made for {path} would not load (nothing written): {error}")]
     ReadBack { path: PathBuf, error: ScenarioError },
+    #[error("{path}: {source} (nothing written)")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
 }
 
 /// A map or graph file, with the importer's defaults.
@@ -139,15 +145,16 @@ pub fn lane_report(g: &LaneGraph, roads: &[mapc_graph::RoadId]) -> Option<Value>
     }))
 }
 
-/// The corridor of `map`: the graph itself when it is one, else the map simplified with `options`. Without
-/// `via`, the corridor must keep `junction` a merge (the window is cut there): the route through `junction` alone
+/// The corridor of `map`: the graph itself when it is one, else the map simplified with `options` (with no
+/// `junction`, as `mapc simplify` does: the longest route, or the one `via` names). Without `via`, the corridor
+/// must keep `junction` a merge (the window is cut there): the route through `junction` alone
 /// is tried first, then the routes through each road into it (higher class, then longer, first), since the longest
 /// route through a merge may come in on the merging road and leave the other road in as one that leaves and
 /// rejoins it, which is no merge. The first corridor where `junction` is a merge is taken; failing that, the first
 /// one, whose window cut then says why.
 pub fn corridor_of(
     map: &Path,
-    junction: &str,
+    junction: Option<&str>,
     options: &SimplifyOptions,
 ) -> Result<LaneGraph, CompileError> {
     let g = load_map(map)?;
@@ -158,9 +165,9 @@ pub fn corridor_of(
         path: map.to_path_buf(),
         error,
     };
-    if !options.via.is_empty() {
+    let Some(junction) = junction.filter(|_| options.via.is_empty()) else {
         return simplify(&g, options).map(|s| s.graph).map_err(transform);
-    }
+    };
     // the map's junction, named as `--junction` (not as the `--via` it becomes below)
     let j = g
         .find_junction(junction)
@@ -221,8 +228,8 @@ pub struct WrittenWindow {
 
 /// Cut the window of `corridor` (read from `map`) around one merge (a junction id, or a [`WindowRequest`] to fit
 /// it to what the map has) matched to the scenario `source` (a built-in name or a file), and write it to
-/// `output` (a `.toml`; the graph goes beside it as `<name>.graph.json`). What is written must load back as a
-/// sound scenario. Demand overrides must be zero or positive rates (`--main-vph`, `--merge-vph`).
+/// `output` (a `.toml`; the graph goes beside it as `<name>.graph.json`). Both are checked to load back as a sound
+/// scenario before either is written ([`CheckedFiles`]); on any error nothing is written. Demand overrides must be zero or positive rates (`--main-vph`, `--merge-vph`).
 pub fn write_window(
     corridor: &LaneGraph,
     map: &Path,
@@ -231,6 +238,21 @@ pub fn write_window(
     output: &Path,
     demand: &DemandOverride,
 ) -> Result<WrittenWindow, CompileError> {
+    let (window, files) = prepare_window(corridor, map, request, source, output, demand)?;
+    files.write()?;
+    Ok(window)
+}
+
+/// [`write_window`] up to the writing: the window and its files, checked, for a caller that has more to check
+/// before anything is written.
+pub fn prepare_window(
+    corridor: &LaneGraph,
+    map: &Path,
+    request: impl Into<WindowRequest>,
+    source: &str,
+    output: &Path,
+    demand: &DemandOverride,
+) -> Result<(WrittenWindow, CheckedFiles), CompileError> {
     check_demand(demand)?;
     let (resolved, shape) = source_shape(source)?;
     let transform = |error: TransformError| CompileError::Transform {
@@ -246,15 +268,18 @@ pub fn write_window(
         &cut.graph,
         &[cut.main_entry, cut.merge_entry],
     )?;
-    save_checked(&cut.graph, &graph, &scenario, output)?;
-    Ok(WrittenWindow {
-        cut,
-        shape,
-        scenario: output.to_path_buf(),
-        graph,
-        timing,
-        demand_notes,
-    })
+    let files = CheckedFiles::check(&cut.graph, &graph, &scenario, output)?;
+    Ok((
+        WrittenWindow {
+            cut,
+            shape,
+            scenario: output.to_path_buf(),
+            graph,
+            timing,
+            demand_notes,
+        },
+        files,
+    ))
 }
 
 /// Demand overrides must be zero or positive rates.
@@ -348,27 +373,6 @@ fn bounded(
     })
 }
 
-/// Writes the graph and the scenario and loads the scenario back.
-fn save_checked(
-    g: &LaneGraph,
-    graph: &Path,
-    scenario: &crate::Scenario,
-    output: &Path,
-) -> Result<(), CompileError> {
-    g.save(graph).map_err(|error| CompileError::Graph {
-        path: graph.to_path_buf(),
-        error,
-    })?;
-    scenario.save(output)?;
-    ResolvedScenario::load(&output.display().to_string()).map_err(|error| {
-        CompileError::ReadBack {
-            path: output.to_path_buf(),
-            error,
-        }
-    })?;
-    Ok(())
-}
-
 /// Several windows cut from a corridor and written.
 #[derive(Clone, Debug)]
 pub struct WrittenWindows {
@@ -446,7 +450,7 @@ pub fn write_windows(
     let (mut scenario, demand_notes) =
         windows_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
     let timing = bounded(&mut scenario, &cut.graph, &[cut.main_entry])?;
-    save_checked(&cut.graph, &graph, &scenario, output)?;
+    CheckedFiles::check(&cut.graph, &graph, &scenario, output)?.write()?;
     Ok(WrittenWindows {
         cut,
         shape,

@@ -104,7 +104,7 @@ pub struct LoadedDistribution {
 impl LoadedDistribution {
     /// Reads and checks a distribution file.
     pub fn load(path: &Path) -> Result<LoadedDistribution, ScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+        let text = mapc_graph::input::read_to_string(path).map_err(|source| ScenarioError::Io {
             path: path.to_path_buf(),
             source,
         })?;
@@ -243,14 +243,21 @@ fn check_draws(d: &Draws) -> Result<(), (&'static str, String)> {
         if !(lo.is_finite() && hi.is_finite() && min <= lo && lo <= hi && hi <= max) {
             return Err((
                 key,
-                format!("[{lo}, {hi}] must satisfy {min} <= low <= high <= {max}"),
+                format!(
+                    "[{}, {}] must satisfy {min} <= low <= high <= {max}",
+                    crate::ranges::show(lo),
+                    crate::ranges::show(hi)
+                ),
             ));
         }
     }
     if !(0.0..=1.0).contains(&d.ramp_major) {
         return Err((
             "ramp_major",
-            format!("a probability in [0, 1], not {}", d.ramp_major),
+            format!(
+                "a probability in [0, 1], not {}",
+                crate::ranges::show(d.ramp_major)
+            ),
         ));
     }
     Ok(())

@@ -2,6 +2,7 @@
 //! along y = 0 with the merge at x = pre_merge_m; the ramp comes in from below at `angle_deg`.
 
 use crate::model::{LaneDropParams, MajorRoad, SimpleMergeParams};
+use crate::ranges::show;
 use mapc_graph::{
     Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance,
     RightOfWay, Road, RoadId, Source, SourceFormat,
@@ -35,7 +36,8 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     ] {
         if !(v.is_finite() && v > 0.0) {
             return Err(format!(
-                "network.simple_merge.{name} must be a positive number, not {v}"
+                "network.simple_merge.{name} must be a positive number, not {}",
+                show(v)
             ));
         }
     }
@@ -46,14 +48,15 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     ] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(format!(
-                "network.simple_merge.{name} must be zero or positive, not {v}"
+                "network.simple_merge.{name} must be zero or positive, not {}",
+                show(v)
             ));
         }
     }
     if !(p.angle_deg > 0.0 && p.angle_deg < 90.0) {
         return Err(format!(
             "network.simple_merge.angle_deg must be between 0 and 90, not {}",
-            p.angle_deg
+            show(p.angle_deg)
         ));
     }
     if p.lanes == 0 {
@@ -72,7 +75,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     if !(p.acceleration_lane_m.is_finite() && p.acceleration_lane_m >= 0.0) {
         return Err(format!(
             "network.simple_merge.acceleration_lane_m must be zero or positive, not {}",
-            p.acceleration_lane_m
+            show(p.acceleration_lane_m)
         ));
     }
     let accel = p.acceleration_lane_m > 0.0;
@@ -276,7 +279,8 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
     ] {
         if !(v.is_finite() && v > 0.0) {
             return Err(format!(
-                "network.lane_drop.{name} must be a positive number, not {v}"
+                "network.lane_drop.{name} must be a positive number, not {}",
+                show(v)
             ));
         }
     }

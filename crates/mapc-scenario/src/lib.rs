@@ -25,6 +25,7 @@
 
 pub mod bounds;
 pub mod compile;
+pub mod compile_files;
 mod depart_lane;
 pub mod distribution;
 pub mod generator;
@@ -250,7 +251,7 @@ impl Scenario {
     }
 
     pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
-        let bytes = std::fs::read(path).map_err(|source| ScenarioError::Io {
+        let bytes = mapc_graph::input::read(path).map_err(|source| ScenarioError::Io {
             path: path.to_path_buf(),
             source,
         })?;
@@ -316,13 +317,8 @@ impl ResolvedScenario {
         origin: &str,
     ) -> Result<ResolvedScenario, ScenarioError> {
         let path = PathBuf::from(origin);
-        let invalid = |key: String, message: String| ScenarioError::Invalid {
-            path: path.clone(),
-            key,
-            message,
-        };
         // the numbers first: a scenario with an absurd one is refused before its network is built
-        ranges::check_scenario(&scenario).map_err(|r| invalid(r.key, r.message))?;
+        check_ranges(&scenario, &path)?;
         let graph = match &scenario.network {
             NetworkSpec::SimpleMerge(p) => {
                 generator::simple_merge(p).map_err(|message| ScenarioError::Network {
@@ -349,6 +345,32 @@ impl ResolvedScenario {
                         message: e.to_string(),
                     })?
             }
+        };
+        ResolvedScenario::on_network(scenario, graph, origin)
+    }
+
+    /// A scenario on a network in hand (a graph about to be written beside it, as the scenario names it), checked
+    /// as [`ResolvedScenario::resolve`] checks one read from files.
+    pub fn resolve_with(
+        scenario: Scenario,
+        graph: LaneGraph,
+        origin: &str,
+    ) -> Result<ResolvedScenario, ScenarioError> {
+        check_ranges(&scenario, Path::new(origin))?;
+        ResolvedScenario::on_network(scenario, graph, origin)
+    }
+
+    /// Every reference of `scenario` checked against its network `graph`.
+    fn on_network(
+        scenario: Scenario,
+        graph: LaneGraph,
+        origin: &str,
+    ) -> Result<ResolvedScenario, ScenarioError> {
+        let path = PathBuf::from(origin);
+        let invalid = |key: String, message: String| ScenarioError::Invalid {
+            path: path.clone(),
+            key,
+            message,
         };
         let find_road = |key: String, r: &str| -> Result<RoadId, ScenarioError> {
             let found = graph
@@ -489,6 +511,15 @@ impl ResolvedScenario {
             measure_junctions,
         })
     }
+}
+
+/// Every number of `scenario` within its range ([`ranges::check_scenario`]); `path` names the scenario.
+fn check_ranges(scenario: &Scenario, path: &Path) -> Result<(), ScenarioError> {
+    ranges::check_scenario(scenario).map_err(|r| ScenarioError::Invalid {
+        path: path.to_path_buf(),
+        key: r.key,
+        message: r.message,
+    })
 }
 
 /// The windows of `control.windows` resolved against `graph`: each merge a junction, each road found, no road in

@@ -65,11 +65,7 @@ impl Range {
 
 /// A number as a message shows it: plain when short, else in exponent form (`1e308`, not 309 digits).
 pub fn show(v: f64) -> String {
-    if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    }
+    mapc_graph::terminal::number(v)
 }
 
 /// `key = value` checked against `range`.

@@ -2,20 +2,9 @@
 
 use std::fmt::Write;
 
-/// Escape a value for a double-quoted XML attribute.
+/// Escape a value for a double-quoted XML attribute ([`mapc_graph::markup::escape`]).
 pub fn escape(value: &str) -> String {
-    let mut out = String::with_capacity(value.len());
-    for c in value.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            _ => out.push(c),
-        }
-    }
-    out
+    mapc_graph::markup::escape(value)
 }
 
 /// A number as SUMO reads it back: two decimals for geometry (SUMO's own precision), more where lengths must

@@ -64,6 +64,8 @@ pub(crate) fn draw_to_file(
                 figure.draw(&root).map_err(draw_err)?;
                 root.present().d().map_err(draw_err)?;
             }
+            // the backend escapes `<` and `&` in labels but passes control characters a map's names may hold
+            let svg = mapc_graph::markup::xml_safe(&svg);
             mapc_graph::write_atomically(out, svg.as_bytes()).map_err(io_err)
         }
         PictureKind::Png => {

@@ -12,7 +12,7 @@ pub struct CsvInput {
 
 impl CsvInput {
     pub fn open(path: &Path) -> Result<CsvInput, VizError> {
-        let file = std::fs::File::open(path).map_err(|source| VizError::Io {
+        let file = mapc_graph::input::open(path).map_err(|source| VizError::Io {
             path: path.to_path_buf(),
             source,
         })?;

@@ -34,7 +34,7 @@ pub fn read_png(path: &Path) -> Result<(PngStats, Vec<[u8; 3]>), VizError> {
         path: path.to_path_buf(),
         message: message.to_string(),
     };
-    let bytes = std::fs::read(path).map_err(|source| VizError::Io {
+    let bytes = mapc_graph::input::read(path).map_err(|source| VizError::Io {
         path: path.to_path_buf(),
         source,
     })?;

@@ -135,7 +135,7 @@ fn read_best_iteration(path: &Path) -> Result<Option<u64>, VizError> {
     struct Selected {
         row_iteration: u64,
     }
-    let text = match std::fs::read_to_string(path) {
+    let text = match mapc_graph::input::read_to_string(path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => {

@@ -14,6 +14,9 @@ pub const MAX_PLAUSIBLE_SPEED_MPS: f64 = 300.0 / 3.6;
 /// The limit of a road tagged `maxspeed=none` (no limit, as on much of the German Autobahn): netconvert's
 /// `osm.speedlimit-none` default in SUMO 1.8, 39.4444 m/s (142 km/h).
 pub const SPEED_LIMIT_NONE_MPS: f64 = 39.4444;
+/// Nor is one below walking pace (1 km/h: `maxspeed=1e-300` reads as 1 km/h with an unknown unit, but
+/// `maxspeed=0.0001` as a number).
+pub const MIN_PLAUSIBLE_SPEED_MPS: f64 = 1.0 / 3.6;
 /// Two consecutive nodes of a road further apart than this (10 km) are counted as `long_segment`: real highway
 /// geometry has a node every few hundred metres at most, so this is a misplaced node.
 pub const LONG_SEGMENT_M: f64 = 10_000.0;
@@ -245,13 +248,15 @@ pub(super) fn speeds(way: &OsmWay, warnings: &mut Warnings) -> (f64, f64) {
                 );
                 None
             }
-            // a typo (`650`) or a unit mix-up: the class default is closer to the truth than 650 km/h
-            Some(s) if s > MAX_PLAUSIBLE_SPEED_MPS => {
+            // a typo (`650`, `0.001`) or a unit mix-up: the class default is closer to the truth than 650 km/h,
+            // as netconvert falls back on its type's speed
+            Some(s) if !(MIN_PLAUSIBLE_SPEED_MPS..=MAX_PLAUSIBLE_SPEED_MPS).contains(&s) => {
                 warnings.add(
                     "maxspeed_implausible",
                     format!(
-                        "way {}: {key}={text}, above {:.0} km/h: class default used",
+                        "way {}: {key}={text}, outside {:.0} to {:.0} km/h: class default used",
                         way.id,
+                        MIN_PLAUSIBLE_SPEED_MPS * 3.6,
                         MAX_PLAUSIBLE_SPEED_MPS * 3.6
                     ),
                 );

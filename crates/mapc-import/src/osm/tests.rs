@@ -191,3 +191,33 @@ fn split_merge_and_right_of_way() {
     assert!((r0.length_m - 828.5).abs() < 1.0, "{}", r0.length_m);
     assert_eq!(r0.provenance.osm_nodes, vec![10, 20]);
 }
+
+#[test]
+fn absurd_speed_limits_fall_back_on_the_class_default_with_a_warning() {
+    let (_, motorway_default, _) = class_defaults("motorway");
+    for maxspeed in [
+        "1e-300",
+        "1e308",
+        "0.0000001",
+        "650",
+        "99999999999999999999",
+    ] {
+        let mut w = Warnings::default();
+        let (fwd, bwd) = speeds(
+            &way(1, &[], &[("highway", "motorway"), ("maxspeed", maxspeed)]),
+            &mut w,
+        );
+        assert_eq!(
+            (fwd, bwd),
+            (motorway_default, motorway_default),
+            "{maxspeed}"
+        );
+        assert_eq!(w.total(), 1, "{maxspeed}: {:?}", w.counts);
+    }
+    let mut w = Warnings::default();
+    let (fwd, _) = speeds(
+        &way(1, &[], &[("highway", "motorway"), ("maxspeed", "5")]),
+        &mut w,
+    );
+    assert!((fwd - 5.0 / 3.6).abs() < 1e-12 && w.is_empty());
+}
