@@ -94,7 +94,8 @@ fn window_that_fails_after_making_its_files_writes_neither() {
             "-o",
             s(&out),
         ],
-        &["control.n_av", "nothing written"],
+        // the flag's own range refuses it before any work
+        &["--n-av", "0..=1000"],
     );
     assert!(names_in(&dir).is_empty(), "{:?}", names_in(&dir));
     // `-o` naming a folder: the graph beside it is not written either
