@@ -51,7 +51,8 @@ const KINDS: &[Kind] = &[
     },
     Kind {
         name: "sumo-net-window",
-        seed_file: "maps/simple_merge.net.xml",
+        // a map whose default corridor has merges to cut (the Simple Merge's net has no road of the default classes)
+        seed_file: "maps/rongwu.net.xml",
         file_name: "m.net.xml",
         text: true,
         args: &["window", "{in}", "--all", "-o", "{out}/w.toml"],
@@ -136,7 +137,7 @@ const FLAG_LINES: &[&[&str]] = &[
     &["train", "--scenario", "simple_merge", "--gamma", "{n}", "--preset", "fast", "--iters", "1", "--out", "{out}/run"],
     &[
         "window",
-        "maps/simple_merge.net.xml",
+        "maps/rongwu.net.xml",
         "--all",
         "--n-av",
         "{n}",
