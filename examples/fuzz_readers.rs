@@ -35,9 +35,17 @@ const KINDS: [(Kind, &str, &str); 7] = [
     (Kind::OsmXml, "osm-xml", "maps/a2_braunschweig.osm"),
     (Kind::OsmPbf, "osm-pbf", "maps/i696.osm.pbf"),
     (Kind::Scenario, "scenario", "scenarios/simple_merge.toml"),
-    (Kind::Scenario, "scenario-lanes", "scenarios/i210_window_lanes.toml"),
+    (
+        Kind::Scenario,
+        "scenario-lanes",
+        "scenarios/i210_window_lanes.toml",
+    ),
     (Kind::Graph, "graph", "scenarios/i696_window.graph.json"),
-    (Kind::Policy, "policy", "policies/simple_merge_distributed.json"),
+    (
+        Kind::Policy,
+        "policy",
+        "policies/simple_merge_distributed.json",
+    ),
 ];
 
 #[derive(Default)]
@@ -54,23 +62,37 @@ fn read(kind: Kind, input: &[u8], scratch: &Path) -> Result<(), String> {
     use mapc_import::{ImportOptions, MapFormat, import_bytes};
     let text = || std::str::from_utf8(input).map_err(|e| e.to_string());
     match kind {
-        Kind::SumoNet => import_bytes(input, MapFormat::SumoNet, "m.net.xml", &ImportOptions::default())
-            .map(drop)
-            .map_err(|e| e.to_string()),
+        Kind::SumoNet => import_bytes(
+            input,
+            MapFormat::SumoNet,
+            "m.net.xml",
+            &ImportOptions::default(),
+        )
+        .map(drop)
+        .map_err(|e| e.to_string()),
         Kind::OsmXml => import_bytes(input, MapFormat::OsmXml, "m.osm", &ImportOptions::default())
             .map(drop)
             .map_err(|e| e.to_string()),
-        Kind::OsmPbf => import_bytes(input, MapFormat::OsmPbf, "m.osm.pbf", &ImportOptions::default())
-            .map(drop)
-            .map_err(|e| e.to_string()),
+        Kind::OsmPbf => import_bytes(
+            input,
+            MapFormat::OsmPbf,
+            "m.osm.pbf",
+            &ImportOptions::default(),
+        )
+        .map(drop)
+        .map_err(|e| e.to_string()),
         Kind::Graph => mapc_graph::LaneGraph::from_json(text()?, Path::new("g.graph.json"))
             .map(drop)
             .map_err(|e| e.to_string()),
         Kind::Scenario => {
             let scenario = mapc_scenario::Scenario::from_toml(text()?, Path::new("s.toml"))
                 .map_err(|e| e.to_string())?;
-            let rs = mapc_scenario::ResolvedScenario::resolve(scenario, Path::new("scenarios"), "s.toml")
-                .map_err(|e| e.to_string())?;
+            let rs = mapc_scenario::ResolvedScenario::resolve(
+                scenario,
+                Path::new("scenarios"),
+                "s.toml",
+            )
+            .map_err(|e| e.to_string())?;
             let mut spec = mapc_sim::spec_from_scenario(&rs).map_err(|e| e.to_string())?;
             // a short run (a graph named by the scenario is looked for in scenarios/): the point is what the
             // simulator does with what the reader let through
@@ -111,7 +133,10 @@ fn options() -> Options {
     let mut i = 0;
     while i + 1 < args.len() {
         let v = &args[i + 1];
-        let num = || v.parse::<u64>().unwrap_or_else(|_| panic!("{}: not a number: {v}", args[i]));
+        let num = || {
+            v.parse::<u64>()
+                .unwrap_or_else(|_| panic!("{}: not a number: {v}", args[i]))
+        };
         match args[i].as_str() {
             "--seconds" => o.seconds = num(),
             "--seed" => o.seed = num(),
@@ -136,7 +161,10 @@ fn main() {
         .collect();
     let seeds: Vec<Vec<u8>> = kinds
         .iter()
-        .map(|(_, _, file)| std::fs::read(file).unwrap_or_else(|e| panic!("{file}: {e} (run from the repository root)")))
+        .map(|(_, _, file)| {
+            std::fs::read(file)
+                .unwrap_or_else(|e| panic!("{file}: {e} (run from the repository root)"))
+        })
         .collect();
     let mut tallies: Vec<Tally> = kinds.iter().map(|_| Tally::default()).collect();
     let mut d = Draw(o.seed);
@@ -177,7 +205,11 @@ fn main() {
             let path = o.out.join(format!("{tag}-{name}-{n}"));
             std::fs::write(&path, &input).ok();
             std::fs::write(path.with_extension("txt"), what.join("\n")).ok();
-            eprintln!("{tag}: {name}: {} (input kept in {})", what.join("; "), path.display());
+            eprintln!(
+                "{tag}: {name}: {} (input kept in {})",
+                what.join("; "),
+                path.display()
+            );
         };
         match rx.recv_timeout(o.limit) {
             Ok(Ok(Ok(()))) => t.accepted += 1,

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{refused, run_mapc, scratch_dir};
+use common::{refused, run_mapc, scratch_dir, steering};
 use std::path::PathBuf;
 
 /// The shipped Simple Merge policy with `edit` applied to its JSON, written as `<name>.json` in a scratch folder.
@@ -257,17 +257,6 @@ fn every_numeric_flag_has_a_range() {
         let err = refused(args, &[flag]);
         assert!(err.contains("invalid value"), "{args:?}: {err}");
     }
-}
-
-/// The characters of a terminal's control channel: C0 but the line break, DEL, C1, and the bidirectional
-/// embeddings, overrides and isolates.
-fn steering(text: &str) -> Vec<char> {
-    text.chars()
-        .filter(|&c| {
-            (c.is_control() && c != '\n')
-                || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
-        })
-        .collect()
 }
 
 #[test]

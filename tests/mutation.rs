@@ -121,9 +121,32 @@ const KINDS: &[Kind] = &[
 
 /// Command lines whose `{n}` takes a hostile number (flags, not files).
 const FLAG_LINES: &[&[&str]] = &[
-    &["sim", "--scenario", "simple_merge", "--seeds", "{n}", "--json"],
-    &["sim", "--scenario", "simple_merge", "--seeds", "1", "--first-seed", "{n}"],
-    &["sim", "--scenario", "simple_merge", "--seeds", "1", "--threads", "{n}"],
+    &[
+        "sim",
+        "--scenario",
+        "simple_merge",
+        "--seeds",
+        "{n}",
+        "--json",
+    ],
+    &[
+        "sim",
+        "--scenario",
+        "simple_merge",
+        "--seeds",
+        "1",
+        "--first-seed",
+        "{n}",
+    ],
+    &[
+        "sim",
+        "--scenario",
+        "simple_merge",
+        "--seeds",
+        "1",
+        "--threads",
+        "{n}",
+    ],
     &[
         "eval",
         "--policy",
@@ -133,8 +156,32 @@ const FLAG_LINES: &[&[&str]] = &[
         "--seeds",
         "{n}",
     ],
-    &["train", "--scenario", "simple_merge", "--n-av", "{n}", "--preset", "fast", "--iters", "1", "--out", "{out}/run"],
-    &["train", "--scenario", "simple_merge", "--gamma", "{n}", "--preset", "fast", "--iters", "1", "--out", "{out}/run"],
+    &[
+        "train",
+        "--scenario",
+        "simple_merge",
+        "--n-av",
+        "{n}",
+        "--preset",
+        "fast",
+        "--iters",
+        "1",
+        "--out",
+        "{out}/run",
+    ],
+    &[
+        "train",
+        "--scenario",
+        "simple_merge",
+        "--gamma",
+        "{n}",
+        "--preset",
+        "fast",
+        "--iters",
+        "1",
+        "--out",
+        "{out}/run",
+    ],
     &[
         "window",
         "maps/rongwu.net.xml",
@@ -346,16 +393,32 @@ fn the_judge_catches_each_kind_of_wrong_answer() {
         hung,
     };
     assert!(judge(&ran(Some(0), "", false), &dir, &input).is_none());
-    assert!(judge(&ran(Some(2), "error: x.toml: line 1: bad", false), &dir, &input).is_none());
+    assert!(
+        judge(
+            &ran(Some(2), "error: x.toml: line 1: bad", false),
+            &dir,
+            &input
+        )
+        .is_none()
+    );
     for wrong in [
         ran(Some(101), "thread 'main' panicked at src/x.rs:1:1", false),
         ran(None, "", false),
-        ran(Some(134), "memory allocation of 8000000000 bytes failed", false),
+        ran(
+            Some(134),
+            "memory allocation of 8000000000 bytes failed",
+            false,
+        ),
         ran(None, "", true),
         ran(Some(2), "  ", false),
         ran(Some(1), "error", false),
     ] {
-        assert!(judge(&wrong, &dir, &input).is_some(), "{:?} {}", wrong.code, wrong.stderr);
+        assert!(
+            judge(&wrong, &dir, &input).is_some(),
+            "{:?} {}",
+            wrong.code,
+            wrong.stderr
+        );
     }
     std::fs::write(dir.join("out.toml"), "half").unwrap();
     assert!(judge(&ran(Some(2), "error: refused", false), &dir, &input).is_some());

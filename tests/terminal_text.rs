@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{run_mapc, scratch_dir};
+use common::{run_mapc, scratch_dir, steering};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -34,17 +34,6 @@ fn hostile_net(dir: &Path, broken: bool) -> PathBuf {
     });
     std::fs::write(&path, net).unwrap();
     path
-}
-
-/// The characters of a terminal's control channel: C0 but the line break, DEL, C1, and the bidirectional
-/// embeddings, overrides and isolates.
-fn steering(text: &str) -> Vec<char> {
-    text.chars()
-        .filter(|&c| {
-            (c.is_control() && c != '\n')
-                || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
-        })
-        .collect()
 }
 
 fn printed(out: &Output) -> (String, String) {

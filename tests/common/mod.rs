@@ -141,3 +141,14 @@ pub fn edited_scenario(shipped: &str, name: &str, edit: impl Fn(String) -> Strin
     std::fs::write(&path, edited).unwrap();
     path
 }
+
+/// The characters of a terminal's control channel: C0 but the line break, DEL, C1, and the bidirectional
+/// embeddings, overrides and isolates.
+pub fn steering(text: &str) -> Vec<char> {
+    text.chars()
+        .filter(|&c| {
+            (c.is_control() && c != '\n')
+                || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+        })
+        .collect()
+}

@@ -95,7 +95,9 @@ fn number_spans(text: &str) -> Vec<(usize, usize)> {
     let mut spans = Vec::new();
     let mut i = 0;
     while i < b.len() {
-        if b[i].is_ascii_digit() && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_')) {
+        if b[i].is_ascii_digit()
+            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'))
+        {
             let start = if i > 0 && b[i - 1] == b'-' { i - 1 } else { i };
             let mut j = i;
             while j < b.len() && (b[j].is_ascii_digit() || b[j] == b'.' || b[j] == b'e') {
@@ -137,4 +139,3 @@ pub fn mutate_bytes(bytes: &[u8], d: &mut Draw) -> (Vec<u8>, String) {
         }
     }
 }
-
