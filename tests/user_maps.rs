@@ -5,7 +5,9 @@
 
 mod common;
 
-use common::{assert_success, edited_scenario, fresh_path, mapc_json, refused, root, run_mapc};
+use common::{
+    assert_success, edited_scenario, fresh_path, mapc_json, refused, root, run_mapc, scratch_dir,
+};
 use serde_json::Value;
 
 /// The Simple Merge with 4000 human veh/h on its one-lane main road: far more than the road takes.
@@ -214,4 +216,33 @@ fn the_help_says_what_simplify_and_export_do() {
         export.contains("GeoJSON") && export.contains("SUMO"),
         "{export}"
     );
+}
+
+#[test]
+fn several_windows_report_their_timing_and_regime_as_one_window_does() {
+    let dir = scratch_dir("windows-regime");
+    let out = dir.join("w.toml");
+    let report = mapc_json(&[
+        "window",
+        "scenarios/i696.corridor.graph.json",
+        "--all",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    // the warm-up picked (null: the source's timing kept) and each merge's regime under the window's demand
+    assert!(report.get("timing").is_some(), "{report}");
+    let merges = report["regime"]["merges"]
+        .as_array()
+        .expect("a regime per merge");
+    assert!(!merges.is_empty(), "{report}");
+    let text = run_mapc(&[
+        "window",
+        "scenarios/i696.corridor.graph.json",
+        "--all",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("regime (3 seeds)"));
+    std::fs::remove_dir_all(dir).unwrap();
 }

@@ -7,7 +7,7 @@ use super::window_fit::{WindowLengths, corridor_before_m};
 use anyhow::Context;
 use mapc_graph::LaneGraph;
 use mapc_scenario::compile::{
-    WindowsOptions, WrittenWindows, corridor_of, prepare_window, write_windows,
+    WindowsOptions, WrittenWindows, corridor_of, prepare_window, prepare_windows,
 };
 use mapc_scenario::window::{CutRegion, DemandOverride, Fit, Lengths, WindowRequest};
 use std::path::PathBuf;
@@ -125,11 +125,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     // a short human run of what is written: which regime each merge is in under this demand; run before writing,
     // so that a scenario the simulator refuses is not left behind
-    let regime = {
-        let spec = mapc_sim::spec_from_scenario(&files.resolved)?;
-        let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
-        mapc_sim::merge_regimes(&spec, &seeds)?
-    };
+    let regime = regime_of(&files.resolved)?;
     files.write()?;
     let cut = &written.cut;
     let render = match &args.render {
@@ -223,7 +219,7 @@ fn run_several(
         };
         r.upstream_m = Some(*m);
     }
-    let written = write_windows(
+    let (written, files) = prepare_windows(
         corridor,
         &args.map,
         &requests,
@@ -236,6 +232,10 @@ fn run_several(
         output,
         demand,
     )?;
+    // the merges' regime under this demand, as for one window: before writing, so that a scenario the simulator
+    // refuses is not left behind
+    let regime = regime_of(&files.resolved)?;
+    files.write()?;
     let render = match &args.render {
         Some(_) => Some(render_several(&written, args)?),
         None => None,
@@ -252,6 +252,8 @@ fn run_several(
         {
             w["observation"] = super::window_fit::observation(&written.shape, &lengths_of(r));
         }
+        report["timing"] = serde_json::to_value(&written.timing)?;
+        report["regime"] = serde_json::to_value(&regime)?;
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
@@ -280,6 +282,9 @@ fn run_several(
     for s in &written.cut.skipped {
         println!("skipped {s}");
     }
+    if let Some(t) = &written.timing {
+        println!("  {}", t.note);
+    }
     for d in &written.demand_notes {
         println!("  {d}");
     }
@@ -295,7 +300,15 @@ fn run_several(
     if let Some(r) = render {
         println!("drew {}", r.path.display());
     }
+    super::sim::print_regime(&regime);
     Ok(())
+}
+
+/// A short human run of a window scenario: which regime each merge is in under its demand.
+fn regime_of(resolved: &mapc_scenario::ResolvedScenario) -> anyhow::Result<mapc_sim::RegimeReport> {
+    let spec = mapc_sim::spec_from_scenario(resolved)?;
+    let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
+    Ok(mapc_sim::merge_regimes(&spec, &seeds)?)
 }
 
 /// The corridor with every window highlighted.

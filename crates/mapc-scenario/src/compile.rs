@@ -399,7 +399,7 @@ pub struct WindowsOptions {
 }
 
 /// Cut the windows of `requests` (and more, as `options` says) matched to `source`, and write them as one
-/// scenario with one controlled region per window.
+/// scenario with one controlled region per window; on any error nothing is written.
 pub fn write_windows(
     corridor: &LaneGraph,
     map: &Path,
@@ -409,6 +409,23 @@ pub fn write_windows(
     output: &Path,
     demand: &DemandOverride,
 ) -> Result<WrittenWindows, CompileError> {
+    let (windows, files) =
+        prepare_windows(corridor, map, requests, options, source, output, demand)?;
+    files.write()?;
+    Ok(windows)
+}
+
+/// [`write_windows`] up to the writing: the windows and their files, checked, for a caller that has more to
+/// check (the merges' regime) before anything is written.
+pub fn prepare_windows(
+    corridor: &LaneGraph,
+    map: &Path,
+    requests: &[WindowRequest],
+    options: WindowsOptions,
+    source: &str,
+    output: &Path,
+    demand: &DemandOverride,
+) -> Result<(WrittenWindows, CheckedFiles), CompileError> {
     check_demand(demand)?;
     let (resolved, shape) = source_shape(source)?;
     let transform = |error: TransformError| CompileError::Transform {
@@ -450,15 +467,16 @@ pub fn write_windows(
     let (mut scenario, demand_notes) =
         windows_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
     let timing = bounded(&mut scenario, &cut.graph, &[cut.main_entry])?;
-    CheckedFiles::check(&cut.graph, &graph, &scenario, output)?.write()?;
-    Ok(WrittenWindows {
+    let files = CheckedFiles::check(&cut.graph, &graph, &scenario, output)?;
+    let windows = WrittenWindows {
         cut,
         shape,
         scenario: output.to_path_buf(),
         graph,
         timing,
         demand_notes,
-    })
+    };
+    Ok((windows, files))
 }
 
 impl WrittenWindows {
