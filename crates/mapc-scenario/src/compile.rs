@@ -2,6 +2,7 @@
 //! simplified to a corridor, a window cut and written as a scenario beside its graph and checked by reading it
 //! back, and the JSON reports both print.
 
+pub use crate::compile_error::CompileError;
 use crate::compile_files::CheckedFiles;
 use crate::simplify::{
     MergeSummary, Simplified, corridor_complex_junctions, corridor_merges, no_merge_warning,
@@ -13,55 +14,10 @@ use crate::window::{
     DemandOverride, Fit, FittedLength, Overlap, SourceShape, WindowCut, WindowRequest, WindowsCut,
     cut_window, cut_windows, junction_name, window_scenario, windows_scenario,
 };
-use crate::{ResolvedScenario, ScenarioError};
+use crate::ResolvedScenario;
 use mapc_graph::LaneGraph;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-
-/// What can go wrong compiling a scenario from files; every message names the file or the argument at fault.
-/// The inner error is part of the message (not a `source`), so that printing the error chain does not repeat it.
-#[derive(Debug, thiserror::Error)]
-pub enum CompileError {
-    #[error("cannot read map {path}: {error}")]
-    Map {
-        path: PathBuf,
-        error: mapc_import::ImportError,
-    },
-    #[error("{path}: {error}")]
-    Transform {
-        path: PathBuf,
-        error: TransformError,
-    },
-    #[error("--match {arg}: {error}")]
-    Source { arg: String, error: ScenarioError },
-    #[error("--match {arg}: {error}")]
-    SourceShape { arg: String, error: TransformError },
-    #[error(transparent)]
-    Scenario(#[from] ScenarioError),
-    #[error("{path}: {error}")]
-    Graph {
-        path: PathBuf,
-        error: mapc_graph::GraphFileError,
-    },
-    #[error("{0}")]
-    Demand(String),
-    /// The picked timing out of the scenario's bounds (a corridor too slow to fill within the warm-up's limit).
-    #[error("{0}")]
-    Timing(String),
-    #[error("{path}: --junction {junction}: {error}")]
-    Junction {
-        path: PathBuf,
-        junction: String,
-        error: mapc_graph::LookupError,
-    },
-    #[error("the scenario made for {path} would not load (nothing written): {error}")]
-    ReadBack { path: PathBuf, error: ScenarioError },
-    #[error("{path}: {source} (nothing written)")]
-    Write {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-}
 
 /// A map or graph file, with the importer's defaults.
 pub fn load_map(path: &Path) -> Result<LaneGraph, CompileError> {

@@ -3,7 +3,7 @@
 //! as every later command resolves it, and only then both written together ([`mapc_graph::write_all_atomically`]).
 //! A compile that fails writes nothing, and a file that would not load is never left behind.
 
-use crate::compile::CompileError;
+use crate::compile_error::CompileError;
 use crate::{ResolvedScenario, Scenario};
 use mapc_graph::LaneGraph;
 use std::path::{Path, PathBuf};

@@ -25,6 +25,7 @@
 
 pub mod bounds;
 pub mod compile;
+pub mod compile_error;
 pub mod compile_files;
 mod depart_lane;
 pub mod distribution;
