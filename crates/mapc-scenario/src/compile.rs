@@ -2,6 +2,7 @@
 //! simplified to a corridor, a window cut and written as a scenario beside its graph and checked by reading it
 //! back, and the JSON reports both print.
 
+use crate::ResolvedScenario;
 pub use crate::compile_error::CompileError;
 use crate::compile_files::CheckedFiles;
 use crate::simplify::{
@@ -14,7 +15,6 @@ use crate::window::{
     DemandOverride, Fit, FittedLength, Overlap, SourceShape, WindowCut, WindowRequest, WindowsCut,
     cut_window, cut_windows, junction_name, window_scenario, windows_scenario,
 };
-use crate::ResolvedScenario;
 use mapc_graph::LaneGraph;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};

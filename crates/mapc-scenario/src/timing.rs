@@ -10,8 +10,11 @@ use mapc_graph::{JunctionId, LaneGraph, RoadId};
 use std::collections::HashMap;
 
 /// Share of the measured horizon that may pass before the first vehicles can reach the end without a warning
-/// (the paper's I-696 window, 275 s of its 1000 s, is within it: its timing and figures stay the paper's).
-const FILL_SHARE_TOLERATED: f64 = 0.5;
+/// or, in `mapc window`, a warm-up. The paper's I-696 windows are within it (275 s of their 1000 s, 288 s for
+/// the three-merge corridor), so their timing and figures stay the paper's; a corridor that leaves more of its
+/// horizon empty understates its outflow by about that share (a 485 s fill measured from the start gave an
+/// outflow of 35 % of the inflow), so it gets a warm-up.
+const FILL_SHARE_TOLERATED: f64 = 0.3;
 /// The warm-up `mapc window` picks is the fill time times this (congestion and slow starts take longer) ...
 const WARMUP_MARGIN: f64 = 1.25;
 /// ... rounded up to whole multiples of this many seconds.
@@ -232,6 +235,30 @@ mod tests {
         assert_eq!(picked.warmup_steps, 200); // 1.25 x 23 s rounded up to 100 s
         assert_eq!(sc.warmup_steps, 200);
         assert_eq!(HorizonFit::of(&sc, &rs.graph, &entries).warning(), None);
+    }
+
+    #[test]
+    fn a_corridor_leaving_a_third_of_its_horizon_unfilled_gets_a_warmup() {
+        let rs = ResolvedScenario::load("simple_merge").unwrap();
+        let entries: Vec<RoadId> = rs.flow_roads.iter().map(|r| r.0).collect();
+        let mut g = rs.graph.clone();
+        // 700 m of main road at 700 / 485 m/s: a fill time of 485 s, under half of the 1000 s horizon
+        for lane in g.roads.iter_mut().flat_map(|r| r.lanes.iter_mut()) {
+            lane.speed_mps = 700.0 / 485.0;
+        }
+        let mut sc = rs.scenario.clone();
+        let fit = HorizonFit::of(&sc, &g, &entries);
+        assert!((fit.fill_s - 485.0).abs() < 1e-6, "{fit:?}");
+        assert!(fit.warning().unwrap().contains("understates the flow"));
+        let picked = fit_to_corridor(&mut sc, &g, &entries).unwrap().unwrap();
+        // 1.25 x 485 s rounded up to 100 s
+        assert_eq!(picked.warmup_steps, 1400);
+        // 288 s of 1000 s (the paper's three-merge corridor) is tolerated
+        for lane in g.roads.iter_mut().flat_map(|r| r.lanes.iter_mut()) {
+            lane.speed_mps = 700.0 / 288.0;
+        }
+        let mut sc = rs.scenario.clone();
+        assert_eq!(fit_to_corridor(&mut sc, &g, &entries), Ok(None));
     }
 
     #[test]

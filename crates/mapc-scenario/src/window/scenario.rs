@@ -8,10 +8,10 @@ use super::fit::FittedLength;
 use crate::transform::{CorridorRoles, TransformError};
 use crate::{
     Control, ControlWindow, Flow, NetworkSpec, ResolvedScenario, SCENARIO_VERSION, Scenario,
-    WindowInfo,
+    VehicleType, WindowInfo,
 };
 use mapc_graph::{JunctionId, LaneGraph, RoadId};
-use std::collections::HashSet;
+use std::collections::{BTreeMap, HashSet};
 
 /// How the window scenario's demand differs from the source's.
 #[derive(Clone, Debug, Default)]
@@ -102,14 +102,71 @@ struct LaneScale {
 }
 
 impl LaneScale {
-    /// The default demand's factor on a source flow's rate.
+    /// The default demand's factor on a source flow's rate: the source's per-lane demand on each lane the flow
+    /// can use, the window's lanes or, where the entry road is narrower, the entry's (a four-lane window fed by
+    /// a one-lane stub gets one lane's demand, not four lanes' queued outside).
     fn factor(&self) -> f64 {
-        if self.boundary_lanes == self.source_lanes {
+        let lanes = self.boundary_lanes.min(self.entry_lanes.max(1));
+        if lanes == self.source_lanes {
             1.0
         } else {
-            self.boundary_lanes as f64 / self.source_lanes as f64
+            lanes as f64 / self.source_lanes as f64
         }
     }
+
+    /// The lanes the default demand is sized on.
+    fn sized_lanes(&self) -> usize {
+        self.boundary_lanes.min(self.entry_lanes.max(1))
+    }
+}
+
+/// About how many vehicles an hour one lane takes in at free flow at `speed_mps`: one a time headway plus the
+/// time the vehicle and its gap take to pass, for the slowest to pass of `types` (SUMO inserts no closer).
+fn lane_intake_vph<'a>(speed_mps: f64, types: impl Iterator<Item = &'a VehicleType>) -> f64 {
+    types
+        .map(|t| {
+            let v = (speed_mps * t.speed_factor).min(t.max_speed).max(1e-3);
+            3600.0 / (t.tau + (t.length + t.min_gap) / v)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// One line for each entry road whose demand is more than its lanes take in at free flow: that demand cannot
+/// all enter, and the rest waits outside (reported per entry by `mapc sim`).
+fn entry_intake_notes(
+    g: &LaneGraph,
+    flows: &[Flow],
+    types: &BTreeMap<String, VehicleType>,
+) -> Vec<String> {
+    let mut entries: Vec<&str> = Vec::new();
+    for f in flows {
+        if !entries.contains(&f.from.as_str()) {
+            entries.push(&f.from);
+        }
+    }
+    let mut notes = Vec::new();
+    for entry in entries {
+        let Some(road) = g.find_roads(entry).ok().and_then(|r| g.road(*r.first()?)) else {
+            continue;
+        };
+        let here: Vec<&Flow> = flows.iter().filter(|f| f.from == entry).collect();
+        let demand: f64 = here.iter().map(|f| f.vehs_per_hour).sum();
+        let lanes = road.lanes.len();
+        let intake = lanes as f64
+            * lane_intake_vph(
+                road.speed_mps(),
+                here.iter().filter_map(|f| types.get(&f.vehicle_type)),
+            );
+        if demand > intake {
+            notes.push(format!(
+                "warning: entry {entry} ({lanes} lane(s), {:.0} m) takes in about {intake:.0} veh/h at free flow, \
+                 less than its demand of {demand:.0} veh/h: the rest waits to enter (`mapc sim` reports it per \
+                 entry); lower the demand or cut the window where the road is wider",
+                road.length_m
+            ));
+        }
+    }
+    notes
 }
 
 /// The flows of one source flow at an entry: one flow as it is on a one-lane entry road, else one flow per entry
@@ -213,10 +270,18 @@ fn corridor_flows(
         let how = if overridden {
             "as asked".to_string()
         } else {
+            let lanes = scale.sized_lanes();
+            let narrower = if lanes < scale.boundary_lanes {
+                format!(
+                    " (its entry road is narrower than the window's {} lanes)",
+                    scale.boundary_lanes
+                )
+            } else {
+                String::new()
+            };
             format!(
-                "the source's {:.0} veh/h per lane x {} lane(s) at the window",
-                total / scale.boundary_lanes as f64,
-                scale.boundary_lanes
+                "the source's {:.0} veh/h per lane x {lanes} lane(s) at the window{narrower}",
+                total / lanes as f64
             )
         };
         let spread = if scale.entry_lanes > 1 {
@@ -298,6 +363,7 @@ fn corridor_flows(
             );
         }
     }
+    notes.extend(entry_intake_notes(g, &flows, &s.vehicle_types));
     Ok((flows, notes))
 }
 

@@ -531,3 +531,66 @@ fn all_with_fit_keeps_every_merge_that_fits_above_the_floor() {
         }
     }
 }
+
+/// Flow's I-210 corridor with every lane as shipped, its five-lane entry road narrowed to one lane.
+fn i210_with_a_one_lane_entry() -> (LaneGraph, RoadId) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/i210_window_lanes.graph.json");
+    let mut g = LaneGraph::load(&path).unwrap();
+    let entry = g.find_roads("R190").unwrap()[0];
+    g.connections
+        .retain(|c| c.from_road != entry || c.from_lane == 0);
+    let road = g.roads.iter_mut().find(|r| r.id == entry).unwrap();
+    road.lanes.truncate(1);
+    (g, entry)
+}
+
+#[test]
+fn demand_is_sized_on_a_narrower_entry_road_and_an_entry_that_cannot_take_it_says_so() {
+    let (g, entry) = i210_with_a_one_lane_entry();
+    let source = ResolvedScenario::load("simple_merge").unwrap();
+    let shape = SourceShape::of(&source).unwrap();
+    let cut = cut_window(&g, WindowRequest::at("J59"), &shape).unwrap();
+    assert_eq!(cut.main_entry, entry);
+    let main_vph = |sc: &Scenario| -> f64 {
+        sc.flows
+            .iter()
+            .filter(|f| f.from == entry.to_string())
+            .map(|f| f.vehs_per_hour)
+            .sum()
+    };
+    // the source's 2000 veh/h per lane once (the entry's one lane), not five times (the window's lanes)
+    let (sc, notes) = window_scenario(
+        &cut,
+        &source,
+        &shape,
+        "w",
+        "w.graph.json",
+        &DemandOverride::default(),
+    )
+    .unwrap();
+    assert!((main_vph(&sc) - 2000.0).abs() < 1e-6, "{notes:?}");
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("narrower than the window's 5 lanes")),
+        "{notes:?}"
+    );
+    assert!(!notes.iter().any(|n| n.starts_with("warning")), "{notes:?}");
+    // asked for more than one lane takes in: said, naming the entry
+    let demand = DemandOverride {
+        main_vph: Some(6000.0),
+        ..DemandOverride::default()
+    };
+    let (sc, notes) = window_scenario(&cut, &source, &shape, "w", "w.graph.json", &demand).unwrap();
+    assert!((main_vph(&sc) - 6000.0).abs() < 1e-6);
+    let warning = notes
+        .iter()
+        .find(|n| n.starts_with("warning"))
+        .expect("a warning");
+    assert!(
+        warning.contains(&format!("entry {entry} (1 lane(s)"))
+            && warning.contains("less than its demand of 6000 veh/h"),
+        "{warning}"
+    );
+}
