@@ -91,7 +91,7 @@ fn a_short_centralized_paper_run_is_pinned() {
             "--horizon",
             "1000",
         ],
-        "6fb500a0bdc1db8fb1fa88e035c71cbc92e3dabcbcb72509c585d9aeb90bb5f2",
+        "5cd93b99136fc0a91afccb23748206e71881304ac2f0bc4c9ccc6e35df71653c",
     );
 }
 
@@ -115,6 +115,6 @@ fn a_short_distributed_paper_run_is_pinned() {
             "--horizon",
             "1000",
         ],
-        "6db225f4f945721f2e3068c44adf4efb79e70a38e9ac7ad193f6d3d766189baa",
+        "a84b3d49ccd2f3cb582707909e4154bf70892654439dc9964624afa51a9f5987",
     );
 }

@@ -101,6 +101,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         for line in mapc_sim::EntrySummary::blocked_lines(&s.entries, s.seeds) {
             println!("  {line}");
         }
+        for line in mapc_sim::standstill_lines(&s.runs) {
+            println!("  {line}");
+        }
         let row = |name: &str, m: &MeanCi, unit: &str| {
             // one seed has a mean but neither an interval nor a spread
             if m.n < 2 {

@@ -221,6 +221,9 @@ pub enum RightOfWay {
     Major,
     /// Yields to major traffic (SUMO `m`).
     Minor,
+    /// One of the streams of a zipper merge (SUMO `Z`, netconvert's lane drops and many merges): the streams
+    /// take turns, each driver yielding to the one that reaches the merge first.
+    Zipper,
 }
 
 /// A lane-to-lane link across a junction.

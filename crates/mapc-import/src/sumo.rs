@@ -355,7 +355,8 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
 fn row_from_state(state: &str) -> Option<RightOfWay> {
     match state {
         "M" | "O" | "G" => Some(RightOfWay::Major),
-        "m" | "=" | "s" | "w" | "Z" | "o" | "g" | "y" | "Y" | "r" | "u" => Some(RightOfWay::Minor),
+        "Z" => Some(RightOfWay::Zipper),
+        "m" | "=" | "s" | "w" | "o" | "g" | "y" | "Y" | "r" | "u" => Some(RightOfWay::Minor),
         _ => None,
     }
 }

@@ -127,6 +127,7 @@ impl Scenario {
             step_s: 0.5,
             horizon_steps: 2000,
             warmup_steps: 0,
+            time_to_teleport_s: None,
             network: NetworkSpec::SimpleMerge(SimpleMergeParams::default()),
             vehicle_types: [("human".to_string(), human), ("av".to_string(), av)].into_iter().collect(),
             flows: vec![

@@ -4,6 +4,9 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
+/// SUMO's default time to teleport (s).
+pub const SUMO_TIME_TO_TELEPORT_S: f64 = 300.0;
+
 /// Bumped on any change that an older reader would misread.
 pub const SCENARIO_VERSION: u32 = 1;
 
@@ -23,6 +26,11 @@ pub struct Scenario {
     /// Steps simulated before metrics and control start.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub warmup_steps: u32,
+    /// A human driver standing still this long at the front of its lane is teleported further along its route
+    /// and counted (SUMO's `--time-to-teleport`; SUMO's default is [`SUMO_TIME_TO_TELEPORT_S`]). Absent or 0:
+    /// never, as in the paper's runs; a run then reports the vehicles that stood longer than SUMO's bound.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_to_teleport_s: Option<f64>,
     pub network: NetworkSpec,
     pub vehicle_types: BTreeMap<String, VehicleType>,
     pub flows: Vec<Flow>,

@@ -22,6 +22,8 @@ const fn closed(lo: f64, hi: f64, unit: &'static str) -> Range {
 /// Simulation step (SUMO's smallest is 1 ms; the simulator takes at most 10 s).
 pub const STEP_S: Range = closed(0.001, 10.0, "s");
 /// When a flow begins and ends: within the longest run a scenario may ask for.
+/// 0 turns teleports off.
+pub const TIME_TO_TELEPORT_S: Range = closed(0.0, MAX_SIMULATED_S, "s");
 pub const FLOW_TIME_S: Range = closed(0.0, MAX_SIMULATED_S, "s");
 /// Any speed: departure, initial, limits (540 km/h).
 pub const SPEED_MPS: Range = closed(0.0, 150.0, "m/s");
@@ -86,6 +88,9 @@ pub fn check(key: impl Into<String>, value: f64, range: Range) -> Result<(), Ref
 /// Every number of `s` within its range, in the file's order; the first one outside is refused.
 pub fn check_scenario(s: &Scenario) -> Result<(), Refusal> {
     check("step_s", s.step_s, STEP_S)?;
+    if let Some(t) = s.time_to_teleport_s {
+        check("time_to_teleport_s", t, TIME_TO_TELEPORT_S)?;
+    }
     if s.horizon_steps == 0 {
         return Err(Refusal {
             key: "horizon_steps".into(),

@@ -79,7 +79,7 @@ pub use idm::IdmParams;
 pub use measure::{MeasurePoint, Passage};
 pub use metrics::{
     BaselineReport, EntryCounts, EntrySummary, LaneChangeReasons, MeanCi, MergeFlow, RunMetrics,
-    Summary, run_baseline_spec, t_quantile_975,
+    Summary, run_baseline_spec, standstill_lines, t_quantile_975,
 };
 pub use network::Network;
 pub use regime::{

@@ -45,6 +45,40 @@ pub struct RunMetrics {
     /// What each entry road took of its demand over the whole run (warm-up included).
     #[serde(default)]
     pub entries: Vec<EntryCounts>,
+    /// Vehicles taken off a jammed lane after standing longer than the time to teleport, after the warm-up.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub teleports: u64,
+    /// Vehicles in the network at the end that had stood still for longer than SUMO's default time to teleport
+    /// (a gridlock that a run without teleports would otherwise hide).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub stuck: u64,
+}
+
+/// Lines for people when vehicles were teleported or stood still to the end in some run, said before any figure.
+pub fn standstill_lines(runs: &[RunMetrics]) -> Vec<String> {
+    let n = runs.len().max(1) as f64;
+    let mean = |f: fn(&RunMetrics) -> u64| runs.iter().map(f).sum::<u64>() as f64 / n;
+    let mut out = Vec::new();
+    if runs.iter().any(|r| r.teleports > 0) {
+        out.push(format!(
+            "{:.1} vehicles a run teleported after standing longer than the time to teleport (a jam that would \
+             have stopped their road)",
+            mean(|r| r.teleports)
+        ));
+    }
+    if runs.iter().any(|r| r.stuck > 0) {
+        out.push(format!(
+            "warning: {:.1} vehicles a run stood still for over {:.0} s at its end: a gridlock; \
+             `time_to_teleport_s` in the scenario resolves such vehicles as SUMO does",
+            mean(|r| r.stuck),
+            mapc_scenario::SUMO_TIME_TO_TELEPORT_S
+        ));
+    }
+    out
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 /// One entry road's demand over a run: the vehicles due to depart there, inserted or still waiting at the end.

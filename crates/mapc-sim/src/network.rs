@@ -53,7 +53,11 @@ pub struct SimLink {
     pub from_lane: LaneIdx,
     pub via_lane: LaneIdx,
     pub to_lane: LaneIdx,
+    /// Drives on without yielding; zipper links too (SUMO counts `Z` as a priority state: no slowing for
+    /// foes, no stop line), their turns taken by [`SimLink::zipper`].
     pub major: bool,
+    /// One stream of a zipper merge: never waited at, its driver follows the foe that reaches the merge first.
+    pub zipper: bool,
     /// Links into the same lane from another lane: they merge with this one.
     pub foes: Vec<LinkIdx>,
 }
@@ -186,7 +190,8 @@ impl Network {
                 from_lane: from,
                 via_lane: via,
                 to_lane: to,
-                major: c.right_of_way == RightOfWay::Major,
+                major: c.right_of_way != RightOfWay::Minor,
+                zipper: c.right_of_way == RightOfWay::Zipper,
                 foes: Vec::new(),
             });
             seen.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), link_idx);

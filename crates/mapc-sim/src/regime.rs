@@ -4,6 +4,7 @@
 //! worth transferring to a merge in a similar regime; this tells the user which one a scenario is in.
 
 use crate::SimError;
+use crate::measure::MeasurePoint;
 use crate::metrics::{EntrySummary, RunMetrics};
 use crate::sim::Simulation;
 use crate::spec::SimSpec;
@@ -87,6 +88,9 @@ pub struct MergeRegime {
     pub name: String,
     pub junction: JunctionId,
     pub approaches: Vec<ApproachRegime>,
+    /// A zipper merge: the roads take turns.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub zipper: bool,
     /// The worst approach's congestion.
     pub congestion: Congestion,
 }
@@ -122,7 +126,9 @@ impl RegimeReport {
                 .filter(|a| a.major)
                 .map(|a| format!("{} {}", role(a), a.road))
                 .collect();
-            let prio = if prio.is_empty() || prio.len() == m.approaches.len() {
+            let prio = if m.zipper {
+                "the roads take turns (zipper)".to_string()
+            } else if prio.is_empty() || prio.len() == m.approaches.len() {
                 "no road has priority".to_string()
             } else {
                 format!("{} has priority", prio.join(" and "))
@@ -241,6 +247,7 @@ pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimE
             name: point.name.clone(),
             junction: junctions[m].unwrap_or(JunctionId(0)),
             approaches: out,
+            zipper: zipper_merge(&sim, point),
             congestion: Congestion::of(worst),
         });
     }
@@ -264,6 +271,9 @@ pub struct MergePriority {
     pub main_major: bool,
     /// A merging road's approach has priority.
     pub merging_major: bool,
+    /// A zipper merge: the roads take turns.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub zipper: bool,
 }
 
 impl MergePriority {
@@ -274,6 +284,9 @@ impl MergePriority {
 
     /// In words, as the regime report says it.
     pub fn label(&self) -> &'static str {
+        if self.zipper {
+            return "the roads take turns (zipper)";
+        }
         match (self.main_major, self.merging_major) {
             (true, true) => "no road yields",
             (true, false) => "the main road has priority",
@@ -304,9 +317,21 @@ pub fn merge_priorities(spec: &SimSpec) -> Result<Vec<MergePriority>, SimError> 
                 junction: junction.unwrap_or(JunctionId(0)),
                 main_major: major(true),
                 merging_major: major(false),
+                zipper: zipper_merge(&sim, point),
             }
         })
         .collect())
+}
+
+/// Whether a link into the measure point's roads is a zipper link.
+fn zipper_merge(sim: &Simulation, point: &MeasurePoint) -> bool {
+    let net = sim.network();
+    net.links.iter().any(|l| {
+        l.zipper
+            && net
+                .road_of(l.to_lane)
+                .is_some_and(|to| point.roads.contains(&net.road_ids[to]))
+    })
 }
 
 /// Per measure point, its approaches: (road, its lane, major).

@@ -116,6 +116,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
     }
     let step_s = sc.step_s;
     Ok(SimSpec {
+        time_to_teleport_s: sc.time_to_teleport_s.unwrap_or(0.0),
         graph: rs.graph.clone(),
         vehicle_types,
         flows,

@@ -106,6 +106,9 @@ pub struct SimSpec {
     pub control_windows: Vec<ControlWindowSpec>,
     /// Where flow is measured besides the outflow (the controlled region's merges).
     pub measure_points: Vec<crate::measure::MeasurePoint>,
+    /// A lane's front vehicle that has stood still longer than this is teleported (SUMO's `--time-to-teleport`;
+    /// 0: never).
+    pub time_to_teleport_s: f64,
 }
 
 /// One window of a several-window scenario.

@@ -164,7 +164,8 @@ fn depart_lane(graph: &LaneGraph, f: &FlowSpec) -> String {
     f.depart_lane.sumo_value()
 }
 
-/// The `.sumocfg`: the files, the step, and the options of the paper's runs (docs/reference.md): no teleporting,
+/// The `.sumocfg`: the files, the step, and the options of the paper's runs (docs/reference.md): the scenario's
+/// time to teleport (`-1` unless the scenario sets one: none, as in the paper's runs),
 /// collisions checked inside junctions but not acted on, no min gap in the collision check; with `multi_lane`,
 /// lane changes done in one step (`lanechange.duration` 0, SUMO 1.8's default, written out as mapc's LC2013
 /// assumes it) by each vehicle type's default model, LC2013.
@@ -174,6 +175,7 @@ pub fn sumocfg(
     step_s: f64,
     end_s: f64,
     multi_lane: bool,
+    time_to_teleport_s: f64,
 ) -> String {
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\n");
     out.push_str("<!-- written by `mapc export` for SUMO 1.8; tools/sumo_check drives it with speed mode 9 -->\n");
@@ -203,7 +205,14 @@ pub fn sumocfg(
         ],
     );
     let mut processing = vec![
-        ("time-to-teleport", "-1".to_string()),
+        (
+            "time-to-teleport",
+            if time_to_teleport_s > 0.0 {
+                num(time_to_teleport_s, 2)
+            } else {
+                "-1".to_string()
+            },
+        ),
         ("collision.check-junctions", "true".into()),
         ("collision.action", "none".into()),
         ("collision.mingap-factor", "0".into()),

@@ -100,6 +100,11 @@ pub(crate) fn junction(
             "type",
             if links.is_empty() {
                 "dead_end"
+            } else if links
+                .iter()
+                .any(|l| l.connection.right_of_way == RightOfWay::Zipper)
+            {
+                "zipper"
             } else {
                 "priority"
             }
@@ -127,8 +132,11 @@ pub(crate) fn junction(
         for other in links {
             if conflicts(l.connection, other.connection) {
                 foes[n - 1 - other.index] = '1';
-                if l.connection.right_of_way == RightOfWay::Minor
-                    && other.connection.right_of_way == RightOfWay::Major
+                // a minor link yields to the major ones; zipper links to each other (netconvert's response
+                // equals the foes there)
+                let (own, foe) = (l.connection.right_of_way, other.connection.right_of_way);
+                if (own == RightOfWay::Minor && foe != RightOfWay::Minor)
+                    || (own == RightOfWay::Zipper && foe == RightOfWay::Zipper)
                 {
                     response[n - 1 - other.index] = '1';
                 }

@@ -258,6 +258,7 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
                 spec.step_s,
                 end_s,
                 spec.graph.roads.iter().any(|r| r.lanes.len() > 1),
+                spec.time_to_teleport_s,
             ),
         ),
         (format!("{stem}.mapc.json"), to_json(&manifest)),

@@ -101,6 +101,7 @@ pub(crate) fn state(c: &Connection) -> &'static str {
     match c.right_of_way {
         RightOfWay::Major => "M",
         RightOfWay::Minor => "m",
+        RightOfWay::Zipper => "Z",
     }
 }
 

@@ -543,6 +543,7 @@ fn corridor_scenario(
         step_s: s.step_s,
         horizon_steps: s.horizon_steps,
         warmup_steps: s.warmup_steps,
+        time_to_teleport_s: s.time_to_teleport_s,
         network: NetworkSpec::Graph(graph_file.into()),
         vehicle_types: s.vehicle_types.clone(),
         flows,

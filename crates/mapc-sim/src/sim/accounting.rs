@@ -17,6 +17,8 @@ pub(super) struct MetricsAcc {
     pub(super) lane_changes: u64,
     pub(super) lane_change_reasons: crate::metrics::LaneChangeReasons,
     pub(super) distance_m: f64,
+    /// Vehicles taken off a jammed lane ([`super::teleport`]).
+    pub(super) teleports: u64,
 }
 
 impl Simulation {
@@ -60,6 +62,15 @@ impl Simulation {
                 .map(|&c| 3600.0 * c as f64 / secs)
                 .collect(),
             entries: self.entry_counts(),
+            teleports: m.teleports,
+            stuck: self
+                .lane_veh
+                .iter()
+                .flat_map(|q| q.iter())
+                .filter(|&&id| {
+                    self.veh[id as usize].waiting_s > mapc_scenario::SUMO_TIME_TO_TELEPORT_S
+                })
+                .count() as u64,
         }
     }
 

@@ -93,6 +93,25 @@ impl Simulation {
     /// SUMO's insertion check at the start of the entry road: front at length + POSITION_EPS, the depart speed
     /// safe behind the leader and able to stop before a minor link within reach.
     pub(super) fn try_insert(&mut self, id: VehicleId) -> bool {
+        if !self.insertion_allowed(id) {
+            return false;
+        }
+        self.place_at_route_start(id, true);
+        true
+    }
+
+    /// Where a vehicle is inserted: at the start of its route's first lane, its front one length in.
+    pub(super) fn place_at_route_start(&mut self, id: VehicleId, counted: bool) {
+        let v = &self.veh[id as usize];
+        let lane = self.routes[v.route as usize].lanes[0];
+        let lane_len = self.lane_at(lane as usize).length;
+        let pos = (v.length + POSITION_EPS).fmin(lane_len);
+        let speed = v.depart_speed;
+        let _ = self.place(id, lane, pos, speed, counted);
+    }
+
+    /// SUMO's insertion check at [`Self::place_at_route_start`] with the vehicle's depart speed.
+    pub(super) fn insertion_allowed(&self, id: VehicleId) -> bool {
         let v = &self.veh[id as usize];
         let p = &self.types[v.vtype as usize];
         let route = &self.routes[v.route as usize];
@@ -147,7 +166,6 @@ impl Simulation {
             }
             k += 1;
         }
-        let _ = self.place(id, lane, pos, speed, true);
         true
     }
 }

@@ -9,6 +9,15 @@ pub(super) const TIME_TO_IMPATIENCE_S: f64 = 300.0;
 /// A foe must arrive this much later than ego leaves for ego to go first (SUMO's link lookahead).
 pub(super) const LINK_LOOKAHEAD_S: f64 = 1.0;
 
+/// A zipper link's foes are those whose passage lies within this many seconds of ego's (SUMO's zipper
+/// lookahead; 1 s at other links).
+pub(super) const ZIPPER_LOOKAHEAD_S: f64 = 4.0;
+
+/// Farther than this from a zipper link, and ...
+const ZIPPER_ADAPT_DIST_M: f64 = 100.0;
+/// ... later than this before arriving there, a driver does not adapt to the other stream yet.
+const ZIPPER_ADAPT_TIME_S: f64 = 10.0;
+
 /// The arrival time of a foe that could stop is this much later than its normal arrival.
 pub(super) const BRAKING_ARRIVAL_DELAY_S: f64 = 30.0;
 
@@ -39,6 +48,11 @@ pub(super) struct Approach {
     pub(super) arrival_speed_braking: f64,
     pub(super) will_pass: bool,
     pub(super) decel: f64,
+    /// Distance to the link and speed when the request was made, and the index of the lane it came on (for the
+    /// zipper's turns).
+    pub(super) dist: f64,
+    pub(super) speed: f64,
+    pub(super) lane_index: u8,
 }
 
 /// Whether a follower behind a leader at the merge could not brake in time: it can only when the leader's
@@ -129,6 +143,24 @@ impl Simulation {
         if lk.major {
             return true;
         }
+        let mut blocked = false;
+        self.blocking_approaches(id, it, can_brake, LINK_LOOKAHEAD_S, &mut |_| {
+            blocked = true;
+        });
+        !blocked
+    }
+
+    /// Every foe approach that blocks ego's request `it` (SUMO's `MSLink::blockedByFoe` over the link's foes):
+    /// its passage overlaps ego's within `lookahead` seconds, or one of them could not brake for the other.
+    fn blocking_approaches(
+        &self,
+        id: VehicleId,
+        it: &LinkItem,
+        can_brake: bool,
+        lookahead: f64,
+        f: &mut impl FnMut(&Approach),
+    ) {
+        let lk = self.link_at(it.link as usize);
         let v = &self.veh[id as usize];
         let tc = &self.type_consts[v.vtype as usize];
         // a driver who can no longer stop takes any gap
@@ -144,27 +176,84 @@ impl Simulation {
                 if a.veh == id || !a.will_pass {
                     continue;
                 }
-                if a.leave_time < it.arrival_time {
+                let blocks = if a.leave_time < it.arrival_time {
                     // ego would follow the foe
-                    if it.arrival_time - a.leave_time < LINK_LOOKAHEAD_S
+                    it.arrival_time - a.leave_time < lookahead
                         || unsafe_merge_speeds(a.leave_speed, it.arrival_speed, a.decel, decel)
-                    {
-                        return false;
-                    }
                 } else if (1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking
-                    > it.leave_time + LINK_LOOKAHEAD_S
+                    > it.leave_time + lookahead
                 {
                     // (the left side is the foe's arrival as an impatient driver expects it)
                     // ego would lead the foe
-                    if unsafe_merge_speeds(it.leave_speed, a.arrival_speed_braking, decel, a.decel)
-                    {
-                        return false;
-                    }
+                    unsafe_merge_speeds(it.leave_speed, a.arrival_speed_braking, decel, a.decel)
                 } else {
-                    return false;
+                    true
+                };
+                if blocks {
+                    f(a);
                 }
             }
         }
-        true
+    }
+
+    /// The speed at which ego takes its turn at a zipper link (SUMO's `MSLink::getZipperSpeed`): every foe of
+    /// the other stream that blocks ego's passage and reaches the merge first becomes a virtual leader, projected
+    /// onto ego's lane at its own distance to the merge. Far from the merge ego opens the gap smoothly; near it,
+    /// it follows the virtual leader as it would a real one. Never a stop at the link: the streams alternate.
+    pub(super) fn zipper_speed(&self, id: VehicleId, it: &LinkItem, can_brake: bool) -> f64 {
+        let dt = self.spec.step_s;
+        let v = &self.veh[id as usize];
+        let p = &self.types[v.vtype as usize];
+        let mut v_safe = f64::INFINITY;
+        if it.arrival_time - self.time_s > ZIPPER_ADAPT_TIME_S && it.dist > ZIPPER_ADAPT_DIST_M {
+            return v_safe;
+        }
+        let own_lane_index = self.lane_at(v.lane as usize).index;
+        // a follower that could brake for a second and stay behind the leader (SUMO's `couldBrakeForLeader`)
+        let could_brake_for_leader = |follow_dist: f64,
+                                      follow_speed: f64,
+                                      follow_decel: f64,
+                                      leader_dist: f64,
+                                      leader_speed: f64| {
+            follow_dist > leader_dist
+                && follow_dist - leader_dist > follow_speed - follow_decel - leader_speed
+        };
+        let v_max_lane = self.desired_speed(v, v.lane);
+        self.blocking_approaches(id, it, can_brake, ZIPPER_LOOKAHEAD_S, &mut |a| {
+            let foe = &self.veh[a.veh as usize];
+            let fp = &self.types[foe.vtype as usize];
+            let ego_leads = (a.arrival_time > it.arrival_time
+                && !could_brake_for_leader(it.dist, v.speed, p.decel, a.dist, a.speed))
+                || could_brake_for_leader(a.dist, a.speed, a.decel, it.dist, v.speed)
+                || (a.arrival_time == it.arrival_time
+                    && a.dist == it.dist
+                    && own_lane_index < a.lane_index);
+            if ego_leads {
+                return;
+            }
+            let step_ceil = |t: f64| ((t / dt).ceil() * dt).fmax(1.0);
+            let u_end = self
+                .desired_speed(foe, foe.lane)
+                .fmin(IdmParams::speed_after_distance(a.dist, a.speed, fp.accel));
+            let u_avg = 0.5 * (a.speed + u_end);
+            let tf = step_ceil(a.dist / u_avg.fmax(NUMERICAL_EPS));
+            let v_end = v_max_lane
+                .fmin(IdmParams::speed_after_distance(it.dist, v.speed, p.accel))
+                .fmin(u_end);
+            let v_avg = 0.5 * (v.speed + v_end);
+            let te = step_ceil(it.dist / v_avg.fmax(NUMERICAL_EPS));
+            let gap = it.dist - foe.length - p.min_gap - a.dist;
+            let safe_gap = p.secure_gap(v_end, u_end);
+            let delta_gap = gap + tf * u_avg - safe_gap - v_avg * tf;
+            let v_safe_gap = v.speed + 2.0 * delta_gap / (tf * tf) * dt;
+            let v_follow = p.follow_speed(gap, v.speed, a.speed, it.desired_speed);
+            let w = (te / ZIPPER_ADAPT_TIME_S).fmin(1.0);
+            let max_decel = w * p.decel + (1.0 - w) * p.emergency_decel;
+            let v_zipper = v_follow
+                .fmax(v.speed - max_decel * dt)
+                .fmax(w * v_safe_gap + (1.0 - w) * v_follow);
+            v_safe = v_safe.fmin(v_zipper);
+        });
+        v_safe
     }
 }

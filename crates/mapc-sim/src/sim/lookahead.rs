@@ -155,8 +155,10 @@ impl Simulation {
     }
 
     /// A minor-road vehicle inside the junction that has not reached the conflict point yet keeps yielding to every
-    /// major-road vehicle inside the junction, even one behind it (SUMO's right of way among junction leaders):
-    /// with a negative gap it brakes as hard as it can.
+    /// major-road vehicle inside the junction beside it, even one a little behind (SUMO's right of way among
+    /// junction leaders): with a negative gap it brakes as hard as it can. A major-road vehicle so far behind that
+    /// it cannot pass beside (ego lies wholly ahead of its front, measured to the merge point) follows ego
+    /// ([`Self::junction_foe_leaders`]), so ego goes first: both waiting would hold them there for good.
     pub(super) fn yield_inside_junction(
         &self,
         id: VehicleId,
@@ -184,7 +186,7 @@ impl Simulation {
             for &o in &self.lane_veh[fl.via_lane as usize] {
                 let ov = &self.veh[o as usize];
                 let df = flen - ov.pos;
-                if df >= d {
+                if df >= d && df - d - v.length < 0.0 {
                     vmax = vmax.fmin(p.follow_speed(
                         d - df - ov.length - p.min_gap,
                         v.speed,

@@ -13,6 +13,7 @@ mod planning;
 mod queries;
 mod side_lanes;
 mod table;
+mod teleport;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
@@ -77,7 +78,11 @@ pub struct Simulation {
     /// This step's (vehicle, index in its lane) in planning order (kept to reuse its allocation).
     plan_order: Vec<(VehicleId, u32)>,
     approaches: Table<Vec<Approach>>,
-    link_has_minor_foe: Table<bool>,
+    /// Teleported vehicles on their way back ([`teleport`]).
+    transfers: Vec<teleport::InTransfer>,
+    /// Right of way is decided at the link (a major link with minor foes, a zipper link): approaching vehicles
+    /// register their requests there.
+    link_takes_requests: Table<bool>,
     /// Per entry lane, the vehicles waiting to be inserted, in departure order.
     pending: Vec<EntryQueue>,
     entry_lanes: Vec<LaneIdx>,
@@ -141,10 +146,11 @@ impl Simulation {
         let mut sim = Simulation {
             lane_veh: Table(vec![Table(Vec::new()); net.lanes.len()]),
             approaches: Table(vec![Vec::new(); net.links.len()]),
-            link_has_minor_foe: net
+            transfers: Vec::new(),
+            link_takes_requests: net
                 .links
                 .iter()
-                .map(|l| l.foes.iter().any(|&f| !net.links[f as usize].major))
+                .map(|l| l.zipper || l.foes.iter().any(|&f| !net.links[f as usize].major))
                 .collect(),
             pending: Vec::new(),
             entry_lanes: Vec::new(),
@@ -413,6 +419,7 @@ impl Simulation {
         self.plan_order = order;
         self.plans = plans;
         self.execute_moves();
+        self.teleport_stuck();
         if self.net.multi_lane {
             self.change_lanes();
         }
@@ -420,6 +427,7 @@ impl Simulation {
         self.step += 1;
         self.metrics.steps += 1;
         self.insert_departures();
+        self.reinsert_teleported();
         if self.check_invariants {
             self.check_no_overlap()?;
         }

@@ -30,7 +30,7 @@ impl Simulation {
                 let mut v_safe = plan.v_safe;
                 for it in &plan.items[..plan.n_items as usize] {
                     let lk = self.link_at(it.link as usize);
-                    if lk.major {
+                    if lk.major && !lk.zipper {
                         continue;
                     }
                     let tc = &self.type_consts[v.vtype as usize];
@@ -42,6 +42,14 @@ impl Simulation {
                                 plan.stop_brake_gap
                             }
                         || v.speed < p.decel * dt;
+                    if lk.zipper {
+                        // a zipper link is never waited at: ego takes its turn behind the other stream's
+                        // vehicles that reach the merge first, and looks on to the next link
+                        if it.will_pass {
+                            v_safe = v_safe.fmin(self.zipper_speed(id, it, can_brake));
+                        }
+                        continue;
+                    }
                     let opened = it.will_pass && self.link_opened(id, it, can_brake);
                     if !opened && (can_brake || !it.will_pass) {
                         let v_link_wait = it.v_link_pass.fmin(p.stop_speed(

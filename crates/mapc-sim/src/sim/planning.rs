@@ -289,7 +289,7 @@ impl Simulation {
                 // only links where right of way is decided need a request: minor links, and major links with
                 // minor foes
                 if (plan.n_items as usize) < MAX_LINK_ITEMS
-                    && (!lk.major || self.link_has_minor_foe[link as usize])
+                    && (!lk.major || self.link_takes_requests[link as usize])
                 {
                     let i = self.link_request(
                         v,
@@ -327,6 +327,7 @@ impl Simulation {
             k += 1;
         }
         plan.v_safe = vv;
+        let own_lane_index = self.lane_at(v.lane as usize).index;
         // leave times from the final leave speeds; register approaches on links that minor foes check
         for it in &mut plan.items[..plan.n_items as usize] {
             let via_len = self
@@ -335,7 +336,7 @@ impl Simulation {
             it.leave_time = it.arrival_time
                 + (via_len + v.length)
                     / (0.5 * (it.arrival_speed + it.leave_speed)).fmax(NUMERICAL_EPS);
-            if self.link_has_minor_foe[it.link as usize] {
+            if self.link_takes_requests[it.link as usize] {
                 self.approaches[it.link as usize].push(Approach {
                     veh: id,
                     arrival_time: it.arrival_time,
@@ -345,6 +346,9 @@ impl Simulation {
                     arrival_speed_braking: it.arrival_speed_braking,
                     will_pass: it.will_pass,
                     decel: p.decel,
+                    dist: it.dist,
+                    speed: v.speed,
+                    lane_index: own_lane_index,
                 });
             }
         }

@@ -168,7 +168,9 @@ impl Simulation {
         let done = match v.status {
             VehicleStatus::Pending => 0.0,
             VehicleStatus::Arrived => total,
-            VehicleStatus::Active => r.start_m[v.route_pos as usize] + v.pos,
+            VehicleStatus::Active | VehicleStatus::Teleporting => {
+                r.start_m[v.route_pos as usize] + v.pos
+            }
         };
         Some((done, total))
     }

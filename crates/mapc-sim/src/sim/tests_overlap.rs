@@ -127,3 +127,36 @@ fn a_follower_beside_a_leaders_tail_on_the_foe_connection_overlaps_only_past_the
         Err(SimError::Collision { .. })
     ));
 }
+
+/// Two vehicles standing inside the Simple Merge's junction: one from the yielding main road 10 m into its
+/// connection (14.53 m before the merge, short of the conflict point), one from the ramp (the major road) just
+/// in, 22.95 m before the merge and so fully behind the first. The ramp's driver cannot pass beside it and follows
+/// it; the main road's driver must then not wait for the ramp's (each waited for the other to the end of the
+/// run).
+#[test]
+fn a_yielding_driver_ahead_inside_the_junction_goes_before_the_major_driver_behind_it() {
+    let m = merge();
+    let mut spec = m.sim.spec.clone();
+    spec.flows.clear();
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    let human = 1;
+    let main_via = m.via_length(m.main, m.main_k);
+    let minor = sim
+        .place_replica(human, m.main, m.main_k - 1, 10.0, 0.0, 1.0, 0.0)
+        .unwrap();
+    let major = sim
+        .place_replica(human, m.ramp, m.ramp_k - 1, 0.0, 0.0, 1.0, 0.0)
+        .unwrap();
+    assert!(main_via - 10.0 > CONFLICT_POINT_SHARE * 22.95);
+    for _ in 0..40 {
+        sim.step().unwrap();
+        sim.check_no_overlap().unwrap();
+    }
+    for id in [minor, major] {
+        let v = sim.vehicle(id);
+        assert!(
+            v.as_ref().is_none_or(|v| !v.in_junction),
+            "vehicle {id} still in the junction after 20 s: {v:?}"
+        );
+    }
+}

@@ -8,6 +8,9 @@ pub enum VehicleStatus {
     /// Scheduled or waiting at its entry: not yet in the network.
     Pending,
     Active,
+    /// Taken off a jammed lane after standing longer than the time to teleport; comes back further along its
+    /// route ([`crate::SimSpec::time_to_teleport_s`]).
+    Teleporting,
     Arrived,
 }
 

@@ -1,0 +1,127 @@
+//! Multi-lane freeway maps nobody here drew (`maps/ATTRIBUTION.md`): a zipper merge whose streams take turns,
+//! and its export, which SUMO reads as a zipper again.
+
+mod common;
+
+use common::{assert_success, mapc_json, run_mapc, scratch_dir};
+use serde_json::Value;
+use std::path::Path;
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The Eccles zipper merge (a three-lane road and a one-lane ramp, SUMO `zipper` junction J4) cut into a window
+/// with `main_vph` on the main road; returns the scenario's path.
+fn eccles_merge_window(dir: &Path, main_vph: &str) -> String {
+    let graph = dir.join("g.json");
+    let corridor = dir.join("s.json");
+    let scenario = dir.join("w.toml");
+    assert_success(&run_mapc(&[
+        "import",
+        "maps/eccles_merge.net.xml",
+        "-o",
+        path(&graph),
+    ]));
+    // the net's edges have no road type: the corridor is named
+    assert_success(&run_mapc(&[
+        "simplify",
+        path(&graph),
+        "--keep-lanes",
+        "--via",
+        "E2",
+        "--via",
+        "E4",
+        "-o",
+        path(&corridor),
+    ]));
+    assert_success(&run_mapc(&[
+        "window",
+        path(&corridor),
+        "--junction",
+        "J3",
+        "--fit",
+        "--fit-floor",
+        "0.05",
+        "--keep-lanes",
+        "--main-vph",
+        main_vph,
+        "-o",
+        path(&scenario),
+    ]));
+    path(&scenario).to_string()
+}
+
+fn entry<'a>(v: &'a Value, road: &str) -> &'a Value {
+    v["entries"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["road"] == road)
+        .unwrap_or_else(|| panic!("no entry {road}: {}", v["entries"]))
+}
+
+#[test]
+fn the_streams_of_a_zipper_merge_take_turns() {
+    let dir = scratch_dir("zipper-merge");
+    for main_vph in ["3000", "4500"] {
+        let scenario = eccles_merge_window(&dir, main_vph);
+        // the import keeps the zipper
+        let g = std::fs::read_to_string(dir.join("g.json")).unwrap();
+        assert!(g.contains("\"zipper\""), "no zipper connection imported");
+        let v = mapc_json(&["sim", "--scenario", &scenario, "--seeds", "2", "--json"]);
+        // both streams enter (the ramp's vehicles stood at the merge from t = 14 s to the end when both zipper
+        // links yielded to each other: 4 of its 56 entered)
+        for road in ["R0", "R1"] {
+            let e = entry(&v, road);
+            assert_eq!(e["waiting"].as_f64(), Some(0.0), "{main_vph}: {e}");
+        }
+        let inflow = v["inflow"]["mean"].as_f64().unwrap();
+        let past = v["merges"][0]["flow"]["mean"].as_f64().unwrap();
+        assert!(
+            past > 0.97 * inflow,
+            "{main_vph}: {past} of {inflow} veh/h past the merge"
+        );
+        let regime = &v["regime"]["merges"][0];
+        assert_eq!(regime["zipper"], true, "{regime}");
+    }
+    let text = String::from_utf8_lossy(
+        &run_mapc(&[
+            "sim",
+            "--scenario",
+            path(&dir.join("w.toml")),
+            "--seeds",
+            "1",
+        ])
+        .stdout,
+    )
+    .into_owned();
+    assert!(text.contains("the roads take turns (zipper)"), "{text}");
+}
+
+#[test]
+fn a_zipper_is_exported_as_a_zipper() {
+    let dir = scratch_dir("zipper-export");
+    let scenario = eccles_merge_window(&dir, "3000");
+    let out = dir.join("export");
+    assert_success(&run_mapc(&["export", &scenario, "--sumo", path(&out)]));
+    let net = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.to_string_lossy().ends_with(".net.xml"))
+        .expect("a net.xml");
+    let text = std::fs::read_to_string(&net).unwrap();
+    assert!(text.contains("type=\"zipper\""), "no zipper junction");
+    assert!(text.contains("state=\"Z\""), "no zipper link");
+    // and read back, the links are zipper links again
+    let back = dir.join("back.json");
+    assert_success(&run_mapc(&["import", path(&net), "-o", path(&back)]));
+    let g: Value = serde_json::from_str(&std::fs::read_to_string(&back).unwrap()).unwrap();
+    let zippers = g["connections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["right_of_way"] == "zipper")
+        .count();
+    assert!(zippers >= 2, "{zippers} zipper connections read back");
+}
