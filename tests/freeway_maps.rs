@@ -125,3 +125,108 @@ fn a_zipper_is_exported_as_a_zipper() {
         .count();
     assert!(zippers >= 2, "{zippers} zipper connections read back");
 }
+
+/// The default corridor (`mapc simplify MAP`) stays on one motorway as a driver would: link roads only where it
+/// starts or ends (an on-ramp onto the motorway, an off-ramp from it), never between two stretches of motorway,
+/// and no merge where the corridor comes in on a link while a motorway joins it. (On the Eccles Interchange the
+/// corridor left the M60 onto 975 m of link roads and took the M60 itself for a merging road; on the I-5 extract
+/// it took the 112.9 m on-ramp for the main road because the motorway's piece before the merge was 112.1 m.)
+#[test]
+fn the_default_corridor_follows_the_motorway_on_every_map() {
+    let dir = scratch_dir("default-corridor-motorway");
+    for map in [
+        "a2_braunschweig.osm",
+        "arizona_highways.osm",
+        "eccles_interchange.net.xml",
+        "i210.net.xml",
+        "i5_exit_ramp.osm",
+        "i696.osm",
+        "lust_motorway.net.xml",
+        "rongwu.net.xml",
+    ] {
+        let out = dir.join(format!("{map}.corridor.json"));
+        let report = mapc_json(&[
+            "simplify",
+            &format!("maps/{map}"),
+            "--json",
+            "-o",
+            path(&out),
+        ]);
+        let g: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        let class = |id: &str| -> String {
+            g["roads"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|r| r["id"] == id)
+                .unwrap_or_else(|| panic!("{map}: no road {id}"))["class"]
+                .as_str()
+                .unwrap()
+                .to_string()
+        };
+        let is_link = |c: &str| c.ends_with("_link");
+        let main: Vec<String> = report["main_road"]["roads"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| class(r.as_str().unwrap()))
+            .collect();
+        let through: Vec<usize> = (0..main.len()).filter(|&i| !is_link(&main[i])).collect();
+        let (first, last) = (through[0], *through.last().unwrap());
+        assert!(
+            main[first..=last].iter().all(|c| !is_link(c)),
+            "{map}: the main road leaves the motorway: {main:?}"
+        );
+        // the motorway carries most of the corridor
+        let main_m = report["main_road"]["length_m"].as_f64().unwrap();
+        assert!(main_m > 1000.0, "{map}: {main_m} m");
+        let road = |id: &str| -> &Value {
+            g["roads"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|r| r["id"] == id)
+                .unwrap()
+        };
+        for m in report["merges"].as_array().unwrap() {
+            let into = report["main_road"]["roads"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|r| road(r.as_str().unwrap()))
+                .find(|r| r["to"] == m["junction"])
+                .unwrap();
+            let merging = road(m["merging_roads"][0].as_str().unwrap());
+            assert!(
+                !(is_link(into["class"].as_str().unwrap())
+                    && !is_link(merging["class"].as_str().unwrap())),
+                "{map}: the corridor comes into merge {} on a link and the motorway joins it",
+                m["junction"]
+            );
+        }
+    }
+}
+
+/// A scenario's `time_to_teleport_s` outside [0, 48 h] is refused naming the key.
+#[test]
+fn a_time_to_teleport_out_of_range_is_refused() {
+    for bad in ["-1.0", "nan", "1e9"] {
+        let scenario = common::edited_scenario("simple_merge.toml", &format!("ttt{bad}"), |t| {
+            t.replacen(
+                "step_s = 0.5",
+                &format!("step_s = 0.5\ntime_to_teleport_s = {bad}"),
+                1,
+            )
+        });
+        common::refused(
+            &[
+                "sim",
+                "--scenario",
+                scenario.to_str().unwrap(),
+                "--seeds",
+                "1",
+            ],
+            &["time_to_teleport_s"],
+        );
+    }
+}

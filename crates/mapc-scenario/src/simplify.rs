@@ -265,8 +265,9 @@ mod tests {
         );
         assert!(s.graph.invariant_violations().is_empty());
         assert!(s.graph.roads.iter().all(|r| r.lanes.len() == 1));
-        // Main road R0+R1 (joint J1 gone) and R4+R8+R7: the bent collector R8 is longer than R6, so the longest
-        // route takes it and R6 (leaving and rejoining the route) goes with the exit. The ramp R2+R3 is one road.
+        // Main road R0+R1 (joint J1 gone) and R4+R6+R7: the bent collector R8 is longer than R6, but a link
+        // road, and a driver stays on the motorway, so R8 (leaving and rejoining the route) goes with the exit.
+        // The ramp R2+R3 is one road.
         assert_eq!(s.roles.main, vec![RoadId(0), RoadId(4)]);
         assert_eq!(s.roles.feeders, vec![vec![RoadId(2)]]);
         assert_eq!(s.graph.roads.len(), 3);
@@ -275,14 +276,14 @@ mod tests {
         let m = &merges[0];
         assert_eq!((m.junction.as_str(), m.osm_node), ("J2", Some(1002)));
         let len = |i| raw.road(RoadId(i)).unwrap().length_m;
-        let after = len(4) + len(8) + len(7);
+        let after = len(4) + len(6) + len(7);
         assert!(
             close(m.main_before_m, 1500.0)
                 && close(m.merge_m, len(2) + len(3))
                 && close(m.main_after_m, after),
             "{m:?}"
         );
-        assert!(s.graph.road(RoadId(6)).is_none());
+        assert!(s.graph.road(RoadId(8)).is_none());
         // Joined roads keep every piece's provenance and say which steps made them.
         let main0 = s.graph.road(RoadId(0)).unwrap();
         assert_eq!(main0.provenance.osm_ways, vec![500, 501]);
@@ -342,7 +343,7 @@ mod tests {
         // off it: where the merging road starts, the merging road itself, a road the corridor dropped
         let feeder = s.roles.feeders[0][0];
         let feeder_start = g.road(feeder).unwrap().from.to_string();
-        for off in [feeder_start.as_str(), &feeder.to_string(), "R6"] {
+        for off in [feeder_start.as_str(), &feeder.to_string(), "R8"] {
             let e = check_via(g, &s.roles, off).unwrap_err().to_string();
             assert!(e.starts_with(&format!("--via `{off}`")), "{e}");
         }
@@ -378,15 +379,16 @@ mod tests {
         assert!(g.invariant_violations().is_empty());
         assert!(g.lane_continuity_violations().is_empty());
         // The joints where lanes change stay (J1: 3 -> 2 lanes, J6: 1 -> 2); the ramp's two pieces are joined.
+        // (R6 and R7 have as many lanes: the joint at J6 goes once the collector R8 is dropped)
         assert_eq!(
             s.roles.main,
-            vec![RoadId(0), RoadId(1), RoadId(4), RoadId(8), RoadId(7)]
+            vec![RoadId(0), RoadId(1), RoadId(4), RoadId(6)]
         );
         assert_eq!(s.roles.feeders, vec![vec![RoadId(2)]]);
         let lanes = |r: u32| g.road(RoadId(r)).unwrap().lanes.len();
         assert_eq!(
-            [lanes(0), lanes(1), lanes(2), lanes(4), lanes(8), lanes(7)],
-            [3, 2, 1, 3, 1, 2]
+            [lanes(0), lanes(1), lanes(2), lanes(4), lanes(6)],
+            [3, 2, 1, 3, 2]
         );
         // The merge J2: 2 + 1 lanes into 3, the ramp on the right takes lane 0 and the main road lanes 1 and 2.
         let links = |from: u32, to: u32| -> Vec<(u8, u8)> {
@@ -398,14 +400,13 @@ mod tests {
         };
         assert_eq!(links(2, 4), [(0, 0)]);
         assert_eq!(links(1, 4), [(0, 1), (1, 2)]);
-        // J1 loses the rightmost lane; J5 (the exit dropped) keeps the leftmost; J6 adds one on the left.
+        // J1 loses the rightmost lane; J5 (the exit dropped) too.
         assert_eq!(links(0, 1), [(1, 0), (2, 1)]);
-        assert_eq!(links(4, 8), [(2, 0)]);
-        assert_eq!(links(8, 7), [(0, 0), (0, 1)]);
+        assert_eq!(links(4, 6), [(1, 0), (2, 1)]);
         let end = |r: u32, l: usize| g.road(RoadId(r)).unwrap().lanes[l].end;
         assert_eq!(end(0, 0), Some(LaneEnd::Drop));
         assert_eq!(end(4, 0), Some(LaneEnd::Acceleration));
-        assert_eq!(end(4, 1), Some(LaneEnd::Drop));
+        assert_eq!(end(4, 1), None);
         assert_eq!(end(4, 2), None);
         // Lengths are kept as in the one-lane corridor.
         let one_lane = simplify(&raw, &SimplifyOptions::default()).unwrap();

@@ -144,6 +144,11 @@ impl SimSpec {
                 .map_err(|r| SimError::Spec(format!("{}: {}", r.key, r.message)))
         };
         range("step_s".into(), self.step_s, ranges::STEP_S)?;
+        range(
+            "time_to_teleport_s".into(),
+            self.time_to_teleport_s,
+            ranges::TIME_TO_TELEPORT_S,
+        )?;
         for (i, t) in self.vehicle_types.iter().enumerate() {
             let bad = |what: &str, v: f64| {
                 SimError::Spec(format!("vehicle type {i} `{}`: {what} = {v}", t.name))

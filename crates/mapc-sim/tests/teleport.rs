@@ -10,7 +10,8 @@ fn jammed_merge(time_to_teleport_s: f64) -> SimSpec {
     let rs = ResolvedScenario::load("simple_merge").unwrap();
     let mut spec = spec_from_scenario(&rs).unwrap();
     let main = spec.flows[0].from;
-    spec.flows.retain(|f| !spec.vehicle_types[f.vehicle_type].controlled);
+    spec.flows
+        .retain(|f| !spec.vehicle_types[f.vehicle_type].controlled);
     for f in &mut spec.flows {
         if f.from != main {
             f.vehs_per_hour = 2000.0;

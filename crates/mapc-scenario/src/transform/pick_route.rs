@@ -1,7 +1,9 @@
 //! `pick_route`: choose the corridor's main road. Through the `--via` points in order (shortest connections
 //! between them over any road), then extended at both ends by the longest route over the allowed roads; with no
 //! `--via`, the longest through route of the map over those roads that passes a junction where another road joins
-//! (so the corridor has a merge), else the longest of all. Allowed roads are those of the allowed classes and,
+//! (so the corridor has a merge), else the longest of all. That default follows the motorway as a driver would:
+//! link roads count a twentieth of their length and may only lead onto the through road or leave it at the
+//! corridor's ends, so the route never leaves the motorway at an interchange for its ramps. Allowed roads are those of the allowed classes and,
 //! where a map gives a road no class (a SUMO edge without `type`), those as fast as a ramp
 //! ([`map_merges::main_road_allowed`]): the route must not depend on types being present. Where the road graph has cycles (loop ramps),
 //! the search ignores the edge that closes a cycle, so the result is a simple route and the same on every run.
@@ -223,8 +225,51 @@ pub fn route_through(
     Ok(full)
 }
 
-/// The best routes downstream of one junction: the longest, and the longest that passes a join on the way
-/// (`f64::NEG_INFINITY` where none does), each by its first road.
+/// How much a metre of link road (`motorway_link`, `trunk_link`, ...) counts in the default route's length: a
+/// driver follows the motorway through an interchange rather than its ramps, so a route takes a link only where
+/// it gains twenty times the link's length of through road.
+const LINK_METRE_WORTH: f64 = 0.05;
+
+fn is_link(road: &Road) -> bool {
+    road.class.ends_with("_link")
+}
+
+/// Where a route is in its order of roads: link roads may lead onto the through road (an on-ramp) and follow it
+/// (an off-ramp), never lie between two stretches of it (a driver leaving the motorway at an interchange is on
+/// another road).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Leg {
+    /// No through road yet.
+    Before,
+    /// On the through road.
+    Through,
+    /// Left the through road onto a link: links only from here.
+    After,
+}
+
+impl Leg {
+    /// The leg after taking `road`, `None` where the route may not take it.
+    fn then(self, road: &Road) -> Option<Leg> {
+        match (self, is_link(road)) {
+            (Leg::Before, true) => Some(Leg::Before),
+            (Leg::Before | Leg::Through, false) => Some(Leg::Through),
+            (Leg::Through | Leg::After, true) => Some(Leg::After),
+            (Leg::After, false) => None,
+        }
+    }
+}
+
+/// What a road adds to a route's worth: its length, a link's at [`LINK_METRE_WORTH`].
+fn worth(road: &Road) -> f64 {
+    if is_link(road) {
+        road.length_m * LINK_METRE_WORTH
+    } else {
+        road.length_m
+    }
+}
+
+/// The best routes downstream of one junction reached in one leg: the worthiest, and the worthiest that passes
+/// a join on the way (`f64::NEG_INFINITY` where none does), each by its first road.
 #[derive(Clone, Copy)]
 struct Downstream {
     any: (f64, Option<RoadId>),
@@ -236,15 +281,18 @@ fn passes_join(joins: &HashSet<JunctionId>, next: JunctionId, after: &Downstream
     joins.contains(&next) && after.any.1.is_some()
 }
 
+type Memo = HashMap<(JunctionId, Leg), Downstream>;
+
 fn downstream_from(
     g: &LaneGraph,
     j: JunctionId,
+    leg: Leg,
     allowed: &dyn Fn(&Road) -> bool,
     joins: &HashSet<JunctionId>,
-    memo: &mut HashMap<JunctionId, Downstream>,
+    memo: &mut Memo,
     in_progress: &mut HashSet<JunctionId>,
 ) -> Downstream {
-    if let Some(&d) = memo.get(&j) {
+    if let Some(&d) = memo.get(&(j, leg)) {
         return d;
     }
     let mut best = Downstream {
@@ -258,15 +306,18 @@ fn downstream_from(
     for &rid in &junction.outgoing {
         let road = g.road(rid).unwrap();
         let next = road.to;
+        let Some(next_leg) = leg.then(road) else {
+            continue;
+        };
         if !allowed(road) || in_progress.contains(&next) || next == j {
             continue;
         }
-        let after = downstream_from(g, next, allowed, joins, memo, in_progress);
-        let any = road.length_m + after.any.0;
+        let after = downstream_from(g, next, next_leg, allowed, joins, memo, in_progress);
+        let any = worth(road) + after.any.0;
         if any > best.any.0 {
             best.any = (any, Some(rid));
         }
-        let joined = road.length_m
+        let joined = worth(road)
             + if passes_join(joins, next, &after) {
                 after.any.0
             } else {
@@ -277,23 +328,32 @@ fn downstream_from(
         }
     }
     in_progress.remove(&j);
-    memo.insert(j, best);
+    memo.insert((j, leg), best);
     best
 }
 
-/// The default main road: the longest through route over allowed roads that passes a junction in `joins` (where
-/// another road comes in, so the corridor can have a merge), else the longest through route of all. Returns the
-/// roads in driving order and whether the route passes a join.
+/// The default main road: the worthiest through route over allowed roads (its length, links counting little and
+/// never between two stretches of through road) that passes a junction in `joins` (where another road comes in,
+/// so the corridor can have a merge), else the worthiest through route of all. Returns the roads in driving order
+/// and whether the route passes a join.
 pub fn best_through_route(
     g: &LaneGraph,
     allowed: &dyn Fn(&Road) -> bool,
     joins: &HashSet<JunctionId>,
 ) -> Result<(Vec<RoadId>, bool), TransformError> {
-    let mut memo = HashMap::new();
+    let mut memo = Memo::new();
     let mut best_any: (f64, Option<JunctionId>) = (0.0, None);
     let mut best_joined: (f64, Option<JunctionId>) = (f64::NEG_INFINITY, None);
     for j in &g.junctions {
-        let d = downstream_from(g, j.id, allowed, joins, &mut memo, &mut HashSet::new());
+        let d = downstream_from(
+            g,
+            j.id,
+            Leg::Before,
+            allowed,
+            joins,
+            &mut memo,
+            &mut HashSet::new(),
+        );
         if d.any.0 > best_any.0 {
             best_any = (d.any.0, Some(j.id));
         }
@@ -314,15 +374,20 @@ pub fn best_through_route(
     let joined = want_join;
     let mut roads = Vec::new();
     let mut cur = start;
+    let mut leg = Leg::Before;
     let mut seen = HashSet::from([start]);
-    while let Some(d) = memo.get(&cur) {
+    while let Some(d) = memo.get(&(cur, leg)) {
         let Some(r) = (if want_join { d.joined.1 } else { d.any.1 }) else {
             break;
         };
-        let next = g.road(r).unwrap().to;
+        let road = g.road(r).unwrap();
+        let next = road.to;
+        leg = leg
+            .then(road)
+            .expect("the memo holds only routes a leg may take");
         if want_join
             && memo
-                .get(&next)
+                .get(&(next, leg))
                 .is_some_and(|after| passes_join(joins, next, after))
         {
             want_join = false;
@@ -376,7 +441,8 @@ pub fn apply(c: &mut Corridor, opts: &SimplifyOptions) -> Result<String, Transfo
     let last = g.road(*c.main.last().unwrap()).unwrap().to;
     let how = if opts.via.is_empty() {
         format!(
-            "the longest through route {}over {} (and roads of no class as fast as a ramp)",
+            "the longest through route {}over {} (and roads of no class as fast as a ramp; link roads count a \
+             twentieth of their length, and only before or after the through road)",
             if passes_join {
                 "past a junction where another road joins "
             } else {
