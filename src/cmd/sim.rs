@@ -73,8 +73,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     })?;
     progress.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
-    if let Some(path) = &args.trace {
-        write_trace(&spec, seeds[0], path)?;
+    if let Some(path) = &args.trace
+        && let Some(note) = write_trace(&spec, seeds[0], path)?
+    {
+        eprintln!("note: {}: {note}", path.display());
     }
     let s = BaselineReport::of(
         &rs.origin,
@@ -184,11 +186,14 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
 }
 
 /// Run one seed and write every step's vehicles, atomically.
-pub fn write_trace(spec: &SimSpec, seed: u64, path: &Path) -> anyhow::Result<()> {
+/// Writes the trace of `seed` to `path`; returns what the trace's bound left out, if anything.
+pub fn write_trace(spec: &SimSpec, seed: u64, path: &Path) -> anyhow::Result<Option<String>> {
+    let mut note = None;
     write_trace_file(path, |w| {
-        mapc_sim::trace_run(spec, seed, w)?;
+        note = mapc_sim::trace_run(spec, seed, w)?.note;
         Ok(())
-    })
+    })?;
+    Ok(note)
 }
 
 /// Writes a trace CSV (header, then the rows `body` writes) atomically (`mapc_graph::write_atomically_with`), so

@@ -278,7 +278,7 @@ fn simulated_replay(
 ) -> anyhow::Result<Replay> {
     let mut measured = None;
     let rows = trace(|w| {
-        measured = Some(mapc_sim::trace_run(spec, seed, w)?);
+        measured = Some(mapc_sim::trace_run(spec, seed, w)?.metrics);
         Ok(())
     })?;
     let mut replay = read(rows, clock, label)?;

@@ -136,11 +136,11 @@ fn trace_human(
     seed: u64,
     out: &mut impl std::io::Write,
 ) -> Result<EpisodeMetrics, RlError> {
-    let metrics = mapc_sim::trace_run(&human_spec(spec), seed, out).map_err(|e| RlError::Io {
+    let run = mapc_sim::trace_run(&human_spec(spec), seed, out).map_err(|e| RlError::Io {
         path: "trace".into(),
         source: e,
     })?;
-    Ok(EpisodeMetrics::from(&metrics))
+    Ok(EpisodeMetrics::from(&run.metrics))
 }
 
 /// A policy evaluated on a scenario over `seeds` (in parallel, results in seed order), with the human baseline on
@@ -397,11 +397,12 @@ pub fn trace_centralized_policy<E: CentralizedEnv>(
 ) -> Result<EpisodeMetrics, RlError> {
     let mut env = E::build(spec.clone(), cfg.clone())?;
     let settings = trace_settings(seed, env.episode_steps(), mode);
+    let mut budget = None;
     env.run_policy_episode(
         &ck.state.model,
         &mut crate::ppo::tensor::Scratch::default(),
         settings,
-        &mut |env: &E| write_sim_rows(env.sim(), out),
+        &mut |env: &E| write_sim_rows(env.sim(), &mut budget, out),
     )
 }
 
@@ -416,16 +417,21 @@ fn trace_settings(seed: u64, horizon: usize, mode: ActionMode) -> crate::rollout
     }
 }
 
-/// The simulation's trace rows for the current step (nothing before the first reset).
+/// The simulation's trace rows for the current step, as the trace's budget takes them (nothing before the first
+/// reset).
 fn write_sim_rows(
     sim: Option<&mapc_sim::Simulation>,
+    budget: &mut Option<mapc_sim::TraceBudget>,
     out: &mut impl std::io::Write,
 ) -> Result<(), RlError> {
     match sim {
-        Some(sim) => sim.write_trace_rows(out).map_err(|e| RlError::Io {
-            path: "trace".into(),
-            source: e,
-        }),
+        Some(sim) => budget
+            .get_or_insert_with(|| mapc_sim::TraceBudget::new(sim.spec()))
+            .write_frame(sim, out)
+            .map_err(|e| RlError::Io {
+                path: "trace".into(),
+                source: e,
+            }),
         None => Ok(()),
     }
 }
@@ -575,12 +581,13 @@ pub fn trace_distributed_policy(
 ) -> Result<EpisodeMetrics, RlError> {
     let mut env = DistributedEnv::new(spec.clone(), *cfg)?;
     let settings = trace_settings(seed, env.horizon(), mode);
+    let mut budget = None;
     let ep = crate::rollout::run_agents_episode(
         &mut env,
         &|_| &ck.state.model,
         &mut crate::ppo::tensor::Scratch::default(),
         settings,
-        &mut |env: &DistributedEnv| write_sim_rows(env.simulation(), out),
+        &mut |env: &DistributedEnv| write_sim_rows(env.simulation(), &mut budget, out),
     )?;
     Ok(ep.metrics)
 }

@@ -93,7 +93,7 @@ pub use sim::{
 pub use spec::{
     ControlWindowSpec, DepartLane, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec,
 };
-pub use trace::trace_run;
+pub use trace::{MAX_TRACE_ROWS, TraceBudget, TracedRun, trace_run};
 
 /// Header of trace CSV files. `road` is the road (`R3`) or the junction connection (`R1>R2`); `lane` the lane's
 /// index on that road (0 rightmost; in a connection, the lane it came from). Traces written before `lane` was

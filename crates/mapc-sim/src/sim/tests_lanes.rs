@@ -202,7 +202,7 @@ fn traces_carry_the_road_and_the_lane_index_that_lane_changes_move() {
     spec.warmup_steps = 0;
     spec.horizon_steps = 600;
     let mut out = Vec::new();
-    let metrics = crate::trace_run(&spec, 0, &mut out).unwrap();
+    let metrics = crate::trace_run(&spec, 0, &mut out).unwrap().metrics;
     assert!(metrics.lane_changes > 0);
     let text = String::from_utf8(out).unwrap();
     let columns = crate::TRACE_HEADER.split(',').count();
