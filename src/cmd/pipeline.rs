@@ -66,9 +66,10 @@ pub struct Args {
     /// humans).
     #[arg(long)]
     pub policy: Option<PathBuf>,
-    /// Seeds for the baseline and the evaluation (1 to 100 000).
-    #[arg(long, default_value_t = 100, value_parser = super::flags::seeds())]
-    pub seeds: u64,
+    /// Seeds for the baseline and the evaluation (1 to 100 000); default 100, fewer (at least 10) where the
+    /// window's corridor is so long that 100 would take the job past a few minutes on two cores, said when so.
+    #[arg(long, value_parser = super::flags::seeds())]
+    pub seeds: Option<u64>,
     /// Keep every lane of the corridor (`mapc simplify --keep-lanes`): the whole job multi-lane, with lane changes.
     #[arg(long)]
     pub keep_lanes: bool,
@@ -98,7 +99,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let corridor = file(format!("{stem}.corridor.graph.json"));
     let window = file(format!("{stem}_window.toml"));
     let trace = file(format!("{stem}_window_human_trace.csv"));
-    let seeds = args.seeds.to_string();
     let map = path_text(&args.map);
 
     let mut first_steps: Vec<Vec<String>> = vec![
@@ -189,6 +189,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &file(format!("{stem}_window.png")),
     ]));
     steps.push(window_step);
+    run_steps(&mut steps, args.json)?;
+    let seeds = match args.seeds {
+        Some(n) => n,
+        None => auto_seeds(&window)?,
+    }
+    .to_string();
     steps.push(cmd(&[
         "sim",
         "--scenario",
@@ -227,16 +233,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "--seeds",
         &seeds,
     ]));
-    if args.json {
-        for s in &mut steps {
-            if !matches!(s[0].as_str(), "render" | "plot") {
-                s.push("--json".to_string());
-            }
-        }
-    }
-    for s in steps {
-        run_step(&s)?;
-    }
+    run_steps(&mut steps, args.json)?;
     eprintln!(
         "\npipeline done in {:.1} s; outputs in {}",
         start.elapsed().as_secs_f64(),
@@ -248,6 +245,45 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// Whether a map is the shipped I-696 extract the paper's route is given for: it has the roads and the merge.
 fn is_paper_map(g: &mapc_graph::LaneGraph) -> bool {
     I696_VIA.iter().all(|v| g.find_roads(v).is_ok()) && g.find_junction(I696_MERGE).is_ok()
+}
+
+/// Runs `steps` in order (with `--json` where a step prints a report), leaving `steps` empty.
+fn run_steps(steps: &mut Vec<Vec<String>>, json: bool) -> anyhow::Result<()> {
+    for mut s in steps.drain(..) {
+        if json && !matches!(s[0].as_str(), "render" | "plot") {
+            s.push("--json".to_string());
+        }
+        run_step(&s)?;
+    }
+    Ok(())
+}
+
+/// Vehicle-steps the pipeline's evaluation may take by default (the policy's and the humans' runs together):
+/// about two minutes on two cores at the multi-lane simulator's speed (docs/perf_sim.md).
+const EVAL_BUDGET_VEHICLE_STEPS: f64 = 4.0e8;
+/// The evaluation's default seeds, and the fewest it takes where a corridor is long.
+const DEFAULT_SEEDS: u64 = 100;
+const FEWEST_AUTO_SEEDS: u64 = 10;
+
+/// The evaluation's seeds when none are asked: [`DEFAULT_SEEDS`], fewer where one seed's runs (the scenario's
+/// estimated vehicle-steps, the same on every machine) would take the job past [`EVAL_BUDGET_VEHICLE_STEPS`].
+fn auto_seeds(window: &str) -> anyhow::Result<u64> {
+    let rs = mapc_scenario::ResolvedScenario::load(window)?;
+    let fill_s = mapc_scenario::timing::HorizonFit::of_resolved(&rs).fill_s;
+    let (steps, vehicles) = mapc_scenario::bounds::scenario_work(&rs.scenario, fill_s);
+    let per_seed = 2.0 * steps as f64 * vehicles;
+    let fits = (EVAL_BUDGET_VEHICLE_STEPS / per_seed).floor() as u64;
+    let seeds = fits.clamp(FEWEST_AUTO_SEEDS, DEFAULT_SEEDS);
+    if seeds < DEFAULT_SEEDS {
+        eprintln!(
+            "
+pipeline: one seed of this window is about {:.1e} vehicle-steps (some {vehicles:.0} vehicles over \
+             {steps} steps), so the evaluation takes {seeds} seeds, not {DEFAULT_SEEDS}, to end within minutes; \
+             `--seeds {DEFAULT_SEEDS}` for the full evaluation",
+            steps as f64 * vehicles
+        );
+    }
+    Ok(seeds)
 }
 
 /// Print a step as the command a user would type, then run it.

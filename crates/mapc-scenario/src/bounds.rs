@@ -181,10 +181,16 @@ pub fn expected_vehicles(initial: u32, total_vehs_per_hour: f64, fill_s: f64) ->
 
 /// [`check_work`] of scenario `sc`, whose longest route takes `fill_s` at free flow.
 pub fn check_scenario_work(sc: &crate::Scenario, fill_s: f64) -> Result<(), Refusal> {
+    let (steps, vehicles) = scenario_work(sc, fill_s);
+    check_work(steps, vehicles)
+}
+
+/// A run's steps (warm-up and horizon) and its [`expected_vehicles`]; their product estimates its vehicle-steps.
+pub fn scenario_work(sc: &crate::Scenario, fill_s: f64) -> (u64, f64) {
     let initial = sc.initial_vehicles.as_ref().map_or(0, |iv| iv.count);
     let vehs_per_hour = sc.flows.iter().map(|f| f.vehs_per_hour).sum();
     let steps = sc.warmup_steps as u64 + sc.horizon_steps as u64;
-    check_work(steps, expected_vehicles(initial, vehs_per_hour, fill_s))
+    (steps, expected_vehicles(initial, vehs_per_hour, fill_s))
 }
 
 /// The run's steps times its [`expected_vehicles`] must stay within [`MAX_VEHICLE_STEPS`].
