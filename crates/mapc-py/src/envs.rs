@@ -3,10 +3,10 @@
 use crate::{load_scenario, mapc_error};
 use mapc_rl::Checkpoint;
 use mapc_rl::RlError;
+use mapc_rl::env::Env as _;
 use mapc_rl::env::distributed::{AgentReward, DistributedConfig, DistributedEnv, Features};
 use mapc_rl::env::merge::{MergeEnv, MergeEnvConfig, RewardKind};
 use mapc_rl::ppo::tensor::Scratch;
-use mapc_rl::rollout::Env as _;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use rayon::prelude::*;

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::Checkpoint;
 use crate::deploy::{Deploy, Deployment, Withheld};
+use crate::env::EpisodeMetrics;
 use crate::env::distributed::{DistributedConfig, DistributedEnv};
 use crate::env::merge::{MergeEnv, MergeEnvConfig};
 use crate::env::obs::ObsNorm;
@@ -21,9 +22,7 @@ use crate::ppo::gae::EpisodeEnd;
 use crate::ppo::tensor::Model;
 use crate::ppo::tensor::Scratch;
 use crate::rng::mix_seed;
-use crate::rollout::{
-    ActionMode, EpisodeMetrics, EpisodeSettings, collect_agents_with, over_seeds,
-};
+use crate::rollout::{ActionMode, EpisodeSettings, collect_agents_with, over_seeds};
 use crate::stats::{WelchTest, welch_t_test};
 
 /// Mean and 95% CI of one metric.

@@ -1,16 +1,17 @@
 //! A policy's episode on a several-window scenario: one centralized policy drives every window's AVs, each
-//! window's observation its own. The evaluation ([`crate::eval`]) runs it per seed and reads the simulation's
+//! window's observation its own. The evaluation (`eval.rs`) runs it per seed and reads the simulation's
 //! measurement, as for any other run; [`CentralizedEnv`] lets it run a centralized policy's one region and its
 //! several windows with the same code.
 
 use mapc_sim::{SimSpec, Simulation};
 
+use crate::env::EpisodeMetrics;
 use crate::env::merge::{MergeEnv, MergeEnvConfig};
 use crate::env::windows::WindowsEnv;
 use crate::error::RlError;
 use crate::ppo::tensor::{Model, Scratch};
 use crate::rng::Rng;
-use crate::rollout::{EpisodeMetrics, EpisodeSettings, action_of, run_episode_observed};
+use crate::rollout::{EpisodeSettings, action_of, run_episode_observed};
 
 /// Where a centralized policy drives: one control region ([`MergeEnv`]) or several windows ([`WindowsEnv`]).
 pub trait CentralizedEnv: Sized {

@@ -47,9 +47,9 @@ pub mod run;
 pub mod stats;
 
 pub use checkpoint::{Checkpoint, PolicySpec};
+pub use env::{Env, EpisodeMetrics};
 pub use error::RlError;
 pub use ppo::{IterationStats, PpoConfig, TrainerState};
-pub use rollout::{Env, EpisodeMetrics};
 
 /// Runs `f` on a rayon pool of `threads` workers (the determinism tests compare thread counts).
 #[cfg(test)]

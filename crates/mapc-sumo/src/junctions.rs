@@ -1,8 +1,7 @@
 //! Junctions as SUMO sees them: links numbered in SUMO's order, internal edges named after them, and the request
 //! table in which a minor link yields to every major link into the same lane (mapc's only conflict: merges).
 
-use crate::names::SumoNames;
-use crate::net::road_index;
+use crate::names::{SumoNames, road_index};
 use crate::xml::{element, num, shape, start};
 use mapc_graph::{Connection, LaneGraph, RightOfWay};
 use std::collections::BTreeMap;

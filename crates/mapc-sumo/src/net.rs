@@ -5,7 +5,7 @@
 //! conflicts are merges (`junctions.rs`).
 
 use crate::junctions::{Link, junction, links_by_junction};
-use crate::names::SumoNames;
+use crate::names::{SumoNames, road_index};
 use crate::xml::{element, num, shape, start};
 use mapc_graph::{Connection, LaneGraph, Projection, RightOfWay, Road};
 use mapc_sim::network::MIN_VIA_LENGTH_M;
@@ -88,13 +88,6 @@ pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
     }
     out.push_str("</net>\n");
     out
-}
-
-pub(crate) fn road_index(graph: &LaneGraph, id: mapc_graph::RoadId) -> usize {
-    graph
-        .roads
-        .binary_search_by_key(&id, |r| r.id)
-        .expect("a connection names a road of its graph")
 }
 
 pub(crate) fn state(c: &Connection) -> &'static str {

@@ -4,8 +4,8 @@
 use super::distributed::{AgentReward, DistributedConfig, DistributedEnv, Features};
 use super::merge::{MergeEnv, MergeEnvConfig, RewardKind};
 use super::windows::WindowsEnv;
+use crate::env::Env as _;
 use crate::error::RlError;
-use crate::rollout::Env as _;
 use mapc_sim::SimSpec;
 
 fn spec(file: &str) -> SimSpec {

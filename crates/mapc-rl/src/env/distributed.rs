@@ -10,8 +10,8 @@ use serde::{Deserialize, Serialize};
 use mapc_sim::{SimSpec, Simulation, VehicleId};
 
 use super::obs::{ADJACENT_PER_AV, AvView, ObsNorm, PER_AV};
+use crate::env::EpisodeMetrics;
 use crate::error::RlError;
-use crate::rollout::EpisodeMetrics;
 
 /// Which of the paper's state augmentations the agents see (its Table 4 ablation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -13,8 +13,8 @@ use serde::{Deserialize, Serialize};
 use super::obs::{
     AvView, ControlQueue, ObsNorm, RegionExits, centralized_obs, flow_reward, speed_reward,
 };
+use crate::env::{Env, EpisodeMetrics, Transition};
 use crate::error::RlError;
-use crate::rollout::{Env, EpisodeMetrics, Transition};
 
 /// Training reward.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -7,6 +7,48 @@ use mapc_sim::{SimSpec, Simulation, VehicleId};
 
 use crate::error::RlError;
 
+/// The result of one environment step.
+#[derive(Clone, Debug)]
+pub struct Transition {
+    pub obs: Vec<f32>,
+    pub reward: f32,
+    /// The episode reached a terminal state (not a time limit).
+    pub terminal: bool,
+}
+
+/// Episode-level traffic figures reported by an environment.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EpisodeMetrics {
+    /// veh/h.
+    pub outflow: f64,
+    /// veh/h.
+    pub inflow: f64,
+    /// m/s.
+    pub speed: f64,
+}
+
+impl From<&mapc_sim::RunMetrics> for EpisodeMetrics {
+    fn from(r: &mapc_sim::RunMetrics) -> Self {
+        EpisodeMetrics {
+            outflow: r.outflow_veh_h,
+            inflow: r.inflow_veh_h,
+            speed: r.avg_speed_mps,
+        }
+    }
+}
+
+/// A reinforcement-learning environment with a fixed observation and action size.
+pub trait Env {
+    fn obs_dim(&self) -> usize;
+    fn act_dim(&self) -> usize;
+    /// Starts a new episode; the seed fixes everything random inside the environment.
+    fn reset(&mut self, seed: u64) -> Result<Vec<f32>, RlError>;
+    /// Applies an (unclipped) action: the environment clips it to its bounds.
+    fn step(&mut self, action: &[f32]) -> Result<Transition, RlError>;
+    /// Figures of the episode so far.
+    fn metrics(&self) -> EpisodeMetrics;
+}
+
 /// A problem of `spec` (or of building a simulation from it), reported against the scenario's file.
 pub(crate) fn scenario_error(spec: &SimSpec, e: impl std::fmt::Display) -> RlError {
     RlError::Scenario {

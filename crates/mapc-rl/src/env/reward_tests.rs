@@ -1,8 +1,8 @@
 //! The outflow reward on the shipped scenarios: the network's end on the Simple Merge, the window's end in the
 //! I-696 window.
 
+use crate::env::Env;
 use crate::env::merge::{MergeEnv, MergeEnvConfig, RewardKind};
-use crate::rollout::Env;
 use mapc_sim::SimSpec;
 use std::collections::HashSet;
 use std::path::Path;

@@ -9,8 +9,8 @@ use mapc_sim::{SimSpec, Simulation, VehicleId};
 
 use super::merge::MergeEnvConfig;
 use super::obs::{AvView, ControlQueue, centralized_obs};
+use crate::env::EpisodeMetrics;
 use crate::error::RlError;
-use crate::rollout::EpisodeMetrics;
 
 /// One window's state in an episode.
 #[derive(Clone, Debug)]

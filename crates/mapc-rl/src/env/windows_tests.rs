@@ -2,8 +2,9 @@
 
 use super::*;
 use crate::checkpoint::Checkpoint;
+use crate::env::Env;
 use crate::env::merge::{MergeEnv, RewardKind};
-use crate::rollout::{ActionMode, Env};
+use crate::rollout::ActionMode;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 

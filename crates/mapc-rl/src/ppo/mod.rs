@@ -15,11 +15,10 @@ use tensor::{
     Adam, Architecture, LossCoeffs, LossStats, Minibatch, Model, loss_and_grad, update_device,
 };
 
+use crate::env::EpisodeMetrics;
 use crate::error::RlError;
 use crate::rng::{Rng, mix_seed};
-use crate::rollout::{
-    ActionMode, AgentsEnvFactory, EnvFactory, Episode, EpisodeMetrics, collect, collect_agents,
-};
+use crate::rollout::{ActionMode, AgentsEnvFactory, EnvFactory, Episode, collect, collect_agents};
 
 /// What one iteration's rollouts gave the trainer.
 pub struct Collected {
@@ -419,7 +418,7 @@ impl Batch {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rollout::{Env, EpisodeMetrics, Transition};
+    use crate::env::{Env, EpisodeMetrics, Transition};
 
     /// A point on a line must be steered to a target: reward -|x - 0.5|, action is a velocity.
     struct Reach {
