@@ -19,6 +19,11 @@ mod cmd;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+/// mimalloc rather than glibc's malloc: training's many small tensors spent 13 % of an iteration in the
+/// allocator (the results do not depend on where memory comes from).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 #[derive(Parser)]
 #[command(name = "mapc", version, about, long_about = None, propagate_version = true)]
 struct Cli {

@@ -248,6 +248,7 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
                           "rollout_s": timing.rollout_s / iters as f64,
                           "update_s": timing.update_s / iters as f64},
         "extrapolated_500_iterations_min": per_iter * full / 60.0,
+        "machine": machine(),
     });
     if args.json {
         println!("{}", serde_json::to_string_pretty(&out)?);
@@ -266,8 +267,60 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
             "  the preset's {full} iterations at this rate: {:.1} min",
             per_iter * full / 60.0
         );
+        let m = machine();
+        println!(
+            "  ran on: {}, {} logical CPUs; x86 features {}; {}",
+            m["cpu"].as_str().unwrap_or("?"),
+            m["logical_cpus"],
+            m["features"].as_str().unwrap_or("?"),
+            m["kernels"].as_str().unwrap_or("?")
+        );
     }
     Ok(())
+}
+
+/// What a benchmark ran on: the CPU's name (Linux), its logical CPUs, the vector features the kernels look for,
+/// and the kernels the trainer's hot paths take there.
+fn machine() -> serde_json::Value {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".to_string());
+    let logical_cpus = std::thread::available_parallelism().map_or(0, |n| n.get());
+    #[cfg(target_arch = "x86_64")]
+    let (features, kernels) = {
+        let has = [
+            ("avx2", std::arch::is_x86_feature_detected!("avx2")),
+            ("fma", std::arch::is_x86_feature_detected!("fma")),
+            ("avx512f", std::arch::is_x86_feature_detected!("avx512f")),
+        ];
+        let names: Vec<&str> = has.iter().filter(|(_, on)| *on).map(|(n, _)| *n).collect();
+        // gemm's stable build dispatches to its AVX2+FMA microkernels where both exist (its AVX-512 ones need
+        // its nightly feature), so an AVX-512 machine runs the same kernels and sums in the same order
+        let kernels = if has[0].1 && has[1].1 {
+            "matrix products: gemm's AVX2+FMA f32 kernels; exp: glibc's FMA expf; allocator: mimalloc"
+        } else {
+            "matrix products: gemm's generic kernels (other sums: results differ from an FMA machine's); \
+             allocator: mimalloc"
+        };
+        (names.join(" "), kernels)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let (features, kernels) = (
+        String::from("(not x86-64)"),
+        "matrix products: gemm's kernels for this architecture; allocator: mimalloc",
+    );
+    serde_json::json!({
+        "cpu": cpu,
+        "logical_cpus": logical_cpus,
+        "features": features,
+        "kernels": kernels,
+    })
 }
 
 /// CPU time (user and system) of the whole process so far, in seconds.

@@ -9,9 +9,10 @@ use crate::spec::SimSpec;
 /// lanes and an hour of warm-up once wrote 3.1 GB, and `mapc view` held it all in memory.
 pub const MAX_TRACE_ROWS: u64 = 2_000_000;
 
-/// Which frames a trace writes: those of the measured horizon (the warm-up is not measured and not drawn), every
-/// `every`-th one, `every` doubling whenever the rows so far plus the frame's vehicles over the frames left would
-/// pass the bound; past the bound nothing more is written.
+/// Which frames a trace writes: those of the measured horizon (the warm-up is not measured and not drawn), one in
+/// `every`, `every` set at the first measured frame so that its vehicles (a quarter more for growth) over the
+/// frames to come stay within the bound, and kept (a replay needs evenly spaced frames); past the bound nothing
+/// more is written.
 #[derive(Clone, Debug)]
 pub struct TraceBudget {
     from_step: u64,
@@ -50,15 +51,12 @@ impl TraceBudget {
             return Ok(());
         }
         let vehicles = sim.active_count() as u64;
-        let on_grid = |every: u64| (step - self.from_step).is_multiple_of(every);
-        let frames_left = |every: u64| (self.last_step.saturating_sub(step)) / every + 1;
-        while on_grid(self.every)
-            && self.rows + vehicles * frames_left(self.every) > self.max_rows
-            && self.every < self.last_step - self.from_step + 1
-        {
-            self.every *= 2;
+        if step == self.from_step {
+            let frames = self.last_step - self.from_step + 1;
+            let expected = (vehicles.max(1) as f64 * 1.25 * frames as f64) / self.max_rows as f64;
+            self.every = (expected.ceil() as u64).clamp(1, frames);
         }
-        if !on_grid(self.every) {
+        if !(step - self.from_step).is_multiple_of(self.every) {
             return Ok(());
         }
         if self.rows + vehicles > self.max_rows {

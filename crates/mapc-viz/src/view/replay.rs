@@ -78,7 +78,54 @@ pub struct RunTotals {
 /// The largest lane index the packing holds.
 const MAX_LANES: usize = u16::MAX as usize;
 
+/// The frames a trace holds: every one (`every` 1), or one in `every` from `first` on.
+struct FrameGrid {
+    first: u32,
+    every: u32,
+}
+
+impl FrameGrid {
+    /// The grid of the frames a trace holds: its first, and the greatest common step between them.
+    fn of(frames: &std::collections::BTreeSet<u32>) -> FrameGrid {
+        let first = frames.first().copied().unwrap_or(0);
+        let gcd = |mut a: u32, mut b: u32| {
+            while b != 0 {
+                (a, b) = (b, a % b);
+            }
+            a
+        };
+        let every = frames.iter().fold(0, |g, &f| gcd(g, f - first)).max(1);
+        FrameGrid { first, every }
+    }
+
+    /// A thinned trace as a replay of its own frames: one step of `every` steps, from its first frame.
+    fn rebase(
+        &self,
+        clock: Clock,
+        mut vehicles: Vec<(String, u16, Vec<RawRow>)>,
+    ) -> (Clock, Vec<(String, u16, Vec<RawRow>)>) {
+        if self.every == 1 {
+            return (clock, vehicles);
+        }
+        let (first, every) = (self.first, self.every);
+        for (_, _, rows) in &mut vehicles {
+            for row in rows.iter_mut() {
+                row.frame = (row.frame - first) / every;
+            }
+        }
+        let clock = Clock {
+            start_s: clock.start_s + f64::from(first) * clock.step_s,
+            step_s: clock.step_s * f64::from(every),
+            warmup_steps: 0,
+            horizon_steps: (clock.frames() as u64 - 1 - u64::from(first)) / u64::from(every),
+        };
+        (clock, vehicles)
+    }
+}
+
 struct RawRow {
+    /// The trace's line, for errors.
+    line: u32,
     frame: u32,
     lane: u16,
     lane_index: u8,
@@ -111,6 +158,9 @@ impl Replay {
         let mut types: Vec<String> = Vec::new();
         let mut vehicles: Vec<(String, u16, Vec<RawRow>)> = Vec::new();
         let mut vehicle_index: HashMap<String, usize> = HashMap::new();
+        // a trace past its bound of rows holds one frame in `every` (mapc_sim::TraceBudget): the frames it holds
+        // set the grid
+        let mut seen_frames: std::collections::BTreeSet<u32> = std::collections::BTreeSet::new();
         csv.for_each_row(|rec, line| {
             let t = fields.required(rec, i_time, "time_s", line)?;
             let f = (t - clock.start_s) / clock.step_s;
@@ -126,6 +176,7 @@ impl Replay {
                 ));
             }
             let frame = frame as u32;
+            seen_frames.insert(frame);
             let road = rec.get(i_road).unwrap_or("").trim();
             let lane = match lane_index.get(road) {
                 Some(l) => *l,
@@ -190,19 +241,20 @@ impl Replay {
             };
             let rows = &mut vehicles[v].2;
             if let Some(last) = rows.last()
-                && last.frame + 1 != frame
+                && frame <= last.frame
             {
                 return Err(fields.error(
                     line,
                     "time_s",
                     format!(
                         "vehicle {vid} was last seen at frame {} and is here at frame {frame}: a vehicle's rows \
-                         must be consecutive steps",
+                         must be consecutive frames of the trace",
                         last.frame
                     ),
                 ));
             }
             rows.push(RawRow {
+                line: line as u32,
                 frame,
                 lane,
                 lane_index,
@@ -211,6 +263,23 @@ impl Replay {
             });
             Ok(())
         })?;
+        let grid = FrameGrid::of(&seen_frames);
+        for (vid, _, rows) in &vehicles {
+            for w in rows.windows(2) {
+                if w[0].frame + grid.every != w[1].frame {
+                    return Err(fields.error(
+                        u64::from(w[1].line),
+                        "time_s",
+                        format!(
+                            "vehicle {vid} was last seen at frame {} and is here at frame {}: a vehicle's rows \
+                             must be consecutive frames of the trace",
+                            w[0].frame, w[1].frame
+                        ),
+                    ));
+                }
+            }
+        }
+        let (clock, vehicles) = grid.rebase(clock, vehicles);
         Ok(Replay::pack(
             path, label, clock, lanes, lane_start, types, vehicles,
         ))
@@ -447,6 +516,39 @@ mod tests {
         assert_eq!((r.tracks[0].first, r.tracks[0].count), (0, 2));
         assert_eq!((r.tracks[1].first, r.tracks[1].count), (1, 4));
         assert_eq!(r.outflow_vph.last(), full.outflow_vph.last());
+    }
+
+    #[test]
+    fn a_thinned_trace_is_a_replay_of_its_own_frames() {
+        // one frame in 2 from frame 2 (a warm-up of 2 steps, then a trace past its bound)
+        let thinned = |v: u32, frames: &[u32]| -> String {
+            frames
+                .iter()
+                .map(|f| {
+                    format!(
+                        "{},{v},human,R0,{f},{f},10.0,false\n",
+                        1.0 + 0.5 * *f as f64
+                    )
+                })
+                .collect()
+        };
+        let r = read(format!(
+            "{HEADER}\n{}{}",
+            thinned(0, &[2, 4, 6]),
+            thinned(1, &[4, 6, 8])
+        ))
+        .unwrap();
+        assert_eq!((r.clock.start_s, r.clock.step_s), (2.0, 1.0));
+        assert_eq!((r.clock.warmup_steps, r.clock.horizon_steps), (0, 3));
+        assert_eq!(r.on_road, [1, 2, 2, 1]);
+        // a vehicle missing from one of the trace's frames is still an error
+        let gap = read(format!(
+            "{HEADER}\n{}{}",
+            thinned(0, &[2, 6]),
+            thinned(1, &[4])
+        ))
+        .unwrap_err();
+        assert!(gap.to_string().contains("line 3"), "{gap}");
     }
 
     #[test]
