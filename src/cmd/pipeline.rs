@@ -289,7 +289,10 @@ pipeline: one seed of this window is about {:.1e} vehicle-steps (some {vehicles:
 /// Print a step as the command a user would type, then run it.
 fn run_step(words: &[String]) -> anyhow::Result<()> {
     eprintln!("\n$ mapc {}", words.join(" "));
-    crate::run_command_line(words)
+    let start = Instant::now();
+    crate::run_command_line(words)?;
+    eprintln!("({:.1} s)", start.elapsed().as_secs_f64());
+    Ok(())
 }
 
 fn cmd(words: &[&str]) -> Vec<String> {

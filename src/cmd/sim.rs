@@ -61,23 +61,37 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .build()?;
     let progress = progress_bar(seeds.len() as u64, args.json);
     let start = std::time::Instant::now();
-    let runs: Vec<RunMetrics> = pool.install(|| {
-        seeds
-            .par_iter()
-            .map(|&seed| {
-                let m = Simulation::from_spec(spec.clone(), seed)?.run();
-                progress.inc(1);
-                m
-            })
-            .collect::<Result<Vec<_>, _>>()
-    })?;
+    let run_seed = |seed: u64| -> anyhow::Result<RunMetrics> {
+        let m = Simulation::from_spec(spec.clone(), seed)?.run()?;
+        progress.inc(1);
+        Ok(m)
+    };
+    // the first seed's run writes the trace (one run, not a second one for it), beside the others
+    let (first, rest) = pool.install(|| {
+        rayon::join(
+            || match &args.trace {
+                Some(path) => {
+                    let (m, note) = write_trace(&spec, seeds[0], path)?;
+                    if let Some(note) = note {
+                        eprintln!("note: {}: {note}", path.display());
+                    }
+                    progress.inc(1);
+                    Ok(m)
+                }
+                None => run_seed(seeds[0]),
+            },
+            || {
+                seeds[1..]
+                    .par_iter()
+                    .map(|&seed| run_seed(seed))
+                    .collect::<anyhow::Result<Vec<_>>>()
+            },
+        )
+    });
+    let mut runs: Vec<RunMetrics> = vec![first?];
+    runs.extend(rest?);
     progress.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
-    if let Some(path) = &args.trace
-        && let Some(note) = write_trace(&spec, seeds[0], path)?
-    {
-        eprintln!("note: {}: {note}", path.display());
-    }
     let s = BaselineReport::of(
         &rs.origin,
         args.first_seed,
@@ -186,14 +200,20 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
 }
 
 /// Run one seed and write every step's vehicles, atomically.
-/// Writes the trace of `seed` to `path`; returns what the trace's bound left out, if anything.
-pub fn write_trace(spec: &SimSpec, seed: u64, path: &Path) -> anyhow::Result<Option<String>> {
-    let mut note = None;
+/// Writes the trace of `seed` to `path`; returns the run's metrics and what the trace's bound left out, if
+/// anything.
+pub fn write_trace(
+    spec: &SimSpec,
+    seed: u64,
+    path: &Path,
+) -> anyhow::Result<(RunMetrics, Option<String>)> {
+    let mut traced = None;
     write_trace_file(path, |w| {
-        note = mapc_sim::trace_run(spec, seed, w)?.note;
+        traced = Some(mapc_sim::trace_run(spec, seed, w)?);
         Ok(())
     })?;
-    Ok(note)
+    let traced = traced.expect("the trace's run ends or fails");
+    Ok((traced.metrics, traced.note))
 }
 
 /// Writes a trace CSV (header, then the rows `body` writes) atomically (`mapc_graph::write_atomically_with`), so

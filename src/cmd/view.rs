@@ -168,15 +168,23 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
             let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
             let driver =
                 PolicyDriver::for_scenario(&ck, &file, &args.target, Some(n_av.unwrap_or(5)))?;
-            if args.compare {
-                page.replays.push(human_replay(&spec, seed, clock)?);
+            // the humans' run of --compare beside the policy's
+            let (humans, policy_run) = rayon::join(
+                || args.compare.then(|| human_replay(&spec, seed, clock)),
+                || {
+                    let mut measured = None;
+                    trace(|w| {
+                        measured = Some(driver.trace(&ck, &spec, seed, ActionMode::Mean, w)?);
+                        Ok(())
+                    })
+                    .map(|rows| (rows, measured))
+                },
+            );
+            if let Some(humans) = humans {
+                page.replays.push(humans?);
             }
-            let mut measured = None;
-            let rows = trace(|w| {
-                measured = Some(driver.trace(&ck, &spec, seed, ActionMode::Mean, w)?);
-                Ok(())
-            })
-            .with_context(|| format!("running {} on seed {seed}", file.display()))?;
+            let (rows, measured) =
+                policy_run.with_context(|| format!("running {} on seed {seed}", file.display()))?;
             let label = format!("policy {}, seed {seed}", file.display());
             let mut replay = read(rows, clock, &label)?;
             if let Some(m) = measured {

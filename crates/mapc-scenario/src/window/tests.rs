@@ -42,15 +42,7 @@ fn window_cuts_exactly_and_keeps_the_corridor() {
     // Three cuts: three new roads above the largest id, three new through junctions.
     assert_eq!(cut.graph.roads.len(), g.roads.len() + 3);
     assert_eq!(cut.main_entry, RoadId(0));
-    let (scenario, _) = window_scenario(
-        &cut,
-        &source,
-        &shape,
-        "w",
-        "w.graph.json",
-        &DemandOverride::default(),
-    )
-    .unwrap();
+    let (scenario, _) = window_of(&cut, &source, &shape, &DemandOverride::default());
     let flows: Vec<(&str, f64)> = scenario
         .flows
         .iter()
@@ -434,15 +426,7 @@ fn the_scenario_records_the_fitted_lengths() {
     let mut shape = SourceShape::of(&source).unwrap();
     shape.upstream_m = 1600.0;
     let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
-    let (scenario, _) = window_scenario(
-        &cut,
-        &source,
-        &shape,
-        "w",
-        "w.graph.json",
-        &DemandOverride::default(),
-    )
-    .unwrap();
+    let (scenario, _) = window_of(&cut, &source, &shape, &DemandOverride::default());
     let control = scenario.control.as_ref().unwrap();
     let window = control.window.as_ref().unwrap();
     assert_eq!(window.upstream_m, 1500.0);
@@ -560,15 +544,7 @@ fn demand_is_sized_on_a_narrower_entry_road_and_an_entry_that_cannot_take_it_say
             .sum()
     };
     // the source's 2000 veh/h per lane once (the entry's one lane), not five times (the window's lanes)
-    let (sc, notes) = window_scenario(
-        &cut,
-        &source,
-        &shape,
-        "w",
-        "w.graph.json",
-        &DemandOverride::default(),
-    )
-    .unwrap();
+    let (sc, notes) = window_of(&cut, &source, &shape, &DemandOverride::default());
     assert!((main_vph(&sc) - 2000.0).abs() < 1e-6, "{notes:?}");
     assert!(
         notes
@@ -582,7 +558,7 @@ fn demand_is_sized_on_a_narrower_entry_road_and_an_entry_that_cannot_take_it_say
         main_vph: Some(6000.0),
         ..DemandOverride::default()
     };
-    let (sc, notes) = window_scenario(&cut, &source, &shape, "w", "w.graph.json", &demand).unwrap();
+    let (sc, notes) = window_of(&cut, &source, &shape, &demand);
     assert!((main_vph(&sc) - 6000.0).abs() < 1e-6);
     let warning = notes
         .iter()
@@ -593,4 +569,14 @@ fn demand_is_sized_on_a_narrower_entry_road_and_an_entry_that_cannot_take_it_say
             && warning.contains("less than its demand of 6000 veh/h"),
         "{warning}"
     );
+}
+
+/// The scenario of window `cut` as `w` (its graph `w.graph.json`), with its demand lines.
+fn window_of(
+    cut: &WindowCut,
+    source: &ResolvedScenario,
+    shape: &SourceShape,
+    demand: &DemandOverride,
+) -> (Scenario, Vec<String>) {
+    window_scenario(cut, source, shape, "w", "w.graph.json", demand).unwrap()
 }
