@@ -1,9 +1,11 @@
 //! `mapc bench`: the simulator's speed — vehicle-steps per second on one core, beside SUMO 1.8's command line on
-//! the same scenario exported (when SUMO is found; [`super::bench_sumo`]), and the wall time of a many-seed
+//! the same scenario exported (when SUMO is found; [`sumo`]), and the wall time of a many-seed
 //! baseline on a given number of threads. Wall time and CPU time are both reported: on a shared machine CPU time
 //! is the steadier measure, and mapc and SUMO run back to back in one process so that they share the load. With
 //! `--train N`, the trainer's: N iterations of the paper preset's centralized training, their wall and CPU time
 //! by phase, and the preset's 500 iterations extrapolated.
+
+mod sumo;
 
 use mapc_sim::{Simulation, spec_from_scenario};
 use rayon::prelude::*;
@@ -12,7 +14,7 @@ use std::time::Instant;
 #[derive(clap::Args)]
 pub struct Args {
     /// Scenario file, or a built-in scenario name (simple_merge).
-    #[arg(long, default_value = super::sim::DEFAULT_SCENARIO)]
+    #[arg(long, default_value = super::common::DEFAULT_SCENARIO)]
     pub scenario: String,
     /// Seeds run one after another on one core for the vehicle-steps figure (1 to 100 000).
     #[arg(long, default_value_t = 20, value_parser = super::flags::seeds())]
@@ -46,13 +48,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(iters) = args.train {
         return bench_training(&args, iters);
     }
-    let rs = super::sim::load_scenario(&args.scenario)?;
+    let rs = super::common::load_scenario(&args.scenario)?;
     let spec = spec_from_scenario(&rs)?;
 
     let sumo_bin = if args.no_sumo {
         None
     } else {
-        super::bench_sumo::find_sumo(args.sumo.as_deref())?
+        sumo::find_sumo(args.sumo.as_deref())?
     };
 
     // One core: seeds in sequence on this thread.
@@ -82,7 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let sumo = match &sumo_bin {
         Some(bin) => {
             let dir = std::env::temp_dir().join(format!("mapc-bench-sumo-{}", std::process::id()));
-            let runs = super::bench_sumo::run_sumo(bin, &rs, &dir, args.sumo_seeds);
+            let runs = sumo::run_sumo(bin, &rs, &dir, args.sumo_seeds);
             std::fs::remove_dir_all(&dir).ok();
             Some(runs?)
         }
@@ -104,9 +106,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     });
 
     // The parallel baseline, as `mapc sim` runs it.
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads)
-        .build()?;
+    let pool = super::common::thread_pool(Some(args.threads))?;
     let baseline_cpu_start = cpu_seconds();
     let start = Instant::now();
     let runs = pool.install(|| {
@@ -346,7 +346,7 @@ fn thread_cpu_s() -> f64 {
     if unsafe { libc::getrusage(who, &mut u) } != 0 {
         return f64::NAN;
     }
-    super::bench_sumo::cpu_seconds(&u)
+    sumo::cpu_seconds(&u)
 }
 
 /// The process's peak resident memory so far (MiB), as the kernel counts it.

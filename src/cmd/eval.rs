@@ -51,18 +51,13 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .ok();
-    }
+    super::common::set_global_threads(args.threads);
     let file = policy_file(&args.policy);
     let mut ck = Checkpoint::load(&file)?;
     if let Some(rule) = args.deploy {
         ck.spec.deploy = Some(rule);
     }
-    let sc = super::train::load_scenario(&args.scenario)?;
+    let sc = super::common::load_run_scenario(&args.scenario)?;
     if let Some(w) = &sc.horizon_warning {
         eprintln!("warning: {}: {w}", args.scenario);
     }
@@ -85,7 +80,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     .with_context(|| format!("evaluating {}", file.display()))?;
     if let Some(path) = &args.trace {
         // one seed under the policy, every step's vehicles, written atomically
-        super::sim::write_trace_file(path, |w| {
+        super::common::write_trace_file(path, |w| {
             driver.trace(&ck, &sc.spec, seeds[0], mode, w)?;
             Ok(())
         })?;

@@ -43,7 +43,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn sumo(map: &str, dir: &Path, json: bool) -> anyhow::Result<()> {
-    let summary = if super::render::names_scenario(map) {
+    let summary = if super::common::names_scenario(map) {
         let resolved = mapc_scenario::ResolvedScenario::load(map)?;
         mapc_sumo::export_scenario(&resolved, dir)?
     } else {
@@ -75,7 +75,7 @@ fn sumo(map: &str, dir: &Path, json: bool) -> anyhow::Result<()> {
 }
 
 fn geojson(map: &str, file: &Path, json: bool) -> anyhow::Result<()> {
-    let graph = super::render::load_map(map)?;
+    let graph = super::common::load_map(map)?;
     let summary = mapc_viz::geojson::write_geojson(&graph, file)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&summary)?);

@@ -43,7 +43,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let output = args.output.unwrap_or_else(|| {
         PathBuf::from(format!(
             "{}.graph.json",
-            super::simplify::map_stem(&args.file)
+            super::common::map_stem(&args.file)
         ))
     });
     graph

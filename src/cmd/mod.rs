@@ -1,7 +1,7 @@
 //! One module per subcommand: its clap arguments and a `run` that returns an error for bad input.
 
 pub mod bench;
-mod bench_sumo;
+pub mod common;
 pub mod eval;
 pub mod export;
 pub mod flags;
@@ -16,4 +16,3 @@ pub mod simplify;
 pub mod train;
 pub mod view;
 pub mod window;
-pub mod window_fit;

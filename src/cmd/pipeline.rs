@@ -87,7 +87,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // a map that cannot be read fails before anything is written
     std::fs::metadata(&args.map).map_err(|e| anyhow::anyhow!("{}: {e}", args.map.display()))?;
     std::fs::create_dir_all(out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
-    let map_stem = super::simplify::map_stem(&args.map);
+    let map_stem = super::common::map_stem(&args.map);
     let file = |name: String| path_text(&out.join(name));
     let graph = file(format!("{map_stem}.graph.json"));
     // what follows the import is named apart when it keeps the lanes

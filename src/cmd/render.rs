@@ -1,11 +1,12 @@
 //! `mapc render`: draw a map as PNG or SVG, roads coloured by class, merges labelled, optionally a transfer window
 //! highlighted.
 
+use super::common::load_map;
 use anyhow::Context;
 use mapc_graph::{JunctionId, LaneGraph, RoadId};
 use mapc_viz::{Highlight, RenderOptions};
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -39,31 +40,6 @@ pub struct Args {
     /// Print what was drawn as JSON.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Whether a map argument names a scenario rather than a map or graph: a file whose content is a scenario
-/// (whatever its name; a `.toml` file that is not recognised is one too, so that its TOML error is reported), or
-/// a built-in scenario name (simple_merge).
-pub fn names_scenario(arg: &str) -> bool {
-    let path = Path::new(arg);
-    if path.is_file() {
-        return match mapc_graph::filekind::sniff_path(path) {
-            Some(kind) => kind == mapc_graph::MapcFile::Scenario,
-            None => path
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("toml")),
-        };
-    }
-    !path.exists() && mapc_scenario::Scenario::builtin(arg).is_some()
-}
-
-/// Any map argument as a lane graph: a file mapc reads, a scenario file, or a built-in scenario name.
-pub fn load_map(arg: &str) -> anyhow::Result<LaneGraph> {
-    if names_scenario(arg) {
-        let resolved = mapc_scenario::ResolvedScenario::load(arg)?;
-        return Ok(resolved.graph);
-    }
-    Ok(mapc_import::load_any(Path::new(arg))?)
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {

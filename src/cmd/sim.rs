@@ -1,19 +1,14 @@
 //! `mapc sim`: the all-human baseline of a scenario over many seeds (in parallel), with mean and 95% confidence
 //! interval per metric, and optionally a trajectory trace of the first seed.
 
+use super::common::{
+    DEFAULT_SCENARIO, REGIME_SEEDS, load_scenario, print_regime_lines, write_trace,
+};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
-use mapc_scenario::ResolvedScenario;
-use mapc_sim::{
-    BaselineReport, MeanCi, RunMetrics, SimSpec, Simulation, TRACE_HEADER, spec_from_scenario,
-};
+use mapc_sim::{BaselineReport, MeanCi, RunMetrics, Simulation, spec_from_scenario};
 use rayon::prelude::*;
-use std::io::Write;
-use std::path::{Path, PathBuf};
-
-/// Used when the default scenario file is absent (running outside the repository).
-const BUILTIN_FALLBACK: &str = "simple_merge";
-pub const DEFAULT_SCENARIO: &str = "scenarios/simple_merge.toml";
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -38,16 +33,6 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Load a scenario by file or built-in name; the default file falls back to the built-in Simple Merge.
-pub fn load_scenario(name: &str) -> anyhow::Result<ResolvedScenario> {
-    let name = if name == DEFAULT_SCENARIO && !Path::new(name).exists() {
-        BUILTIN_FALLBACK
-    } else {
-        name
-    };
-    ResolvedScenario::load(name).with_context(|| format!("loading scenario `{name}`"))
-}
-
 pub fn run(args: Args) -> anyhow::Result<()> {
     let rs = load_scenario(&args.scenario)?;
     let spec = spec_from_scenario(&rs).with_context(|| format!("scenario `{}`", rs.origin))?;
@@ -56,9 +41,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         eprintln!("warning: {}: {w}", rs.origin);
     }
     let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
-        .build()?;
+    let pool = super::common::thread_pool(args.threads)?;
     let progress = progress_bar(seeds.len() as u64, args.json);
     let start = std::time::Instant::now();
     let run_seed = |seed: u64| -> anyhow::Result<RunMetrics> {
@@ -169,24 +152,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Seeds of the observed pass that reports the merges' regime.
-pub use mapc_sim::REGIME_SEEDS;
-
-/// The blocked entries and the merges' regime, a line each.
-pub fn print_regime(regime: &mapc_sim::RegimeReport) {
-    print_regime_lines(regime.seeds, &regime.lines());
-}
-
-fn print_regime_lines(seeds: usize, lines: &[String]) {
-    if lines.is_empty() {
-        return;
-    }
-    println!("  regime ({seeds} seeds):");
-    for line in lines {
-        println!("    {line}");
-    }
-}
-
 fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
     if quiet || n < 8 {
         return ProgressBar::hidden();
@@ -197,50 +162,4 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
             .expect("valid template"),
     );
     pb
-}
-
-/// Run one seed and write every step's vehicles, atomically.
-/// Writes the trace of `seed` to `path`; returns the run's metrics and what the trace's bound left out, if
-/// anything.
-pub fn write_trace(
-    spec: &SimSpec,
-    seed: u64,
-    path: &Path,
-) -> anyhow::Result<(RunMetrics, Option<String>)> {
-    let mut traced = None;
-    write_trace_file(path, |w| {
-        traced = Some(mapc_sim::trace_run(spec, seed, w)?);
-        Ok(())
-    })?;
-    let traced = traced.expect("the trace's run ends or fails");
-    Ok((traced.metrics, traced.note))
-}
-
-/// Writes a trace CSV (header, then the rows `body` writes) atomically (`mapc_graph::write_atomically_with`), so
-/// an interrupted or failed run leaves neither half a trace under the final name nor a temporary file.
-pub fn write_trace_file(
-    path: &Path,
-    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> anyhow::Result<()>,
-) -> anyhow::Result<()> {
-    // the writer speaks io::Error; the simulator's or the policy's own error is kept aside and returned as is
-    let mut failure = None;
-    let written = mapc_graph::write_atomically_with(path, |w| {
-        writeln!(w, "{TRACE_HEADER}")?;
-        body(w).map_err(|e| {
-            let io = std::io::Error::other(e.to_string());
-            failure = Some(e);
-            io
-        })
-    });
-    if let Some(e) = failure {
-        // the file system's own refusal (a full disk) names the file; the simulator's or the policy's stays as is
-        let os_error = e
-            .downcast_ref::<std::io::Error>()
-            .is_some_and(|io| io.get_ref().is_none());
-        if os_error {
-            return Err(e.context(format!("writing the trace {}", path.display())));
-        }
-        return Err(e);
-    }
-    written.with_context(|| format!("writing the trace {}", path.display()))
 }

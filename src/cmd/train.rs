@@ -1,5 +1,6 @@
 //! `mapc train`: PPO on a scenario, with a progress bar, a CSV log and atomic checkpoints.
 
+use super::common::{LoadedScenario, load_run_scenario as load_scenario};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
@@ -178,15 +179,6 @@ pub enum ValueNet {
     Separate,
 }
 
-/// A scenario resolved for the simulator: its spec, display name and N_AV (if the scenario sets one).
-pub struct LoadedScenario {
-    pub spec: mapc_sim::SimSpec,
-    pub name: String,
-    pub n_av: Option<usize>,
-    /// Set when the horizon is too short for the network (`mapc_scenario::timing`).
-    pub horizon_warning: Option<String>,
-}
-
 /// A merge distribution file, if `arg` names one (recognised by its content).
 fn distribution_of(arg: &str) -> anyhow::Result<Option<LoadedDistribution>> {
     let path = Path::new(arg);
@@ -225,20 +217,6 @@ fn load_training_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
         name: d.file.name.clone(),
         n_av: resolved.scenario.control.as_ref().map(|c| c.n_av as usize),
         horizon_warning: None,
-    })
-}
-
-/// Resolves `simple_merge` or a scenario file into a simulator spec.
-pub fn load_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
-    let resolved = mapc_scenario::ResolvedScenario::load(arg)?;
-    let spec =
-        mapc_sim::spec_from_scenario(&resolved).with_context(|| format!("scenario {arg}"))?;
-    let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
-    Ok(LoadedScenario {
-        spec,
-        name: resolved.scenario.name.clone(),
-        n_av,
-        horizon_warning: mapc_scenario::timing::HorizonFit::of_resolved(&resolved).warning(),
     })
 }
 
@@ -298,12 +276,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// `mapc train` without its report: the run once its iterations are done and saved, and its last log row.
 pub fn train(args: Args) -> anyhow::Result<(TrainRun, Option<IterationStats>)> {
-    if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .ok();
-    }
+    super::common::set_global_threads(args.threads);
     let mut run = if let Some(dir) = &args.resume {
         let mut r = TrainRun::resume(dir, args.checkpoint_every)?;
         if let Some(n) = args.iters {

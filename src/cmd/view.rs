@@ -50,10 +50,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let mut page = if super::render::names_scenario(&args.target) {
+    let mut page = if super::common::names_scenario(&args.target) {
         scenario_page(&args)?
     } else {
-        let graph = super::render::load_map(&args.target)?;
+        let graph = super::common::load_map(&args.target)?;
         anyhow::ensure!(
             args.policy.is_none() && args.trace.is_none(),
             "{} is a map, not a scenario: --policy and --trace need a scenario (make one with `mapc window`)",
@@ -107,7 +107,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
-    let resolved = super::sim::load_scenario(&args.target)?;
+    let resolved = super::common::load_scenario(&args.target)?;
     let spec =
         spec_from_scenario(&resolved).with_context(|| format!("scenario `{}`", resolved.origin))?;
     let mut page = ViewPage::new(

@@ -2,9 +2,11 @@
 //! matched to a source scenario's lengths, and write the scenario (the whole corridor, each window a controlled
 //! region, the source's demand on every entry).
 
-use super::simplify::{RouteArgs, map_stem};
-use super::window_fit::{WindowLengths, corridor_before_m};
+mod fit;
+
+use super::common::{RouteArgs, map_stem};
 use anyhow::Context;
+use fit::{WindowLengths, corridor_before_m};
 use mapc_graph::LaneGraph;
 use mapc_scenario::compile::{
     WindowsOptions, WrittenWindows, corridor_of, prepare_window, prepare_windows,
@@ -158,19 +160,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.json {
         let mut report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
         report["regime"] = serde_json::to_value(&regime)?;
-        report["observation"] = super::window_fit::observation(&written.shape, &lengths);
+        report["observation"] = fit::observation(&written.shape, &lengths);
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
     println!(
         "window at {} matched to {}: {:.2} m before the merge, {:.2} m of merging road, {:.2} m after",
-        super::super::cmd::window::describe(&cut.graph, cut.junction),
+        describe(&cut.graph, cut.junction),
         args.match_,
         cut.upstream_m,
         cut.merge_m,
         cut.downstream_m
     );
-    for line in super::window_fit::lines(&written.shape, &args.match_, &lengths) {
+    for line in fit::lines(&written.shape, &args.match_, &lengths) {
         println!("  {line}");
     }
     for n in &cut.notes {
@@ -191,9 +193,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("drew {}", r.path.display());
     }
     if multi_lane {
-        super::simplify::print_lanes(&cut.graph, &cut.region());
+        super::common::print_lanes(&cut.graph, &cut.region());
     }
-    super::sim::print_regime(&regime);
+    super::common::print_regime(&regime);
     Ok(())
 }
 
@@ -250,7 +252,7 @@ fn run_several(
             .iter_mut()
             .zip(&written.cut.regions)
         {
-            w["observation"] = super::window_fit::observation(&written.shape, &lengths_of(r));
+            w["observation"] = fit::observation(&written.shape, &lengths_of(r));
         }
         report["timing"] = serde_json::to_value(&written.timing)?;
         report["regime"] = serde_json::to_value(&regime)?;
@@ -271,7 +273,7 @@ fn run_several(
             r.end_m()
         );
         if r.merges.len() == 1 {
-            for line in super::window_fit::lines(&written.shape, &args.match_, &lengths_of(r)) {
+            for line in fit::lines(&written.shape, &args.match_, &lengths_of(r)) {
                 println!("  {line}");
             }
         }
@@ -290,7 +292,7 @@ fn run_several(
     }
     if g.roads.iter().any(|r| r.lanes.len() > 1) {
         let roads: Vec<_> = written.cut.regions.iter().flat_map(|r| r.roads()).collect();
-        super::simplify::print_lanes(g, &roads);
+        super::common::print_lanes(g, &roads);
     }
     println!(
         "wrote {} and {}",
@@ -300,14 +302,14 @@ fn run_several(
     if let Some(r) = render {
         println!("drew {}", r.path.display());
     }
-    super::sim::print_regime(&regime);
+    super::common::print_regime(&regime);
     Ok(())
 }
 
 /// A short human run of a window scenario: which regime each merge is in under its demand.
 fn regime_of(resolved: &mapc_scenario::ResolvedScenario) -> anyhow::Result<mapc_sim::RegimeReport> {
     let spec = mapc_sim::spec_from_scenario(resolved)?;
-    let seeds: Vec<u64> = (0..super::sim::REGIME_SEEDS as u64).collect();
+    let seeds: Vec<u64> = (0..super::common::REGIME_SEEDS as u64).collect();
     Ok(mapc_sim::merge_regimes(&spec, &seeds)?)
 }
 

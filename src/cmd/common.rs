@@ -1,0 +1,253 @@
+//! What the commands share: loading a scenario (with the built-in fallback) or any map, the trace writer, the
+//! thread pool, the regime and lanes lines, and output names. Commands use this module, never one another.
+
+use anyhow::Context;
+use mapc_graph::LaneGraph;
+use mapc_scenario::ResolvedScenario;
+use mapc_scenario::transform::SimplifyOptions;
+use mapc_sim::{RunMetrics, SimSpec, TRACE_HEADER};
+use std::io::Write;
+use std::path::Path;
+
+/// The thread pool of a command's runs: `threads` workers, or one per core.
+pub fn thread_pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
+    Ok(rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()?)
+}
+
+/// `--threads` for a command whose library runs on rayon's global pool (training, evaluation); the first call
+/// of a process sets it (a second, as `mapc bench --train` after its own runs, keeps the first).
+pub fn set_global_threads(threads: Option<usize>) {
+    if let Some(t) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .ok();
+    }
+}
+
+/// Used when the default scenario file is absent (running outside the repository).
+const BUILTIN_FALLBACK: &str = "simple_merge";
+
+pub const DEFAULT_SCENARIO: &str = "scenarios/simple_merge.toml";
+
+/// Load a scenario by file or built-in name; the default file falls back to the built-in Simple Merge.
+pub fn load_scenario(name: &str) -> anyhow::Result<ResolvedScenario> {
+    let name = if name == DEFAULT_SCENARIO && !Path::new(name).exists() {
+        BUILTIN_FALLBACK
+    } else {
+        name
+    };
+    ResolvedScenario::load(name).with_context(|| format!("loading scenario `{name}`"))
+}
+
+/// Seeds of the observed pass that reports the merges' regime.
+pub use mapc_sim::REGIME_SEEDS;
+
+/// The blocked entries and the merges' regime, a line each.
+pub fn print_regime(regime: &mapc_sim::RegimeReport) {
+    print_regime_lines(regime.seeds, &regime.lines());
+}
+
+pub fn print_regime_lines(seeds: usize, lines: &[String]) {
+    if lines.is_empty() {
+        return;
+    }
+    println!("  regime ({seeds} seeds):");
+    for line in lines {
+        println!("    {line}");
+    }
+}
+
+/// Run one seed and write every step's vehicles, atomically.
+/// Writes the trace of `seed` to `path`; returns the run's metrics and what the trace's bound left out, if
+/// anything.
+pub fn write_trace(
+    spec: &SimSpec,
+    seed: u64,
+    path: &Path,
+) -> anyhow::Result<(RunMetrics, Option<String>)> {
+    let mut traced = None;
+    write_trace_file(path, |w| {
+        traced = Some(mapc_sim::trace_run(spec, seed, w)?);
+        Ok(())
+    })?;
+    let traced = traced.expect("the trace's run ends or fails");
+    Ok((traced.metrics, traced.note))
+}
+
+/// Writes a trace CSV (header, then the rows `body` writes) atomically (`mapc_graph::write_atomically_with`), so
+/// an interrupted or failed run leaves neither half a trace under the final name nor a temporary file.
+pub fn write_trace_file(
+    path: &Path,
+    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    // the writer speaks io::Error; the simulator's or the policy's own error is kept aside and returned as is
+    let mut failure = None;
+    let written = mapc_graph::write_atomically_with(path, |w| {
+        writeln!(w, "{TRACE_HEADER}")?;
+        body(w).map_err(|e| {
+            let io = std::io::Error::other(e.to_string());
+            failure = Some(e);
+            io
+        })
+    });
+    if let Some(e) = failure {
+        // the file system's own refusal (a full disk) names the file; the simulator's or the policy's stays as is
+        let os_error = e
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.get_ref().is_none());
+        if os_error {
+            return Err(e.context(format!("writing the trace {}", path.display())));
+        }
+        return Err(e);
+    }
+    written.with_context(|| format!("writing the trace {}", path.display()))
+}
+
+/// Whether a map argument names a scenario rather than a map or graph: a file whose content is a scenario
+/// (whatever its name; a `.toml` file that is not recognised is one too, so that its TOML error is reported), or
+/// a built-in scenario name (simple_merge).
+pub fn names_scenario(arg: &str) -> bool {
+    let path = Path::new(arg);
+    if path.is_file() {
+        return match mapc_graph::filekind::sniff_path(path) {
+            Some(kind) => kind == mapc_graph::MapcFile::Scenario,
+            None => path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("toml")),
+        };
+    }
+    !path.exists() && mapc_scenario::Scenario::builtin(arg).is_some()
+}
+
+/// Any map argument as a lane graph: a file mapc reads, a scenario file, or a built-in scenario name.
+pub fn load_map(arg: &str) -> anyhow::Result<LaneGraph> {
+    if names_scenario(arg) {
+        let resolved = mapc_scenario::ResolvedScenario::load(arg)?;
+        return Ok(resolved.graph);
+    }
+    Ok(mapc_import::load_any(Path::new(arg))?)
+}
+
+/// `maps/i696.osm` -> `i696`: the file name without the map or graph extensions (any case).
+pub fn map_stem(path: &Path) -> String {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "map".into());
+    let lower = name.to_ascii_lowercase();
+    for ext in [
+        ".corridor.graph.json",
+        ".graph.json",
+        ".osm.pbf",
+        ".osm.xml",
+        ".net.xml",
+        ".osm",
+        ".json",
+        ".xml",
+        ".pbf",
+    ] {
+        if lower.len() > ext.len() && lower.ends_with(ext) {
+            return name[..name.len() - ext.len()].to_string();
+        }
+    }
+    name
+}
+
+/// Lanes per road of a corridor or window that keeps several lanes a road, and the lanes that end there.
+pub fn print_lanes(g: &mapc_graph::LaneGraph, roads: &[mapc_graph::RoadId]) {
+    let mut parts = Vec::new();
+    for r in roads.iter().filter_map(|r| g.road(*r)) {
+        let ends: Vec<String> = r
+            .lanes
+            .iter()
+            .filter_map(|l| {
+                l.end
+                    .map(|e| format!("lane {} {}", l.index, lane_end_name(e)))
+            })
+            .collect();
+        parts.push(if ends.is_empty() {
+            format!("{} {}", r.id, r.lanes.len())
+        } else {
+            format!("{} {} ({})", r.id, r.lanes.len(), ends.join(", "))
+        });
+    }
+    println!("  lanes: {}", parts.join(", "));
+}
+
+pub fn lane_end_name(e: mapc_graph::LaneEnd) -> &'static str {
+    match e {
+        mapc_graph::LaneEnd::Drop => "drops",
+        mapc_graph::LaneEnd::Acceleration => "ends (acceleration lane)",
+    }
+}
+
+/// A scenario resolved for the simulator: its spec, display name and N_AV (if the scenario sets one).
+pub struct LoadedScenario {
+    pub spec: mapc_sim::SimSpec,
+    pub name: String,
+    pub n_av: Option<usize>,
+    /// Set when the horizon is too short for the network (`mapc_scenario::timing`).
+    pub horizon_warning: Option<String>,
+}
+
+/// A scenario file or built-in name (the default file falling back to the built-in) resolved into a simulator
+/// spec.
+pub fn load_run_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
+    let resolved = load_scenario(arg)?;
+    let spec =
+        mapc_sim::spec_from_scenario(&resolved).with_context(|| format!("scenario {arg}"))?;
+    let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
+    Ok(LoadedScenario {
+        spec,
+        name: resolved.scenario.name.clone(),
+        n_av,
+        horizon_warning: mapc_scenario::timing::HorizonFit::of_resolved(&resolved).warning(),
+    })
+}
+
+/// How `mapc simplify`, and `mapc window` given a raw map, choose the corridor.
+#[derive(clap::Args, Clone, Debug)]
+pub struct RouteArgs {
+    /// A point the main road must pass, in order (repeat): `osm-way:WAY`, `osm:NODE`, a SUMO edge or junction id,
+    /// `R3` or `J3`. Default: the longest through route over --classes (and roads of no class as fast as a
+    /// ramp) that passes a junction where another road joins.
+    #[arg(long = "via", value_name = "ID")]
+    pub via: Vec<String>,
+    /// Keep merging roads at most this long (metres) instead of back to where they start in the map.
+    #[arg(long, value_name = "M", value_parser = super::flags::within::<f64>(mapc_scenario::ranges::ROAD_LENGTH_M))]
+    pub feeder_length: Option<f64>,
+    /// Keep diverging roads as exits (up to their next junction) instead of dropping them.
+    #[arg(long)]
+    pub keep_exits: bool,
+    /// Road classes the main road may use where --via does not pin it (comma-separated).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "motorway,motorway_link,trunk,trunk_link"
+    )]
+    pub classes: Vec<String>,
+    /// Keep footways, paths, cycleways and service roads that meet the main road as merging roads (by default
+    /// they are dropped, and a junction only they join is no merge).
+    #[arg(long)]
+    pub minor_roads: bool,
+    /// Keep every lane of the main and merging roads, with their lane-level connections, lane drops, gains and
+    /// acceleration lanes (by default each road keeps its rightmost lane, as the paper's corridors do).
+    #[arg(long)]
+    pub keep_lanes: bool,
+}
+
+impl RouteArgs {
+    pub fn options(&self) -> SimplifyOptions {
+        SimplifyOptions {
+            via: self.via.clone(),
+            classes: self.classes.clone(),
+            feeder_length_m: self.feeder_length,
+            keep_exits: self.keep_exits,
+            minor_roads: self.minor_roads,
+            keep_lanes: self.keep_lanes,
+        }
+    }
+}
