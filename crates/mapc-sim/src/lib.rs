@@ -79,14 +79,14 @@ pub use idm::IdmParams;
 pub use measure::{MeasurePoint, Passage};
 pub use metrics::{
     BaselineReport, EntryCounts, EntrySummary, LaneChangeReasons, MeanCi, MergeFlow, RunMetrics,
-    Summary, run_baseline_spec, standstill_lines, t_quantile_975,
+    Summary, standstill_lines, t_quantile_975,
 };
 pub use network::Network;
 pub use regime::{
     Congestion, MergePriority, MergeRegime, REGIME_SEEDS, RegimeReport, merge_priorities,
     merge_regimes,
 };
-pub use scenario::{run_baseline, spec_from_scenario};
+pub use scenario::{run_baseline, run_baseline_spec, spec_from_scenario};
 pub use sim::{
     MergeFoe, Neighbor, SideNeighbors, Simulation, VehicleId, VehicleStatus, VehicleView,
 };

@@ -6,7 +6,7 @@
 //! a test can follow every vehicle.
 
 use crate::network::{LaneIdx, LaneKind, Network};
-use crate::sim::VehicleId;
+use crate::vehicle_table::VehicleId;
 use mapc_graph::RoadId;
 use serde::{Deserialize, Serialize};
 

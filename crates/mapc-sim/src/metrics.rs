@@ -1,11 +1,7 @@
-//! Per-run metrics, their summary over seeds (mean and Student-t 95% confidence interval), and the parallel
-//! all-human baseline.
+//! Per-run metrics and their summary over seeds (mean and Student-t 95% confidence interval); the runs
+//! themselves are `scenario::run_baseline_spec`'s.
 
-use crate::SimError;
-use crate::sim::Simulation;
-use crate::spec::SimSpec;
 use mapc_graph::RoadId;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// What one run measured (definitions as the paper computed them).
@@ -374,15 +370,4 @@ impl BaselineReport {
             runs,
         }
     }
-}
-
-/// Run every seed to the horizon in parallel (rayon's current pool); results in seed order.
-pub fn run_baseline_spec(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, SimError> {
-    seeds
-        .par_iter()
-        .map(|&seed| {
-            let mut sim = Simulation::from_spec(spec.clone(), seed)?;
-            sim.run()
-        })
-        .collect()
 }

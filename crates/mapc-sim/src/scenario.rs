@@ -2,13 +2,14 @@
 
 use crate::SimError;
 use crate::measure::MeasurePoint;
-use crate::metrics::{RunMetrics, run_baseline_spec};
+use crate::metrics::RunMetrics;
 use crate::network::Network;
 use crate::placement::{check_initial_spacing, initial_placement};
 use crate::sim::Simulation;
 use crate::spec::{DepartLane, FlowSpec, SimSpec, VehicleTypeSpec};
 use mapc_graph::RoadId;
 use mapc_scenario::ResolvedScenario;
+use rayon::prelude::*;
 
 /// SUMO's default emergency deceleration of a passenger car (m/s^2).
 const EMERGENCY_DECEL: f64 = 9.0;
@@ -174,4 +175,15 @@ impl Simulation {
 /// All-human baseline over `seeds` (controlled vehicles drive as humans; parallel, results in seed order).
 pub fn run_baseline(rs: &ResolvedScenario, seeds: &[u64]) -> Result<Vec<RunMetrics>, SimError> {
     run_baseline_spec(&spec_from_scenario(rs)?, seeds)
+}
+
+/// Run every seed to the horizon in parallel (rayon's current pool); results in seed order.
+pub fn run_baseline_spec(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, SimError> {
+    seeds
+        .par_iter()
+        .map(|&seed| {
+            let mut sim = Simulation::from_spec(spec.clone(), seed)?;
+            sim.run()
+        })
+        .collect()
 }

@@ -6,6 +6,9 @@
 //! table. The paper's runs never reach that (they create at most about 620 vehicles), so nothing there changes;
 //! after it, `get` answers `None` for a forgotten vehicle.
 
+/// Index of a vehicle, stable for the whole run (vehicles are numbered in creation order).
+pub type VehicleId = u32;
+
 /// Fewest leading arrived vehicles worth dropping (a drop moves the rest of the table).
 const FORGET_AT_LEAST: usize = 1024;
 

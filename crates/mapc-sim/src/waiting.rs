@@ -9,7 +9,7 @@
 //! chosen at insertion, behind vehicles refused on their lanes in that step), so a demand the road cannot take
 //! costs a counter, not a vehicle record per departure.
 
-use crate::sim::VehicleId;
+use crate::vehicle_table::VehicleId;
 use std::collections::VecDeque;
 
 /// Waiting vehicles per entry lane that are built when due; later ones are counted.

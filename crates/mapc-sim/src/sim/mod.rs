@@ -52,8 +52,7 @@ pub use queries::{MergeFoe, Neighbor, VehicleView};
 pub use side_lanes::SideNeighbors;
 pub use vehicle::VehicleStatus;
 
-/// Index of a vehicle, stable for the whole run (vehicles are numbered in creation order).
-pub type VehicleId = u32;
+pub use crate::vehicle_table::VehicleId;
 
 /// How far the stop point lies before a minor link's stop line (SUMO's POSITION_EPS).
 const POSITION_EPS: f64 = 0.1;

@@ -178,7 +178,7 @@ fn multi_lane_runs_are_deterministic_for_any_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| crate::metrics::run_baseline_spec(&spec, &[4, 5]).unwrap())
+            .install(|| crate::scenario::run_baseline_spec(&spec, &[4, 5]).unwrap())
     };
     let bits = |runs: Vec<RunMetrics>| -> Vec<(u64, u64, u64)> {
         runs.iter()
