@@ -6,7 +6,7 @@ use anyhow::Context;
 use clap::Args as ClapArgs;
 use mapc_rl::Checkpoint;
 use mapc_rl::checkpoint::policy_file;
-use mapc_rl::eval::{FigureSet, evaluate};
+use mapc_rl::eval::{EvalRequest, FigureSet, evaluate};
 use mapc_rl::rollout::ActionMode;
 
 /// Evaluate a policy: mean and 95% CI of outflow, inflow and speed, and a Welch t-test against the humans.
@@ -67,16 +67,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         ActionMode::Mean
     };
-    let (report, driver) = evaluate(
-        &ck,
-        &file,
-        &args.scenario,
-        &sc.spec,
-        sc.n_av,
-        &seeds,
+    let (report, driver) = evaluate(&EvalRequest {
+        ck: &ck,
+        policy_file: &file,
+        scenario: &args.scenario,
+        spec: &sc.spec,
+        scenario_n_av: sc.n_av,
+        seeds: &seeds,
         mode,
-        !args.no_baseline,
-    )
+        baseline: !args.no_baseline,
+    })
     .with_context(|| format!("evaluating {}", file.display()))?;
     if let Some(path) = &args.trace {
         // one seed under the policy, every step's vehicles, written atomically

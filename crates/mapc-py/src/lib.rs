@@ -107,7 +107,18 @@ fn evaluate(
         ActionMode::Mean
     };
     let (report, _) = py
-        .detach(|| evaluate_policy(&ck, &file, scenario, &spec, n_av, &list, mode, baseline))
+        .detach(|| {
+            evaluate_policy(&mapc_rl::eval::EvalRequest {
+                ck: &ck,
+                policy_file: &file,
+                scenario,
+                spec: &spec,
+                scenario_n_av: n_av,
+                seeds: &list,
+                mode,
+                baseline,
+            })
+        })
         .map_err(|e| mapc_error(format!("evaluating {}: {e}", file.display())))?;
     serde_json::to_string(&report).map_err(mapc_error)
 }

@@ -142,20 +142,35 @@ fn trace_human(
     Ok(EpisodeMetrics::from(&run.metrics))
 }
 
+/// What to evaluate: a policy (its checkpoint and the file it came from) on a scenario (its name for the report,
+/// its spec, the N_AV it sets) over `seeds`, with mean or sampled actions, and the human baseline unless
+/// `baseline` is false.
+#[derive(Clone, Copy)]
+pub struct EvalRequest<'a> {
+    pub ck: &'a Checkpoint,
+    pub policy_file: &'a Path,
+    pub scenario: &'a str,
+    pub spec: &'a SimSpec,
+    pub scenario_n_av: Option<usize>,
+    pub seeds: &'a [u64],
+    pub mode: ActionMode,
+    pub baseline: bool,
+}
+
 /// A policy evaluated on a scenario over `seeds` (in parallel, results in seed order), with the human baseline on
 /// the same seeds unless `baseline` is false: what `mapc eval` and the Python package's `evaluate` report. Also
 /// returns how the policy drove, for a trace of the same episodes.
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate(
-    ck: &Checkpoint,
-    policy_file: &Path,
-    scenario: &str,
-    spec: &SimSpec,
-    scenario_n_av: Option<usize>,
-    seeds: &[u64],
-    mode: ActionMode,
-    baseline: bool,
-) -> Result<(EvalReport, PolicyDriver), RlError> {
+pub fn evaluate(req: &EvalRequest) -> Result<(EvalReport, PolicyDriver), RlError> {
+    let EvalRequest {
+        ck,
+        policy_file,
+        scenario,
+        spec,
+        scenario_n_av,
+        seeds,
+        mode,
+        baseline,
+    } = *req;
     let start = std::time::Instant::now();
     let driver =
         PolicyDriver::for_scenario(ck, policy_file, scenario, Some(scenario_n_av.unwrap_or(5)))?;

@@ -29,16 +29,16 @@ fn robust() -> (Checkpoint, PathBuf) {
 
 fn eval(spec: &SimSpec, seeds: &[u64]) -> EvalReport {
     let (ck, file) = robust();
-    evaluate(
-        &ck,
-        &file,
-        "test",
+    evaluate(&EvalRequest {
+        ck: &ck,
+        policy_file: &file,
+        scenario: "test",
         spec,
-        Some(5),
+        scenario_n_av: Some(5),
         seeds,
-        ActionMode::Mean,
-        true,
-    )
+        mode: ActionMode::Mean,
+        baseline: true,
+    })
     .unwrap()
     .0
 }
