@@ -9,6 +9,26 @@ use mapc_sim::{RunMetrics, SimSpec, TRACE_HEADER};
 use std::io::Write;
 use std::path::Path;
 
+/// Which seeds a command runs, and on how many threads (`mapc sim`, `mapc eval`).
+#[derive(clap::Args, Clone, Debug)]
+pub struct SeedArgs {
+    /// Number of seeds (seeds first_seed .. first_seed + N), 1 to 100 000.
+    #[arg(long, default_value_t = 100, value_parser = super::flags::seeds())]
+    pub seeds: u64,
+    /// First seed (at most 2^64 - 1 - 100 000, so that every seed fits in 64 bits).
+    #[arg(long, default_value_t = 0, value_parser = super::flags::first_seed())]
+    pub first_seed: u64,
+    /// Worker threads, 1 to 1024 (default: all cores). Results do not depend on it.
+    #[arg(long, value_parser = super::flags::threads())]
+    pub threads: Option<usize>,
+}
+
+impl SeedArgs {
+    pub fn seeds(&self) -> Vec<u64> {
+        (self.first_seed..self.first_seed + self.seeds).collect()
+    }
+}
+
 /// The thread pool of a command's runs: `threads` workers, or one per core.
 pub fn thread_pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
     Ok(rayon::ThreadPoolBuilder::new()

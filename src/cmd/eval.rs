@@ -18,21 +18,14 @@ pub struct Args {
     /// Scenario: `simple_merge` or a scenario file (a window from `mapc window` for zero-shot transfer).
     #[arg(long, default_value = "simple_merge")]
     pub scenario: String,
-    /// Number of seeds (0, 1, ..., N-1 from --first-seed), 1 to 100 000.
-    #[arg(long, default_value_t = 100, value_parser = super::flags::seeds())]
-    pub seeds: u64,
-    /// First seed (at most 2^64 - 1 - 100 000, so that every seed fits in 64 bits).
-    #[arg(long, default_value_t = 0, value_parser = super::flags::first_seed())]
-    pub first_seed: u64,
+    #[command(flatten)]
+    pub runs: super::common::SeedArgs,
     /// Sample actions from the Gaussian instead of taking its mean.
     #[arg(long)]
     pub sample: bool,
     /// Skip the human baseline.
     #[arg(long)]
     pub no_baseline: bool,
-    /// Worker threads, 1 to 1024 (default: all cores).
-    #[arg(long, value_parser = super::flags::threads())]
-    pub threads: Option<usize>,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -51,7 +44,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    super::common::set_global_threads(args.threads);
+    super::common::set_global_threads(args.runs.threads);
     let file = policy_file(&args.policy);
     let mut ck = Checkpoint::load(&file)?;
     if let Some(rule) = args.deploy {
@@ -61,7 +54,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(w) = &sc.horizon_warning {
         eprintln!("warning: {}: {w}", args.scenario);
     }
-    let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
+    let seeds = args.runs.seeds();
     let mode = if args.sample {
         ActionMode::Sample
     } else {

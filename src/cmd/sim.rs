@@ -15,15 +15,8 @@ pub struct Args {
     /// Scenario file, or a built-in scenario name (simple_merge).
     #[arg(long, default_value = DEFAULT_SCENARIO)]
     pub scenario: String,
-    /// Number of seeds (seeds first_seed .. first_seed + N), 1 to 100 000.
-    #[arg(long, default_value_t = 100, value_parser = super::flags::seeds())]
-    pub seeds: u64,
-    /// First seed (at most 2^64 - 1 - 100 000, so that every seed fits in 64 bits).
-    #[arg(long, default_value_t = 0, value_parser = super::flags::first_seed())]
-    pub first_seed: u64,
-    /// Worker threads, 1 to 1024 (default: all cores). Results do not depend on it.
-    #[arg(long, value_parser = super::flags::threads())]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub runs: super::common::SeedArgs,
     /// Write the first seed's trajectories as CSV (time_s, vehicle_id, vehicle_type, road, pos_on_road_m,
     /// corridor_x_m, speed_mps, controlled).
     #[arg(long)]
@@ -40,8 +33,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(w) = fit.warning() {
         eprintln!("warning: {}: {w}", rs.origin);
     }
-    let seeds: Vec<u64> = (args.first_seed..args.first_seed + args.seeds).collect();
-    let pool = super::common::thread_pool(args.threads)?;
+    let seeds = args.runs.seeds();
+    let pool = super::common::thread_pool(args.runs.threads)?;
     let progress = progress_bar(seeds.len() as u64, args.json);
     let start = std::time::Instant::now();
     let run_seed = |seed: u64| -> anyhow::Result<RunMetrics> {
@@ -77,7 +70,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let wall_s = start.elapsed().as_secs_f64();
     let s = BaselineReport::of(
         &rs.origin,
-        args.first_seed,
+        args.runs.first_seed,
         runs,
         wall_s,
         &spec.measure_names(),

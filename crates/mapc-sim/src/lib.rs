@@ -1,9 +1,13 @@
-//! # mapc-sim: a microscopic single-lane traffic simulator calibrated to SUMO 1.8
+//! # mapc-sim: a microscopic multi-lane traffic simulator calibrated to SUMO 1.8
 //!
 //! Glossary:
-//! - **lane**: every road is driven as one lane (lane 0); every connection across a junction is an *internal
-//!   lane* (its length counts as distance driven).
-//! - **link**: a road-to-road connection at a junction; **major** links drive on, **minor** links yield.
+//! - **lane**: a road has one lane or several (index 0 rightmost); every connection across a junction is an
+//!   *internal lane* (its length counts as distance driven). On a one-lane network nobody changes lanes; with
+//!   several lanes drivers change lanes as SUMO 1.8's LC2013 does.
+//! - **link**: a lane-to-lane connection at a junction; **major** links drive on, **minor** links yield,
+//!   **zipper** links take turns with the other stream.
+//! - **teleport**: a front driver standing longer than the scenario's `time_to_teleport_s` leaves and comes back
+//!   further along its route (SUMO's time-to-teleport; off unless set), counted.
 //! - **merge foe**: a link from another road into the same road; vehicles on merging links follow each other by
 //!   their distance to the *merge point* (the end of the links).
 //! - **IDM**: the Intelligent Driver Model as SUMO computes it (two sub-steps per 0.5 s step).
@@ -25,8 +29,8 @@
 //! - **vehicle-step**: one vehicle simulated for one step (the unit of the speed figures).
 //! - **best lanes**: per lane of a vehicle's road, how far its route goes on without a lane change, looking
 //!   about 3000 m ahead ([`best_lanes`], SUMO's `updateBestLanes`, cached per route suffix and type).
-//! - **lane-change model**: [`lcmodels`] holds SUMO 1.8's LC2013 behind a small interface, tested on its own;
-//!   the step does not use it yet (roads are single-lane).
+//! - **lane-change model**: [`lcmodels`] holds SUMO 1.8's LC2013 (`lcmodels/lc2013/`), which the step's
+//!   lane-change pass (`sim/lane_change.rs`) runs on every road of several lanes.
 //!
 //! ## Using it (for the environment and evaluation code)
 //! ```ignore
