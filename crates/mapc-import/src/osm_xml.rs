@@ -33,7 +33,7 @@ fn id_of(element: &quick_xml::events::BytesStart<'_>, at: u64) -> Result<i64, Pa
 
 /// Pass one: the kept ways, in file order.
 pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<WaysPass, ParseError> {
-    let mut xml = XmlStream::new(input);
+    let mut xml = XmlStream::with_root(input, "osm", "OSM");
     let mut data = OsmData::default();
     let mut seen_way = false;
     let mut nodes_first = true;
@@ -44,7 +44,6 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
     // The relation being read: (id, member ways, whether it is a turn restriction); those found.
     let mut relation: Option<(i64, Vec<i64>, bool)> = None;
     let mut restrictions: Vec<(i64, Vec<i64>)> = Vec::new();
-    let mut root_checked = false;
     loop {
         match xml.next()? {
             Item::Eof => break,
@@ -71,20 +70,6 @@ pub(crate) fn read_ways<R: BufRead>(input: R, classes: &[String]) -> Result<Ways
                 at,
                 depth,
             } => {
-                if !root_checked {
-                    root_checked = true;
-                    let name = element.name().as_ref().to_string();
-                    if name != "osm" {
-                        return Err(ParseError::new(
-                            at,
-                            Some(format!("<{name}>")),
-                            format!(
-                                "this is XML but not OSM (root element <{name}>, expected <osm>)"
-                            ),
-                        ));
-                    }
-                    continue;
-                }
                 match element.name().as_ref() {
                     // a node after a way: the file is not in the usual nodes-first order
                     "node" => nodes_first &= !seen_way,

@@ -147,9 +147,8 @@ struct Net {
 }
 
 fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
-    let mut xml = XmlStream::new(input);
+    let mut xml = XmlStream::with_root(input, "net", "a SUMO network");
     let mut net = Net::default();
-    let mut root_checked = false;
     // Index into net.edges / net.junctions of the element whose children are being read.
     let mut in_edge = false;
     let mut in_junction = false;
@@ -170,19 +169,6 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                 depth,
             } => {
                 let name = element.name().as_ref().to_string();
-                if !root_checked {
-                    root_checked = true;
-                    if name != "net" {
-                        return Err(ParseError::new(
-                            at,
-                            Some(format!("<{name}>")),
-                            format!(
-                                "this is XML but not a SUMO network (root element <{name}>, expected <net>)"
-                            ),
-                        ));
-                    }
-                    continue;
-                }
                 let kv = attrs(&element)
                     .map_err(|m| ParseError::new(at, Some(describe(&element)), m))?;
                 let el = Element {

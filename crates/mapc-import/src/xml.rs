@@ -15,6 +15,8 @@ pub(crate) struct XmlStream<R: BufRead> {
     /// Byte offset where the last event returned began.
     pub start: u64,
     pub root: Option<String>,
+    /// The root element a reader expects and what the file is then, for the error when it is another.
+    expected_root: Option<(&'static str, &'static str)>,
 }
 
 /// One element start (`<a ..>` or `<a ../>`), an element end, or the end of the input.
@@ -44,6 +46,16 @@ impl<R: BufRead> XmlStream<R> {
             open: Vec::new(),
             start: 0,
             root: None,
+            expected_root: None,
+        }
+    }
+
+    /// A stream of a file whose root element must be `<root>` (`what` says what such a file is: "OSM", "a SUMO
+    /// network"): another root is an error naming both; the root's own start comes back as [`Item::Skip`].
+    pub fn with_root(input: R, root: &'static str, what: &'static str) -> Self {
+        XmlStream {
+            expected_root: Some((root, what)),
+            ..XmlStream::new(input)
         }
     }
 
@@ -89,8 +101,24 @@ impl<R: BufRead> XmlStream<R> {
                         ));
                     }
                     let name = element.name().as_ref().to_string();
-                    if self.root.is_none() {
+                    let is_root = self.root.is_none();
+                    if is_root {
                         self.root = Some(name.clone());
+                    }
+                    if is_root && let Some((root, what)) = self.expected_root {
+                        if name != root {
+                            return Err(ParseError::new(
+                                self.start,
+                                Some(format!("<{name}>")),
+                                format!(
+                                    "this is XML but not {what} (root element <{name}>, expected <{root}>)"
+                                ),
+                            ));
+                        }
+                        if !empty {
+                            self.open.push(name);
+                        }
+                        return Ok(Item::Skip);
                     }
                     if !empty {
                         self.open.push(name);
