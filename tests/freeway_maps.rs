@@ -230,3 +230,48 @@ fn a_time_to_teleport_out_of_range_is_refused() {
         );
     }
 }
+
+/// The A-7 from Alicante to Murcia (95 km, 59 zippers) as a one-lane corridor with a window at every merge:
+/// every merge passes traffic and no driver stands still at the end (two drivers inside one junction once waited
+/// for each other from t = 3 303 s on, and the flow past that merge was 0 on every seed).
+#[test]
+fn the_a7_corridor_keeps_every_merge_flowing() {
+    let dir = scratch_dir("a7-one-lane");
+    let (graph, corridor, scenario) = (dir.join("g.json"), dir.join("s.json"), dir.join("w.toml"));
+    assert_success(&run_mapc(&[
+        "import",
+        "maps/alicante_murcia_a7.net.xml",
+        "-o",
+        path(&graph),
+    ]));
+    assert_success(&run_mapc(&[
+        "simplify",
+        path(&graph),
+        "-o",
+        path(&corridor),
+    ]));
+    assert_success(&run_mapc(&[
+        "window",
+        path(&corridor),
+        "--all",
+        "--fit",
+        "-o",
+        path(&scenario),
+    ]));
+    let v = mapc_json(&[
+        "sim",
+        "--scenario",
+        path(&scenario),
+        "--seeds",
+        "1",
+        "--json",
+    ]);
+    let merges = v["merges"].as_array().unwrap();
+    assert!(merges.len() > 20, "{} merges", merges.len());
+    for m in merges {
+        let flow = m["flow"]["mean"].as_f64().unwrap();
+        assert!(flow > 100.0, "{}: {flow} veh/h", m["name"]);
+    }
+    let run = &v["runs"][0];
+    assert!(run.get("stuck").is_none(), "{run}");
+}
