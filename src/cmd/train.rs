@@ -251,21 +251,7 @@ fn apply_flags(c: &mut PpoConfig, a: &Args) {
 fn read_config(path: &Path, base: PpoConfig) -> anyhow::Result<PpoConfig> {
     let text = mapc_graph::input::read_to_string(path)
         .with_context(|| format!("reading {}", path.display()))?;
-    // Keys absent from the file keep the preset's values.
-    let mut table: toml::Table =
-        toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
-    // a constant rate in the file replaces the preset's schedule (as --lr does)
-    if table.contains_key("lr") && !table.contains_key("lr_schedule") {
-        table.insert("lr_schedule".into(), toml::Value::Array(Vec::new()));
-    }
-    let base_value = toml::Table::try_from(&base)?;
-    for (k, v) in base_value {
-        table.entry(k).or_insert(v);
-    }
-    let c: PpoConfig = table
-        .try_into()
-        .with_context(|| format!("{}: invalid hyperparameters", path.display()))?;
-    Ok(c)
+    PpoConfig::from_toml_over(&text, &base).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {

@@ -78,6 +78,23 @@ impl Default for PpoConfig {
 }
 
 impl PpoConfig {
+    /// The hyperparameters a TOML text sets over `base`: keys the text lacks keep `base`'s values, and a constant
+    /// `lr` without an `lr_schedule` replaces `base`'s schedule (as `--lr` does). Their ranges are
+    /// [`crate::limits::check_config`]'s.
+    pub fn from_toml_over(text: &str, base: &PpoConfig) -> Result<PpoConfig, String> {
+        let mut table: toml::Table = toml::from_str(text).map_err(|e| e.to_string())?;
+        if table.contains_key("lr") && !table.contains_key("lr_schedule") {
+            table.insert("lr_schedule".into(), toml::Value::Array(Vec::new()));
+        }
+        let base = toml::Table::try_from(base).map_err(|e| e.to_string())?;
+        for (k, v) in base {
+            table.entry(k).or_insert(v);
+        }
+        table
+            .try_into()
+            .map_err(|e: toml::de::Error| format!("invalid hyperparameters: {e}"))
+    }
+
     /// The quick preset: smaller batches and larger minibatches (96 gradient steps per iteration instead of
     /// 3 100), so an iteration costs about a second on two cores; enough for the outflow reward, not for the
     /// speed-based ones (the shipped policies use the paper preset; see docs/results.md).
