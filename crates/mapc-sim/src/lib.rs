@@ -130,6 +130,6 @@ pub enum SimError {
 }
 
 #[cfg(test)]
-mod tests;
+mod bounds_tests;
 #[cfg(test)]
-mod tests_bounds;
+mod tests;

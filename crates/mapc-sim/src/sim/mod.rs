@@ -3,29 +3,29 @@
 //! links (right of way with impatience), then move every vehicle, front to back, never into its leader.
 
 mod accounting;
+#[cfg(test)]
+mod depart_lane_tests;
 mod insertion;
 mod junction;
 mod lane_change;
+#[cfg(test)]
+mod lane_change_view_tests;
 mod lane_choice;
+#[cfg(test)]
+mod lanes_tests;
 mod lookahead;
 mod moves;
+#[cfg(test)]
+mod overlap_tests;
 mod planning;
 mod queries;
 mod side_lanes;
+#[cfg(test)]
+mod side_lanes_tests;
 mod table;
 mod teleport;
 #[cfg(test)]
 mod tests;
-#[cfg(test)]
-mod tests_depart_lane;
-#[cfg(test)]
-mod tests_lane_change_view;
-#[cfg(test)]
-mod tests_lanes;
-#[cfg(test)]
-mod tests_overlap;
-#[cfg(test)]
-mod tests_side_lanes;
 mod vehicle;
 
 use crate::SimError;
