@@ -63,6 +63,8 @@
 // `!(x > 0.0)` and the like reject NaN on purpose; `partial_cmp` would hide that.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod error;
+pub use error::SimError;
 pub mod best_lanes;
 pub mod idm;
 pub mod lcmodels;
@@ -104,30 +106,6 @@ pub use trace::{MAX_TRACE_ROWS, TraceBudget, TracedRun, trace_run};
 /// added lack it: readers take 0.
 pub const TRACE_HEADER: &str =
     "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled,lane";
-
-#[derive(Debug, thiserror::Error)]
-pub enum SimError {
-    #[error("network: {0}")]
-    Network(String),
-    #[error("scenario: {0}")]
-    Spec(String),
-    #[error("no vehicle {0}")]
-    UnknownVehicle(VehicleId),
-    #[error("vehicle {0} is not a controlled vehicle")]
-    NotControlled(VehicleId),
-    #[error("vehicle {vehicle}: acceleration {accel} is not a finite number")]
-    BadAcceleration { vehicle: VehicleId, accel: f64 },
-    #[error(
-        "collision at t = {time_s} s: vehicle {follower} is {gap_m:.3} m into vehicle {leader} ({place})"
-    )]
-    Collision {
-        time_s: f64,
-        leader: VehicleId,
-        follower: VehicleId,
-        gap_m: f64,
-        place: String,
-    },
-}
 
 #[cfg(test)]
 mod bounds_tests;

@@ -6,7 +6,7 @@
 //! lanes of each road, then the internal lanes. On a graph with one lane per road this is exactly the
 //! one-lane-per-road network (same indices, same links, same order).
 
-use crate::SimError;
+use crate::error::SimError;
 use mapc_graph::{LaneGraph, RightOfWay, RoadId};
 use std::collections::HashMap;
 

@@ -7,7 +7,7 @@
 //! in the graph's road order (an imported network's edges are laid in the order of their ids in Flow). Since
 //! the roads together are longer than the spacing times the count, every vehicle lands on a road.
 
-use crate::SimError;
+use crate::error::SimError;
 use crate::network::{LaneIdx, Network};
 use crate::spec::{InitialVehicleSpec, VehicleTypeSpec};
 use mapc_graph::{LaneGraph, RoadId};

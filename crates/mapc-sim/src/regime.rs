@@ -3,7 +3,7 @@
 //! grows. A policy trained on the Simple Merge (the ramp major, the main road congested by its yielding) is only
 //! worth transferring to a merge in a similar regime; this tells the user which one a scenario is in.
 
-use crate::SimError;
+use crate::error::SimError;
 use crate::measure::MeasurePoint;
 use crate::metrics::{EntrySummary, RunMetrics};
 use crate::sim::Simulation;

@@ -1,6 +1,6 @@
 //! From a resolved scenario to a [`SimSpec`], and the scenario-level entry points.
 
-use crate::SimError;
+use crate::error::SimError;
 use crate::measure::MeasurePoint;
 use crate::metrics::RunMetrics;
 use crate::network::Network;

@@ -1,7 +1,7 @@
 //! What a simulation run is made of, in the simulator's own plain terms: the lane graph plus driver types, flows,
 //! initial vehicles, step and horizon. [`SimSpec::from_scenario`] fills it from a resolved scenario.
 
-use crate::SimError;
+use crate::error::SimError;
 use mapc_graph::{LaneGraph, RoadId};
 use mapc_scenario::ranges;
 

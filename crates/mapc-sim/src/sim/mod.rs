@@ -28,7 +28,7 @@ mod teleport;
 mod tests;
 mod vehicle;
 
-use crate::SimError;
+use crate::error::SimError;
 use crate::idm::{FastMinMax, IdmParams, NUMERICAL_EPS};
 use crate::measure::MeasureAcc;
 use crate::metrics::RunMetrics;
