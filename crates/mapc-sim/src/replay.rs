@@ -1,8 +1,9 @@
 //! Replaying another simulator's state for vehicle-by-vehicle comparisons (docs/calibration.md): put every
 //! vehicle where the other simulator had it, take one step, read every vehicle's next speed.
 
+use crate::error::SimError;
+use crate::sim::Simulation;
 use crate::spec::SimSpec;
-use crate::{SimError, Simulation};
 
 /// One vehicle of a recorded state.
 #[derive(Clone, Debug, PartialEq)]

@@ -136,7 +136,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
         control_windows: rs
             .windows
             .iter()
-            .map(|w| crate::ControlWindowSpec {
+            .map(|w| crate::spec::ControlWindowSpec {
                 name: w.name.clone(),
                 merges: w.merges.clone(),
                 roads: w.roads.clone(),
