@@ -106,7 +106,7 @@ impl LaneScale {
     /// can use, the window's lanes or, where the entry road is narrower, the entry's (a four-lane window fed by
     /// a one-lane stub gets one lane's demand, not four lanes' queued outside).
     fn factor(&self) -> f64 {
-        let lanes = self.boundary_lanes.min(self.entry_lanes.max(1));
+        let lanes = self.sized_lanes();
         if lanes == self.source_lanes {
             1.0
         } else {

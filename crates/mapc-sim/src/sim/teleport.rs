@@ -87,8 +87,8 @@ impl Simulation {
             if self.try_reinsert(t.veh, t.road_k) {
                 continue;
             }
-            let road = self.veh[t.veh as usize].route as usize;
-            let roads_len = self.routes[road].roads.len();
+            let route = self.veh[t.veh as usize].route as usize;
+            let roads_len = self.routes[route].roads.len();
             if t.proceed_s.is_nan() {
                 t.proceed_s = now + self.road_travel_time(t.veh, t.road_k);
             } else if t.proceed_s < now {
