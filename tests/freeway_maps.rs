@@ -234,7 +234,7 @@ fn a_time_to_teleport_out_of_range_is_refused() {
 /// The A-7 from Alicante to Murcia (95 km, 59 zippers) as a one-lane corridor with a window at every merge, the
 /// map where a junction once held two drivers waiting for each other to the end: every merge passes traffic and no
 /// driver stands still at the end. A guard on the public map; the mechanism's own test, which fails without the
-/// fix, is `sim/overlap_tests.rs`.
+/// fix, is `sim/step/overlap_tests.rs`.
 #[test]
 fn the_a7_corridor_keeps_every_merge_flowing() {
     let dir = scratch_dir("a7-one-lane");

@@ -33,8 +33,8 @@ fn main() {
     let seeds = if profile { 3u64 } else { 20 };
     #[cfg(feature = "count-idm")]
     {
-        mapc_sim::idm::take_idm_calls();
-        mapc_sim::idm::take_idm_batches();
+        mapc_sim::models::cf::idm::take_idm_calls();
+        mapc_sim::models::cf::idm::take_idm_batches();
     }
     let start = Instant::now();
     let mut vehicle_steps = 0u64;
@@ -49,8 +49,8 @@ fn main() {
     let wall = start.elapsed().as_secs_f64();
     #[cfg(feature = "count-idm")]
     {
-        let calls = mapc_sim::idm::take_idm_calls() as f64;
-        let batches = mapc_sim::idm::take_idm_batches() as f64;
+        let calls = mapc_sim::models::cf::idm::take_idm_calls() as f64;
+        let batches = mapc_sim::models::cf::idm::take_idm_batches() as f64;
         println!(
             "{}: {:.2} IDM steps per vehicle-step: {:.2} batches of four (next_speed_x4, unread lanes \
              included), {:.2} single calls (next_speed)",

@@ -4,6 +4,7 @@
 //! `cargo run --release -p mapc-sim --example arith_floor` (docs/perf_sim.md).
 
 use mapc_sim::IdmParams;
+use mapc_sim::models::cf::CarFollowModel;
 
 /// IDM steps per Simple Merge vehicle-step, as counted by
 /// `cargo bench -p mapc-sim --bench sim_speed --features count-idm -- --profile`.

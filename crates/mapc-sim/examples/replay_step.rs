@@ -6,7 +6,7 @@
 //! `cargo run --release -p mapc-sim --example replay_step -- STATES.jsonl > NEXT.jsonl`
 
 use mapc_scenario::ResolvedScenario;
-use mapc_sim::replay::{parse_state_line, replay_simple_merge_step};
+use mapc_sim::runs::replay::{parse_state_line, replay_simple_merge_step};
 use mapc_sim::spec_from_scenario;
 use std::io::{BufRead, Write};
 

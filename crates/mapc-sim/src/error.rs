@@ -1,7 +1,7 @@
 //! What can go wrong in a simulation: a network or spec it cannot run, a command for a vehicle it does not
 //! have, or two vehicles overlapping (a broken invariant).
 
-use crate::vehicle_table::VehicleId;
+use crate::ids::VehicleId;
 
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {

@@ -10,17 +10,19 @@
 //!   further along its route (SUMO's time-to-teleport; off unless set), counted.
 //! - **merge foe**: a link from another road into the same road; vehicles on merging links follow each other by
 //!   their distance to the *merge point* (the end of the links).
-//! - **IDM**: the Intelligent Driver Model as SUMO computes it (two sub-steps per 0.5 s step).
+//! - **car-following model**: how a driver type picks its speed behind leaders, before stops and limits
+//!   ([`models::cf`], one model per file behind the `CarFollowModel` trait); today the **IDM**, the Intelligent
+//!   Driver Model as SUMO computes it (two sub-steps per 0.5 s step).
 //! - **safe speed**: the highest speed with which the vehicle can follow its leaders and stop where it must; it is
 //!   never exceeded, and no vehicle ever moves into its leader (checked after every step in debug builds).
 //! - **impatience**: base impatience + waiting time / 300 s; it shifts the foe arrival time a minor driver
 //!   assumes towards the foe's arrival when braking, so waiting drivers take smaller gaps.
 //! - **flow**: periodic departures (SUMO's vehsPerHour); a vehicle that cannot be inserted safely waits at its
 //!   entry road and only counts once inserted. Past 1024 waiting at an entry, further ones are only counted and
-//!   built when they reach the front (`waiting.rs`); records of vehicles long gone are dropped in long runs
-//!   (`vehicle_table.rs`), so memory follows the road, not the demand or the horizon.
+//!   built when they reach the front (`demand/waiting.rs`); records of vehicles long gone are dropped in long runs
+//!   (`demand/vehicle_table.rs`), so memory follows the road, not the demand or the horizon.
 //! - **depart lane**: the entry road's lane a flow's vehicles enter on (SUMO's `departLane`): fixed for the flow
-//!   (`first`, `best`, an index), or chosen at each insertion attempt (`random`, `free`: `sim/lane_choice.rs`).
+//!   (`first`, `best`, an index), or chosen at each insertion attempt (`random`, `free`: `sim/entry/lane_choice.rs`).
 //! - **measure point**: a merge whose flow (vehicles entering the road after it) is counted per hour of measured
 //!   time, like the flow past the corridor's end; both besides the paper's whole-horizon outflow.
 //! - **regime**: per merge, the major road, the humans' speed near it against free flow and the queue before it
@@ -29,8 +31,8 @@
 //! - **vehicle-step**: one vehicle simulated for one step (the unit of the speed figures).
 //! - **best lanes**: per lane of a vehicle's road, how far its route goes on without a lane change, looking
 //!   about 3000 m ahead ([`best_lanes`], SUMO's `updateBestLanes`, cached per route suffix and type).
-//! - **lane-change model**: [`lcmodels`] holds SUMO 1.8's LC2013 (`lcmodels/lc2013/`), which the step's
-//!   lane-change pass (`sim/lane_change.rs`) runs on every road of several lanes.
+//! - **lane-change model**: [`models::lc`] holds SUMO 1.8's LC2013 (`models/lc/lc2013/`), which the step's
+//!   lane-change pass (`sim/step/lane_change.rs`) runs on every road of several lanes.
 //!
 //! ## Using it (for the environment and evaluation code)
 //! ```ignore
@@ -63,43 +65,42 @@
 // `!(x > 0.0)` and the like reject NaN on purpose; `partial_cmp` would hide that.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+// The layers, each using only those above it: numeric helpers, errors and the spec; the models, the network and
+// the demand; what a run measures; the simulator; runs built on it (docs/architecture.md draws them).
 mod error;
+mod ids;
+pub mod numeric;
 pub use error::SimError;
-pub mod best_lanes;
-pub mod idm;
-pub mod lcmodels;
-pub mod measure;
-pub mod metrics;
-pub mod network;
-mod placement;
-pub mod regime;
-pub mod replay;
-pub mod scenario;
-pub mod sim;
 pub mod spec;
-pub mod trace;
-mod vehicle_table;
-mod waiting;
 
-pub use idm::IdmParams;
-pub use measure::{MeasurePoint, Passage};
-pub use metrics::{
+pub mod demand;
+pub mod models;
+pub mod network;
+
+pub mod measure;
+
+pub mod sim;
+
+pub mod runs;
+
+pub use demand::vehicle_table::VehicleId;
+pub use measure::metrics::{
     BaselineReport, EntryCounts, EntrySummary, LaneChangeReasons, MeanCi, MergeFlow, RunMetrics,
     Summary, standstill_lines, t_quantile_975,
 };
+pub use measure::points::{MeasurePoint, Passage};
+pub use models::cf::idm::IdmParams;
 pub use network::Network;
-pub use regime::{
+pub use runs::regime::{
     Congestion, MergePriority, MergeRegime, REGIME_SEEDS, RegimeReport, merge_priorities,
     merge_regimes,
 };
-pub use scenario::{run_baseline, run_baseline_spec, spec_from_scenario};
-pub use sim::{
-    MergeFoe, Neighbor, SideNeighbors, Simulation, VehicleId, VehicleStatus, VehicleView,
-};
+pub use runs::scenario::{run_baseline, run_baseline_spec, spec_from_scenario};
+pub use runs::trace::{MAX_TRACE_ROWS, TraceBudget, TracedRun, trace_run};
+pub use sim::{MergeFoe, Neighbor, SideNeighbors, Simulation, VehicleStatus, VehicleView};
 pub use spec::{
     ControlWindowSpec, DepartLane, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec,
 };
-pub use trace::{MAX_TRACE_ROWS, TraceBudget, TracedRun, trace_run};
 
 /// Header of trace CSV files. `road` is the road (`R3`) or the junction connection (`R1>R2`); `lane` the lane's
 /// index on that road (0 rightmost; in a connection, the lane it came from). Traces written before `lane` was

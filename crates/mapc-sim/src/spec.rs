@@ -4,6 +4,7 @@
 use crate::error::SimError;
 use mapc_graph::{LaneGraph, RoadId};
 use mapc_scenario::ranges;
+use serde::{Deserialize, Serialize};
 
 /// One driver/vehicle type.
 #[derive(Clone, Debug, PartialEq)]
@@ -72,6 +73,13 @@ pub struct FlowSpec {
 
 pub use mapc_scenario::DepartLane;
 
+/// A point where flow is measured: vehicles entering any of `roads` pass it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeasurePoint {
+    /// For reports: `merge J3 (osm:123)`.
+    pub name: String,
+    pub roads: Vec<RoadId>,
+}
 /// A vehicle present at time 0, standing on `road` with its front at `pos_m`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InitialVehicleSpec {
@@ -105,7 +113,7 @@ pub struct SimSpec {
     /// Empty for a scenario with one region.
     pub control_windows: Vec<ControlWindowSpec>,
     /// Where flow is measured besides the outflow (the controlled region's merges).
-    pub measure_points: Vec<crate::measure::MeasurePoint>,
+    pub measure_points: Vec<MeasurePoint>,
     /// A lane's front vehicle that has stood still longer than this is teleported (SUMO's `--time-to-teleport`;
     /// 0: never).
     pub time_to_teleport_s: f64,

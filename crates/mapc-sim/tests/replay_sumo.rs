@@ -2,7 +2,7 @@
 //! replayed one step at a time; every vehicle's next speed must match SUMO's.
 
 use mapc_scenario::ResolvedScenario;
-use mapc_sim::replay::{ReplicaVehicle, parse_state_line, replay_simple_merge_step};
+use mapc_sim::runs::replay::{ReplicaVehicle, parse_state_line, replay_simple_merge_step};
 use mapc_sim::spec_from_scenario;
 use std::collections::HashMap;
 

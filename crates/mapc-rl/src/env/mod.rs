@@ -88,7 +88,7 @@ pub(crate) fn av_view(sim: &Simulation, id: VehicleId, len: f64, lanes: bool) ->
         })
     };
     let (left, right) = if lanes {
-        use mapc_sim::lcmodels::Side;
+        use mapc_sim::models::lc::Side;
         (side(Side::Left), side(Side::Right))
     } else {
         (None, None)

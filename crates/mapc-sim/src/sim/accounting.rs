@@ -15,7 +15,7 @@ pub(super) struct MetricsAcc {
     pub(super) delay_sum: f64,
     /// Lane changes done, and metres driven (for lane changes per vehicle-km).
     pub(super) lane_changes: u64,
-    pub(super) lane_change_reasons: crate::metrics::LaneChangeReasons,
+    pub(super) lane_change_reasons: crate::measure::metrics::LaneChangeReasons,
     pub(super) distance_m: f64,
     /// Vehicles taken off a jammed lane ([`super::teleport`]).
     pub(super) teleports: u64,

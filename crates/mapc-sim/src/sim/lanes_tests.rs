@@ -1,7 +1,7 @@
 //! Multi-lane roads: the network's lanes and best lanes, and lane changing on the two-lane merge.
 
 use super::*;
-use crate::scenario::spec_from_scenario;
+use crate::runs::scenario::spec_from_scenario;
 
 fn two_lane_merge_spec() -> SimSpec {
     let rs = mapc_scenario::ResolvedScenario::load("two_lane_merge").expect("built-in scenario");
@@ -178,7 +178,7 @@ fn multi_lane_runs_are_deterministic_for_any_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| crate::scenario::run_baseline_spec(&spec, &[4, 5]).unwrap())
+            .install(|| crate::runs::scenario::run_baseline_spec(&spec, &[4, 5]).unwrap())
     };
     let bits = |runs: Vec<RunMetrics>| -> Vec<(u64, u64, u64)> {
         runs.iter()

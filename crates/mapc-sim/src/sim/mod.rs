@@ -3,40 +3,27 @@
 //! links (right of way with impatience), then move every vehicle, front to back, never into its leader.
 
 mod accounting;
-#[cfg(test)]
-mod depart_lane_tests;
-mod insertion;
-mod junction;
-mod lane_change;
-#[cfg(test)]
-mod lane_change_view_tests;
-mod lane_choice;
+mod entry;
 #[cfg(test)]
 mod lanes_tests;
-mod lookahead;
-mod moves;
-#[cfg(test)]
-mod overlap_tests;
-mod planning;
 mod queries;
-mod side_lanes;
-#[cfg(test)]
-mod side_lanes_tests;
+mod step;
 mod table;
-mod teleport;
 #[cfg(test)]
 mod tests;
 mod vehicle;
 
+use crate::demand::vehicle_table::VehicleTable;
+use crate::demand::waiting::EntryQueue;
 use crate::error::SimError;
-use crate::idm::{FastMinMax, IdmParams, NUMERICAL_EPS};
-use crate::measure::MeasureAcc;
-use crate::metrics::RunMetrics;
+use crate::measure::metrics::RunMetrics;
+use crate::measure::points::MeasureAcc;
+use crate::models::cf::{CarFollowModel, CfModel, IdmParams, kinematics};
 use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network, SimLane, SimLink};
+use crate::numeric::{FastMinMax, NUMERICAL_EPS};
 use crate::spec::SimSpec;
-use crate::vehicle_table::VehicleTable;
-use crate::waiting::EntryQueue;
 use accounting::MetricsAcc;
+use entry::{lane_choice, teleport};
 use junction::Approach;
 use junction::LinkItem;
 use lane_change::BestLanesCache;
@@ -45,6 +32,7 @@ use planning::Plan;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Normal};
+use step::{junction, lane_change, planning, side_lanes};
 use table::Table;
 use vehicle::{Route, TypeConsts, Veh};
 
@@ -52,7 +40,7 @@ pub use queries::{MergeFoe, Neighbor, VehicleView};
 pub use side_lanes::SideNeighbors;
 pub use vehicle::VehicleStatus;
 
-pub use crate::vehicle_table::VehicleId;
+pub use crate::demand::vehicle_table::VehicleId;
 
 /// How far the stop point lies before a minor link's stop line (SUMO's POSITION_EPS).
 const POSITION_EPS: f64 = 0.1;
@@ -65,7 +53,7 @@ const CONFLICT_POINT_SHARE: f64 = 0.35;
 pub struct Simulation {
     net: Network,
     spec: SimSpec,
-    types: Table<IdmParams>,
+    types: Table<CfModel>,
     routes: Table<Route>,
     /// Routes by (lanes, roads), so vehicles that drive the same share one.
     route_index: std::collections::HashMap<(Vec<LaneIdx>, Vec<usize>), u32>,
@@ -110,7 +98,7 @@ pub struct Simulation {
     /// Per vehicle type, what the hot loop reads (cached from the spec and the IDM parameters).
     type_consts: Table<TypeConsts>,
     /// Lane changing (networks with a road of several lanes only): the model (each vehicle's record is in `Veh`).
-    lc_model: crate::lcmodels::Lc2013,
+    lc_model: crate::models::lc::Lc2013,
     /// Road sequences of the routes, numbered (routes that differ only in lanes share one).
     road_seqs: std::collections::HashMap<Vec<usize>, u32>,
     /// Best lanes computed so far, by (road sequence, index of the current road in it, vehicle type).
@@ -126,11 +114,11 @@ impl Simulation {
         spec.validate()?;
         let net = Network::from_graph(&spec.graph)?;
         let dt = spec.step_s;
-        let types: Vec<IdmParams> = spec
+        let types: Vec<CfModel> = spec
             .vehicle_types
             .iter()
             .map(|t| {
-                IdmParams::with_stepping(
+                CfModel::idm(IdmParams::with_stepping(
                     t.accel,
                     t.decel,
                     t.emergency_decel,
@@ -139,7 +127,7 @@ impl Simulation {
                     t.delta,
                     dt,
                     t.idm_stepping_s,
-                )
+                ))
             })
             .collect();
         let mut sim = Simulation {
@@ -189,7 +177,7 @@ impl Simulation {
                     max_brake_dist: p.brake_gap(t.max_speed, p.decel, p.tau) + t.min_gap,
                     impatience: t.impatience,
                     inv_two_decel: Some(0.5 / p.decel).filter(|x| *x > 0.0 && x.is_finite()),
-                    max_arrival_from_visibility: IdmParams::speed_after_distance(
+                    max_arrival_from_visibility: kinematics::speed_after_distance(
                         FOE_VISIBILITY_M,
                         p.maximum_safe_stop_speed(FOE_VISIBILITY_M, 0.0),
                         p.accel,
@@ -284,7 +272,7 @@ impl Simulation {
             sim.main_line.last().map(|&(l, _)| l),
         );
         // Initial vehicles: standing where the spec puts them, before the first step, none inside another.
-        crate::placement::check_initial_spacing(
+        crate::demand::placement::check_initial_spacing(
             &sim.net,
             &sim.spec.initial,
             &sim.spec.vehicle_types,
@@ -342,7 +330,7 @@ impl Simulation {
     }
 
     /// The passages kept since [`Self::record_passages`], in the order they happened.
-    pub fn passages(&self) -> &[crate::measure::Passage] {
+    pub fn passages(&self) -> &[crate::measure::points::Passage] {
         self.measure.passages()
     }
 

@@ -422,8 +422,8 @@ impl Simulation {
 
     /// Per entry road of the flows (in the order of their first flow): the vehicles due to depart there since the
     /// start of the run (warm-up included), and how many of them still wait to enter; the others were inserted.
-    pub fn entry_counts(&self) -> Vec<crate::metrics::EntryCounts> {
-        use crate::metrics::EntryCounts;
+    pub fn entry_counts(&self) -> Vec<crate::measure::metrics::EntryCounts> {
+        use crate::measure::metrics::EntryCounts;
         fn at(out: &mut Vec<EntryCounts>, road: RoadId) -> &mut EntryCounts {
             let i = match out.iter().position(|e| e.road == road) {
                 Some(i) => i,

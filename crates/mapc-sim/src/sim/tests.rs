@@ -1,7 +1,7 @@
 //! Bit-for-bit checks of the hot loop's shortcuts.
 
-use super::moves::exact_reciprocal;
-use super::planning::LazyPassSpeed;
+use super::step::moves::exact_reciprocal;
+use super::step::planning::LazyPassSpeed;
 use super::*;
 
 #[test]
@@ -73,7 +73,7 @@ fn lazy_pass_speed_is_the_eager_chain_bit_for_bit() {
         let leaders: Vec<f64> = (0..rng.random_range(0..5))
             .map(|_| pick(&mut rng))
             .collect();
-        let mut eager = IdmParams::speed_after_distance(dist, speed, accel).fmin(cap);
+        let mut eager = kinematics::speed_after_distance(dist, speed, accel).fmin(cap);
         let mut lazy = LazyPassSpeed::new(dist, speed, accel, cap);
         for &v in &leaders {
             eager = eager.fmin(v);
@@ -90,7 +90,7 @@ fn lazy_pass_speed_is_the_eager_chain_bit_for_bit() {
 #[test]
 fn brake_gap_bound_lies_above_the_exact_gap() {
     for (decel, dt) in [(4.5, 0.5), (4.5, 0.1), (1.0, 1.0), (7.5, 0.2), (3.0, 2.0)] {
-        let p = IdmParams::new(2.6, decel, 9.0, 1.0, 2.5, 4.0, dt);
+        let p = CfModel::idm(IdmParams::new(2.6, decel, 9.0, 1.0, 2.5, 4.0, dt));
         let tc = TypeConsts {
             max_speed: 30.0,
             max_brake_dist: 0.0,

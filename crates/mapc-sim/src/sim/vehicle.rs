@@ -74,7 +74,7 @@ pub(super) struct TypeConsts {
 }
 
 impl TypeConsts {
-    /// A bound strictly above `IdmParams::brake_gap(speed, decel, headway)` as computed in floating point: the
+    /// A bound strictly above `CfModel::brake_gap(speed, decel, headway)` as computed in floating point: the
     /// Euler sum is a right Riemann sum of the continuous stop, so it never exceeds v^2 / 2b + v headway; the
     /// margin lies far above rounding. Infinite (no shortcut) where that does not apply. Comparisons against it
     /// decide the far cases without the exact gap, which is computed only when the bound cannot decide.

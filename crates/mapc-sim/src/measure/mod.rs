@@ -1,0 +1,6 @@
+//! What a run measures: [`metrics`] holds a run's figures and their summary over seeds (mean and 95 % CI),
+//! [`points`] the measurement points (merges and the corridor's end) and the passages counted at them. Each
+//! metric is computed in one place: the simulator accumulates, these types define and summarize.
+
+pub mod metrics;
+pub mod points;

@@ -1,0 +1,89 @@
+//! The kinematics every car-following model shares, as SUMO's `MSCFModel` base computes them with the Euler
+//! update: how far a vehicle needs to stop, the fastest it may drive to still stop within a gap, when and how
+//! fast it reaches a point. Pure functions of the type's parameters; speeds in m/s, distances in m, times in s.
+
+use crate::numeric::{FastMinMax, NUMERICAL_EPS, floor_exact};
+
+/// Distance needed to stop from `speed` braking `decel` each step of `dt`, plus `headway` seconds at `speed`
+/// (SUMO's Euler `brakeGap`).
+pub fn brake_gap(dt: f64, speed: f64, decel: f64, headway: f64) -> f64 {
+    let reduction = decel * dt;
+    if reduction <= 0.0 {
+        return f64::INFINITY;
+    }
+    let steps = floor_exact(speed / reduction);
+    dt * (steps * speed - reduction * steps * (steps + 1.0) / 2.0) + speed * headway
+}
+
+/// The largest speed from which a vehicle can still stop within `gap` braking at `decel` per step of `dt`
+/// (SUMO's Euler `maximumSafeStopSpeed` with no headway).
+pub fn maximum_safe_stop_speed(dt: f64, decel: f64, gap: f64) -> f64 {
+    let g = gap - NUMERICAL_EPS;
+    if g <= 0.0 {
+        return 0.0;
+    }
+    let b = decel * dt;
+    let s = dt;
+    let t = 0.0;
+    let n = floor_exact(
+        0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s,
+    );
+    let h = 0.5 * n * (n - 1.0) * b * s + n * b * t;
+    let r = (g - h) / (n * s + t);
+    // n steps of driving: the last at speed r, each earlier one b faster
+    (n - 1.0) * b + r
+}
+
+/// The lowest speed at which a vehicle now at `speed` can reach a point `dist` ahead when it brakes
+/// (SUMO's `getMinimalArrivalSpeedEuler`): within one second of the point braking no longer helps; otherwise
+/// braking starts after a reaction time of one headway `tau`. The last branch returns the deceleration, as SUMO
+/// does.
+pub fn minimal_arrival_speed_euler(tau: f64, decel: f64, dist: f64, speed: f64) -> f64 {
+    if dist < speed {
+        f64::INFINITY
+    } else if 2.0 * (dist - speed * tau) * -decel + speed * speed >= 0.0 {
+        speed_after_distance(dist - speed * tau, speed, -decel)
+    } else {
+        decel
+    }
+}
+
+/// Time to cover `dist` starting at `speed` and reaching `arrival_speed`, accelerating (`accel`) or braking
+/// (`decel`) at the type's limits and then cruising (SUMO's `getMinimalArrivalTime`).
+pub fn minimal_arrival_time(
+    accel: f64,
+    decel: f64,
+    dist: f64,
+    speed: f64,
+    arrival_speed: f64,
+) -> f64 {
+    if dist <= 0.0 {
+        return 0.0;
+    }
+    if arrival_speed <= NUMERICAL_EPS && speed <= NUMERICAL_EPS {
+        return 1e6;
+    }
+    let accel = if arrival_speed >= speed {
+        accel
+    } else {
+        -decel
+    };
+    let accel_time = (arrival_speed - speed) / accel;
+    let accel_way = accel_time * (arrival_speed + speed) * 0.5;
+    if dist >= accel_way {
+        // drive as fast as possible: brake as late as possible, or accelerate first and then hold the speed
+        let cruise = speed.fmax(arrival_speed).fmax(0.1);
+        return accel_time + (dist - accel_way) / cruise;
+    }
+    // the target speed is not reached: solve dist = v t + a t^2 / 2
+    let disc = speed * speed + 2.0 * accel * dist;
+    if disc <= 0.0 {
+        return 1e6;
+    }
+    (disc.sqrt() - speed) / accel
+}
+
+/// Speed after `dist` metres accelerating at `accel` from `speed` (SUMO's `estimateSpeedAfterDistance`).
+pub fn speed_after_distance(dist: f64, speed: f64, accel: f64) -> f64 {
+    (2.0 * dist * accel + speed * speed).fmax(0.0).sqrt()
+}

@@ -1,0 +1,208 @@
+//! Car-following models, after SUMO's `src/microsim/cfmodels/`: one model per file behind the small interface
+//! [`CarFollowModel`], and [`CfModel`], a vehicle type's model as the simulator stores it.
+//!
+//! Glossary:
+//! - **gap**: from the ego's front to the leader's back, less the ego's min gap (SUMO's convention).
+//! - **follow speed**: the speed for the next step behind a leader (SUMO's `followSpeed`).
+//! - **stop speed**: the speed for the next step towards a point to stop at (SUMO's `stopSpeed`).
+//! - **free speed**: the speed for the next step towards a lower limit further on (SUMO's `freeSpeed`).
+//! - **secure gap**: the gap a follower needs behind a leader to be safe at their speeds (`getSecureGap`).
+//! - **base parameters**: what every model has (SUMO's `MSCFModel` members): acceleration, deceleration,
+//!   emergency deceleration, headway `tau`, min gap and the step; the step's own rules (acceleration bounds,
+//!   junctions, insertion) read them from [`CfModel`], and [`kinematics`] computes from them.
+
+pub mod idm;
+pub mod kinematics;
+
+pub use idm::IdmParams;
+
+/// What the simulator asks of a car-following model. The gaps exclude the min gap; `desired_speed` is the
+/// vehicle's desired speed on its lane (limit times speed factor, capped by the type's maximum).
+pub trait CarFollowModel {
+    /// The speed after one step behind a leader `gap` ahead driving at `leader_speed`.
+    fn follow_speed(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64) -> f64;
+
+    /// The speed after one step that lets the vehicle stop within `gap`.
+    fn stop_speed(&self, gap: f64, speed: f64, desired_speed: f64) -> f64;
+
+    /// The speed after one step towards `max_speed`, which applies `seen` metres ahead.
+    fn free_speed(&self, speed: f64, seen: f64, max_speed: f64, desired_speed: f64) -> f64;
+
+    /// The gap a vehicle at `speed` needs behind a leader at `leader_speed`.
+    fn secure_gap(&self, speed: f64, leader_speed: f64) -> f64;
+
+    /// The highest speed, at most `speed`, a vehicle may be inserted with at `gap` behind a leader.
+    fn insertion_follow_speed(
+        &self,
+        speed: f64,
+        gap: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+    ) -> f64;
+
+    /// The part of [`Self::free_speed`] for `speed <= max_speed` that does not depend on the distance, for
+    /// models whose free speed has one (IDM's); the planning step keeps it per limit and hands it to
+    /// [`Self::free_speed_given`]. Other models return NaN.
+    #[inline(always)]
+    fn free_speed_below_limit(&self, _speed: f64, _max_speed: f64, _desired_speed: f64) -> f64 {
+        f64::NAN
+    }
+
+    /// [`Self::free_speed`] for `speed <= max_speed`, given [`Self::free_speed_below_limit`]'s value `below`.
+    #[inline(always)]
+    fn free_speed_given(
+        &self,
+        _below: f64,
+        speed: f64,
+        seen: f64,
+        max_speed: f64,
+        desired_speed: f64,
+    ) -> f64 {
+        self.free_speed(speed, seen, max_speed, desired_speed)
+    }
+
+    /// The four speeds most plans need, known before planning: behind leaders 0, 2 and 3, and
+    /// [`Self::free_speed_below_limit`] towards `leader_speed[1]` (`gap[1]` unused). One at a time unless a
+    /// model computes them together.
+    #[inline(always)]
+    fn plan_speeds(
+        &self,
+        gap: [f64; 4],
+        speed: f64,
+        leader_speed: [f64; 4],
+        desired_speed: f64,
+    ) -> [f64; 4] {
+        [
+            self.follow_speed(gap[0], speed, leader_speed[0], desired_speed),
+            self.free_speed_below_limit(speed, leader_speed[1], desired_speed),
+            self.follow_speed(gap[2], speed, leader_speed[2], desired_speed),
+            self.follow_speed(gap[3], speed, leader_speed[3], desired_speed),
+        ]
+    }
+}
+
+/// The models a vehicle type may drive with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CfKind {
+    Idm(IdmParams),
+}
+
+/// A vehicle type's car following: the base parameters every model has and the model itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CfModel {
+    /// Maximum acceleration (m/s^2).
+    pub accel: f64,
+    /// Comfortable deceleration (m/s^2), also the deceleration the junction logic plans with.
+    pub decel: f64,
+    /// Deceleration a driver is physically able to apply when the safe speed demands it (m/s^2).
+    pub emergency_decel: f64,
+    /// Desired time headway (s).
+    pub tau: f64,
+    /// Standstill gap (m), front bumper to the leader's back bumper.
+    pub min_gap: f64,
+    /// Step length (s).
+    pub dt: f64,
+    pub kind: CfKind,
+}
+
+impl CfModel {
+    /// An IDM driver with IDM's parameters as the base ones.
+    pub fn idm(p: IdmParams) -> CfModel {
+        CfModel {
+            accel: p.accel,
+            decel: p.decel,
+            emergency_decel: p.emergency_decel,
+            tau: p.tau,
+            min_gap: p.min_gap,
+            dt: p.dt,
+            kind: CfKind::Idm(p),
+        }
+    }
+
+    /// [`kinematics::brake_gap`] with this type's step.
+    #[inline]
+    pub fn brake_gap(&self, speed: f64, decel: f64, headway: f64) -> f64 {
+        kinematics::brake_gap(self.dt, speed, decel, headway)
+    }
+
+    /// [`kinematics::maximum_safe_stop_speed`] at this type's deceleration.
+    #[inline]
+    pub fn maximum_safe_stop_speed(&self, gap: f64, _speed: f64) -> f64 {
+        kinematics::maximum_safe_stop_speed(self.dt, self.decel, gap)
+    }
+
+    /// [`kinematics::minimal_arrival_speed_euler`] with this type's headway and deceleration.
+    #[inline]
+    pub fn minimal_arrival_speed_euler(&self, dist: f64, speed: f64) -> f64 {
+        kinematics::minimal_arrival_speed_euler(self.tau, self.decel, dist, speed)
+    }
+
+    /// [`kinematics::minimal_arrival_time`] at this type's acceleration and deceleration.
+    #[inline]
+    pub fn minimal_arrival_time(&self, dist: f64, speed: f64, arrival_speed: f64) -> f64 {
+        kinematics::minimal_arrival_time(self.accel, self.decel, dist, speed, arrival_speed)
+    }
+}
+
+/// Each call goes to the type's model.
+macro_rules! by_model {
+    ($self:ident, $m:ident => $e:expr) => {
+        match &$self.kind {
+            CfKind::Idm($m) => $e,
+        }
+    };
+}
+
+impl CarFollowModel for CfModel {
+    #[inline(always)]
+    fn follow_speed(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64) -> f64 {
+        by_model!(self, m => m.follow_speed(gap, speed, leader_speed, desired_speed))
+    }
+    #[inline(always)]
+    fn stop_speed(&self, gap: f64, speed: f64, desired_speed: f64) -> f64 {
+        by_model!(self, m => m.stop_speed(gap, speed, desired_speed))
+    }
+    #[inline(always)]
+    fn free_speed(&self, speed: f64, seen: f64, max_speed: f64, desired_speed: f64) -> f64 {
+        by_model!(self, m => m.free_speed(speed, seen, max_speed, desired_speed))
+    }
+    #[inline(always)]
+    fn secure_gap(&self, speed: f64, leader_speed: f64) -> f64 {
+        by_model!(self, m => m.secure_gap(speed, leader_speed))
+    }
+    #[inline(always)]
+    fn insertion_follow_speed(
+        &self,
+        speed: f64,
+        gap: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+    ) -> f64 {
+        by_model!(self, m => m.insertion_follow_speed(speed, gap, leader_speed, desired_speed))
+    }
+    #[inline(always)]
+    fn free_speed_below_limit(&self, speed: f64, max_speed: f64, desired_speed: f64) -> f64 {
+        by_model!(self, m => m.free_speed_below_limit(speed, max_speed, desired_speed))
+    }
+    #[inline(always)]
+    fn free_speed_given(
+        &self,
+        below: f64,
+        speed: f64,
+        seen: f64,
+        max_speed: f64,
+        desired_speed: f64,
+    ) -> f64 {
+        by_model!(self, m => m.free_speed_given(below, speed, seen, max_speed, desired_speed))
+    }
+    #[inline(always)]
+    fn plan_speeds(
+        &self,
+        gap: [f64; 4],
+        speed: f64,
+        leader_speed: [f64; 4],
+        desired_speed: f64,
+    ) -> [f64; 4] {
+        by_model!(self, m => m.plan_speeds(gap, speed, leader_speed, desired_speed))
+    }
+}

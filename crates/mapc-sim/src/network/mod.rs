@@ -1,0 +1,479 @@
+//! The simulator's own view of a lane graph: one simulator lane per graph lane (with its road, index and
+//! neighbours), one internal lane per lane-level connection, links with their right of way and merge foes, and
+//! routes as lane sequences over a sequence of roads.
+//!
+//! Lane numbering: lane 0 of every road first (simulator lane `i` is lane 0 of graph road `i`), then the other
+//! lanes of each road, then the internal lanes. On a graph with one lane per road this is exactly the
+//! one-lane-per-road network (same indices, same links, same order).
+
+pub mod best_lanes;
+
+use crate::error::SimError;
+use mapc_graph::{LaneGraph, RightOfWay, RoadId};
+use std::collections::HashMap;
+
+/// Internal lanes shorter than this are lengthened to it (SUMO's shortest internal lane).
+pub const MIN_VIA_LENGTH_M: f64 = 0.1;
+/// Distance before a minor link from which a driver sees all foes and may go (SUMO's default visibility).
+pub const FOE_VISIBILITY_M: f64 = 4.5;
+
+pub type LaneIdx = u32;
+pub type LinkIdx = u32;
+
+/// What a simulator lane stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LaneKind {
+    /// A lane of the road at this index of `LaneGraph::roads` (its index on the road is `SimLane::index`).
+    Road(usize),
+    /// The internal lane of a link (the connection inside its junction).
+    Via(LinkIdx),
+}
+
+#[derive(Clone, Debug)]
+pub struct SimLane {
+    pub kind: LaneKind,
+    pub length: f64,
+    pub speed_limit: f64,
+    /// Links leaving the end of a road lane (empty for via lanes and sinks).
+    pub out_links: Vec<LinkIdx>,
+    /// For a via lane, the road lane it leads to.
+    pub via_target: Option<LaneIdx>,
+    /// Longest distance from the start of this lane to the end of the network.
+    pub downstream_m: f64,
+    /// Index on its road (0 = rightmost); 0 for via lanes.
+    pub index: u8,
+    /// The road's lane to the right (index - 1) and to the left (index + 1); none for via lanes.
+    pub right: Option<LaneIdx>,
+    pub left: Option<LaneIdx>,
+    /// Links ending on this road lane (for followers behind its start).
+    pub in_links: Vec<LinkIdx>,
+}
+
+#[derive(Clone, Debug)]
+pub struct SimLink {
+    pub junction: mapc_graph::JunctionId,
+    pub from_lane: LaneIdx,
+    pub via_lane: LaneIdx,
+    pub to_lane: LaneIdx,
+    /// Drives on without yielding; zipper links too (SUMO counts `Z` as a priority state: no slowing for
+    /// foes, no stop line), their turns taken by [`SimLink::zipper`].
+    pub major: bool,
+    /// One stream of a zipper merge: never waited at, its driver follows the foe that reaches the merge first.
+    pub zipper: bool,
+    /// Links into the same lane from another lane: they merge with this one.
+    pub foes: Vec<LinkIdx>,
+}
+
+#[derive(Clone, Debug)]
+pub struct Network {
+    pub lanes: Vec<SimLane>,
+    pub links: Vec<SimLink>,
+    pub road_ids: Vec<RoadId>,
+    /// Lane 0 of each road.
+    pub road_lane: HashMap<RoadId, LaneIdx>,
+    /// Per graph road, its simulator lanes by index (right to left).
+    pub road_lanes: Vec<Vec<LaneIdx>>,
+    /// Some road has more than one lane (lane changing runs only then).
+    pub multi_lane: bool,
+    /// Lane labels for messages: `R3` (`R3_1` where some road has more lanes); via lanes `R1>R2` (`R1_0>R2_1`).
+    pub lane_names: Vec<String>,
+    /// The road of each lane for traces, lane index aside: `R3`; via lanes `R1>R2`.
+    pub road_labels: Vec<String>,
+}
+
+impl Network {
+    /// Build from a lane graph: every graph lane a simulator lane, every lane-level connection a link.
+    pub fn from_graph(g: &LaneGraph) -> Result<Network, SimError> {
+        let multi_lane = g.roads.iter().any(|r| r.lanes.len() > 1);
+        let mut lanes = Vec::with_capacity(g.roads.len() + g.connections.len());
+        let mut road_lane = HashMap::new();
+        let mut lane_names = Vec::new();
+        let mut road_labels = Vec::new();
+        let mut road_lanes: Vec<Vec<LaneIdx>> = Vec::with_capacity(g.roads.len());
+        let lane_name = |r: &mapc_graph::Road, i: usize| {
+            if multi_lane {
+                format!("{}_{i}", r.id)
+            } else {
+                r.id.to_string()
+            }
+        };
+        for (i, r) in g.roads.iter().enumerate() {
+            if !(r.length_m > 0.0) || !r.length_m.is_finite() {
+                return Err(SimError::Network(format!(
+                    "road {} has length {} m",
+                    r.id, r.length_m
+                )));
+            }
+            let speed = r.speed_mps();
+            if !(speed > 0.0) {
+                return Err(SimError::Network(format!(
+                    "road {} has speed limit {} m/s",
+                    r.id, speed
+                )));
+            }
+            if r.lanes.is_empty() || r.lanes.len() > u8::MAX as usize {
+                return Err(SimError::Network(format!(
+                    "road {} has {} lanes",
+                    r.id,
+                    r.lanes.len()
+                )));
+            }
+            road_lane.insert(r.id, i as LaneIdx);
+            road_lanes.push(vec![i as LaneIdx]);
+            lanes.push(road_sim_lane(i, 0, r.length_m, speed));
+            lane_names.push(lane_name(r, 0));
+            road_labels.push(r.id.to_string());
+        }
+        // the other lanes of each road after every road's lane 0 (so one-lane graphs keep their indices)
+        for (i, r) in g.roads.iter().enumerate() {
+            for (k, lane) in r.lanes.iter().enumerate().skip(1) {
+                let speed = if lane.speed_mps > 0.0 {
+                    lane.speed_mps
+                } else {
+                    r.speed_mps()
+                };
+                road_lanes[i].push(lanes.len() as LaneIdx);
+                lanes.push(road_sim_lane(i, k as u8, r.length_m, speed));
+                lane_names.push(lane_name(r, k));
+                road_labels.push(r.id.to_string());
+            }
+            for k in 0..road_lanes[i].len() {
+                let l = road_lanes[i][k] as usize;
+                lanes[l].right = k.checked_sub(1).map(|j| road_lanes[i][j]);
+                lanes[l].left = road_lanes[i].get(k + 1).copied();
+            }
+        }
+        let road_index: HashMap<RoadId, usize> =
+            g.roads.iter().enumerate().map(|(i, r)| (r.id, i)).collect();
+        // One link per lane-level connection (repeated connections collapse into one).
+        let mut links: Vec<SimLink> = Vec::new();
+        let mut seen: HashMap<(RoadId, u8, RoadId, u8), LinkIdx> = HashMap::new();
+        for c in &g.connections {
+            if seen.contains_key(&(c.from_road, c.from_lane, c.to_road, c.to_lane)) {
+                continue;
+            }
+            let (Some(&fr), Some(&tr)) = (road_index.get(&c.from_road), road_index.get(&c.to_road))
+            else {
+                return Err(SimError::Network(format!(
+                    "connection {} -> {} at {} names a missing road",
+                    c.from_road, c.to_road, c.junction
+                )));
+            };
+            let (Some(&from), Some(&to)) = (
+                road_lanes[fr].get(c.from_lane as usize),
+                road_lanes[tr].get(c.to_lane as usize),
+            ) else {
+                return Err(SimError::Network(format!(
+                    "connection {} lane {} -> {} lane {} at {} names a missing lane",
+                    c.from_road, c.from_lane, c.to_road, c.to_lane, c.junction
+                )));
+            };
+            let link_idx = links.len() as LinkIdx;
+            let via = lanes.len() as LaneIdx;
+            let from_speed = lanes[from as usize].speed_limit;
+            let to_speed = lanes[to as usize].speed_limit;
+            let mut via_lane = road_sim_lane(0, 0, c.via_length_m.max(MIN_VIA_LENGTH_M), 0.0);
+            via_lane.kind = LaneKind::Via(link_idx);
+            via_lane.speed_limit = c
+                .via_speed_mps
+                .filter(|s| *s > 0.0)
+                .unwrap_or(from_speed.min(to_speed));
+            via_lane.via_target = Some(to);
+            lanes.push(via_lane);
+            lane_names.push(format!(
+                "{}>{}",
+                lane_names[from as usize], lane_names[to as usize]
+            ));
+            road_labels.push(format!("{}>{}", c.from_road, c.to_road));
+            lanes[from as usize].out_links.push(link_idx);
+            lanes[to as usize].in_links.push(link_idx);
+            links.push(SimLink {
+                junction: c.junction,
+                from_lane: from,
+                via_lane: via,
+                to_lane: to,
+                major: c.right_of_way != RightOfWay::Minor,
+                zipper: c.right_of_way == RightOfWay::Zipper,
+                foes: Vec::new(),
+            });
+            seen.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), link_idx);
+        }
+        for i in 0..links.len() {
+            let foes: Vec<LinkIdx> = (0..links.len())
+                .filter(|&j| {
+                    j != i
+                        && links[j].to_lane == links[i].to_lane
+                        && links[j].from_lane != links[i].from_lane
+                })
+                .map(|j| j as LinkIdx)
+                .collect();
+            links[i].foes = foes;
+        }
+        let mut net = Network {
+            lanes,
+            links,
+            road_ids: g.roads.iter().map(|r| r.id).collect(),
+            road_lane,
+            road_lanes,
+            multi_lane,
+            lane_names,
+            road_labels,
+        };
+        net.compute_downstream()?;
+        Ok(net)
+    }
+
+    /// Longest downstream distance per lane; fails on a cycle (a corridor never has one).
+    fn compute_downstream(&mut self) -> Result<(), SimError> {
+        let n = self.lanes.len();
+        let mut state = vec![0u8; n]; // 0 new, 1 on stack, 2 done
+        let mut order = Vec::with_capacity(n);
+        for start in 0..n {
+            if state[start] != 0 {
+                continue;
+            }
+            let mut stack: Vec<(usize, usize)> = vec![(start, 0)];
+            state[start] = 1;
+            while let Some(&mut (lane, ref mut k)) = stack.last_mut() {
+                let succ = self.successors(lane as LaneIdx);
+                if *k < succ.len() {
+                    let s = succ[*k] as usize;
+                    *k += 1;
+                    match state[s] {
+                        0 => {
+                            state[s] = 1;
+                            stack.push((s, 0));
+                        }
+                        1 => {
+                            return Err(SimError::Network(format!(
+                                "the network has a cycle through {}; only corridors without loops can be simulated",
+                                self.lane_names[s]
+                            )));
+                        }
+                        _ => {}
+                    }
+                } else {
+                    state[lane] = 2;
+                    order.push(lane);
+                    stack.pop();
+                }
+            }
+        }
+        for &lane in &order {
+            let best = self
+                .successors(lane as LaneIdx)
+                .iter()
+                .map(|&s| self.lanes[s as usize].downstream_m)
+                .fold(0.0, f64::max);
+            self.lanes[lane].downstream_m = self.lanes[lane].length + best;
+        }
+        Ok(())
+    }
+
+    pub(crate) fn successors(&self, lane: LaneIdx) -> Vec<LaneIdx> {
+        let l = &self.lanes[lane as usize];
+        match l.kind {
+            LaneKind::Road(_) => l
+                .out_links
+                .iter()
+                .map(|&k| self.links[k as usize].via_lane)
+                .collect(),
+            LaneKind::Via(_) => l.via_target.into_iter().collect(),
+        }
+    }
+
+    /// The road index in the graph of a road lane.
+    pub fn road_of(&self, lane: LaneIdx) -> Option<usize> {
+        match self.lanes[lane as usize].kind {
+            LaneKind::Road(i) => Some(i),
+            LaneKind::Via(_) => None,
+        }
+    }
+
+    /// Route as lanes from `from` to `to` (or, without `to`, downstream to a sink taking the through road at each
+    /// diverge: highest priority, then most lanes, then the smallest turning angle), starting on the rightmost of
+    /// the first road's lanes that go furthest on it ([`Network::best_lanes`] with the shortest look-ahead), each
+    /// road's link taken as a vehicle entering it would ([`Network::best_lane_path`]).
+    pub fn route(
+        &self,
+        g: &LaneGraph,
+        from: RoadId,
+        to: Option<RoadId>,
+    ) -> Result<Vec<LaneIdx>, SimError> {
+        let roads = self.route_roads(g, from, to)?;
+        let (part, dead_end) = self.best_lane_path(self.start_lane(&roads), &roads, 0.0);
+        self.past_dead_ends(&roads, part, dead_end)
+    }
+
+    /// `part`, a lane path from the start of `roads` that stops at a dead end where `dead_end`, on to the end of
+    /// `roads`: a lane that ends on the way (one gained and dropped again far down a corridor) is left by a lane
+    /// change on its road, so the line goes on from the nearest lane of that road that continues, in its place.
+    pub fn past_dead_ends(
+        &self,
+        roads: &[usize],
+        mut part: Vec<LaneIdx>,
+        mut dead_end: bool,
+    ) -> Result<Vec<LaneIdx>, SimError> {
+        let (mut lanes, mut base) = (Vec::new(), 0);
+        while dead_end {
+            let k = base + part.iter().filter(|&&l| self.road_of(l).is_some()).count() - 1;
+            let ending = part.pop().expect("a path holds its start");
+            lanes.append(&mut part);
+            let i = self.lanes[ending as usize].index as usize;
+            let next = self.best_lanes(&roads[k..], 0.0);
+            let Some(j) = (0..next.len())
+                .filter(|&j| next[j].next_link.is_some())
+                .min_by_key(|&j| (j.abs_diff(i), j))
+            else {
+                return Err(SimError::Network(format!(
+                    "no connection from {} to {}",
+                    self.road_ids[roads[k]],
+                    self.road_ids[roads[k + 1]]
+                )));
+            };
+            (part, dead_end) = self.best_lane_path(self.road_lanes[roads[k]][j], &roads[k..], 0.0);
+            base = k;
+        }
+        lanes.append(&mut part);
+        Ok(lanes)
+    }
+
+    /// The lanes a vehicle drives on the lane [`Network::route`] starts on, without changing lanes; `true` where
+    /// they stop at a lane that does not continue on the route (the vehicle must change lanes before its end).
+    pub fn route_without_changes(
+        &self,
+        g: &LaneGraph,
+        from: RoadId,
+        to: Option<RoadId>,
+    ) -> Result<(Vec<LaneIdx>, Vec<usize>, bool), SimError> {
+        let roads = self.route_roads(g, from, to)?;
+        let (lanes, dead_end) = self.best_lane_path(self.start_lane(&roads), &roads, 0.0);
+        Ok((lanes, roads, dead_end))
+    }
+
+    /// The rightmost of the first road's lanes that go furthest on `roads`.
+    fn start_lane(&self, roads: &[usize]) -> LaneIdx {
+        let first = self.best_lanes(roads, 0.0);
+        let top = first.iter().map(|q| q.length).fold(f64::MIN, f64::max);
+        let start = first.iter().position(|q| q.length == top).unwrap_or(0);
+        self.road_lanes[roads[0]][start]
+    }
+
+    /// The roads (indices into `LaneGraph::roads`) of the route from `from` to `to` (see [`Network::route`]).
+    pub fn route_roads(
+        &self,
+        g: &LaneGraph,
+        from: RoadId,
+        to: Option<RoadId>,
+    ) -> Result<Vec<usize>, SimError> {
+        let &start = self
+            .road_lane
+            .get(&from)
+            .ok_or_else(|| SimError::Network(format!("unknown road {from}")))?;
+        let start = start as usize;
+        match to {
+            Some(to) => {
+                let Some(&goal) = self.road_lane.get(&to) else {
+                    return Err(SimError::Network(format!("unknown road {to}")));
+                };
+                self.road_path(start, goal as usize)
+                    .ok_or_else(|| SimError::Network(format!("no route from {from} to {to}")))
+            }
+            None => {
+                let mut path = vec![start];
+                let mut cur = start;
+                for _ in 0..self.lanes.len() {
+                    let Some(next) = self.through_road(g, cur) else {
+                        break;
+                    };
+                    path.push(next);
+                    cur = next;
+                }
+                Ok(path)
+            }
+        }
+    }
+
+    /// Roads reached from the end of road `r` (any lane), in link order, each once.
+    fn next_roads(&self, r: usize) -> Vec<usize> {
+        let mut out = Vec::new();
+        for &l in &self.road_lanes[r] {
+            for &k in &self.lanes[l as usize].out_links {
+                let to = self.road_of(self.links[k as usize].to_lane).unwrap();
+                if !out.contains(&to) {
+                    out.push(to);
+                }
+            }
+        }
+        out
+    }
+
+    /// Breadth-first road path (corridors have few alternatives; the first found is the fewest roads).
+    fn road_path(&self, start: usize, goal: usize) -> Option<Vec<usize>> {
+        let mut prev: HashMap<usize, usize> = HashMap::new();
+        let mut queue = std::collections::VecDeque::from([start]);
+        while let Some(cur) = queue.pop_front() {
+            if cur == goal {
+                let mut path = vec![cur];
+                let mut c = cur;
+                while let Some(&p) = prev.get(&c) {
+                    path.push(p);
+                    c = p;
+                }
+                path.reverse();
+                return Some(path);
+            }
+            for nxt in self.next_roads(cur) {
+                if nxt != start && !prev.contains_key(&nxt) {
+                    prev.insert(nxt, cur);
+                    queue.push_back(nxt);
+                }
+            }
+        }
+        None
+    }
+
+    /// The road a through driver takes at the end of road `r`.
+    pub fn through_road(&self, g: &LaneGraph, r: usize) -> Option<usize> {
+        let from_road = &g.roads[r];
+        self.next_roads(r).into_iter().min_by(|&a, &b| {
+            let (ra, rb) = (&g.roads[a], &g.roads[b]);
+            rb.priority
+                .cmp(&ra.priority)
+                .then(rb.lanes.len().cmp(&ra.lanes.len()))
+                .then(turn_angle(from_road, ra).total_cmp(&turn_angle(from_road, rb)))
+                .then(ra.id.cmp(&rb.id))
+        })
+    }
+}
+
+fn road_sim_lane(road: usize, index: u8, length: f64, speed_limit: f64) -> SimLane {
+    SimLane {
+        kind: LaneKind::Road(road),
+        length,
+        speed_limit,
+        out_links: Vec::new(),
+        via_target: None,
+        downstream_m: 0.0,
+        index,
+        right: None,
+        left: None,
+        in_links: Vec::new(),
+    }
+}
+
+/// Absolute heading change (radians) from the end of `a` to the start of `b`.
+fn turn_angle(a: &mapc_graph::Road, b: &mapc_graph::Road) -> f64 {
+    let heading = |p: [f64; 2], q: [f64; 2]| (q[1] - p[1]).atan2(q[0] - p[0]);
+    let n = a.geometry.len();
+    if n < 2 || b.geometry.len() < 2 {
+        return 0.0;
+    }
+    let h1 = heading(a.geometry[n - 2], a.geometry[n - 1]);
+    let h2 = heading(b.geometry[0], b.geometry[1]);
+    let mut d = (h2 - h1).abs() % (2.0 * std::f64::consts::PI);
+    if d > std::f64::consts::PI {
+        d = 2.0 * std::f64::consts::PI - d;
+    }
+    d
+}

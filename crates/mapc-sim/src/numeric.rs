@@ -1,0 +1,75 @@
+//! Floating-point helpers every model and the step share: SUMO's zero threshold, and `floor`, `ceil`, `min` and
+//! `max` without the baseline x86-64 target's library calls and NaN fix-ups (the same bits for every input the
+//! simulator produces).
+
+/// Below this a quantity counts as zero (SUMO's `NUMERICAL_EPS`).
+pub const NUMERICAL_EPS: f64 = 0.001;
+
+/// `x.floor()`, bit for bit, without the library call the baseline x86-64 target makes for `floor` (no SSE4.1
+/// `roundsd`): below 2^52 in magnitude, truncation through an integer is exact and only needs a correction of one
+/// for negative non-integers; zeros are their own floor; NaN, infinities and large values take the library path.
+#[inline(always)]
+pub(crate) fn floor_exact(x: f64) -> f64 {
+    if x == 0.0 {
+        x
+    } else if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64 as f64;
+        if t > x { t - 1.0 } else { t }
+    } else {
+        library_floor(x)
+    }
+}
+
+/// `x.ceil()`, bit for bit, without the library call (as [`floor_exact`]); the sign is copied from `x` so that
+/// a negative number above -1 gives -0, as the library's.
+#[inline(always)]
+pub(crate) fn ceil_exact(x: f64) -> f64 {
+    if x == 0.0 {
+        x
+    } else if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64 as f64;
+        (if t < x { t + 1.0 } else { t }).copysign(x)
+    } else {
+        library_ceil(x)
+    }
+}
+
+// The rare paths out of line: inlined, the library calls are speculated (executed before the test that selects
+// them) wherever the optimizer hoists the arithmetic around them.
+#[cold]
+#[inline(never)]
+fn library_floor(x: f64) -> f64 {
+    x.floor()
+}
+
+#[cold]
+#[inline(never)]
+fn library_ceil(x: f64) -> f64 {
+    x.ceil()
+}
+
+/// `f64::min` / `f64::max` as one compare-and-select, without the NaN fix-up sequence the baseline x86-64 target
+/// emits around `minsd`/`maxsd` (seven instructions; -8 % of the simulator's instructions). The same value as the
+/// library's for every input the simulator produces: the left operand is never NaN (debug builds check it); of
+/// two zeros of different signs either may come back, as with the library's.
+pub(crate) trait FastMinMax {
+    fn fmin(self, other: f64) -> f64;
+    fn fmax(self, other: f64) -> f64;
+}
+
+impl FastMinMax for f64 {
+    #[inline(always)]
+    fn fmin(self, other: f64) -> f64 {
+        debug_assert!(!self.is_nan(), "fmin on NaN");
+        if other < self { other } else { self }
+    }
+    #[inline(always)]
+    fn fmax(self, other: f64) -> f64 {
+        debug_assert!(!self.is_nan(), "fmax on NaN");
+        if other > self { other } else { self }
+    }
+}
+
+#[cfg(test)]
+#[path = "numeric_tests.rs"]
+mod tests;

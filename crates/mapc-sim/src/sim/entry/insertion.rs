@@ -1,0 +1,171 @@
+//! Departures: flows' vehicles created when due and inserted at their entry lane where SUMO's insertion check
+//! allows (at most one per entry lane and step); flows whose lane is chosen at insertion wait at their road
+//! (`lane_choice.rs`).
+
+use super::*;
+
+impl Simulation {
+    /// Create the flows' vehicles due by now and insert waiting vehicles where it is safe (SUMO's insertion: at
+    /// most one per entry lane and step; a refused vehicle blocks the ones behind it).
+    pub(in crate::sim) fn insert_departures(&mut self) {
+        let now = self.time_s - self.spec.step_s; // insertion happens within the step just executed
+        for f in 0..self.spec.flows.len() {
+            let flow = self.spec.flows[f].clone();
+            if flow.vehs_per_hour <= 0.0 {
+                continue;
+            }
+            // Departure n is at begin + n * period. `validate` keeps begin within the longest run and the period
+            // at least one step, so each departure time is a distinct sane number and this loop makes at most a
+            // few departures per step (a begin of -1e308 once made `depart` stand still: a run without end).
+            let period = 3600.0 / flow.vehs_per_hour;
+            loop {
+                let n = self.flow_next[f];
+                // the first departure without the product: a period too long to be a number departs once
+                let depart = if n == 0 {
+                    flow.begin_s
+                } else {
+                    flow.begin_s + n as f64 * period
+                };
+                if !(depart <= now + 1e-9) || depart >= flow.end_s {
+                    break;
+                }
+                if let Some(fl) = &self.flow_lanes[f] {
+                    let re = fl.entry as usize;
+                    if self.road_entries[re].queue.builds_next() {
+                        let id = self.build_flow_vehicle(f);
+                        self.road_entries[re].queue.push_built(id);
+                    } else {
+                        self.road_entries[re].queue.push_counted(f);
+                    }
+                    self.flow_next[f] += 1;
+                    continue;
+                }
+                let entry = self.routes[self.flow_route[f] as usize].lanes[0];
+                let ei = self.entry_lanes.iter().position(|&l| l == entry).unwrap();
+                if self.pending[ei].builds_next() {
+                    let id = self.build_flow_vehicle(f);
+                    self.pending[ei].push_built(id);
+                } else {
+                    self.pending[ei].push_counted(f);
+                }
+                self.flow_next[f] += 1;
+            }
+        }
+        // lanes where an insertion failed in this step: no later vehicle is tried there (SUMO's failed-insertion
+        // memory; lanes chosen at insertion are tried after the fixed ones)
+        let mut refused = std::mem::take(&mut self.refused_lanes);
+        refused.clear();
+        for ei in 0..self.entry_lanes.len() {
+            loop {
+                let id = match self.pending[ei].front_built() {
+                    Some(id) => id,
+                    None => match self.pending[ei].take_counted() {
+                        // a counted vehicle reaches the front: built now, then waits like any other
+                        Some(f) => {
+                            let id = self.build_flow_vehicle(f);
+                            self.pending[ei].push_taken(id);
+                            id
+                        }
+                        None => break,
+                    },
+                };
+                if self.try_insert(id) {
+                    self.pending[ei].pop_built();
+                } else {
+                    refused.push(self.entry_lanes[ei]);
+                    break;
+                }
+            }
+        }
+        for re in 0..self.road_entries.len() {
+            self.insert_at_road(re, &mut refused);
+        }
+        self.refused_lanes = refused;
+    }
+
+    /// A new vehicle of flow `f` (pending until inserted).
+    pub(in crate::sim) fn build_flow_vehicle(&mut self, f: usize) -> VehicleId {
+        let flow = &self.spec.flows[f];
+        let (vt, speed) = (flow.vehicle_type, flow.depart_speed);
+        self.create_vehicle(vt, self.flow_route[f], speed)
+    }
+
+    /// SUMO's insertion check at the start of the entry road: front at length + POSITION_EPS, the depart speed
+    /// safe behind the leader and able to stop before a minor link within reach.
+    pub(in crate::sim) fn try_insert(&mut self, id: VehicleId) -> bool {
+        if !self.insertion_allowed(id) {
+            return false;
+        }
+        self.place_at_route_start(id, true);
+        true
+    }
+
+    /// Where a vehicle is inserted: at the start of its route's first lane, its front one length in.
+    pub(in crate::sim) fn place_at_route_start(&mut self, id: VehicleId, counted: bool) {
+        let v = &self.veh[id as usize];
+        let lane = self.routes[v.route as usize].lanes[0];
+        let lane_len = self.lane_at(lane as usize).length;
+        let pos = (v.length + POSITION_EPS).fmin(lane_len);
+        let speed = v.depart_speed;
+        let _ = self.place(id, lane, pos, speed, counted);
+    }
+
+    /// SUMO's insertion check at [`Self::place_at_route_start`] with the vehicle's depart speed.
+    pub(in crate::sim) fn insertion_allowed(&self, id: VehicleId) -> bool {
+        let v = &self.veh[id as usize];
+        let p = &self.types[v.vtype as usize];
+        let route = &self.routes[v.route as usize];
+        let lane = route.lanes[0];
+        let lane_len = self.lane_at(lane as usize).length;
+        let pos = (v.length + POSITION_EPS).fmin(lane_len);
+        let speed = v.depart_speed;
+        let des = self.desired_speed(v, lane);
+        // leader: last vehicle on the lane, or further along the route
+        let mut seen = 0.0 - pos;
+        let mut k = 0;
+        let reach = speed * self.spec.step_s + p.brake_gap(speed, p.decel, p.tau) + 200.0;
+        while k < route.lanes.len() && seen < reach {
+            let l = route.lanes[k];
+            if let Some(&o) = self.lane_veh[l as usize].last() {
+                let ov = &self.veh[o as usize];
+                let gap = seen + ov.pos - ov.length - p.min_gap;
+                if gap < 0.0 {
+                    return false;
+                }
+                // with a given depart speed, SUMO refuses whenever the insertion follow speed falls below it,
+                // which for IDM is exactly when the gap is below the desired dynamic gap
+                if gap < p.secure_gap(speed, ov.speed) {
+                    return false;
+                }
+                break;
+            }
+            // tails of vehicles that just left this road onto a connection
+            if k == 0 {
+                for &lk in &self.lane_at(l as usize).out_links {
+                    let via = self.link_at(lk as usize).via_lane;
+                    if let Some(&o) = self.lane_veh[via as usize].last() {
+                        let ov = &self.veh[o as usize];
+                        let gap = seen + lane_len + ov.pos - ov.length - p.min_gap;
+                        if gap < 0.0 || gap < p.secure_gap(speed, ov.speed) {
+                            return false;
+                        }
+                    }
+                }
+            }
+            seen += self.lane_at(l as usize).length;
+            // a minor link ahead must be reachable with a stop
+            if k + 1 < route.lanes.len()
+                && let LaneKind::Via(link) = self.lane_at(route.lanes[k + 1] as usize).kind
+                && !self.link_at(link as usize).major
+                && seen < p.brake_gap(speed, p.decel, 0.0) + speed * self.spec.step_s
+            {
+                let vs = p.stop_speed((seen - POSITION_EPS).fmax(0.0), speed, des);
+                if vs < speed {
+                    return false;
+                }
+            }
+            k += 1;
+        }
+        true
+    }
+}

@@ -1,0 +1,160 @@
+//! Depart lanes chosen at insertion (`depart_lane` `random` and `free`), as SUMO 1.8's `MSEdge::getDepartLane`
+//! chooses them: the vehicles of such flows wait at their entry road, not at one lane, and each insertion attempt
+//! picks the lane anew.
+//!
+//! - `random`: a lane of the entry road drawn uniformly (SUMO draws among the lanes the vehicle class may use:
+//!   every lane in mapc, which has no lane permissions).
+//! - `free`: the lane with the least brutto occupancy (`MSLane::getBruttoOccupancy`: lengths plus min gaps of the
+//!   vehicles on it, plus the tail of one that has just left it, less what sticks out behind its start, over the
+//!   lane's length), the rightmost on a tie. SUMO 1.8's `getFreeLane` also prefers the lane whose last vehicle is
+//!   furthest from the depart position, but with the default depart position (`base`, mapc's only one) that
+//!   bound is the road's length, so no lane's gap is positive and the occupancy decides alone (checked in SUMO
+//!   1.8.0: docs/sumo_check.md).
+//!
+//! As in SUMO (`MSEdge::insertVehicle`'s failed-insertion memory), once an insertion on a lane failed in a step,
+//! no later vehicle is tried on that lane in that step.
+
+use super::*;
+use crate::demand::waiting::EntryQueue;
+use crate::spec::DepartLane;
+
+/// The vehicles waiting at one entry road for a lane chosen at insertion (one per road and mode).
+#[derive(Clone, Debug)]
+pub(in crate::sim) struct RoadEntry {
+    /// `Random` or `Free`.
+    pub(in crate::sim) mode: DepartLane,
+    /// The road's lanes, rightmost first.
+    pub(in crate::sim) lanes: Vec<LaneIdx>,
+    pub(in crate::sim) queue: EntryQueue,
+}
+
+/// A flow whose lane is chosen at insertion: where its vehicles wait, and its route from each lane of the road.
+#[derive(Clone, Debug)]
+pub(in crate::sim) struct FlowLanes {
+    /// Index into the simulation's road entries.
+    pub(in crate::sim) entry: u32,
+    /// Per lane of the entry road (rightmost first), the flow's route starting on it.
+    pub(in crate::sim) routes: Vec<u32>,
+}
+
+/// SUMO 1.8's `free` choice among lanes with these brutto occupancies: the first (rightmost) of the least.
+pub(in crate::sim) fn least_occupied(occupancy: impl IntoIterator<Item = f64>) -> Option<usize> {
+    let mut best: Option<(usize, f64)> = None;
+    for (i, o) in occupancy.into_iter().enumerate() {
+        if best.is_none_or(|(_, b)| o < b) {
+            best = Some((i, o));
+        }
+    }
+    best.map(|(i, _)| i)
+}
+
+impl Simulation {
+    /// The share of `lane` taken by vehicles with their min gaps (SUMO's `MSLane::getBruttoOccupancy`), at most 1.
+    pub(in crate::sim) fn brutto_occupancy(&self, lane: LaneIdx) -> f64 {
+        let len = self.lane_at(lane as usize).length;
+        let on_lane = &self.lane_veh[lane as usize];
+        let mut sum = 0.0;
+        for &id in on_lane.iter() {
+            sum += self.brutto_length(id);
+        }
+        // the tail of a vehicle that has just left the lane onto a connection (SUMO counts one partial occupier)
+        let mut fraction: f64 = 0.0;
+        for &lk in &self.lane_at(lane as usize).out_links {
+            let via = self.link_at(lk as usize).via_lane;
+            if let Some(&o) = self.lane_veh[via as usize].last() {
+                let ov = &self.veh[o as usize];
+                fraction = fraction.max((ov.length - ov.pos).min(len));
+            }
+        }
+        // the last vehicle's part behind the lane's start is not on it
+        if let Some(&last) = on_lane.last() {
+            let v = &self.veh[last as usize];
+            if v.pos < v.length {
+                fraction -= v.length - v.pos;
+            }
+        }
+        ((sum + fraction) / len).min(1.0)
+    }
+
+    /// The lane (index on the road, 0 = rightmost) the next vehicle at road entry `re` tries.
+    pub(in crate::sim) fn choose_lane(&mut self, re: usize) -> usize {
+        let lanes = &self.road_entries[re].lanes;
+        match self.road_entries[re].mode {
+            DepartLane::Random => {
+                let n = lanes.len();
+                self.rng.random_range(0..n)
+            }
+            _ => least_occupied(lanes.iter().map(|&l| self.brutto_occupancy(l)))
+                .expect("an entry road has a lane"),
+        }
+    }
+
+    /// Try to insert the vehicles waiting at road entry `re`, with the lanes already refused in this step.
+    pub(in crate::sim) fn insert_at_road(&mut self, re: usize, refused: &mut Vec<LaneIdx>) {
+        let mut i = 0;
+        loop {
+            let lanes = &self.road_entries[re].lanes;
+            if lanes.iter().all(|l| refused.contains(l)) {
+                // no later vehicle can enter (SUMO still draws a lane for each: mapc's numbers differ anyway)
+                break;
+            }
+            let q = &mut self.road_entries[re].queue;
+            let id = match q.built_at(i) {
+                Some(id) => id,
+                // every built vehicle before `i` was refused: the next counted one is built behind them and tries
+                // its own lane
+                None => match q.take_counted() {
+                    Some(f) => {
+                        let id = self.build_flow_vehicle(f);
+                        self.road_entries[re].queue.push_taken(id);
+                        id
+                    }
+                    None => break,
+                },
+            };
+            let k = self.choose_lane(re);
+            let lane = self.road_entries[re].lanes[k];
+            if refused.contains(&lane) {
+                // a free choice stays the same until a vehicle enters: every later one is refused too
+                if self.road_entries[re].mode == DepartLane::Free {
+                    break;
+                }
+                i += 1;
+                continue;
+            }
+            // the vehicle's route is one of its flow's lane routes (flows over the same roads share them)
+            let current = self.veh[id as usize].route;
+            let route = self
+                .flow_lanes
+                .iter()
+                .flatten()
+                .find(|fl| fl.routes.contains(&current))
+                .expect("a vehicle waiting at a road entry has lane routes")
+                .routes[k];
+            self.set_route(id, route);
+            if self.try_insert(id) {
+                self.road_entries[re].queue.remove_built(i);
+            } else {
+                refused.push(lane);
+                if self.road_entries[re].mode == DepartLane::Free {
+                    break;
+                }
+                i += 1;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn free_takes_the_least_occupied_lane_and_the_rightmost_on_a_tie() {
+        assert_eq!(least_occupied([0.3, 0.1, 0.2]), Some(1));
+        assert_eq!(least_occupied([0.0, 0.0]), Some(0));
+        assert_eq!(least_occupied([0.2, 0.1, 0.1]), Some(1));
+        assert_eq!(least_occupied([1.0, 1.0, 0.999]), Some(2));
+        assert_eq!(least_occupied([0.0; 0]), None);
+    }
+}

@@ -1,0 +1,752 @@
+//! The lane-change pass (SUMO's `MSLaneChanger` with LC2013, changes done in one step): after the moves, road by
+//! road, the vehicles on a road's lanes are visited front to back across its lanes; each gets its
+//! [`Surroundings`], LC2013 decides, messages are delivered at once, and a change moves the vehicle to the
+//! neighbour lane at the same position. Runs only on networks with a road of several lanes.
+
+use super::*;
+use crate::models::lc::{
+    BlockedAhead, Ego, LaneQ, Lc2013, Lc2013Memory, Message, NeighbourLane, Other, Side,
+    Surroundings,
+};
+use crate::network::best_lanes::BestLane;
+use std::collections::HashMap;
+
+/// A vehicle's lane-change record between steps.
+#[derive(Clone, Debug, Default)]
+pub(in crate::sim) struct LcVeh {
+    pub(in crate::sim) mem: Lc2013Memory,
+    /// Its speed at the last pass, for its acceleration in the next.
+    prev_speed: f64,
+    accel: f64,
+    /// Its lane's best-lane offset at the last pass (read when its speed is patched).
+    pub(in crate::sim) best_lane_offset: i32,
+    /// The best lanes it used last: (its route's road sequence, road index in it, index in
+    /// `BestLanesCache::store`), the cache's own key but for the type; the cache is asked again only when it
+    /// enters a new road (a lane change keeps the road sequence).
+    best_memo: Option<(u32, u32, u32)>,
+}
+
+/// Buffers of the lane-change pass, kept between steps so that the pass allocates nothing.
+#[derive(Clone, Debug, Default)]
+pub(in crate::sim) struct LcScratch {
+    lanes: Vec<LaneIdx>,
+    cands: Vec<VehicleId>,
+    dens: Vec<f64>,
+    /// Per lane index: the vehicles visited so far in the pass that are on it now (at a vehicle's turn, mostly its
+    /// index in its lane's queue: the pass goes front to back).
+    visited: Vec<usize>,
+    blocked: Vec<(Option<VehicleId>, Option<VehicleId>)>,
+    best_lanes: LanesView,
+    next_occupation: NextOccupation,
+}
+
+/// The lanes as LC2013 sees them (`Surroundings::best_lanes`), kept between the vehicles of a road.
+#[derive(Clone, Debug, Default)]
+struct LanesView {
+    lanes: Vec<LaneQ>,
+    /// The entry of `BestLanesCache::store` that `lanes` was built from, with the occupations as they are now;
+    /// `None` on a new road (its densities start again) or when `NextOccupation` was recomputed. Between two
+    /// vehicles that share it only one lane's density changes, and only that lane is rewritten.
+    of: Option<u32>,
+}
+
+/// The summed occupation of each lane's best continuation (SUMO's `nextOccupation`) for one entry of
+/// `BestLanesCache::store`: the lanes' occupations change only at the pass's start and when a vehicle changes
+/// lanes, so the vehicles visited one after another on a road and route share the sums in between.
+#[derive(Clone, Debug, Default)]
+struct NextOccupation {
+    /// The entry the sums are for; `None` once an occupation changed.
+    of: Option<u32>,
+    sums: Vec<f64>,
+}
+
+/// Best lanes by (road sequence, index of the current road in it, vehicle type): they depend on nothing else, so
+/// each is computed once per run, when the first vehicle of its type enters that road on that route.
+#[derive(Clone, Debug, Default)]
+pub(in crate::sim) struct BestLanesCache {
+    index: HashMap<(u32, u32, u16), u32>,
+    pub(in crate::sim) store: Vec<Vec<BestLane>>,
+    /// The route after a lane change, by (route, lane of it changed from, lane changed to, vehicle type).
+    after_change: HashMap<(u32, u32, LaneIdx, u16), u32>,
+}
+
+impl Simulation {
+    /// The best lanes of road `k` of the route `route` for a vehicle of type `vtype` (an index into
+    /// `best_cache.store`).
+    pub(in crate::sim) fn best_lanes_at(&mut self, route: u32, k: usize, vtype: u16) -> u32 {
+        let r = &self.routes[route as usize];
+        let key = (r.roads_id, k as u32, vtype);
+        if let Some(&i) = self.best_cache.index.get(&key) {
+            return i;
+        }
+        let brake = self.type_consts[vtype as usize].max_brake_dist;
+        let best = self.net.best_lanes(&r.roads[k..], brake);
+        let i = self.best_cache.store.len() as u32;
+        self.best_cache.store.push(best);
+        self.best_cache.index.insert(key, i);
+        i
+    }
+
+    /// LC2013's `patch_speed` for a vehicle's next speed between `min` and `max` (`wanted`: the car-following
+    /// speed). A lane with no neighbour (a one-lane road, or a junction connection: the SUMO export writes each as
+    /// an internal edge of one lane) has no lane changer in SUMO, whose `patchSpeed` then clears the memory as
+    /// after a change: the speed-gain and keep-right wishes do not survive a junction.
+    #[allow(clippy::too_many_arguments)]
+    pub(in crate::sim) fn patch_lc_speed(
+        &mut self,
+        id: VehicleId,
+        speed: f64,
+        vtype: usize,
+        lane: LaneIdx,
+        desired: f64,
+        min: f64,
+        wanted: f64,
+        max: f64,
+    ) -> f64 {
+        let l = self.lane_at(lane as usize);
+        let has_lane_changer = l.left.is_some() || l.right.is_some();
+        let Some(rec) = self.veh[id as usize].lc.as_deref_mut() else {
+            return wanted;
+        };
+        rec.mem.patch_speed(
+            &self.lc_model,
+            speed,
+            &self.types[vtype],
+            desired,
+            has_lane_changer,
+            rec.best_lane_offset,
+            min,
+            wanted,
+            max,
+        )
+    }
+
+    /// The lane-change pass of a step (after the moves).
+    // out of line: inlined into the step, its code changed the one-lane plans' register use (one-lane runs
+    // executed up to 1 % more instructions as the pass changed)
+    #[inline(never)]
+    pub(in crate::sim) fn change_lanes(&mut self) {
+        let dt = self.spec.step_s;
+        // each lane's vehicles' lengths with min gaps (SUMO's brutto occupancy), kept up to date by the changes
+        let mut brutto = std::mem::take(&mut self.lane_brutto);
+        brutto.clear();
+        brutto.resize(self.net.lanes.len(), 0.0);
+        for (l, q) in self.lane_veh.iter().enumerate() {
+            for &id in q.iter() {
+                brutto[l] += self.brutto_length(id);
+            }
+        }
+        self.lane_brutto = brutto;
+        // after the moves, before any message of this pass: forget the last step's advices and marks (advices
+        // sent in this pass are read in the next move)
+        for q in self.lane_veh.iter() {
+            for &id in q.iter() {
+                let v = &mut self.veh[id as usize];
+                let speed = v.speed;
+                let rec = v.lc.get_or_insert_with(|| {
+                    Box::new(LcVeh {
+                        prev_speed: speed,
+                        ..LcVeh::default()
+                    })
+                });
+                rec.accel = (speed - rec.prev_speed) / dt;
+                rec.prev_speed = speed;
+                rec.mem.prepare_step();
+            }
+        }
+        let mut scratch = std::mem::take(&mut self.lc_scratch);
+        scratch.next_occupation.of = None;
+        for r in 0..self.net.road_lanes.len() {
+            if self.net.road_lanes[r].len() < 2 {
+                continue;
+            }
+            let LcScratch {
+                lanes,
+                cands,
+                dens,
+                visited,
+                blocked,
+                best_lanes,
+                next_occupation,
+            } = &mut scratch;
+            lanes.clear();
+            lanes.extend_from_slice(&self.net.road_lanes[r]);
+            // SUMO's findCandidate: the largest position first; the right lane first on a tie
+            cands.clear();
+            if !self.merge_two_lanes(lanes, cands) {
+                cands.extend(
+                    lanes
+                        .iter()
+                        .flat_map(|&l| self.lane_veh[l as usize].iter().copied()),
+                );
+                cands.sort_by(|&a, &b| self.candidate_order(a, b));
+            }
+            dens.clear();
+            dens.resize(lanes.len(), 0.0);
+            visited.clear();
+            visited.resize(lanes.len(), 0);
+            blocked.clear();
+            blocked.resize(lanes.len(), (None, None));
+            best_lanes.of = None;
+            for &id in cands.iter() {
+                let final_index =
+                    self.change_one(id, dens, visited, blocked, best_lanes, next_occupation);
+                visited[final_index] += 1;
+                dens[final_index] += self.brutto_length(id);
+                if best_lanes.of.is_some() {
+                    best_lanes.lanes[final_index].occupation =
+                        dens[final_index] + next_occupation.sums[final_index];
+                }
+            }
+        }
+        self.lc_scratch = scratch;
+    }
+
+    /// The candidates' order on a road of two lanes, by merging the lanes' queues (each front first) into
+    /// `cands`: the stable sort's order when each queue is ordered as the sort orders it. Returns false, leaving
+    /// `cands` empty, on another number of lanes or a queue out of that order (then the caller sorts).
+    fn merge_two_lanes(&self, lanes: &[LaneIdx], cands: &mut Vec<VehicleId>) -> bool {
+        let &[a, b] = lanes else { return false };
+        let qa: &[VehicleId] = &self.lane_veh[a as usize];
+        let qb: &[VehicleId] = &self.lane_veh[b as usize];
+        let pos = |o: VehicleId| self.veh[o as usize].pos;
+        let ordered = |q: &[VehicleId]| {
+            q.windows(2)
+                .all(|w| pos(w[0]).total_cmp(&pos(w[1])).is_ge())
+        };
+        if !ordered(qa) || !ordered(qb) {
+            return false;
+        }
+        // on a tie of positions, the lane of the lower index first
+        let a_first_on_tie = self.lane_at(a as usize).index < self.lane_at(b as usize).index;
+        let (mut i, mut j) = (0, 0);
+        while i < qa.len() && j < qb.len() {
+            let order = pos(qa[i]).total_cmp(&pos(qb[j]));
+            if order.is_gt() || (order.is_eq() && a_first_on_tie) {
+                cands.push(qa[i]);
+                i += 1;
+            } else {
+                cands.push(qb[j]);
+                j += 1;
+            }
+        }
+        cands.extend_from_slice(&qa[i..]);
+        cands.extend_from_slice(&qb[j..]);
+        debug_assert!({
+            let mut sorted: Vec<VehicleId> = qa.iter().chain(qb).copied().collect();
+            sorted.sort_by(|&x, &y| self.candidate_order(x, y));
+            sorted == *cands
+        });
+        true
+    }
+
+    /// SUMO's findCandidate order: the largest position first; the right lane first on a tie.
+    fn candidate_order(&self, a: VehicleId, b: VehicleId) -> std::cmp::Ordering {
+        let (va, vb) = (&self.veh[a as usize], &self.veh[b as usize]);
+        vb.pos.total_cmp(&va.pos).then(
+            self.lane_at(va.lane as usize)
+                .index
+                .cmp(&self.lane_at(vb.lane as usize).index),
+        )
+    }
+
+    /// One vehicle's turn; returns the index of the lane it ends on.
+    fn change_one(
+        &mut self,
+        id: VehicleId,
+        dens: &[f64],
+        visited: &[usize],
+        blocked: &mut [(Option<VehicleId>, Option<VehicleId>)],
+        best_lanes: &mut LanesView,
+        next_occupation: &mut NextOccupation,
+    ) -> usize {
+        let (route, route_pos, vtype) = {
+            let v = &self.veh[id as usize];
+            (v.route, v.route_pos, v.vtype)
+        };
+        let r = &self.routes[route as usize];
+        let (k, roads_id) = (r.road_k[route_pos as usize], r.roads_id);
+        let best_i = match self.lc_rec(id).best_memo {
+            Some((seq, rk, i)) if seq == roads_id && rk == k => i,
+            _ => {
+                let i = self.best_lanes_at(route, k as usize, vtype);
+                self.lc_rec(id).best_memo = Some((roads_id, k, i));
+                i
+            }
+        };
+        let lane = self.veh[id as usize].lane;
+        let index = self.lane_at(lane as usize).index as usize;
+        let best_lane_offset = self.best_cache.store[best_i as usize][index].best_lane_offset;
+        self.lc_rec(id).best_lane_offset = best_lane_offset;
+        let best: &[BestLane] = &self.best_cache.store[best_i as usize];
+        let v = &self.veh[id as usize];
+        // SUMO's occupation: this pass's density on the lane plus the vehicles on its continuation
+        if next_occupation.of != Some(best_i) {
+            next_occupation.sums.clear();
+            next_occupation.sums.extend(best.iter().map(|q| {
+                q.continuation
+                    .iter()
+                    .map(|&c| self.lane_brutto[c as usize])
+                    .sum::<f64>()
+            }));
+            next_occupation.of = Some(best_i);
+            best_lanes.of = None;
+        }
+        debug_assert!(best.iter().zip(&next_occupation.sums).all(|(q, &next)| {
+            let fresh: f64 = q
+                .continuation
+                .iter()
+                .map(|&c| self.lane_brutto[c as usize])
+                .sum();
+            fresh.to_bits() == next.to_bits()
+        }));
+        let lane_q = |((q, &d), &next): ((&BestLane, &f64), &f64)| LaneQ {
+            length: q.length,
+            occupation: d + next,
+            best_lane_offset: q.best_lane_offset,
+            leads_elsewhere: q.leads_elsewhere,
+        };
+        if best_lanes.of != Some(best_i) {
+            best_lanes.lanes.clear();
+            best_lanes
+                .lanes
+                .extend(best.iter().zip(dens).zip(&next_occupation.sums).map(lane_q));
+            best_lanes.of = Some(best_i);
+        }
+        debug_assert!(
+            best.iter()
+                .zip(dens)
+                .zip(&next_occupation.sums)
+                .map(lane_q)
+                .zip(best_lanes.lanes.iter())
+                .all(|(a, b)| a.occupation.to_bits() == b.occupation.to_bits()
+                    && a.length.to_bits() == b.length.to_bits()
+                    && a.best_lane_offset == b.best_lane_offset
+                    && a.leads_elsewhere == b.leads_elsewhere)
+                && best_lanes.lanes.len() == best.len()
+        );
+        let l = self.lane_at(lane as usize);
+        let (l_right, l_left) = (l.right, l.left);
+        // a vehicle whose back is still in the junction behind stays on its lane
+        let may_change = v.pos >= v.length;
+        let side_lane = |n: Option<LaneIdx>| n.filter(|_| may_change);
+        let (last, first) = blocked[index];
+        // built in place, each neighbour written where the model reads it: moved between locals, the copies of
+        // the neighbours cost as much as the model's gap checks
+        let mut s = Surroundings {
+            ego: Ego {
+                speed: v.speed,
+                params: &self.types[v.vtype as usize],
+                length: v.length,
+                pos: v.pos,
+                lane_index: index,
+                lane_length: l.length,
+                lane_speed_limit: l.speed_limit,
+                max_speed: self.desired_speed(v, lane),
+            },
+            leader: None,
+            right: None,
+            left: None,
+            best_lanes: &best_lanes.lanes,
+            blocked_ahead: BlockedAhead::default(),
+            road_has_lane_changer: true,
+        };
+        let types = &self.types;
+        s.leader = self.own_leader(types, id, visited[index]);
+        // the vehicles visited so far on a side lane are, mostly, those ahead of the split there
+        if let Some(n) = side_lane(l_right) {
+            let guess = index.checked_sub(1).map_or(usize::MAX, |i| visited[i]);
+            self.neighbours(
+                types,
+                id,
+                n,
+                best,
+                guess,
+                s.right.insert(NeighbourLane::default()),
+            );
+        }
+        if let Some(n) = side_lane(l_left) {
+            let guess = visited.get(index + 1).copied().unwrap_or(usize::MAX);
+            self.neighbours(
+                types,
+                id,
+                n,
+                best,
+                guess,
+                s.left.insert(NeighbourLane::default()),
+            );
+        }
+        if let Some(o) = last {
+            s.blocked_ahead.last = Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
+        }
+        if let Some(o) = first.filter(|&f| Some(f) != last) {
+            s.blocked_ahead.first = Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
+        }
+        let mem = &mut self.veh[id as usize]
+            .lc
+            .as_deref_mut()
+            .expect("recorded at the pass's start")
+            .mem;
+        let d = self.lc_model.decide(mem, &s);
+        let dt = self.spec.step_s;
+        for m in &d.messages {
+            match *m {
+                Message::SpeedAdvice { to, speed, state } => {
+                    let to = to as VehicleId;
+                    let v = &mut self.veh[to as usize];
+                    let own = v.speed;
+                    v.lc.get_or_insert_default()
+                        .mem
+                        .inform(speed, state, own, dt);
+                }
+                Message::KeepRoom { to, length } => {
+                    self.veh[to as usize]
+                        .lc
+                        .get_or_insert_default()
+                        .mem
+                        .keep_room(length);
+                }
+            }
+        }
+        for side in &d.urgent_blocked {
+            let t = (index as i32 + side.offset()) as usize;
+            if let Some(b) = blocked.get_mut(t) {
+                b.0 = Some(id);
+                b.1.get_or_insert(id);
+            }
+        }
+        let Some(side) = d.change else {
+            return index;
+        };
+        let target = match side {
+            Side::Right => l_right,
+            Side::Left => l_left,
+        }
+        .expect("the model changes only to an existing lane");
+        self.move_to_lane(id, target);
+        next_occupation.of = None;
+        best_lanes.of = None;
+        let target_index = self.lane_at(target as usize).index as usize;
+        let offset = self.best_cache.store[best_i as usize][target_index].best_lane_offset;
+        if let Some(rec) = self.veh[id as usize].lc.as_deref_mut() {
+            rec.best_lane_offset = offset;
+        }
+        self.metrics.lane_changes += 1;
+        self.metrics.lane_change_reasons.count(d.reason);
+        target_index
+    }
+
+    /// Moves a vehicle to `target`, a neighbour lane of its road, at the same position, and follows the route
+    /// from there (the lanes' occupations change: within the pass, `NextOccupation` must be cleared after it).
+    pub(in crate::sim) fn move_to_lane(&mut self, id: VehicleId, target: LaneIdx) {
+        let (old, pos, route, rp, vtype, occupancy) = {
+            let v = &self.veh[id as usize];
+            let occupancy = self.brutto_length(id);
+            (
+                v.lane,
+                v.pos,
+                v.route,
+                v.route_pos as usize,
+                v.vtype,
+                occupancy,
+            )
+        };
+        if let Some(b) = self.lane_brutto.get_mut(old as usize) {
+            *b -= occupancy;
+        }
+        if let Some(b) = self.lane_brutto.get_mut(target as usize) {
+            *b += occupancy;
+        }
+        if let Some(i) = self.index_in_lane(id, old) {
+            self.lane_veh[old as usize].remove(i);
+        }
+        // behind every vehicle at its position or ahead
+        let at = self.queue_index_behind(target, pos, |o, p| o < p);
+        self.lane_veh[target as usize].insert(at, id);
+        let key = (route, rp as u32, target, vtype);
+        let new_route = match self.best_cache.after_change.get(&key) {
+            Some(&r) => r,
+            None => {
+                let r = self.route_after_change(route, rp, target, vtype);
+                self.best_cache.after_change.insert(key, r);
+                r
+            }
+        };
+        let v = &mut self.veh[id as usize];
+        v.lane = target;
+        v.route = new_route;
+    }
+
+    /// The route of a vehicle of type `vtype` on `route` that changes to `target` at lane `rp` of it: the same
+    /// lanes before, the path from `target` after.
+    fn route_after_change(&mut self, route: u32, rp: usize, target: LaneIdx, vtype: u16) -> u32 {
+        let r = &self.routes[route as usize];
+        let k = r.road_k[rp] as usize;
+        let roads: Vec<usize> = r.roads.clone();
+        let mut lanes: Vec<LaneIdx> = r.lanes.0[..rp].to_vec();
+        // the path on from the new lane: at each road the link a vehicle of this type entering it would take
+        let best_at: Vec<u32> = (k..roads.len().saturating_sub(1))
+            .map(|j| self.best_lanes_at(route, j, vtype))
+            .collect();
+        let store = &self.best_cache.store;
+        let (rest, dead_end) = self.net.lane_path(target, &roads[k..], |j, i| {
+            store[best_at[j] as usize][i].next_link
+        });
+        lanes.extend(rest);
+        self.add_lane_route(lanes, roads, dead_end)
+    }
+
+    /// `o` as the model sees it, at `gap`.
+    /// `types` is `self.types`, passed apart so that the neighbours borrow only it while the pass writes the
+    /// vehicle's memory.
+    fn other<'t>(&self, types: &'t Table<CfModel>, o: VehicleId, gap: f64) -> Other<'t> {
+        let ov = &self.veh[o as usize];
+        let rec = ov.lc.as_deref();
+        Other {
+            id: o as u64,
+            gap,
+            speed: ov.speed,
+            accel: rec.map_or(0.0, |r| r.accel),
+            params: &types[ov.vtype as usize],
+            length: ov.length,
+            max_speed: self.desired_speed(ov, ov.lane),
+            stopped: false,
+            lc_state: rec.map_or(0, |r| r.mem.own_state),
+        }
+    }
+
+    /// The gap from `id`'s front to the back of `o`, a vehicle ahead on the same road (minus `id`'s min gap).
+    fn gap_ahead_same_road(&self, id: VehicleId, o: VehicleId) -> f64 {
+        let (v, ov) = (&self.veh[id as usize], &self.veh[o as usize]);
+        ov.pos - ov.length - v.pos - self.types[v.vtype as usize].min_gap
+    }
+
+    /// The leader on the own lane, or across its end along the route; `guess`: where `id` likely is in its lane's
+    /// queue (taken when it is there, else searched).
+    pub(in crate::sim) fn own_leader<'t>(
+        &self,
+        types: &'t Table<CfModel>,
+        id: VehicleId,
+        guess: usize,
+    ) -> Option<Other<'t>> {
+        let v = &self.veh[id as usize];
+        let q = &self.lane_veh[v.lane as usize];
+        let qi = if q.get(guess) == Some(&id) {
+            guess
+        } else {
+            self.index_in_lane(id, v.lane)?
+        };
+        if qi > 0 {
+            let o = q[qi - 1];
+            return Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
+        }
+        let r = &self.routes[v.route as usize];
+        let lanes = &r.lanes.0[v.route_pos as usize + 1..];
+        self.first_ahead(
+            types,
+            id,
+            lanes.iter().copied(),
+            self.lane_at(v.lane as usize).length - v.pos,
+        )
+    }
+
+    /// The lanes ahead along a lane's best continuation (`roads`, its road lanes), from its link `first` on:
+    /// each junction connection, then the road lane it leads to.
+    fn continuation_lanes<'a>(
+        &'a self,
+        first: LinkIdx,
+        roads: &'a [LaneIdx],
+    ) -> impl Iterator<Item = LaneIdx> + 'a {
+        let mut link = Some(first);
+        // roads[0] is the lane `first` leads to
+        let mut next = 1;
+        std::iter::from_fn(move || {
+            let lk = self.link_at(link.take()? as usize);
+            link = roads.get(next).and_then(|&to| {
+                self.lane_at(lk.to_lane as usize)
+                    .out_links
+                    .iter()
+                    .copied()
+                    .find(|&k| self.link_at(k as usize).to_lane == to)
+            });
+            next += 1;
+            Some([lk.via_lane, lk.to_lane])
+        })
+        .flatten()
+    }
+
+    /// The last vehicle on the first occupied lane of `lanes` (which start `seen` m ahead of `id`'s front), looked
+    /// for as SUMO's lane changer does past the end of a lane (`getRealLeader`, `getLeaderOnConsecutive`): only
+    /// when the end lies within the ego's braking distance plus min gap, and on the lanes that start within it
+    /// (and the road lane after a junction connection); a vehicle farther ahead is no leader for lane changing.
+    fn first_ahead<'t>(
+        &self,
+        types: &'t Table<CfModel>,
+        id: VehicleId,
+        lanes: impl IntoIterator<Item = LaneIdx>,
+        mut seen: f64,
+    ) -> Option<Other<'t>> {
+        let v = &self.veh[id as usize];
+        let p = &self.types[v.vtype as usize];
+        let mut dist = p.brake_gap(v.speed, p.decel, p.tau) + p.min_gap;
+        if seen > dist {
+            return None;
+        }
+        for l in lanes {
+            if let Some(&o) = self.lane_veh[l as usize].last() {
+                let ov = &self.veh[o as usize];
+                return Some(self.other(types, o, seen + ov.pos - ov.length - p.min_gap));
+            }
+            let lane_max = self.desired_speed(v, l);
+            if lane_max < v.speed {
+                dist = p.brake_gap(lane_max, p.decel, p.tau);
+            }
+            seen += self.lane_at(l as usize).length;
+            if seen > dist && !matches!(self.lane_at(l as usize).kind, LaneKind::Via(_)) {
+                break;
+            }
+        }
+        None
+    }
+
+    /// Leader and follower of `id` on neighbour lane `n` of its road, as SUMO's lane changer finds them, written
+    /// into `out`: the leader is the nearest vehicle already visited in this pass (front ahead of `id`'s front),
+    /// the follower the next one, even when it drives alongside (then its gap is negative); across the lane's end
+    /// along its best continuation, and across its start through the connections into it. `guess`: the likely
+    /// index of the split in `n`'s queue (taken when right, else searched).
+    // inlined: its two neighbours are then written where the model reads them, not copied there
+    #[inline(always)]
+    pub(in crate::sim) fn neighbours<'t>(
+        &self,
+        types: &'t Table<CfModel>,
+        id: VehicleId,
+        n: LaneIdx,
+        best: &[BestLane],
+        guess: usize,
+        out: &mut NeighbourLane<'t>,
+    ) {
+        let v = &self.veh[id as usize];
+        let back = v.pos - v.length;
+        let q = &self.lane_veh[n as usize];
+        // front first; at the ego's very position, a vehicle on the lane to the right was visited first (the pass
+        // takes the rightmost lane on a tie) and leads, one on the lane to the left follows
+        let n_is_right = self.lane_at(n as usize).index < self.lane_at(v.lane as usize).index;
+        let split = if n_is_right {
+            self.queue_index_behind_near(n, v.pos, guess, |o, p| o < p)
+        } else {
+            self.queue_index_behind_near(n, v.pos, guess, |o, p| o <= p)
+        };
+        if split > 0 {
+            let o = q[split - 1];
+            out.leader = Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
+        } else {
+            let nl = self.lane_at(n as usize);
+            let nq = &best[nl.index as usize];
+            out.leader = nq.next_link.and_then(|link| {
+                let lanes = self.continuation_lanes(link, &nq.continuation);
+                self.first_ahead(types, id, lanes, nl.length - v.pos)
+            });
+        }
+        if let Some(&o) = q.get(split) {
+            let ov = &self.veh[o as usize];
+            out.follower = Some(self.other(
+                types,
+                o,
+                back - ov.pos - self.types[ov.vtype as usize].min_gap,
+            ));
+        } else {
+            // behind the lane's start: the first vehicle on a connection into it, or on that connection's lane
+            let mut found: Option<Other> = None;
+            for &link in &self.lane_at(n as usize).in_links {
+                let lk = self.link_at(link as usize);
+                let via_len = self.lane_at(lk.via_lane as usize).length;
+                let from_len = self.lane_at(lk.from_lane as usize).length;
+                let cand = if let Some(&o) = self.lane_veh[lk.via_lane as usize].first() {
+                    Some((o, back + via_len - self.veh[o as usize].pos))
+                } else {
+                    self.lane_veh[lk.from_lane as usize]
+                        .first()
+                        .map(|&o| (o, back + via_len + from_len - self.veh[o as usize].pos))
+                };
+                if let Some((o, dist)) = cand {
+                    let gap = dist - self.types[self.veh[o as usize].vtype as usize].min_gap;
+                    if found.is_none_or(|f| gap < f.gap) {
+                        found = Some(self.other(types, o, gap));
+                    }
+                }
+            }
+            out.follower = found;
+        }
+    }
+
+    /// The index in lane `l`'s queue (front first, positions falling) of its first vehicle whose position `p`
+    /// satisfies `behind(p, pos)` (the queue's length if none), by bisection: the pass asks this of every
+    /// vehicle, and a linear scan made it quadratic in the vehicles per lane.
+    fn queue_index_behind(&self, l: LaneIdx, pos: f64, behind: impl Fn(f64, f64) -> bool) -> usize {
+        let q = &self.lane_veh[l as usize];
+        let i = q.partition_point(|&o| !behind(self.veh[o as usize].pos, pos));
+        debug_assert_eq!(
+            Some(i),
+            q.iter()
+                .position(|&o| behind(self.veh[o as usize].pos, pos))
+                .or(Some(q.len())),
+            "lane {l} is not ordered front first"
+        );
+        i
+    }
+
+    /// [`Self::queue_index_behind`], checked first at `guess`: the index there when the vehicle before it (if any)
+    /// is not behind and the one at it (if any) is, the one index that satisfies both in an ordered queue.
+    #[inline(always)]
+    fn queue_index_behind_near(
+        &self,
+        l: LaneIdx,
+        pos: f64,
+        guess: usize,
+        behind: impl Fn(f64, f64) -> bool,
+    ) -> usize {
+        let q = &self.lane_veh[l as usize];
+        let is_behind = |i: usize| behind(self.veh[q[i] as usize].pos, pos);
+        if guess <= q.len()
+            && (guess == 0 || !is_behind(guess - 1))
+            && (guess == q.len() || is_behind(guess))
+        {
+            debug_assert_eq!(guess, self.queue_index_behind(l, pos, &behind));
+            return guess;
+        }
+        self.queue_index_behind(l, pos, behind)
+    }
+
+    /// Where `id` is in lane `l`'s queue.
+    fn index_in_lane(&self, id: VehicleId, l: LaneIdx) -> Option<usize> {
+        let q = &self.lane_veh[l as usize];
+        let pos = self.veh[id as usize].pos;
+        let from = self.queue_index_behind(l, pos, |o, p| o <= p);
+        let i = q
+            .iter()
+            .skip(from)
+            .take_while(|&&o| self.veh[o as usize].pos == pos)
+            .position(|&o| o == id)
+            .map(|i| from + i);
+        debug_assert_eq!(i, q.iter().position(|&o| o == id), "lane {l}");
+        i
+    }
+
+    /// The lane-change record of a vehicle in the pass (made at its start).
+    fn lc_rec(&mut self, id: VehicleId) -> &mut LcVeh {
+        self.veh[id as usize]
+            .lc
+            .as_deref_mut()
+            .expect("recorded at the pass's start")
+    }
+
+    /// Per-vehicle lane-change records are dropped when a vehicle leaves.
+    pub(in crate::sim) fn forget_lc(&mut self, id: VehicleId) {
+        self.veh[id as usize].lc = None;
+    }
+}
+
+/// The model every vehicle uses (SUMO 1.8's LC2013 defaults), for steps of `dt` seconds.
+pub(in crate::sim) fn default_model(dt: f64) -> Lc2013 {
+    Lc2013::default().for_step(dt)
+}
