@@ -98,7 +98,7 @@ pub struct Simulation {
     /// Per vehicle type, what the hot loop reads (cached from the spec and the IDM parameters).
     type_consts: Table<TypeConsts>,
     /// Lane changing (networks with a road of several lanes only): the model (each vehicle's record is in `Veh`).
-    lc_model: crate::models::lc::Lc2013,
+    lc_model: lane_change::LcModel,
     /// Road sequences of the routes, numbered (routes that differ only in lanes share one).
     road_seqs: std::collections::HashMap<Vec<usize>, u32>,
     /// Best lanes computed so far, by (road sequence, index of the current road in it, vehicle type).

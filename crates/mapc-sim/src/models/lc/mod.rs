@@ -34,6 +34,43 @@ pub use lc2013::{Lc2013, Lc2013Memory, Lc2013Params};
 
 use crate::models::cf::CfModel;
 
+/// What the simulator asks of a lane-change model (the part of SUMO's `MSAbstractLaneChangeModel` mapc uses), in
+/// the order of the module docs: prepare each vehicle's memory after the move, decide vehicle by vehicle,
+/// deliver the messages, and patch each next speed in the following move.
+pub trait LaneChangeModel {
+    /// A vehicle's own record between steps (advices received, probabilities, state bits).
+    type Memory: Default + Clone + std::fmt::Debug;
+
+    /// After the moves, before any message of the pass: forget the last step's advices and marks.
+    fn prepare_step(&self, mem: &mut Self::Memory);
+
+    /// One vehicle's decision in the pass, updating its memory.
+    fn decide(&self, mem: &mut Self::Memory, s: &Surroundings) -> Decision;
+
+    /// Deliver a message another vehicle's decision sent to this one (`own_speed`: its speed now).
+    fn receive(&self, mem: &mut Self::Memory, message: &Message, own_speed: f64);
+
+    /// The speed for the next step between the car-following bounds `min` and `max`, `wanted` being the
+    /// car-following speed (SUMO's `patchSpeed`); `desired_speed` is the vehicle's highest speed on its lane,
+    /// `best_lane_offset` that of its lane.
+    #[allow(clippy::too_many_arguments)]
+    fn patch_speed(
+        &self,
+        mem: &mut Self::Memory,
+        speed: f64,
+        params: &CfModel,
+        desired_speed: f64,
+        road_has_lane_changer: bool,
+        best_lane_offset: i32,
+        min: f64,
+        wanted: f64,
+        max: f64,
+    ) -> f64;
+
+    /// The vehicle's state bits (SUMO's `getLaneChangeState` of its own lane).
+    fn state(&self, mem: &Self::Memory) -> u32;
+}
+
 /// SUMO's `LaneChangeAction` bits (`SUMOVehicleClass.h`), with SUMO's values.
 pub mod lca {
     pub const STAY: u32 = 1;

@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::models::lc::{
-    BlockedAhead, Ego, LaneQ, Lc2013, Lc2013Memory, Message, NeighbourLane, Other, Side,
+    BlockedAhead, Ego, LaneChangeModel, LaneQ, Lc2013, Message, NeighbourLane, Other, Side,
     Surroundings,
 };
 use crate::network::best_lanes::BestLane;
@@ -14,7 +14,7 @@ use std::collections::HashMap;
 /// A vehicle's lane-change record between steps.
 #[derive(Clone, Debug, Default)]
 pub(in crate::sim) struct LcVeh {
-    pub(in crate::sim) mem: Lc2013Memory,
+    pub(in crate::sim) mem: <LcModel as LaneChangeModel>::Memory,
     /// Its speed at the last pass, for its acceleration in the next.
     prev_speed: f64,
     accel: f64,
@@ -108,8 +108,8 @@ impl Simulation {
         let Some(rec) = self.veh[id as usize].lc.as_deref_mut() else {
             return wanted;
         };
-        rec.mem.patch_speed(
-            &self.lc_model,
+        self.lc_model.patch_speed(
+            &mut rec.mem,
             speed,
             &self.types[vtype],
             desired,
@@ -151,7 +151,7 @@ impl Simulation {
                 });
                 rec.accel = (speed - rec.prev_speed) / dt;
                 rec.prev_speed = speed;
-                rec.mem.prepare_step();
+                self.lc_model.prepare_step(&mut rec.mem);
             }
         }
         let mut scratch = std::mem::take(&mut self.lc_scratch);
@@ -388,25 +388,12 @@ impl Simulation {
             .expect("recorded at the pass's start")
             .mem;
         let d = self.lc_model.decide(mem, &s);
-        let dt = self.spec.step_s;
         for m in &d.messages {
-            match *m {
-                Message::SpeedAdvice { to, speed, state } => {
-                    let to = to as VehicleId;
-                    let v = &mut self.veh[to as usize];
-                    let own = v.speed;
-                    v.lc.get_or_insert_default()
-                        .mem
-                        .inform(speed, state, own, dt);
-                }
-                Message::KeepRoom { to, length } => {
-                    self.veh[to as usize]
-                        .lc
-                        .get_or_insert_default()
-                        .mem
-                        .keep_room(length);
-                }
-            }
+            let (Message::SpeedAdvice { to, .. } | Message::KeepRoom { to, .. }) = *m;
+            let v = &mut self.veh[to as VehicleId as usize];
+            let own = v.speed;
+            let mem = &mut v.lc.get_or_insert_default().mem;
+            self.lc_model.receive(mem, m, own);
         }
         for side in &d.urgent_blocked {
             let t = (index as i32 + side.offset()) as usize;
@@ -511,7 +498,7 @@ impl Simulation {
             length: ov.length,
             max_speed: self.desired_speed(ov, ov.lane),
             stopped: false,
-            lc_state: rec.map_or(0, |r| r.mem.own_state),
+            lc_state: rec.map_or(0, |r| self.lc_model.state(&r.mem)),
         }
     }
 
@@ -747,6 +734,9 @@ impl Simulation {
 }
 
 /// The model every vehicle uses (SUMO 1.8's LC2013 defaults), for steps of `dt` seconds.
-pub(in crate::sim) fn default_model(dt: f64) -> Lc2013 {
+/// The lane-change model every vehicle drives with.
+pub(in crate::sim) type LcModel = Lc2013;
+
+pub(in crate::sim) fn default_model(dt: f64) -> LcModel {
     Lc2013::default().for_step(dt)
 }

@@ -23,8 +23,8 @@ mod tests;
 
 use super::safety::check_gaps;
 use super::{BlockedAhead, Decision, Ego, LaneQ, Message, Other, Reason, Side, Surroundings, lca};
-use crate::models::cf::CarFollowModel;
 use crate::models::cf::idm::NUMERICAL_EPS;
+use crate::models::cf::{CarFollowModel, CfModel};
 pub use memory::Lc2013Memory;
 use speed::{anticipate_follow_speed, max2, min2};
 
@@ -617,4 +617,60 @@ fn current_dist_disallows(dist: f64, lanes: i32, look_ahead: f64) -> bool {
 /// SUMO's `currentDistAllows`.
 fn current_dist_allows(dist: f64, lanes: i32, look_ahead: f64) -> bool {
     dist / (lanes.abs() as f64) > look_ahead
+}
+
+impl super::LaneChangeModel for Lc2013 {
+    type Memory = Lc2013Memory;
+
+    #[inline]
+    fn prepare_step(&self, mem: &mut Lc2013Memory) {
+        mem.prepare_step();
+    }
+
+    #[inline]
+    fn decide(&self, mem: &mut Lc2013Memory, s: &Surroundings) -> Decision {
+        Lc2013::decide(self, mem, s)
+    }
+
+    /// Advices are read with the step this model was made for ([`Lc2013::for_step`]).
+    #[inline]
+    fn receive(&self, mem: &mut Lc2013Memory, message: &Message, own_speed: f64) {
+        match *message {
+            Message::SpeedAdvice { speed, state, .. } => {
+                mem.inform(speed, state, own_speed, self.decay.dt)
+            }
+            Message::KeepRoom { length, .. } => mem.keep_room(length),
+        }
+    }
+
+    #[inline]
+    fn patch_speed(
+        &self,
+        mem: &mut Lc2013Memory,
+        speed: f64,
+        params: &CfModel,
+        desired_speed: f64,
+        road_has_lane_changer: bool,
+        best_lane_offset: i32,
+        min: f64,
+        wanted: f64,
+        max: f64,
+    ) -> f64 {
+        mem.patch_speed(
+            self,
+            speed,
+            params,
+            desired_speed,
+            road_has_lane_changer,
+            best_lane_offset,
+            min,
+            wanted,
+            max,
+        )
+    }
+
+    #[inline]
+    fn state(&self, mem: &Lc2013Memory) -> u32 {
+        mem.own_state
+    }
 }
