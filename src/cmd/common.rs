@@ -7,7 +7,7 @@ use mapc_scenario::ResolvedScenario;
 use mapc_scenario::transform::SimplifyOptions;
 use mapc_sim::{RunMetrics, SimSpec, TRACE_HEADER};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Which seeds a command runs, and on how many threads (`mapc sim`, `mapc eval`).
 #[derive(clap::Args, Clone, Debug)]
@@ -60,6 +60,53 @@ pub fn load_scenario(name: &str) -> anyhow::Result<ResolvedScenario> {
         name
     };
     ResolvedScenario::load(name).with_context(|| format!("loading scenario `{name}`"))
+}
+
+/// How a SUMO user's scenario is given: a `.sumocfg` as the scenario, or its files as `sumo -n -r -a` takes them.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct SumoInputArgs {
+    /// A SUMO network: run it with --routes and --additional, as `sumo -n NET -r R -a A` (SUMO's defaults for
+    /// every other option).
+    #[arg(long, value_name = "NET", requires = "routes")]
+    pub net: Option<PathBuf>,
+    /// SUMO route files (comma-separated), with --net.
+    #[arg(long, value_name = "R1,R2", value_delimiter = ',')]
+    pub routes: Vec<PathBuf>,
+    /// SUMO additional files (comma-separated), with --net.
+    #[arg(long, value_name = "A1,A2", value_delimiter = ',')]
+    pub additional: Vec<PathBuf>,
+    /// Drop what mapc does not simulate from a SUMO scenario (one warning per kind) instead of refusing it, as
+    /// SUMO's --ignore-route-errors.
+    #[arg(long)]
+    pub skip_unsupported: bool,
+}
+
+/// The scenario `name` names (a scenario file, a `.sumocfg`, a built-in name), or the SUMO files of `sumo`;
+/// what reading a SUMO scenario dropped is printed as warnings.
+pub fn load_scenario_or_sumo(name: &str, sumo: &SumoInputArgs) -> anyhow::Result<ResolvedScenario> {
+    let options = mapc_scenario::sumo::ReadOptions {
+        skip_unsupported: sumo.skip_unsupported,
+    };
+    let rs = match &sumo.net {
+        Some(net) => {
+            let read =
+                mapc_scenario::sumo::from_files(net, &sumo.routes, &sumo.additional, &options)?;
+            ResolvedScenario::from_sumo(read, &net.display().to_string())?
+        }
+        None => {
+            let name = if name == DEFAULT_SCENARIO && !Path::new(name).exists() {
+                BUILTIN_FALLBACK
+            } else {
+                name
+            };
+            ResolvedScenario::load_with(name, &options)
+                .with_context(|| format!("loading scenario `{name}`"))?
+        }
+    };
+    for note in &rs.notes {
+        eprintln!("warning: {note}");
+    }
+    Ok(rs)
 }
 
 /// Seeds of the observed pass that reports the merges' regime.

@@ -1,9 +1,7 @@
 //! `mapc sim`: the all-human baseline of a scenario over many seeds (in parallel), with mean and 95% confidence
 //! interval per metric, and optionally a trajectory trace of the first seed.
 
-use super::common::{
-    DEFAULT_SCENARIO, REGIME_SEEDS, load_scenario, print_regime_lines, write_trace,
-};
+use super::common::{DEFAULT_SCENARIO, REGIME_SEEDS, print_regime_lines, write_trace};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use mapc_sim::{BaselineReport, MeanCi, RunMetrics, Simulation, spec_from_scenario};
@@ -12,9 +10,14 @@ use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scenario file, or a built-in scenario name (simple_merge).
+    /// Scenario file, a SUMO configuration (`.sumocfg`), or a built-in scenario name (simple_merge).
     #[arg(long, default_value = DEFAULT_SCENARIO)]
     pub scenario: String,
+    /// The scenario as the first argument (`mapc sim X.sumocfg`), instead of --scenario.
+    #[arg(value_name = "SCENARIO", conflicts_with = "scenario")]
+    pub input: Option<String>,
+    #[command(flatten)]
+    pub sumo: super::common::SumoInputArgs,
     #[command(flatten)]
     pub runs: super::common::SeedArgs,
     /// Write the first seed's trajectories as CSV (time_s, vehicle_id, vehicle_type, road, pos_on_road_m,
@@ -27,7 +30,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let rs = load_scenario(&args.scenario)?;
+    let rs = super::common::load_scenario_or_sumo(
+        args.input.as_deref().unwrap_or(&args.scenario),
+        &args.sumo,
+    )?;
     let spec = spec_from_scenario(&rs).with_context(|| format!("scenario `{}`", rs.origin))?;
     let fit = mapc_scenario::timing::HorizonFit::of_resolved(&rs);
     if let Some(w) = fit.warning() {

@@ -6,11 +6,9 @@ mod fit;
 
 use super::common::{RouteArgs, map_stem};
 use anyhow::Context;
-use fit::{WindowLengths, corridor_before_m};
+use fit::WindowLengths;
 use mapc_graph::LaneGraph;
-use mapc_scenario::compile::{
-    WindowsOptions, WrittenWindows, corridor_of, prepare_window, prepare_windows,
-};
+use mapc_scenario::compile::{WindowsOptions, WrittenWindows, corridor_of, prepare_windows};
 use mapc_scenario::window::{CutRegion, DemandOverride, Fit, Lengths, WindowRequest};
 use std::path::PathBuf;
 
@@ -114,99 +112,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ramp_vph: args.ramp_vph.clone(),
         every_ramp: args.every_ramp,
     };
-    if args.junction.len() != 1 || args.all || args.join || !args.upstream_m.is_empty() {
-        return run_several(&args, &corridor, &output, &demand, fit);
-    }
-    let (written, files) = prepare_window(
-        &corridor,
-        &args.map,
-        WindowRequest::at(&args.junction[0]).fitted(fit),
-        &args.match_,
-        &output,
-        &demand,
-    )?;
-    // a short human run of what is written: which regime each merge is in under this demand; run before writing,
-    // so that a scenario the simulator refuses is not left behind
-    let regime = regime_of(&files.resolved)?;
-    files.write()?;
-    let cut = &written.cut;
-    let render = match &args.render {
-        Some(png) => {
-            let mut h = mapc_viz::Highlight::window(cut.region(), [cut.junction]);
-            h.title = Some(format!(
-                "{}: window at {} matched to {} ({:.0} / {:.0} / {:.0} m)",
-                map_stem(&args.map),
-                args.junction[0],
-                args.match_,
-                cut.upstream_m,
-                cut.merge_m,
-                cut.downstream_m
-            ));
-            Some(mapc_viz::render_map(&cut.graph, &h, png)?)
-        }
-        None => None,
-    };
-    let multi_lane = cut.graph.roads.iter().any(|r| r.lanes.len() > 1);
-    let lengths = WindowLengths {
-        lengths: Lengths {
-            upstream_m: cut.upstream_m,
-            merge_m: cut.merge_m,
-            downstream_m: cut.downstream_m,
-        },
-        between_m: 0.0,
-        corridor_before_m: corridor_before_m(&cut.graph, &cut.roles, cut.junction),
-        fitted: &cut.fitted,
-    };
-    if args.json {
-        let mut report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
-        report["regime"] = serde_json::to_value(&regime)?;
-        report["observation"] = fit::observation(&written.shape, &lengths);
-        println!("{}", serde_json::to_string_pretty(&report)?);
-        return Ok(());
-    }
-    println!(
-        "window at {} matched to {}: {:.2} m before the merge, {:.2} m of merging road, {:.2} m after",
-        describe(&cut.graph, cut.junction),
-        args.match_,
-        cut.upstream_m,
-        cut.merge_m,
-        cut.downstream_m
-    );
-    for line in fit::lines(&written.shape, &args.match_, &lengths) {
-        println!("  {line}");
-    }
-    for n in &cut.notes {
-        println!("  {n}");
-    }
-    if let Some(t) = &written.timing {
-        println!("  {}", t.note);
-    }
-    for d in &written.demand_notes {
-        println!("  {d}");
-    }
-    println!(
-        "wrote {} and {}",
-        written.scenario.display(),
-        written.graph.display()
-    );
-    if let Some(r) = render {
-        println!("drew {}", r.path.display());
-    }
-    if multi_lane {
-        super::common::print_lanes(&cut.graph, &cut.region());
-    }
-    super::common::print_regime(&regime);
-    Ok(())
-}
-
-/// Several windows (`--junction` repeated, `--all`, `--join` or `--upstream-m`).
-fn run_several(
-    args: &Args,
-    corridor: &LaneGraph,
-    output: &std::path::Path,
-    demand: &DemandOverride,
-    fit: Option<Fit>,
-) -> anyhow::Result<()> {
     let mut requests: Vec<WindowRequest> =
         args.junction.iter().map(|j| WindowRequest::at(j)).collect();
     for (j, m) in &args.upstream_m {
@@ -221,56 +126,74 @@ fn run_several(
         };
         r.upstream_m = Some(*m);
     }
+    // One `--junction` alone (and no `--all` or `--join`, which compile checks) keeps the one-window format: its
+    // scenario, report and render as they always were.
+    let one_window = args.junction.len() == 1 && args.upstream_m.is_empty();
     let (written, files) = prepare_windows(
-        corridor,
+        &corridor,
         &args.map,
         &requests,
         WindowsOptions {
             all: args.all,
             join: args.join,
             fit,
+            one_window,
         },
         &args.match_,
-        output,
-        demand,
+        &output,
+        &demand,
     )?;
-    // the merges' regime under this demand, as for one window: before writing, so that a scenario the simulator
-    // refuses is not left behind
+    // a short human run of what is written: which regime each merge is in under this demand; run before writing,
+    // so that a scenario the simulator refuses is not left behind
     let regime = regime_of(&files.resolved)?;
     files.write()?;
     let render = match &args.render {
-        Some(_) => Some(render_several(&written, args)?),
+        Some(png) => Some(render(&written, &args, png)?),
         None => None,
     };
     let g = &written.cut.graph;
     let lengths_of = |r| region_lengths(g, r);
     if args.json {
         let mut report = written.report(&args.match_, render.as_ref().map(|r| r.path.as_path()));
-        for (w, r) in report["windows"]
-            .as_array_mut()
-            .expect("a list of windows")
-            .iter_mut()
-            .zip(&written.cut.regions)
-        {
-            w["observation"] = fit::observation(&written.shape, &lengths_of(r));
+        let mut observations = written
+            .cut
+            .regions
+            .iter()
+            .map(|r| fit::observation(&written.shape, &lengths_of(r)));
+        if written.one_window {
+            report["observation"] = observations.next().expect("one window");
+        } else {
+            for (w, o) in report["windows"]
+                .as_array_mut()
+                .expect("a list of windows")
+                .iter_mut()
+                .zip(observations)
+            {
+                w["observation"] = o;
+            }
         }
-        report["timing"] = serde_json::to_value(&written.timing)?;
         report["regime"] = serde_json::to_value(&regime)?;
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
     for r in &written.cut.regions {
         let merges: Vec<String> = r.merges.iter().map(|j| describe(g, *j)).collect();
+        let along = if written.one_window {
+            String::new()
+        } else {
+            format!(
+                " ({:.1} m to {:.1} m along the main road)",
+                r.start_m(),
+                r.end_m()
+            )
+        };
         println!(
-            "window at {} matched to {}: {:.2} m before the merge, {:.2} m of merging road, {:.2} m after \
-             ({:.1} m to {:.1} m along the main road)",
+            "window at {} matched to {}: {:.2} m before the merge, {:.2} m of merging road, {:.2} m after{along}",
             merges.join(" + "),
             args.match_,
             r.upstream_m,
             r.merge_m[0],
             r.downstream_m,
-            r.start_m(),
-            r.end_m()
         );
         if r.merges.len() == 1 {
             for line in fit::lines(&written.shape, &args.match_, &lengths_of(r)) {
@@ -290,9 +213,15 @@ fn run_several(
     for d in &written.demand_notes {
         println!("  {d}");
     }
-    if g.roads.iter().any(|r| r.lanes.len() > 1) {
-        let roads: Vec<_> = written.cut.regions.iter().flat_map(|r| r.roads()).collect();
-        super::common::print_lanes(g, &roads);
+    // the lanes: before the files written, or after them for one window (as that report always had them)
+    let print_lanes = || {
+        if g.roads.iter().any(|r| r.lanes.len() > 1) {
+            let roads: Vec<_> = written.cut.regions.iter().flat_map(|r| r.roads()).collect();
+            super::common::print_lanes(g, &roads);
+        }
+    };
+    if !written.one_window {
+        print_lanes();
     }
     println!(
         "wrote {} and {}",
@@ -301,6 +230,9 @@ fn run_several(
     );
     if let Some(r) = render {
         println!("drew {}", r.path.display());
+    }
+    if written.one_window {
+        print_lanes();
     }
     super::common::print_regime(&regime);
     Ok(())
@@ -314,38 +246,48 @@ fn regime_of(resolved: &mapc_scenario::ResolvedScenario) -> anyhow::Result<mapc_
 }
 
 /// The corridor with every window highlighted.
-fn render_several(
+fn render(
     written: &WrittenWindows,
     args: &Args,
+    picture: &std::path::Path,
 ) -> anyhow::Result<mapc_viz::MapRenderSummary> {
     let cut = &written.cut;
     let roads = cut.regions.iter().flat_map(|r| r.roads());
     let merges = cut.regions.iter().flat_map(|r| r.merges.clone());
     let mut h = mapc_viz::Highlight::window(roads, merges);
-    let names: Vec<String> = cut
-        .regions
-        .iter()
-        .map(|r| {
-            r.merges
-                .iter()
-                .map(|j| j.to_string())
-                .collect::<Vec<_>>()
-                .join("+")
-        })
-        .collect();
-    h.title = Some(format!(
-        "{}: {} windows ({}) matched to {}",
-        map_stem(&args.map),
-        cut.regions.len(),
-        names.join(", "),
-        args.match_
-    ));
-    h.label = Some("transfer windows".to_string());
-    Ok(mapc_viz::render_map(
-        &cut.graph,
-        &h,
-        args.render.as_ref().unwrap(),
-    )?)
+    if written.one_window {
+        let r = &cut.regions[0];
+        h.title = Some(format!(
+            "{}: window at {} matched to {} ({:.0} / {:.0} / {:.0} m)",
+            map_stem(&args.map),
+            args.junction[0],
+            args.match_,
+            r.upstream_m,
+            r.merge_m[0],
+            r.downstream_m
+        ));
+    } else {
+        let names: Vec<String> = cut
+            .regions
+            .iter()
+            .map(|r| {
+                r.merges
+                    .iter()
+                    .map(|j| j.to_string())
+                    .collect::<Vec<_>>()
+                    .join("+")
+            })
+            .collect();
+        h.title = Some(format!(
+            "{}: {} windows ({}) matched to {}",
+            map_stem(&args.map),
+            cut.regions.len(),
+            names.join(", "),
+            args.match_
+        ));
+        h.label = Some("transfer windows".to_string());
+    }
+    Ok(mapc_viz::render_map(&cut.graph, &h, picture)?)
 }
 
 /// A region's lengths for the report (a joined region: its merging roads together, the main road between).

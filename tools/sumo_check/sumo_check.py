@@ -4,6 +4,8 @@
   sumo_check.py baseline SCENARIO [--seeds 0-99]           humans in mapc and in SUMO
   sumo_check.py policy SCENARIO --policy FILE [--seeds ..]  a mapc policy driving the AVs in mapc and in SUMO,
                                                            beside each simulator's humans
+  sumo_check.py scenario X.sumocfg [--seeds 0-19]          a SUMO user's scenario as it is, in SUMO 1.8 and in
+                                                           mapc (`mapc sim X.sumocfg`)
 
 SCENARIO is what `mapc export` takes (a scenario file or a built-in name); the scenario is exported with
 `mapc export SCENARIO --sumo WORK/export` first. Figures: mean ± 95 % CI (Student t) over the seeds, Welch t.
@@ -219,7 +221,7 @@ def print_table(columns, comparisons, points=()):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=["baseline", "policy"])
+    ap.add_argument("mode", choices=["baseline", "policy", "scenario"])
     ap.add_argument("scenario")
     ap.add_argument("--policy", help="a centralized mapc policy file (policies/*.json)")
     ap.add_argument("--seeds", default="0-99", help="SUMO seeds and as many mapc seeds from 0 (default 0-99)")
@@ -229,7 +231,15 @@ def main():
     ap.add_argument("--json", dest="json_out", help="also write every run and summary here")
     ap.add_argument("--sumo-runs", help="baseline: reuse SUMO's runs from an earlier --json of the same export "
                                         "and seeds instead of running SUMO")
+    ap.add_argument("--skip-unsupported", action="store_true",
+                    help="scenario: mapc drops what it does not simulate (SUMO still runs it)")
+    ap.add_argument("--end", type=float, help="scenario: end time for SUMO where the configuration has none")
     a = ap.parse_args()
+    if a.mode == "scenario":
+        import scenario
+        root = os.path.dirname(os.path.dirname(HERE))
+        scenario.compare(a, [a.mapc or os.path.join(root, "target", "release", "mapc")], parse_seeds(a.seeds))
+        return
     if a.mode == "policy" and not a.policy:
         ap.error("policy mode needs --policy FILE")
     root = os.path.dirname(os.path.dirname(HERE))

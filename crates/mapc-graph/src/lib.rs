@@ -48,6 +48,7 @@ impl LaneGraph {
             junctions: Vec::new(),
             roads: Vec::new(),
             connections: Vec::new(),
+            lights: Vec::new(),
             warnings: Warnings::default(),
         }
     }
@@ -133,6 +134,7 @@ pub(crate) mod tests {
                 via_length_m: 10.0,
                 via_speed_mps: None,
                 right_of_way: row,
+                signal: None,
                 right_of_way_overridden: false,
                 provenance: Provenance::default(),
             });

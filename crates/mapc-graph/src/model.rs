@@ -244,6 +244,36 @@ pub struct Connection {
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub right_of_way_overridden: bool,
     pub provenance: Provenance,
+    /// The traffic light that controls this connection, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signal: Option<Signal>,
+}
+
+/// A connection's traffic light: the light's id and the connection's index in its phases' states (SUMO's `tl`
+/// and `linkIndex`).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Signal {
+    pub light: String,
+    pub index: u32,
+}
+
+/// A fixed-time traffic light (SUMO's `tlLogic type="static"`, the program that runs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrafficLight {
+    pub id: String,
+    /// The program's name (SUMO's `programID`).
+    pub program: String,
+    /// The cycle starts this many seconds after the run's begin.
+    pub offset_s: f64,
+    pub phases: Vec<SignalPhase>,
+}
+
+/// One phase: every controlled connection's state for `duration_s` (SUMO's letters: `G` green with priority,
+/// `g` green yielding, `y` yellow, `r` red, `o`/`O` off).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SignalPhase {
+    pub duration_s: f64,
+    pub state: String,
 }
 
 /// The input format a graph was read from.
@@ -303,6 +333,9 @@ pub struct LaneGraph {
     /// Sorted by id.
     pub roads: Vec<Road>,
     pub connections: Vec<Connection>,
+    /// Fixed-time traffic lights, by id.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lights: Vec<TrafficLight>,
     #[serde(default)]
     pub warnings: Warnings,
 }

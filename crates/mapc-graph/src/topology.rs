@@ -75,6 +75,17 @@ impl LaneGraph {
 
     /// Recompute every junction's road lists and kind from the roads (after roads were added, removed or cut).
     pub fn rebuild_junction_links(&mut self) {
+        // a light no connection is controlled by any more (cut away with its roads) is dropped with them
+        let used: std::collections::HashSet<&str> = self
+            .connections
+            .iter()
+            .filter_map(|c| c.signal.as_ref().map(|s| s.light.as_str()))
+            .collect();
+        let lights = std::mem::take(&mut self.lights);
+        self.lights = lights
+            .into_iter()
+            .filter(|l| used.contains(l.id.as_str()))
+            .collect();
         let mut incoming: HashMap<JunctionId, Vec<RoadId>> = HashMap::new();
         let mut outgoing: HashMap<JunctionId, Vec<RoadId>> = HashMap::new();
         for r in &self.roads {

@@ -33,10 +33,12 @@ mod osm_pbf;
 mod osm_xml;
 mod summary;
 mod sumo;
+mod sumo_xml;
 mod xml;
 
 pub use error::ImportError;
 pub use summary::Summary;
+pub use sumo_xml::{SumoElement, read_sumo_xml};
 
 use mapc_graph::{LaneGraph, MapcFile, RightOfWay, Source, SourceFormat, filekind};
 use std::io::BufReader;

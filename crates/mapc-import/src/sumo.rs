@@ -59,6 +59,8 @@ struct SumoConnection {
     to_lane: u8,
     via: Option<String>,
     state: Option<String>,
+    /// The traffic light and the index in its states (`tl`, `linkIndex`).
+    signal: Option<(String, u32)>,
 }
 
 type Attrs<'a> = Vec<(&'a str, std::borrow::Cow<'a, str>)>;
@@ -144,6 +146,10 @@ struct Net {
     edges: Vec<SumoEdge>,
     junctions: Vec<SumoJunction>,
     connections: Vec<SumoConnection>,
+    /// Fixed-time lights; a later program of the same light replaces an earlier one (SUMO runs the last loaded).
+    lights: Vec<mapc_graph::TrafficLight>,
+    /// The light whose phases are being read.
+    in_light: bool,
 }
 
 fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
@@ -305,15 +311,42 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                             .push((index, response));
                     }
                     (2, "tlLogic") => {
-                        // Signal programs are not simulated: the connections' states (`o`/`O` for a
-                        // signal that is off, the request table otherwise) give the right of way.
-                        net.notes.push((
-                            "traffic_light_ignored",
-                            format!(
-                                "tlLogic {}: signal program not simulated; right of way from the connections",
-                                el.get("id").unwrap_or("?")
-                            ),
-                        ));
+                        let id = el.req("id")?.to_string();
+                        net.in_light = false;
+                        if el.get("type").unwrap_or("static") != "static" {
+                            // actuated and other programs are not simulated: the connections' states give the
+                            // right of way
+                            net.notes.push((
+                                "traffic_light_ignored",
+                                format!(
+                                    "tlLogic {id}: a `{}` program is not simulated; right of way from the connections",
+                                    el.get("type").unwrap_or("?")
+                                ),
+                            ));
+                        } else {
+                            net.lights.retain(|l| l.id != id);
+                            net.lights.push(mapc_graph::TrafficLight {
+                                id,
+                                program: el.get("programID").unwrap_or("0").to_string(),
+                                offset_s: el.num("offset")?.unwrap_or(0.0),
+                                phases: Vec::new(),
+                            });
+                            net.in_light = !empty;
+                        }
+                    }
+                    (3, "phase") if net.in_light => {
+                        let duration_s = el.req_num("duration")?;
+                        if !(duration_s > 0.0) {
+                            return Err(
+                                el.err(format!("phase duration {duration_s}: must be positive"))
+                            );
+                        }
+                        let state = el.req("state")?.to_string();
+                        net.lights
+                            .last_mut()
+                            .expect("in a light")
+                            .phases
+                            .push(mapc_graph::SignalPhase { duration_s, state });
                     }
                     (2, "connection") => {
                         net.connections.push(SumoConnection {
@@ -328,6 +361,10 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                                 .ok_or_else(|| el.err("missing `toLane`"))?,
                             via: el.get("via").map(str::to_string),
                             state: el.get("state").map(str::to_string),
+                            signal: match (el.get("tl"), el.int::<u32>("linkIndex")?) {
+                                (Some(tl), Some(i)) => Some((tl.to_string(), i)),
+                                _ => None,
+                            },
                         });
                     }
                     _ => {}
@@ -356,7 +393,8 @@ fn osm_id_in(sumo_id: &str) -> Option<i64> {
 
 /// Read a net.xml into a lane graph.
 pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, ParseError> {
-    let net = parse(input)?;
+    let mut net = parse(input)?;
+    let mut net_lights = std::mem::take(&mut net.lights);
     let mut warnings = Warnings::default();
     for (kind, example) in &net.notes {
         warnings.add(kind, example.clone());
@@ -675,6 +713,10 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             via_length_m: via_length,
             via_speed_mps: via_speed,
             right_of_way,
+            signal: c.signal.as_ref().map(|(light, index)| mapc_graph::Signal {
+                light: light.clone(),
+                index: *index,
+            }),
             right_of_way_overridden: false,
             provenance,
         });
@@ -684,6 +726,21 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     graph.junctions = junctions;
     graph.roads = roads;
     graph.connections = connections;
+    // a light with no phase, or one whose states do not reach a connection's index, is not simulated
+    let mut lights = std::mem::take(&mut net_lights);
+
+    lights.retain(|l| !l.phases.is_empty());
+    lights.sort_by(|a, b| a.id.cmp(&b.id));
+    for c in &mut graph.connections {
+        if let Some(s) = &c.signal
+            && !lights.iter().any(|l| {
+                l.id == s.light && l.phases.iter().all(|p| (s.index as usize) < p.state.len())
+            })
+        {
+            c.signal = None;
+        }
+    }
+    graph.lights = lights;
     graph.warnings = warnings;
     graph.rebuild_junction_links();
     Ok(graph)

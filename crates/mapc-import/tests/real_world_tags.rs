@@ -162,7 +162,7 @@ fn sumo(speed: &str, extras: u8) -> String {
     if extras & 2 != 0 {
         net = net.replacen(
             "</net>",
-            "    <tlLogic id=\"center\" type=\"static\" programID=\"0\" offset=\"0\">\n        <phase duration=\"42\" state=\"GG\"/>\n    </tlLogic>\n    <roundabout nodes=\"a b\" edges=\"x y\"/>\n</net>",
+            "    <tlLogic id=\"center\" type=\"actuated\" programID=\"0\" offset=\"0\">\n        <phase duration=\"42\" state=\"GG\"/>\n    </tlLogic>\n    <roundabout nodes=\"a b\" edges=\"x y\"/>\n</net>",
             1,
         );
     }

@@ -12,8 +12,8 @@ use crate::simplify::{
 use crate::transform::pick_route::describe_junction;
 use crate::transform::{Corridor, CorridorRoles, SimplifyOptions, TransformError};
 use crate::window::{
-    DemandOverride, Fit, FittedLength, Overlap, SourceShape, WindowCut, WindowRequest, WindowsCut,
-    cut_window, cut_windows, junction_name, window_scenario, windows_scenario,
+    DemandOverride, Fit, FittedLength, Overlap, SourceShape, WindowRequest, WindowsCut,
+    cut_windows, junction_name, windows_scenario,
 };
 use mapc_graph::LaneGraph;
 use serde_json::{Value, json};
@@ -169,75 +169,6 @@ pub fn corridor_of(
     first.expect("one attempt at least").map_err(transform)
 }
 
-/// A window cut from a corridor and written: the scenario file and its cut corridor graph beside it.
-#[derive(Clone, Debug)]
-pub struct WrittenWindow {
-    pub cut: WindowCut,
-    pub shape: SourceShape,
-    pub scenario: PathBuf,
-    pub graph: PathBuf,
-    /// The warm-up picked for a corridor longer than the source's timing allows (`None`: the source's kept).
-    pub timing: Option<crate::timing::PickedTiming>,
-    /// What demand each road of several lanes got (the source's per lane on each lane); empty on one lane.
-    pub demand_notes: Vec<String>,
-}
-
-/// Cut the window of `corridor` (read from `map`) around one merge (a junction id, or a [`WindowRequest`] to fit
-/// it to what the map has) matched to the scenario `source` (a built-in name or a file), and write it to
-/// `output` (a `.toml`; the graph goes beside it as `<name>.graph.json`). Both are checked to load back as a sound
-/// scenario before either is written ([`CheckedFiles`]); on any error nothing is written. Demand overrides must be zero or positive rates (`--main-vph`, `--merge-vph`).
-pub fn write_window(
-    corridor: &LaneGraph,
-    map: &Path,
-    request: impl Into<WindowRequest>,
-    source: &str,
-    output: &Path,
-    demand: &DemandOverride,
-) -> Result<WrittenWindow, CompileError> {
-    let (window, files) = prepare_window(corridor, map, request, source, output, demand)?;
-    files.write()?;
-    Ok(window)
-}
-
-/// [`write_window`] up to the writing: the window and its files, checked, for a caller that has more to check
-/// before anything is written.
-pub fn prepare_window(
-    corridor: &LaneGraph,
-    map: &Path,
-    request: impl Into<WindowRequest>,
-    source: &str,
-    output: &Path,
-    demand: &DemandOverride,
-) -> Result<(WrittenWindow, CheckedFiles), CompileError> {
-    check_demand(demand)?;
-    let (resolved, shape) = source_shape(source)?;
-    let transform = |error: TransformError| CompileError::Transform {
-        path: map.to_path_buf(),
-        error,
-    };
-    let cut = cut_window(corridor, request, &shape).map_err(transform)?;
-    let (name, graph_file, graph) = output_names(output);
-    let (mut scenario, demand_notes) =
-        window_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
-    let timing = bounded(
-        &mut scenario,
-        &cut.graph,
-        &[cut.main_entry, cut.merge_entry],
-    )?;
-    let files = CheckedFiles::check(&cut.graph, &graph, &scenario, output)?;
-    Ok((
-        WrittenWindow {
-            cut,
-            shape,
-            scenario: output.to_path_buf(),
-            graph,
-            timing,
-            demand_notes,
-        },
-        files,
-    ))
-}
-
 /// Demand overrides must be zero or positive rates.
 fn check_demand(demand: &DemandOverride) -> Result<(), CompileError> {
     let per_road = demand
@@ -329,7 +260,7 @@ fn bounded(
     })
 }
 
-/// Several windows cut from a corridor and written.
+/// Windows cut from a corridor and written: the scenario file and its cut corridor graph beside it.
 #[derive(Clone, Debug)]
 pub struct WrittenWindows {
     pub cut: WindowsCut,
@@ -340,9 +271,11 @@ pub struct WrittenWindows {
     pub timing: Option<crate::timing::PickedTiming>,
     /// What demand each road of several lanes got (the source's per lane on each lane); empty on one lane.
     pub demand_notes: Vec<String>,
+    /// Written and reported in the one-window format ([`WindowsOptions::one_window`]).
+    pub one_window: bool,
 }
 
-/// Which windows [`write_windows`] cuts besides those asked for, and how.
+/// Which windows [`write_windows`] cuts besides those asked for, and how they are written.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct WindowsOptions {
     /// A window at every merge of the corridor whose window fits, the first of two overlapping ones kept.
@@ -352,10 +285,41 @@ pub struct WindowsOptions {
     /// Every window without a fit of its own is fitted to what the map has (`--fit`); with `all`, merges that
     /// fit only above the floor are skipped and say why.
     pub fit: Option<Fit>,
+    /// One window asked for alone (one request, neither `all` nor `join`) is written and reported as before
+    /// several windows existed: `[control] region` and `window`, demand on its own merging road, the flat
+    /// report; ignored otherwise.
+    pub one_window: bool,
 }
 
-/// Cut the windows of `requests` (and more, as `options` says) matched to `source`, and write them as one
-/// scenario with one controlled region per window; on any error nothing is written.
+/// One window: [`write_windows`] of a list of one, in the one-window format.
+pub fn write_window(
+    corridor: &LaneGraph,
+    map: &Path,
+    request: impl Into<WindowRequest>,
+    source: &str,
+    output: &Path,
+    demand: &DemandOverride,
+) -> Result<WrittenWindows, CompileError> {
+    let options = WindowsOptions {
+        one_window: true,
+        ..WindowsOptions::default()
+    };
+    write_windows(
+        corridor,
+        map,
+        &[request.into()],
+        options,
+        source,
+        output,
+        demand,
+    )
+}
+
+/// Cut the windows of `requests` (and more, as `options` says) of `corridor` (read from `map`) matched to the
+/// scenario `source` (a built-in name or a file), and write them as one scenario with one controlled region per
+/// window to `output` (a `.toml`; the graph goes beside it as `<name>.graph.json`). Both are checked to load back
+/// as a sound scenario before either is written ([`CheckedFiles`]); on any error nothing is written. Demand
+/// overrides must be zero or positive rates (`--main-vph`, `--merge-vph`).
 pub fn write_windows(
     corridor: &LaneGraph,
     map: &Path,
@@ -388,7 +352,13 @@ pub fn prepare_windows(
         path: map.to_path_buf(),
         error,
     };
-    let WindowsOptions { all, join, fit } = options;
+    let WindowsOptions {
+        all,
+        join,
+        fit,
+        one_window,
+    } = options;
+    let one_window = one_window && requests.len() == 1 && !all && !join;
     let mut requests: Vec<WindowRequest> = requests
         .iter()
         .map(|r| WindowRequest {
@@ -420,9 +390,23 @@ pub fn prepare_windows(
     };
     let cut = cut_windows(corridor, &requests, &shape, overlap).map_err(transform)?;
     let (name, graph_file, graph) = output_names(output);
-    let (mut scenario, demand_notes) =
-        windows_scenario(&cut, &resolved, &shape, &name, &graph_file, demand).map_err(transform)?;
-    let timing = bounded(&mut scenario, &cut.graph, &[cut.main_entry])?;
+    let (mut scenario, demand_notes) = windows_scenario(
+        &cut,
+        &resolved,
+        &shape,
+        &name,
+        &graph_file,
+        demand,
+        one_window,
+    )
+    .map_err(transform)?;
+    // The warm-up fits the routes from the main road's entry; a one-window scenario's, as it always has, also
+    // the route from its merging road's.
+    let mut entries = vec![cut.main_entry];
+    if one_window {
+        entries.extend(&cut.regions[0].merge_entries);
+    }
+    let timing = bounded(&mut scenario, &cut.graph, &entries)?;
     let files = CheckedFiles::check(&cut.graph, &graph, &scenario, output)?;
     let windows = WrittenWindows {
         cut,
@@ -431,16 +415,18 @@ pub fn prepare_windows(
         graph,
         timing,
         demand_notes,
+        one_window,
     };
     Ok((windows, files))
 }
 
 impl WrittenWindows {
-    /// The JSON report `mapc window --json` prints for several windows: every window's merges, lengths and
-    /// offsets along the corridor's main road.
+    /// The JSON report `mapc window --json` prints (`render`: the picture drawn, if any): every window's merges,
+    /// lengths and offsets along the corridor's main road; in the one-window format, the window's fields at the
+    /// top (its merging road's length and entry as one, its merge's OSM node and SUMO id) instead of `windows`.
     pub fn report(&self, matched_to: &str, render: Option<&Path>) -> Value {
         let g = &self.cut.graph;
-        let windows: Vec<Value> = self
+        let mut windows: Vec<Value> = self
             .cut
             .regions
             .iter()
@@ -475,59 +461,36 @@ impl WrittenWindows {
                 "merge_m": self.shape.merge_m,
                 "downstream_m": self.shape.downstream_m,
             },
-            "windows": windows,
-            "skipped": self.cut.skipped,
             "main_entry": self.cut.main_entry.to_string(),
             "cuts": self.cut.notes,
             "scenario": self.scenario.display().to_string(),
             "graph": self.graph.display().to_string(),
             "render": render.map(|r| r.display().to_string()),
-        });
-        let roads: Vec<_> = self.cut.regions.iter().flat_map(|r| r.roads()).collect();
-        if let Some(lanes) = lane_report(&self.cut.graph, &roads) {
-            report["lanes"] = lanes;
-            report["demand"] = json!(self.demand_notes);
-        }
-        report
-    }
-}
-
-impl WrittenWindow {
-    /// The JSON report `mapc window --json` prints (`render`: the picture drawn, if any).
-    pub fn report(&self, matched_to: &str, render: Option<&Path>) -> Value {
-        let cut = &self.cut;
-        let junction = cut.graph.junction(cut.junction);
-        let mut report = json!({
-            "junction": cut.junction.to_string(),
-            "osm_node": junction.and_then(|j| j.provenance.osm_nodes.first()),
-            "sumo_id": junction.and_then(|j| j.provenance.sumo_ids.first()),
-            "matched_to": matched_to,
-            "source": {
-                "upstream_m": self.shape.upstream_m,
-                "merge_m": self.shape.merge_m,
-                "downstream_m": self.shape.downstream_m,
-            },
-            "upstream_m": cut.upstream_m,
-            "merge_m": cut.merge_m,
-            "downstream_m": cut.downstream_m,
-            "lengths": lengths_against_source(
-                &self.shape,
-                cut.upstream_m,
-                cut.merge_m,
-                cut.downstream_m,
-                &cut.fitted,
-            ),
-            "fitted": fitted_report(&cut.graph, &cut.fitted),
-            "region": cut.region().iter().map(|r| r.to_string()).collect::<Vec<_>>(),
-            "main_entry": cut.main_entry.to_string(),
-            "merge_entry": cut.merge_entry.to_string(),
-            "cuts": cut.notes,
-            "scenario": self.scenario.display().to_string(),
-            "graph": self.graph.display().to_string(),
-            "render": render.map(|r| r.display().to_string()),
             "timing": self.timing,
         });
-        if let Some(lanes) = lane_report(&cut.graph, &cut.region()) {
+        if self.one_window {
+            let (r, w) = (&self.cut.regions[0], &mut windows[0]);
+            for key in [
+                "junction",
+                "upstream_m",
+                "downstream_m",
+                "lengths",
+                "fitted",
+                "region",
+            ] {
+                report[key] = w[key].take();
+            }
+            let junction = g.junction(r.merges[0]);
+            report["osm_node"] = json!(junction.and_then(|j| j.provenance.osm_nodes.first()));
+            report["sumo_id"] = json!(junction.and_then(|j| j.provenance.sumo_ids.first()));
+            report["merge_m"] = json!(r.merge_m[0]);
+            report["merge_entry"] = json!(r.merge_entries[0].to_string());
+        } else {
+            report["windows"] = json!(windows);
+            report["skipped"] = json!(self.cut.skipped);
+        }
+        let roads: Vec<_> = self.cut.regions.iter().flat_map(|r| r.roads()).collect();
+        if let Some(lanes) = lane_report(g, &roads) {
             report["lanes"] = lanes;
             report["demand"] = json!(self.demand_notes);
         }

@@ -205,6 +205,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
             via_length_m: via,
             via_speed_mps: Some(speed),
             right_of_way: row,
+            signal: None,
             right_of_way_overridden: false,
             provenance: made_by(),
         };
@@ -332,6 +333,7 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
             via_length_m: p.through_internal_m,
             via_speed_mps: Some(p.speed_limit_mps),
             right_of_way: RightOfWay::Major,
+            signal: None,
             right_of_way_overridden: false,
             provenance: Provenance::made_by(LANE_DROP),
         })

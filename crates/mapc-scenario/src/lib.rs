@@ -33,6 +33,7 @@ pub mod generator;
 pub mod model;
 pub mod ranges;
 pub mod simplify;
+pub mod sumo;
 pub mod timing;
 pub mod transform;
 pub mod window;
@@ -65,6 +66,8 @@ pub enum ScenarioError {
     },
     #[error("{path}: network: {message}")]
     Network { path: PathBuf, message: String },
+    #[error(transparent)]
+    Sumo(#[from] sumo::SumoError),
     #[error(
         "no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge, two_lane_merge, lane_drop)"
     )]
@@ -80,6 +83,13 @@ pub struct ResolvedScenario {
     pub origin: String,
     /// Each flow's entry road and optional last road.
     pub flow_roads: Vec<(RoadId, Option<RoadId>)>,
+    /// Per flow, the roads its route passes between its first and last (each `via` entry's pieces, in order).
+    pub flow_via: Vec<Vec<RoadId>>,
+    /// What reading the scenario dropped or ignored (a SUMO scenario's unsupported elements and options), a line
+    /// each.
+    pub notes: Vec<String>,
+    /// Demand above what an entry takes queues there (a SUMO scenario, as SUMO runs it) instead of being refused.
+    pub queue_excess_demand: bool,
     /// The control region's roads (empty: the whole network); with several windows, all their roads.
     pub region_roads: Vec<RoadId>,
     /// The windows of a several-window scenario (`control.windows`), in the file's order; empty otherwise.
@@ -117,6 +127,7 @@ impl Scenario {
             begin_s: 1.0,
             end_s: None,
             depart_lane: None,
+            ..Flow::default()
         };
         Scenario {
             version: SCENARIO_VERSION,
@@ -130,6 +141,7 @@ impl Scenario {
             time_to_teleport_s: None,
             network: NetworkSpec::SimpleMerge(SimpleMergeParams::default()),
             vehicle_types: [("human".to_string(), human), ("av".to_string(), av)].into_iter().collect(),
+            vehicle_type_mixes: Default::default(),
             flows: vec![
                 flow("main_human", generator::MAIN_ENTRY, 1800.0, "human", 10.0),
                 flow("main_av", generator::MAIN_ENTRY, 200.0, "av", 10.0),
@@ -156,6 +168,7 @@ impl Scenario {
             begin_s: 1.0,
             end_s: None,
             depart_lane: lane.map(str::to_string),
+            ..Flow::default()
         };
         Scenario {
             name: generator::TWO_LANE_MERGE.to_string(),
@@ -201,6 +214,7 @@ impl Scenario {
                 begin_s: 1.0,
                 end_s: None,
                 depart_lane: Some(lane.to_string()),
+                ..Flow::default()
             })
             .collect();
         Scenario {
@@ -295,9 +309,21 @@ impl Scenario {
 }
 
 impl ResolvedScenario {
-    /// A scenario file, or the name of a built-in scenario (`simple_merge`).
+    /// A scenario file, a SUMO configuration (`.sumocfg`), or the name of a built-in scenario (`simple_merge`).
     pub fn load(file_or_name: &str) -> Result<ResolvedScenario, ScenarioError> {
+        ResolvedScenario::load_with(file_or_name, &sumo::ReadOptions::default())
+    }
+
+    /// [`ResolvedScenario::load`], a SUMO configuration read with `sumo_options`.
+    pub fn load_with(
+        file_or_name: &str,
+        sumo_options: &sumo::ReadOptions,
+    ) -> Result<ResolvedScenario, ScenarioError> {
         let path = Path::new(file_or_name);
+        if path.is_file() && sumo::is_sumo_config(path) {
+            let read = sumo::from_sumocfg(path, sumo_options)?;
+            return ResolvedScenario::from_sumo(read, file_or_name);
+        }
         if path.exists() {
             let scenario = Scenario::load(path)?;
             let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -348,7 +374,19 @@ impl ResolvedScenario {
                     })?
             }
         };
-        ResolvedScenario::on_network(scenario, graph, origin)
+        ResolvedScenario::on_network(scenario, graph, origin, false)
+    }
+
+    /// A SUMO scenario read ([`sumo::from_sumocfg`], [`sumo::from_files`]) on its network, checked.
+    /// Demand above what an entry takes is SUMO's to queue, as SUMO does: a note, not a refusal.
+    pub fn from_sumo(
+        read: sumo::FromSumo,
+        origin: &str,
+    ) -> Result<ResolvedScenario, ScenarioError> {
+        check_ranges(&read.scenario, Path::new(origin))?;
+        let mut rs = ResolvedScenario::on_network(read.scenario, read.graph, origin, true)?;
+        rs.notes.splice(0..0, read.warnings);
+        Ok(rs)
     }
 
     /// A scenario on a network in hand (a graph about to be written beside it, as the scenario names it), checked
@@ -359,7 +397,7 @@ impl ResolvedScenario {
         origin: &str,
     ) -> Result<ResolvedScenario, ScenarioError> {
         check_ranges(&scenario, Path::new(origin))?;
-        ResolvedScenario::on_network(scenario, graph, origin)
+        ResolvedScenario::on_network(scenario, graph, origin, false)
     }
 
     /// Every reference of `scenario` checked against its network `graph`.
@@ -367,7 +405,9 @@ impl ResolvedScenario {
         scenario: Scenario,
         graph: LaneGraph,
         origin: &str,
+        queue_excess_demand: bool,
     ) -> Result<ResolvedScenario, ScenarioError> {
+        let mut notes = Vec::new();
         let path = PathBuf::from(origin);
         let invalid = |key: String, message: String| ScenarioError::Invalid {
             path: path.clone(),
@@ -380,14 +420,82 @@ impl ResolvedScenario {
                 .map_err(|e| invalid(key.clone(), e.to_string()))?;
             Ok(found[0])
         };
+        for (name, mix) in &scenario.vehicle_type_mixes {
+            if scenario.vehicle_types.contains_key(name) {
+                return Err(invalid(
+                    format!("vehicle_type_mixes.{name}"),
+                    "a mix cannot have the name of a vehicle type".into(),
+                ));
+            }
+            if mix.is_empty() {
+                return Err(invalid(
+                    format!("vehicle_type_mixes.{name}"),
+                    "an empty mix".into(),
+                ));
+            }
+            for (t, w) in mix {
+                if !scenario.vehicle_types.contains_key(t) {
+                    return Err(invalid(
+                        format!("vehicle_type_mixes.{name}.{t}"),
+                        format!("no vehicle type `{t}`"),
+                    ));
+                }
+                if !(w.is_finite() && *w > 0.0) {
+                    return Err(invalid(
+                        format!("vehicle_type_mixes.{name}.{t}"),
+                        format!("weight {w}: must be a positive number"),
+                    ));
+                }
+            }
+        }
         let mut flow_roads = Vec::new();
+        let mut flow_via = Vec::new();
         for (i, f) in scenario.flows.iter().enumerate() {
-            if !scenario.vehicle_types.contains_key(&f.vehicle_type) {
+            if !scenario.vehicle_types.contains_key(&f.vehicle_type)
+                && !scenario.vehicle_type_mixes.contains_key(&f.vehicle_type)
+            {
                 return Err(invalid(
                     format!("flows[{i}].vehicle_type"),
                     format!("no vehicle type `{}`", f.vehicle_type),
                 ));
             }
+            if let Some(p) = f.probability
+                && !(p > 0.0 && p <= 1.0)
+            {
+                return Err(invalid(
+                    format!("flows[{i}].probability"),
+                    format!(
+                        "flow `{}`: probability {p}: must lie in (0, 1] (per second)",
+                        f.id
+                    ),
+                ));
+            }
+            if let Some(rule) = f.depart_speed.as_deref()
+                && rule != "max"
+                && rule != "desired"
+            {
+                return Err(invalid(
+                    format!("flows[{i}].depart_speed"),
+                    format!(
+                        "flow `{}`: `{rule}`: `max` or `desired` (or a number in depart_speed_mps)",
+                        f.id
+                    ),
+                ));
+            }
+            if f.number == Some(0) {
+                return Err(invalid(
+                    format!("flows[{i}].number"),
+                    format!("flow `{}`: a number of vehicles must be at least 1", f.id),
+                ));
+            }
+            let mut via = Vec::new();
+            for (k, r) in f.via.iter().enumerate() {
+                let found = graph
+                    .find_roads(r)
+                    .map_err(|e| invalid(format!("flows[{i}].via[{k}]"), e.to_string()))?;
+                via.extend(found);
+            }
+            flow_via.push(via);
             let from = find_road(format!("flows[{i}].from"), &f.from)?;
             let to = match &f.to {
                 Some(t) => {
@@ -442,7 +550,14 @@ impl ResolvedScenario {
                 }
             })
             .collect();
-        bounds::check_demand(&demand, scenario.step_s)
+        let demand_fits = match bounds::check_demand(&demand, scenario.step_s) {
+            Err(r) if queue_excess_demand => {
+                notes.push(format!("{}: {} (they queue, as in SUMO)", r.key, r.message));
+                Ok(())
+            }
+            other => other,
+        };
+        demand_fits
             .and_then(|()| {
                 bounds::check_horizon(
                     scenario.warmup_steps as u64,
@@ -508,6 +623,9 @@ impl ResolvedScenario {
             graph,
             origin: origin.to_string(),
             flow_roads,
+            flow_via,
+            notes,
+            queue_excess_demand,
             region_roads,
             windows,
             measure_junctions,

@@ -33,6 +33,10 @@ pub struct Scenario {
     pub time_to_teleport_s: Option<f64>,
     pub network: NetworkSpec,
     pub vehicle_types: BTreeMap<String, VehicleType>,
+    /// Named mixes of vehicle types (SUMO's `vTypeDistribution`): a flow whose `vehicle_type` names a mix draws
+    /// each vehicle's type with these weights.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub vehicle_type_mixes: BTreeMap<String, BTreeMap<String, f64>>,
     pub flows: Vec<Flow>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub initial_vehicles: Option<InitialVehicles>,
@@ -203,6 +207,33 @@ pub struct VehicleType {
     pub idm_stepping_s: f64,
     /// An automated vehicle that a policy may control.
     pub controlled: bool,
+    /// The car-following model: `idm` (the paper's, default) or `krauss` (SUMO's default driver).
+    #[serde(skip_serializing_if = "CarFollowModel::is_idm")]
+    pub car_follow_model: CarFollowModel,
+    /// Krauss' dawdling in [0, 1] (SUMO's `sigma`; 0.5 when not given).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f64>,
+    /// The hardest braking when the safe speed demands it, m/s² (SUMO's `emergencyDecel`; 9, or `decel` when
+    /// larger, when not given).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub emergency_decel: Option<f64>,
+}
+
+/// The car-following models a vehicle type may drive with (SUMO's `carFollowModel`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CarFollowModel {
+    /// The Intelligent Driver Model as SUMO 1.8 computes it (the paper's drivers).
+    #[default]
+    Idm,
+    /// SUMO 1.8's default driver: safe speed from the reaction time, random dawdling.
+    Krauss,
+}
+
+impl CarFollowModel {
+    pub fn is_idm(&self) -> bool {
+        *self == CarFollowModel::Idm
+    }
 }
 
 impl Default for VehicleType {
@@ -220,12 +251,15 @@ impl Default for VehicleType {
             length: 5.0,
             idm_stepping_s: 0.25,
             controlled: false,
+            car_follow_model: CarFollowModel::Idm,
+            sigma: None,
+            emergency_decel: None,
         }
     }
 }
 
 /// Periodic departures (SUMO's `vehsPerHour`): one vehicle every 3600 / vehs_per_hour seconds from `begin_s`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Flow {
     pub id: String,
@@ -245,6 +279,20 @@ pub struct Flow {
     /// `best`, `random`, `free` or a lane index (0 = rightmost).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depart_lane: Option<String>,
+    /// Roads the route passes between `from` and `to`, in order (a SUMO route's inner edges, a trip's `via`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub via: Vec<String>,
+    /// Departures by chance (SUMO's `probability`): in each second a vehicle with this probability, at most one a
+    /// step; `vehs_per_hour` is then its mean, 3600 x probability.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub probability: Option<f64>,
+    /// At most this many vehicles (SUMO's `number`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub number: Option<u64>,
+    /// SUMO's `departSpeed` rules instead of `depart_speed_mps`: `max` (the highest safe speed up to the desired
+    /// one) or `desired` (the desired speed, or wait).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depart_speed: Option<String>,
 }
 
 /// Vehicles on the network at t = 0, evenly spaced along the network's roads.

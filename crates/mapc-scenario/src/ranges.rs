@@ -38,6 +38,8 @@ pub const IDM_DELTA: Range = closed(0.1, 20.0, "");
 pub const SPEED_FACTOR: Range = closed(0.2, 2.0, "");
 pub const SPEED_DEV: Range = closed(0.0, 1.0, "");
 pub const IMPATIENCE: Range = closed(0.0, 1.0, "");
+/// Krauss' dawdling.
+pub const SIGMA: Range = closed(0.0, 1.0, "");
 /// IDM sub-step: with a step of at most 10 s, at most 10 000 sub-steps.
 pub const IDM_STEPPING_S: Range = closed(0.001, 10.0, "s");
 pub const INITIAL_VEHICLES: Range = closed(0.0, 100_000.0, "vehicles");
@@ -151,6 +153,12 @@ pub fn check_scenario(s: &Scenario) -> Result<(), Refusal> {
             ("idm_stepping_s", t.idm_stepping_s, IDM_STEPPING_S),
         ] {
             check(key(f), v, range)?;
+        }
+        if let Some(sigma) = t.sigma {
+            check(key("sigma"), sigma, SIGMA)?;
+        }
+        if let Some(e) = t.emergency_decel {
+            check(key("emergency_decel"), e, closed(t.decel, 50.0, "m/s²"))?;
         }
     }
     let vph = closed(0.0, entry_capacity_vph(s.step_s), "veh/h");

@@ -29,7 +29,13 @@ pub struct VehicleTypeSpec {
     pub controlled: bool,
     /// IDM integration sub-step (s); the step is split into round(step / this) sub-steps.
     pub idm_stepping_s: f64,
+    /// The car-following model (`delta` and `idm_stepping_s` are the IDM's, `sigma` Krauss').
+    pub car_follow_model: CarFollowModelKind,
+    /// Krauss' dawdling in [0, 1].
+    pub sigma: f64,
 }
+
+pub use mapc_scenario::CarFollowModel as CarFollowModelKind;
 
 impl VehicleTypeSpec {
     /// The paper's human driver (SUMO IDM as Flow configured it).
@@ -49,6 +55,8 @@ impl VehicleTypeSpec {
             impatience: 0.5,
             controlled: false,
             idm_stepping_s: 0.25,
+            car_follow_model: CarFollowModelKind::Idm,
+            sigma: 0.0,
         }
     }
 }
@@ -64,14 +72,33 @@ pub struct FlowSpec {
     pub vehs_per_hour: f64,
     /// Index into [`SimSpec::vehicle_types`].
     pub vehicle_type: usize,
+    /// m/s, or [`DEPART_SPEED_MAX`] / [`DEPART_SPEED_DESIRED`] (SUMO's `max` and `desired`).
     pub depart_speed: f64,
     pub begin_s: f64,
     pub end_s: f64,
     /// The lane of the entry road its vehicles depart on.
     pub depart_lane: DepartLane,
+    /// Roads the route passes between `from` and `to`, in order.
+    pub via: Vec<RoadId>,
+    /// Departures by chance: per second a vehicle with this probability (at most one a step), instead of the
+    /// periodic `vehs_per_hour`.
+    pub probability: Option<f64>,
+    /// At most this many vehicles.
+    pub number: Option<u64>,
+    /// Demand above what its entry takes queues there (SUMO's behaviour) instead of being refused.
+    pub queue_excess: bool,
+    /// A mix of types, as (type index, cumulative weight up to 1): each vehicle's type is drawn; empty: always
+    /// `vehicle_type`.
+    pub type_mix: Vec<(usize, f64)>,
 }
 
 pub use mapc_scenario::DepartLane;
+
+/// A flow's depart speed meaning SUMO's `departSpeed="max"`: the highest speed up to the vehicle's desired speed
+/// at which the insertion is safe.
+pub const DEPART_SPEED_MAX: f64 = f64::INFINITY;
+/// SUMO's `departSpeed="desired"`: the desired speed, or no insertion.
+pub const DEPART_SPEED_DESIRED: f64 = f64::NEG_INFINITY;
 
 /// A point where flow is measured: vehicles entering any of `roads` pass it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -190,6 +217,9 @@ impl SimSpec {
             if !(0.0..=1.0).contains(&t.impatience) {
                 return Err(bad("impatience", t.impatience));
             }
+            if !(0.0..=1.0).contains(&t.sigma) {
+                return Err(bad("sigma", t.sigma));
+            }
             if !(t.emergency_decel >= t.decel) {
                 return Err(bad("emergency_decel (must be >= decel)", t.emergency_decel));
             }
@@ -207,7 +237,10 @@ impl SimSpec {
                     f.vehs_per_hour
                 )));
             }
-            if !(f.depart_speed >= 0.0 && f.depart_speed.is_finite()) {
+            if !(f.depart_speed >= 0.0 && f.depart_speed.is_finite()
+                || f.depart_speed == DEPART_SPEED_MAX
+                || f.depart_speed == DEPART_SPEED_DESIRED)
+            {
                 return Err(SimError::Spec(format!(
                     "flow {i}: depart_speed = {}",
                     f.depart_speed
@@ -226,6 +259,7 @@ impl SimSpec {
         let demand: Vec<mapc_scenario::bounds::FlowDemand> = self
             .flows
             .iter()
+            .filter(|f| !f.queue_excess)
             .map(|f| mapc_scenario::bounds::FlowDemand {
                 id: &f.id,
                 entry: mapc_scenario::bounds::entry_key(

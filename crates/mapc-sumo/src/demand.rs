@@ -22,12 +22,13 @@ pub fn route_roads(
     net: &Network,
     graph: &LaneGraph,
     from: RoadId,
+    via: &[RoadId],
     to: Option<RoadId>,
 ) -> Result<Vec<RoadId>, SimError> {
     // Road by road, as mapc-sim routes a vehicle of a given entry lane: a lane that ends (an acceleration lane)
     // is left by a lane change, so the lane path may end early where the road path goes on.
     Ok(net
-        .route_roads(graph, from, to)?
+        .route_roads(graph, from, via, to)?
         .into_iter()
         .map(|r| net.road_ids[r])
         .collect())
@@ -92,7 +93,7 @@ pub fn routes_xml(
     // Initial vehicles first: SUMO wants a route file sorted by departure.
     let depart = initial_depart_s(spec.step_s);
     for (i, v) in spec.initial.iter().enumerate() {
-        let roads = route_roads(&net, graph, v.road, None)?;
+        let roads = route_roads(&net, graph, v.road, &[], None)?;
         start(
             &mut out,
             4,
@@ -118,7 +119,7 @@ pub fn routes_xml(
     order.sort_by(|&a, &b| spec.flows[a].begin_s.total_cmp(&spec.flows[b].begin_s));
     for i in order {
         let f = &spec.flows[i];
-        let roads = route_roads(&net, graph, f.from, f.to)?;
+        let roads = route_roads(&net, graph, f.from, &f.via, f.to)?;
         // SUMO needs an end; mapc's open-ended flows run past any horizon.
         let end = if f.end_s.is_finite() {
             f.end_s
@@ -136,7 +137,7 @@ pub fn routes_xml(
                 ("end", num(end, 4)),
                 ("vehsPerHour", num(f.vehs_per_hour, 4)),
                 ("departLane", depart_lane(graph, f)),
-                ("departSpeed", num(f.depart_speed, 4)),
+                ("departSpeed", depart_speed(f.depart_speed)),
             ],
         );
         element(
@@ -233,4 +234,15 @@ pub fn sumocfg(
     );
     out.push_str("</configuration>\n");
     out
+}
+
+/// SUMO's `departSpeed` of a flow: a number, or `max` / `desired`.
+fn depart_speed(speed: f64) -> String {
+    if speed == mapc_sim::spec::DEPART_SPEED_MAX {
+        "max".into()
+    } else if speed == mapc_sim::spec::DEPART_SPEED_DESIRED {
+        "desired".into()
+    } else {
+        num(speed, 4)
+    }
 }

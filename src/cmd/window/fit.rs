@@ -4,10 +4,8 @@
 //! the same scale; what changes is the controlled region (where control starts, how many AVs fit in it) and, when
 //! the corridor itself is shorter than the source before the merge, how far ahead a distance can read.
 
-use mapc_graph::{JunctionId, LaneGraph};
 use mapc_rl::env::distributed::SIMPLE_MERGE_DIST_NORM;
 use mapc_rl::env::merge::SIMPLE_MERGE_NORM;
-use mapc_scenario::transform::CorridorRoles;
 use mapc_scenario::window::{FittedLength, Lengths, SourceShape};
 use serde_json::{Value, json};
 
@@ -19,16 +17,6 @@ pub struct WindowLengths<'a> {
     /// Main road on the whole corridor before the (first) merge.
     pub corridor_before_m: f64,
     pub fitted: &'a [FittedLength],
-}
-
-/// Main road of the corridor before merge `j` (m).
-pub fn corridor_before_m(g: &LaneGraph, roles: &CorridorRoles, j: JunctionId) -> f64 {
-    roles
-        .main
-        .iter()
-        .take_while(|r| g.road(**r).unwrap().from != j)
-        .map(|r| g.road(*r).unwrap().length_m)
-        .sum()
 }
 
 fn region_m(l: &Lengths, between_m: f64) -> f64 {

@@ -342,6 +342,7 @@ fn osm_connections(graph: &LaneGraph, road_piece: &[(i64, u32)]) -> Vec<Connecti
                         via_length_m: 0.0,
                         via_speed_mps: None,
                         right_of_way,
+                        signal: None,
                         right_of_way_overridden: false,
                         provenance: Provenance::default(),
                     });

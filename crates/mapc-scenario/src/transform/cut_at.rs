@@ -117,6 +117,7 @@ pub fn cut_road(
             via_length_m: 0.0,
             via_speed_mps: None,
             right_of_way: RightOfWay::Major,
+            signal: None,
             right_of_way_overridden: false,
             provenance: Provenance::made_by(CUT_AT),
         });

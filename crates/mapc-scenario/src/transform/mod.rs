@@ -390,6 +390,7 @@ pub fn ensure_connection(g: &mut LaneGraph, from: RoadId, to: RoadId, step: &str
         via_length_m: 0.0,
         via_speed_mps: None,
         right_of_way,
+        signal: None,
         right_of_way_overridden: false,
         provenance: Provenance::made_by(step),
     });
@@ -595,6 +596,7 @@ pub(crate) mod test_maps {
                 via_length_m: 0.0,
                 via_speed_mps: None,
                 right_of_way: row,
+                signal: None,
                 right_of_way_overridden: false,
                 provenance: Provenance::default(),
             });

@@ -1,4 +1,4 @@
-//! Cutting windows out of a corridor: one window ([`cut_window`]) or several along it ([`cut_windows`]).
+//! Cutting windows out of a corridor ([`cut_windows`]): one window is a list of one.
 //!
 //! Every window spans an interval of the main road, `upstream_m` before its merge to `downstream_m` after it.
 //! Windows are cut in driving order, each boundary recomputed on the graph the previous cuts left, so one
@@ -9,42 +9,6 @@ use super::fit::{Fit, FittedLength, Lengths, Part, fit_lengths, locate};
 use super::{Boundary, SNAP_M, SourceShape, boundary_downstream, boundary_upstream, sum};
 use crate::transform::{self, CorridorRoles, TransformError, pick_route::describe_junction};
 use mapc_graph::{JunctionId, LaneGraph, RoadId};
-
-/// A corridor cut for one window.
-#[derive(Clone, Debug)]
-pub struct WindowCut {
-    pub graph: LaneGraph,
-    pub roles: CorridorRoles,
-    pub junction: JunctionId,
-    /// The roads inside the window: main road before the merge, merging road, main road after.
-    pub upstream_roads: Vec<RoadId>,
-    pub merge_roads: Vec<RoadId>,
-    pub downstream_roads: Vec<RoadId>,
-    pub upstream_m: f64,
-    pub merge_m: f64,
-    pub downstream_m: f64,
-    /// Where main-road and merging-road traffic enters the corridor.
-    pub main_entry: RoadId,
-    pub merge_entry: RoadId,
-    /// One line per boundary: where it fell and whether a road was cut.
-    pub notes: Vec<String>,
-    /// The lengths `--fit` cut shorter than asked (empty without it).
-    pub fitted: Vec<FittedLength>,
-}
-
-impl WindowCut {
-    pub fn region(&self) -> Vec<RoadId> {
-        let mut r: Vec<RoadId> = self
-            .upstream_roads
-            .iter()
-            .chain(&self.merge_roads)
-            .chain(&self.downstream_roads)
-            .copied()
-            .collect();
-        r.sort();
-        r
-    }
-}
 
 /// One window asked for: its merge (any id `find_junction` takes), if not the source's, how much main road
 /// before the merge it spans, and whether it may be cut shorter where the map has less ([`Fit`]).
@@ -472,34 +436,5 @@ pub fn cut_windows(
         regions,
         notes,
         skipped,
-    })
-}
-
-/// Cut the window around one merge (a request, or any junction id `find_junction` takes) of a corridor graph.
-pub fn cut_window(
-    corridor: &LaneGraph,
-    request: impl Into<WindowRequest>,
-    shape: &SourceShape,
-) -> Result<WindowCut, TransformError> {
-    let cut = cut_windows(corridor, &[request.into()], shape, Overlap::Refuse)?;
-    let region = cut
-        .regions
-        .into_iter()
-        .next()
-        .expect("one window asked for");
-    Ok(WindowCut {
-        upstream_m: region.upstream_m,
-        merge_m: region.merge_m[0],
-        downstream_m: region.downstream_m,
-        main_entry: cut.main_entry,
-        merge_entry: region.merge_entries[0],
-        junction: region.merges[0],
-        upstream_roads: region.upstream_roads,
-        merge_roads: region.merge_roads.into_iter().next().unwrap(),
-        downstream_roads: region.downstream_roads,
-        fitted: region.fitted,
-        roles: cut.roles,
-        graph: cut.graph,
-        notes: cut.notes,
     })
 }

@@ -1,6 +1,7 @@
 //! `window`: cut the piece of a corridor around a merge whose lengths equal a source scenario's (upstream main
 //! road, merging road, downstream), and make a scenario of the whole corridor with that piece as the controlled
-//! region and the source's demand; or several such pieces along one corridor, each its own controlled region.
+//! region and the source's demand; or several such pieces along one corridor, each its own controlled region
+//! (one window is cut and written as a list of one).
 //!
 //! A window boundary falls exactly at the asked distance from the merge: the road there is cut in two
 //! ([`crate::transform::cut_road`]) unless an existing junction lies within [`SNAP_M`] of the point.
@@ -15,9 +16,9 @@ pub mod scenario;
 #[cfg(test)]
 mod tests;
 
-pub use cut::{CutRegion, Overlap, WindowCut, WindowRequest, WindowsCut, cut_window, cut_windows};
+pub use cut::{CutRegion, Overlap, WindowRequest, WindowsCut, cut_windows};
 pub use fit::{Fit, FittedLength, Lengths, Part};
-pub use scenario::{DemandOverride, junction_name, window_scenario, windows_scenario};
+pub use scenario::{DemandOverride, junction_name, windows_scenario};
 
 use crate::ResolvedScenario;
 use crate::transform::{CorridorRoles, TransformError};

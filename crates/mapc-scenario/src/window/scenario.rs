@@ -3,7 +3,7 @@
 //! the merging roads' first roads), and the window(s) as the controlled region(s).
 
 use super::SourceShape;
-use super::cut::{WindowCut, WindowsCut};
+use super::cut::WindowsCut;
 use super::fit::FittedLength;
 use crate::transform::{CorridorRoles, TransformError};
 use crate::{
@@ -367,66 +367,12 @@ fn corridor_flows(
     Ok((flows, notes))
 }
 
-/// The window scenario: the whole cut corridor (saved as `graph_file`, relative to the scenario), the source's
-/// vehicle types, step, horizon and initial vehicles, its flows moved to the corridor's entries, and the window
-/// as the controlled region; with it, a line per road of several lanes saying what demand it got.
-pub fn window_scenario(
-    cut: &WindowCut,
-    source: &ResolvedScenario,
-    shape: &SourceShape,
-    name: &str,
-    graph_file: &str,
-    demand: &DemandOverride,
-) -> Result<(Scenario, Vec<String>), TransformError> {
-    let s = &source.scenario;
-    let ramps = if demand.every_ramp {
-        ramp_entries(&cut.graph, &cut.roles)
-    } else {
-        vec![cut.merge_entry]
-    };
-    let (flows, demand_notes) = corridor_flows(
-        &cut.graph,
-        &cut.roles,
-        cut.main_entry,
-        main_road_into(&cut.graph, &cut.roles, cut.junction),
-        &ramps,
-        source,
-        shape,
-        demand,
-    )?;
-    let n_av = controlled_avs(source, demand);
-    let junction_name = junction_name(&cut.graph, cut.junction);
-    let matched_to = matched_to(source);
-    let description = format!(
-        "The corridor of {} with a window around merge {} ({junction_name}) matched to {matched_to}: \
-         {:.1} m of main road before the merge, {:.1} m of merging road, {:.1} m after.{}",
-        cut.graph.source.file,
-        cut.junction,
-        cut.upstream_m,
-        cut.merge_m,
-        cut.downstream_m,
-        fitted_list(&cut.fitted).map_or(String::new(), |l| format!(" Fitted to the map: {l}."))
-    );
-    let control = Control {
-        n_av,
-        region: cut.region().iter().map(|r| r.to_string()).collect(),
-        window: Some(WindowInfo {
-            junction: junction_name,
-            matched_to,
-            upstream_m: cut.upstream_m,
-            merge_m: cut.merge_m,
-            downstream_m: cut.downstream_m,
-        }),
-        windows: vec![],
-    };
-    Ok((
-        corridor_scenario(s, name, description, graph_file, flows, control),
-        demand_notes,
-    ))
-}
-
-/// The scenario of a corridor cut for several windows: as [`window_scenario`], with a flow on every merging road
-/// of the corridor and one `[[control.windows]]` entry per region (and the demand's lines).
+/// The scenario of a cut corridor: the whole corridor (saved as `graph_file`, relative to the scenario), the
+/// source's vehicle types, step, horizon and initial vehicles, its flows moved to the corridor's entries (every
+/// merging road's), and one `[[control.windows]]` entry per region; with it, a line per road of several lanes
+/// saying what demand it got. `one_window` (a cut of one window asked for alone) writes it as one-window
+/// scenarios always were: the window as `[control] region` and `window`, demand on its own merging road only
+/// unless `every_ramp`.
 pub fn windows_scenario(
     cut: &WindowsCut,
     source: &ResolvedScenario,
@@ -434,10 +380,15 @@ pub fn windows_scenario(
     name: &str,
     graph_file: &str,
     demand: &DemandOverride,
+    one_window: bool,
 ) -> Result<(Scenario, Vec<String>), TransformError> {
     let s = &source.scenario;
     let g = &cut.graph;
-    let ramps = ramp_entries(g, &cut.roles);
+    let ramps = if one_window && !demand.every_ramp {
+        cut.regions[0].merge_entries.clone()
+    } else {
+        ramp_entries(g, &cut.roles)
+    };
     let first_merge = cut.regions[0].merges[0];
     let (flows, demand_notes) = corridor_flows(
         g,
@@ -451,7 +402,7 @@ pub fn windows_scenario(
     )?;
     let n_av = controlled_avs(source, demand);
     let matched_to = matched_to(source);
-    let windows: Vec<ControlWindow> = cut
+    let mut windows: Vec<ControlWindow> = cut
         .regions
         .iter()
         .map(|r| ControlWindow {
@@ -464,6 +415,34 @@ pub fn windows_scenario(
             region: r.roads().iter().map(|x| x.to_string()).collect(),
         })
         .collect();
+    if one_window {
+        let (r, w) = (&cut.regions[0], windows.remove(0));
+        let description = format!(
+            "The corridor of {} with a window around merge {} ({}) matched to {matched_to}: {:.1} m of main \
+             road before the merge, {:.1} m of merging road, {:.1} m after.{}",
+            g.source.file,
+            r.merges[0],
+            w.junction,
+            w.upstream_m,
+            w.merge_m,
+            w.downstream_m,
+            fitted_list(&r.fitted).map_or(String::new(), |l| format!(" Fitted to the map: {l}."))
+        );
+        let control = Control {
+            n_av,
+            region: w.region,
+            window: Some(WindowInfo {
+                junction: w.junction,
+                matched_to: w.matched_to,
+                upstream_m: w.upstream_m,
+                merge_m: w.merge_m,
+                downstream_m: w.downstream_m,
+            }),
+            windows: vec![],
+        };
+        let scenario = corridor_scenario(s, name, description, graph_file, flows, control);
+        return Ok((scenario, demand_notes));
+    }
     let listed: Vec<String> = windows
         .iter()
         .zip(&cut.regions)
@@ -546,6 +525,7 @@ fn corridor_scenario(
         time_to_teleport_s: s.time_to_teleport_s,
         network: NetworkSpec::Graph(graph_file.into()),
         vehicle_types: s.vehicle_types.clone(),
+        vehicle_type_mixes: s.vehicle_type_mixes.clone(),
         flows,
         initial_vehicles: s.initial_vehicles.clone(),
         control: Some(control),

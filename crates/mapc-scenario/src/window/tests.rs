@@ -33,9 +33,10 @@ fn window_cuts_exactly_and_keeps_the_corridor() {
     let g = corridor();
     let source = ResolvedScenario::load("simple_merge").unwrap();
     let shape = SourceShape::of(&source).unwrap();
-    let cut = cut_window(&g, "osm:1002", &shape).unwrap();
-    assert!((cut.upstream_m - 600.0).abs() < 1e-9 && (cut.merge_m - 200.0).abs() < 1e-9);
-    assert!((cut.downstream_m - 100.0).abs() < 1e-9);
+    let cut = cut_one(&g, "osm:1002", &shape).unwrap();
+    let w = &cut.regions[0];
+    assert!((w.upstream_m - 600.0).abs() < 1e-9 && (w.merge_m[0] - 200.0).abs() < 1e-9);
+    assert!((w.downstream_m - 100.0).abs() < 1e-9);
     assert_eq!(cut.notes.len(), 3);
     assert!(cut.graph.invariant_violations().is_empty());
     assert!((cut.graph.total_lane_length_m() - g.total_lane_length_m()).abs() < 1e-6);
@@ -53,19 +54,19 @@ fn window_cuts_exactly_and_keeps_the_corridor() {
         [
             ("R0", 1800.0),
             ("R0", 200.0),
-            (cut.merge_entry.to_string().as_str(), 200.0)
+            (w.merge_entries[0].to_string().as_str(), 200.0)
         ]
     );
     let control = scenario.control.as_ref().unwrap();
     assert_eq!(control.n_av, 5);
-    assert_eq!(control.region.len(), cut.region().len());
+    assert_eq!(control.region.len(), w.roads().len());
     // The scenario comes back from TOML exactly, and resolves against its graph.
     let back = Scenario::from_toml(&scenario.to_toml(), std::path::Path::new("w.toml")).unwrap();
     assert_eq!(back, scenario);
     let dir = std::env::temp_dir().join(format!("mapc-window-test-{}", std::process::id()));
     cut.graph.save(&dir.join("w.graph.json")).unwrap();
     let resolved = ResolvedScenario::resolve(scenario, &dir, "w.toml").unwrap();
-    assert_eq!(resolved.region_roads, cut.region());
+    assert_eq!(resolved.region_roads, w.roads());
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -75,21 +76,21 @@ fn shortfalls_and_non_merges_are_named() {
     let source = ResolvedScenario::load("simple_merge").unwrap();
     let mut shape = SourceShape::of(&source).unwrap();
     shape.upstream_m = 1600.0;
-    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    let err = cut_one(&g, "J2", &shape).unwrap_err().to_string();
     assert!(
         err.contains("main road before J2") && err.contains("100.0 m short"),
         "{err}"
     );
     shape.upstream_m = 600.0;
     shape.merge_m = 2000.0;
-    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    let err = cut_one(&g, "J2", &shape).unwrap_err().to_string();
     assert!(err.contains("merging road into J2"), "{err}");
-    let err = cut_window(&g, "J0", &shape).unwrap_err().to_string();
+    let err = cut_one(&g, "J0", &shape).unwrap_err().to_string();
     assert!(
         err.contains("not inside the corridor's main road") && err.contains("J2 (osm:1002)"),
         "{err}"
     );
-    let err = cut_window(&g, "osm:77", &shape).unwrap_err().to_string();
+    let err = cut_one(&g, "osm:77", &shape).unwrap_err().to_string();
     assert!(err.contains("osm:77"), "{err}");
 }
 
@@ -99,8 +100,9 @@ fn a_boundary_near_a_junction_snaps_to_it() {
     let source = ResolvedScenario::load("simple_merge").unwrap();
     let mut shape = SourceShape::of(&source).unwrap();
     shape.upstream_m = 1499.8; // the corridor's start is 1500 m before the merge
-    let cut = cut_window(&g, "J2", &shape).unwrap();
-    assert_eq!(cut.upstream_m, 1500.0);
+    let cut = cut_one(&g, "J2", &shape).unwrap();
+    let w = &cut.regions[0];
+    assert_eq!(w.upstream_m, 1500.0);
     assert!(
         cut.notes[0].contains("boundary at junction J0"),
         "{:?}",
@@ -290,11 +292,6 @@ fn joined_windows_make_one_region_over_three_merges() {
         (span - (600.0 + 3983.0886 - 3191.4065 + 100.0)).abs() < 0.01,
         "{span}"
     );
-    // A single window through the general cut is the one-window cut.
-    let one = cut_window(&g, "J43", &shape).unwrap();
-    let many = cut_windows(&g, &[WindowRequest::at("J43")], &shape, Overlap::Refuse).unwrap();
-    assert_eq!(one.region(), many.regions[0].roads());
-    assert_eq!(one.graph, many.graph);
 }
 
 /// The test highway's merge J2 has 1500 m of main road before it, a 723.6 m merging road and 1523.1 m after.
@@ -307,7 +304,7 @@ fn a_short_length_is_refused_naming_fit_and_fitted_with_it() {
     let g = corridor();
     let mut shape = simple_merge_shape();
     shape.upstream_m = 1600.0;
-    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    let err = cut_one(&g, "J2", &shape).unwrap_err().to_string();
     assert!(
         err.contains(
             "the main road before J2 (osm:1002) is 1500.0 m long; the window needs 1600.0 m (100.0 m short; \
@@ -315,18 +312,19 @@ fn a_short_length_is_refused_naming_fit_and_fitted_with_it() {
         ),
         "{err}"
     );
-    let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
-    assert_eq!(cut.upstream_m, 1500.0);
-    assert!((cut.merge_m - 200.0).abs() < 1e-9 && (cut.downstream_m - 100.0).abs() < 1e-9);
-    assert_eq!(cut.fitted.len(), 1, "{:?}", cut.fitted);
-    let f = &cut.fitted[0];
+    let cut = cut_one(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
+    let w = &cut.regions[0];
+    assert_eq!(w.upstream_m, 1500.0);
+    assert!((w.merge_m[0] - 200.0).abs() < 1e-9 && (w.downstream_m - 100.0).abs() < 1e-9);
+    assert_eq!(w.fitted.len(), 1, "{:?}", w.fitted);
+    let f = &w.fitted[0];
     assert_eq!(
         (f.part, f.asked_m, f.fitted_m),
         (Part::Upstream, 1600.0, 1500.0)
     );
     assert_eq!(f.short_by_m(), 100.0);
     // The window starts at the corridor's entry: its first road is the main road's first.
-    assert!(cut.upstream_roads.contains(&cut.main_entry), "{cut:?}");
+    assert!(w.upstream_roads.contains(&cut.main_entry), "{cut:?}");
     assert!(
         cut.notes[0].contains("boundary at junction J0"),
         "{:?}",
@@ -341,12 +339,12 @@ fn a_fit_stops_at_its_floor() {
     let mut shape = simple_merge_shape();
     // 1500 m is 0.48 of 3100 m: below the default floor.
     shape.upstream_m = 3100.0;
-    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    let err = cut_one(&g, "J2", &shape).unwrap_err().to_string();
     assert!(
         err.contains("(1600.0 m short; `--fit` cuts what the map has down to 1550.0 m, `--fit-floor 0.48` down to 1500.0 m)"),
         "{err}"
     );
-    let err = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape)
+    let err = cut_one(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape)
         .unwrap_err()
         .to_string();
     assert!(
@@ -355,8 +353,9 @@ fn a_fit_stops_at_its_floor() {
         ),
         "{err}"
     );
-    let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.48)), &shape).unwrap();
-    assert_eq!(cut.upstream_m, 1500.0);
+    let cut = cut_one(&g, WindowRequest::at("J2").fitted(fit_to(0.48)), &shape).unwrap();
+    let w = &cut.regions[0];
+    assert_eq!(w.upstream_m, 1500.0);
     for bad in [0.0, -0.5, 1.5, f64::NAN] {
         let err = Fit::new(bad).unwrap_err().to_string();
         assert!(err.contains("--fit-floor"), "{err}");
@@ -370,23 +369,24 @@ fn a_fit_takes_the_whole_merging_road_and_the_rest_of_the_corridor() {
     let mut shape = simple_merge_shape();
     shape.merge_m = 800.0;
     shape.downstream_m = 1600.0;
-    let err = cut_window(&g, "J2", &shape).unwrap_err().to_string();
+    let err = cut_one(&g, "J2", &shape).unwrap_err().to_string();
     assert!(
         err.contains("merging road into J2") && err.contains("76.4 m short"),
         "{err}"
     );
-    let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
-    let parts: Vec<Part> = cut.fitted.iter().map(|f| f.part).collect();
+    let cut = cut_one(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
+    let w = &cut.regions[0];
+    let parts: Vec<Part> = w.fitted.iter().map(|f| f.part).collect();
     assert_eq!(parts, [Part::MergingRoad, Part::Downstream]);
     // Upstream fits as asked; the merging road is all of it, the main road after runs to the corridor's end.
-    assert!((cut.upstream_m - 600.0).abs() < 1e-9);
+    assert!((w.upstream_m - 600.0).abs() < 1e-9);
     let roles = CorridorRoles::of(&g).unwrap();
     let feeder: f64 = roles.feeders[0]
         .iter()
         .map(|r| g.road(*r).unwrap().length_m)
         .sum();
     assert!(
-        (cut.merge_m - feeder).abs() < 1e-9 && (feeder - 723.6).abs() < 0.1,
+        (w.merge_m[0] - feeder).abs() < 1e-9 && (feeder - 723.6).abs() < 0.1,
         "{feeder}"
     );
     let j2 = g.find_junction("J2").unwrap();
@@ -397,13 +397,9 @@ fn a_fit_takes_the_whole_merging_road_and_the_rest_of_the_corridor() {
         .map(|r| g.road(*r).unwrap().length_m)
         .sum();
     assert!(after < 1600.0 && after > 1000.0, "{after}");
-    assert_eq!(cut.downstream_m, after);
-    assert_eq!(cut.merge_roads[0], cut.merge_entry);
-    assert_eq!(
-        cut.downstream_roads.last(),
-        cut.roles.main.last(),
-        "{cut:?}"
-    );
+    assert_eq!(w.downstream_m, after);
+    assert_eq!(w.merge_roads[0][0], w.merge_entries[0]);
+    assert_eq!(w.downstream_roads.last(), cut.roles.main.last(), "{cut:?}");
     // Only the upstream boundary cuts a road: the others fall on the corridor's ends.
     assert_eq!(cut.graph.roads.len(), g.roads.len() + 1, "{:?}", cut.notes);
 }
@@ -412,11 +408,11 @@ fn a_fit_takes_the_whole_merging_road_and_the_rest_of_the_corridor() {
 fn a_fit_changes_nothing_where_the_map_has_the_lengths() {
     let g = corridor();
     let shape = simple_merge_shape();
-    let plain = cut_window(&g, "J2", &shape).unwrap();
-    let fitted = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
-    assert!(fitted.fitted.is_empty());
+    let plain = cut_one(&g, "J2", &shape).unwrap();
+    let fitted = cut_one(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
+    assert!(fitted.regions[0].fitted.is_empty());
     assert_eq!(plain.graph, fitted.graph);
-    assert_eq!(plain.region(), fitted.region());
+    assert_eq!(plain.regions[0].roads(), fitted.regions[0].roads());
 }
 
 #[test]
@@ -425,12 +421,13 @@ fn the_scenario_records_the_fitted_lengths() {
     let source = ResolvedScenario::load("simple_merge").unwrap();
     let mut shape = SourceShape::of(&source).unwrap();
     shape.upstream_m = 1600.0;
-    let cut = cut_window(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
+    let cut = cut_one(&g, WindowRequest::at("J2").fitted(fit_to(0.5)), &shape).unwrap();
+    let w = &cut.regions[0];
     let (scenario, _) = window_of(&cut, &source, &shape, &DemandOverride::default());
     let control = scenario.control.as_ref().unwrap();
     let window = control.window.as_ref().unwrap();
     assert_eq!(window.upstream_m, 1500.0);
-    assert_eq!(control.region.len(), cut.region().len());
+    assert_eq!(control.region.len(), w.roads().len());
     assert!(
         scenario
             .description
@@ -534,7 +531,7 @@ fn demand_is_sized_on_a_narrower_entry_road_and_an_entry_that_cannot_take_it_say
     let (g, entry) = i210_with_a_one_lane_entry();
     let source = ResolvedScenario::load("simple_merge").unwrap();
     let shape = SourceShape::of(&source).unwrap();
-    let cut = cut_window(&g, WindowRequest::at("J59"), &shape).unwrap();
+    let cut = cut_one(&g, WindowRequest::at("J59"), &shape).unwrap();
     assert_eq!(cut.main_entry, entry);
     let main_vph = |sc: &Scenario| -> f64 {
         sc.flows
@@ -571,12 +568,21 @@ fn demand_is_sized_on_a_narrower_entry_road_and_an_entry_that_cannot_take_it_say
     );
 }
 
-/// The scenario of window `cut` as `w` (its graph `w.graph.json`), with its demand lines.
+/// The cut of one window: a list of one.
+fn cut_one(
+    g: &LaneGraph,
+    request: impl Into<WindowRequest>,
+    shape: &SourceShape,
+) -> Result<WindowsCut, TransformError> {
+    cut_windows(g, &[request.into()], shape, Overlap::Refuse)
+}
+
+/// The one-window scenario of `cut` as `w` (its graph `w.graph.json`), with its demand lines.
 fn window_of(
-    cut: &WindowCut,
+    cut: &WindowsCut,
     source: &ResolvedScenario,
     shape: &SourceShape,
     demand: &DemandOverride,
 ) -> (Scenario, Vec<String>) {
-    window_scenario(cut, source, shape, "w", "w.graph.json", demand).unwrap()
+    windows_scenario(cut, source, shape, "w", "w.graph.json", demand, true).unwrap()
 }

@@ -331,6 +331,7 @@ mod tests {
                         via_length_m: 5.0,
                         via_speed_mps: None,
                         right_of_way: RightOfWay::Major,
+                        signal: None,
                         right_of_way_overridden: false,
                         provenance: Provenance::default(),
                     });

@@ -7,6 +7,7 @@
 //! one-lane-per-road network (same indices, same links, same order).
 
 pub mod best_lanes;
+pub mod signals;
 
 use crate::error::SimError;
 use mapc_graph::{LaneGraph, RightOfWay, RoadId};
@@ -62,6 +63,8 @@ pub struct SimLink {
     pub zipper: bool,
     /// Links into the same lane from another lane: they merge with this one.
     pub foes: Vec<LinkIdx>,
+    /// The fixed-time light that controls it: (index into [`Network::lights`], index in its phases' states).
+    pub signal: Option<(u32, u32)>,
 }
 
 #[derive(Clone, Debug)]
@@ -79,6 +82,8 @@ pub struct Network {
     pub lane_names: Vec<String>,
     /// The road of each lane for traces, lane index aside: `R3`; via lanes `R1>R2`.
     pub road_labels: Vec<String>,
+    /// The graph's fixed-time traffic lights ([`signals`]).
+    pub lights: Vec<mapc_graph::TrafficLight>,
 }
 
 impl Network {
@@ -195,6 +200,12 @@ impl Network {
                 major: c.right_of_way != RightOfWay::Minor,
                 zipper: c.right_of_way == RightOfWay::Zipper,
                 foes: Vec::new(),
+                signal: c.signal.as_ref().and_then(|s| {
+                    g.lights
+                        .iter()
+                        .position(|l| l.id == s.light)
+                        .map(|l| (l as u32, s.index))
+                }),
             });
             seen.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), link_idx);
         }
@@ -218,6 +229,7 @@ impl Network {
             multi_lane,
             lane_names,
             road_labels,
+            lights: g.lights.clone(),
         };
         net.compute_downstream()?;
         Ok(net)
@@ -300,7 +312,7 @@ impl Network {
         from: RoadId,
         to: Option<RoadId>,
     ) -> Result<Vec<LaneIdx>, SimError> {
-        let roads = self.route_roads(g, from, to)?;
+        let roads = self.route_roads(g, from, &[], to)?;
         let (part, dead_end) = self.best_lane_path(self.start_lane(&roads), &roads, 0.0);
         self.past_dead_ends(&roads, part, dead_end)
     }
@@ -344,9 +356,10 @@ impl Network {
         &self,
         g: &LaneGraph,
         from: RoadId,
+        via: &[RoadId],
         to: Option<RoadId>,
     ) -> Result<(Vec<LaneIdx>, Vec<usize>, bool), SimError> {
-        let roads = self.route_roads(g, from, to)?;
+        let roads = self.route_roads(g, from, via, to)?;
         let (lanes, dead_end) = self.best_lane_path(self.start_lane(&roads), &roads, 0.0);
         Ok((lanes, roads, dead_end))
     }
@@ -359,18 +372,55 @@ impl Network {
         self.road_lanes[roads[0]][start]
     }
 
-    /// The roads (indices into `LaneGraph::roads`) of the route from `from` to `to` (see [`Network::route`]).
+    /// The roads (indices into `LaneGraph::roads`) of the route from `from` through each of `via` in order to
+    /// `to` (see [`Network::route`]); without `to`, on along the through roads after the last.
     pub fn route_roads(
         &self,
         g: &LaneGraph,
         from: RoadId,
+        via: &[RoadId],
         to: Option<RoadId>,
     ) -> Result<Vec<usize>, SimError> {
-        let &start = self
-            .road_lane
-            .get(&from)
-            .ok_or_else(|| SimError::Network(format!("unknown road {from}")))?;
-        let start = start as usize;
+        let index = |r: RoadId| -> Result<usize, SimError> {
+            self.road_lane
+                .get(&r)
+                .map(|&i| i as usize)
+                .ok_or_else(|| SimError::Network(format!("unknown road {r}")))
+        };
+        let mut start = index(from)?;
+        let mut head = Vec::new();
+        let mut last_id = from;
+        for &v in via {
+            let goal = index(v)?;
+            if goal == start {
+                continue;
+            }
+            let mut leg = self.road_path(start, goal).ok_or_else(|| {
+                SimError::Network(format!(
+                    "no route from {last_id} to {v}: the roads do not connect"
+                ))
+            })?;
+            leg.pop();
+            head.extend(leg);
+            start = goal;
+            last_id = v;
+        }
+        let mut rest = self.route_roads_from(g, start, last_id, to)?;
+        if head.is_empty() {
+            return Ok(rest);
+        }
+        head.append(&mut rest);
+        Ok(head)
+    }
+
+    /// [`Self::route_roads`] from the road at index `start` (whose id is `from`) without stops.
+    fn route_roads_from(
+        &self,
+        g: &LaneGraph,
+        start: usize,
+        from: RoadId,
+        to: Option<RoadId>,
+    ) -> Result<Vec<usize>, SimError> {
         match to {
             Some(to) => {
                 let Some(&goal) = self.road_lane.get(&to) else {

@@ -6,13 +6,17 @@ use crate::measure::metrics::RunMetrics;
 use crate::measure::points::MeasurePoint;
 use crate::network::Network;
 use crate::sim::Simulation;
-use crate::spec::{DepartLane, FlowSpec, SimSpec, VehicleTypeSpec};
+use crate::spec::{
+    DEPART_SPEED_DESIRED, DEPART_SPEED_MAX, DepartLane, FlowSpec, SimSpec, VehicleTypeSpec,
+};
 use mapc_graph::RoadId;
 use mapc_scenario::ResolvedScenario;
 use rayon::prelude::*;
 
 /// SUMO's default emergency deceleration of a passenger car (m/s^2).
 const EMERGENCY_DECEL: f64 = 9.0;
+/// Krauss' dawdling when a type does not give it (SUMO 1.8's default).
+const KRAUSS_SIGMA: f64 = 0.5;
 /// The original rollouts ran two steps (start, and the reset that inserts the initial vehicles) before the
 /// horizon; the clock at step 0 is two steps in.
 const SETUP_STEPS: f64 = 2.0;
@@ -28,7 +32,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             name: name.clone(),
             accel: t.accel,
             decel: t.decel,
-            emergency_decel: EMERGENCY_DECEL.max(t.decel),
+            emergency_decel: t.emergency_decel.unwrap_or(EMERGENCY_DECEL.max(t.decel)),
             tau: t.tau,
             min_gap: t.min_gap,
             delta: t.delta,
@@ -39,6 +43,8 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             impatience: t.impatience,
             controlled: t.controlled,
             idm_stepping_s: t.idm_stepping_s,
+            car_follow_model: t.car_follow_model,
+            sigma: t.sigma.unwrap_or(KRAUSS_SIGMA),
         })
         .collect();
     let type_index = |name: &str, what: &str| -> Result<usize, SimError> {
@@ -54,13 +60,45 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
         let (from, to) = *rs.flow_roads.get(i).ok_or_else(|| {
             SimError::Spec(format!("{}: flows[{i}] has no resolved roads", rs.origin))
         })?;
+        // a mix: the first type stands for the flow where one is needed, each vehicle draws its own
+        let (vehicle_type, type_mix) = match sc.vehicle_type_mixes.get(&f.vehicle_type) {
+            Some(mix) => {
+                let total: f64 = mix.values().sum();
+                let mut acc = 0.0;
+                let mut cumulative = Vec::with_capacity(mix.len());
+                for (name, w) in mix {
+                    acc += w / total;
+                    cumulative.push((
+                        type_index(name, &format!("vehicle_type_mixes.{}", f.vehicle_type))?,
+                        acc,
+                    ));
+                }
+                if let Some(last) = cumulative.last_mut() {
+                    last.1 = 1.0;
+                }
+                (cumulative[0].0, cumulative)
+            }
+            None => (
+                type_index(&f.vehicle_type, &format!("flows[{i}].vehicle_type"))?,
+                Vec::new(),
+            ),
+        };
         flows.push(FlowSpec {
             id: f.id.clone(),
             from,
             to,
             vehs_per_hour: f.vehs_per_hour,
-            vehicle_type: type_index(&f.vehicle_type, &format!("flows[{i}].vehicle_type"))?,
-            depart_speed: f.depart_speed_mps,
+            vehicle_type,
+            type_mix,
+            via: rs.flow_via.get(i).cloned().unwrap_or_default(),
+            probability: f.probability,
+            number: f.number,
+            queue_excess: rs.queue_excess_demand,
+            depart_speed: match f.depart_speed.as_deref() {
+                Some("max") => DEPART_SPEED_MAX,
+                Some("desired") => DEPART_SPEED_DESIRED,
+                _ => f.depart_speed_mps,
+            },
             begin_s: f.begin_s,
             end_s: f.end_s.unwrap_or(f64::INFINITY),
             depart_lane: match &f.depart_lane {

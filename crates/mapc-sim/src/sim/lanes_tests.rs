@@ -51,7 +51,7 @@ fn best_lanes_say_the_acceleration_lane_must_be_left() {
     let g = &spec.graph;
     let net = Network::from_graph(g).unwrap();
     let ramp = road(&net, g, mapc_scenario::generator::RAMP_ENTRY);
-    let roads = net.route_roads(g, net.road_ids[ramp], None).unwrap();
+    let roads = net.route_roads(g, net.road_ids[ramp], &[], None).unwrap();
     assert_eq!(
         roads.len(),
         4,

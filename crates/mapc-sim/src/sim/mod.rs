@@ -18,10 +18,10 @@ use crate::demand::waiting::EntryQueue;
 use crate::error::SimError;
 use crate::measure::metrics::RunMetrics;
 use crate::measure::points::MeasureAcc;
-use crate::models::cf::{CarFollowModel, CfModel, IdmParams, kinematics};
+use crate::models::cf::{CarFollowModel, CfModel, IdmParams, Krauss, kinematics};
 use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network, SimLane, SimLink};
 use crate::numeric::{FastMinMax, NUMERICAL_EPS};
-use crate::spec::SimSpec;
+use crate::spec::{CarFollowModelKind, SimSpec};
 use accounting::MetricsAcc;
 use entry::{lane_choice, teleport};
 use junction::Approach;
@@ -84,6 +84,8 @@ pub struct Simulation {
     flow_lanes: Vec<Option<lane_choice::FlowLanes>>,
     in_region: Table<bool>,
     rng: StdRng,
+    /// The run's seed, from which each dawdling driver's own generator is derived ([`vehicle::DriverRng`]).
+    seed: u64,
     step: u64,
     time_s: f64,
     next_entry: u64,
@@ -117,8 +119,8 @@ impl Simulation {
         let types: Vec<CfModel> = spec
             .vehicle_types
             .iter()
-            .map(|t| {
-                CfModel::idm(IdmParams::with_stepping(
+            .map(|t| match t.car_follow_model {
+                CarFollowModelKind::Idm => CfModel::idm(IdmParams::with_stepping(
                     t.accel,
                     t.decel,
                     t.emergency_decel,
@@ -127,7 +129,19 @@ impl Simulation {
                     t.delta,
                     dt,
                     t.idm_stepping_s,
-                ))
+                )),
+                CarFollowModelKind::Krauss => CfModel::krauss(
+                    Krauss {
+                        accel: t.accel,
+                        decel: t.decel,
+                        emergency_decel: t.emergency_decel,
+                        tau: t.tau,
+                        sigma: t.sigma,
+                        max_speed: t.max_speed,
+                        dt,
+                    },
+                    t.min_gap,
+                ),
             })
             .collect();
         let mut sim = Simulation {
@@ -154,6 +168,7 @@ impl Simulation {
             plans: Table(Vec::new()),
             plan_order: Vec::new(),
             rng: StdRng::seed_from_u64(seed),
+            seed,
             step: 0,
             time_s: spec.start_time_s,
             next_entry: 0,
@@ -226,12 +241,12 @@ impl Simulation {
                     )));
                 }
             }
-            let r = sim.add_route(flow.from, flow.to, flow.depart_lane.start_lane())?;
+            let r = sim.add_route(flow.from, &flow.via, flow.to, flow.depart_lane.start_lane())?;
             sim.flow_route.push(r);
             if flow.depart_lane.chosen_at_insertion() {
                 let lanes = sim.spec.graph.road(flow.from).map_or(0, |r| r.lanes.len());
                 let routes = (0..lanes)
-                    .map(|i| sim.add_route(flow.from, flow.to, Some(i as u8)))
+                    .map(|i| sim.add_route(flow.from, &flow.via, flow.to, Some(i as u8)))
                     .collect::<Result<Vec<u32>, SimError>>()?;
                 let starts: Vec<LaneIdx> = routes
                     .iter()
@@ -279,7 +294,7 @@ impl Simulation {
         )?;
         for i in 0..sim.spec.initial.len() {
             let iv = sim.spec.initial[i].clone();
-            let r = sim.add_route(iv.road, None, None)?;
+            let r = sim.add_route(iv.road, &[], None, None)?;
             let lane = sim.routes[r as usize].lanes[0];
             let len = sim.net.lanes[lane as usize].length;
             if !(iv.pos_m >= 0.0 && iv.pos_m <= len) {

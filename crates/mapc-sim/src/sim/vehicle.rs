@@ -39,6 +39,8 @@ pub(super) struct Veh {
     /// Its lane-change record (multi-lane networks only: made at its first lane-change pass, dropped when it
     /// leaves).
     pub(super) lc: Option<Box<lane_change::LcVeh>>,
+    /// The driver's own random draws (dawdling), independent of every other vehicle and of the thread count.
+    pub(super) rng: DriverRng,
 }
 
 #[derive(Clone, Debug)]
@@ -89,6 +91,33 @@ impl TypeConsts {
     }
 }
 
+/// A vehicle's own generator (SplitMix64 over the run's seed and the vehicle's id): the draws of one driver do not
+/// depend on how many other drivers drew, so a model's randomness adds nothing to the shared stream that decides
+/// departures and speed factors.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct DriverRng(u64);
+
+impl DriverRng {
+    pub(super) fn new(seed: u64, id: VehicleId) -> DriverRng {
+        let mut r = DriverRng(seed ^ (id as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
+        r.next_u64();
+        r
+    }
+
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1), 53 bits.
+    pub(super) fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
 impl Simulation {
     pub(super) fn create_vehicle(
         &mut self,
@@ -134,6 +163,7 @@ impl Simulation {
             distance_m: 0.0,
             free_flow_s,
             lc: None,
+            rng: DriverRng::new(self.seed, id),
         });
         id
     }
@@ -217,7 +247,7 @@ impl Simulation {
         if vtype >= self.spec.vehicle_types.len() {
             return Err(SimError::Spec(format!("no vehicle type {vtype}")));
         }
-        let r = self.add_route(from, None, None)?;
+        let r = self.add_route(from, &[], None, None)?;
         let Some(&lane) = self.routes[r as usize].lanes.get(lane_in_route) else {
             return Err(SimError::Spec(format!(
                 "the route from {from} has no lane {lane_in_route}"
@@ -256,15 +286,17 @@ impl Simulation {
     pub(super) fn add_route(
         &mut self,
         from: RoadId,
+        via: &[RoadId],
         to: Option<RoadId>,
         lane: Option<u8>,
     ) -> Result<u32, SimError> {
         let Some(lane) = lane else {
             let (lanes, roads, dead_end) =
-                self.net.route_without_changes(&self.spec.graph, from, to)?;
+                self.net
+                    .route_without_changes(&self.spec.graph, from, via, to)?;
             return Ok(self.add_lane_route(lanes, roads, dead_end));
         };
-        let roads = self.net.route_roads(&self.spec.graph, from, to)?;
+        let roads = self.net.route_roads(&self.spec.graph, from, via, to)?;
         let Some(&start) = self.net.road_lanes[roads[0]].get(lane as usize) else {
             return Err(SimError::Spec(format!("road {from} has no lane {lane}")));
         };

@@ -1,5 +1,5 @@
 //! Car-following models, after SUMO's `src/microsim/cfmodels/`: one model per file behind the small interface
-//! [`CarFollowModel`], and [`CfModel`], a vehicle type's model as the simulator stores it.
+//! [`CarFollowModel`] (the IDM, [`idm`]; Krauss, SUMO's default, [`krauss`]), and [`CfModel`], a vehicle type's model as the simulator stores it.
 //!
 //! Glossary:
 //! - **gap**: from the ego's front to the leader's back, less the ego's min gap (SUMO's convention).
@@ -13,8 +13,10 @@
 
 pub mod idm;
 pub mod kinematics;
+pub mod krauss;
 
 pub use idm::IdmParams;
+pub use krauss::Krauss;
 
 /// What the simulator asks of a car-following model. The gaps exclude the min gap; `desired_speed` is the
 /// vehicle's desired speed on its lane (limit times speed factor, capped by the type's maximum).
@@ -61,6 +63,19 @@ pub trait CarFollowModel {
         self.free_speed(speed, seen, max_speed, desired_speed)
     }
 
+    /// Whether the driver slows at random each step ([`Self::dawdle`] needs a draw).
+    #[inline(always)]
+    fn dawdles(&self) -> bool {
+        false
+    }
+
+    /// The next speed after the driver's random slowdown (SUMO's `patchSpeedBeforeLC`), between the step's
+    /// bounds `v_min` and `v_max`, from a uniform draw `r` in [0, 1).
+    #[inline(always)]
+    fn dawdle(&self, _v_min: f64, v_max: f64, _r: f64) -> f64 {
+        v_max
+    }
+
     /// The four speeds most plans need, known before planning: behind leaders 0, 2 and 3, and
     /// [`Self::free_speed_below_limit`] towards `leader_speed[1]` (`gap[1]` unused). One at a time unless a
     /// model computes them together.
@@ -85,6 +100,7 @@ pub trait CarFollowModel {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CfKind {
     Idm(IdmParams),
+    Krauss(Krauss),
 }
 
 /// A vehicle type's car following: the base parameters every model has and the model itself.
@@ -119,6 +135,19 @@ impl CfModel {
         }
     }
 
+    /// A Krauss driver with Krauss' parameters as the base ones and `min_gap`.
+    pub fn krauss(k: Krauss, min_gap: f64) -> CfModel {
+        CfModel {
+            accel: k.accel,
+            decel: k.decel,
+            emergency_decel: k.emergency_decel,
+            tau: k.tau,
+            min_gap,
+            dt: k.dt,
+            kind: CfKind::Krauss(k),
+        }
+    }
+
     /// [`kinematics::brake_gap`] with this type's step.
     #[inline]
     pub fn brake_gap(&self, speed: f64, decel: f64, headway: f64) -> f64 {
@@ -149,6 +178,7 @@ macro_rules! by_model {
     ($self:ident, $m:ident => $e:expr) => {
         match &$self.kind {
             CfKind::Idm($m) => $e,
+            CfKind::Krauss($m) => $e,
         }
     };
 }
@@ -194,6 +224,14 @@ impl CarFollowModel for CfModel {
         desired_speed: f64,
     ) -> f64 {
         by_model!(self, m => m.free_speed_given(below, speed, seen, max_speed, desired_speed))
+    }
+    #[inline(always)]
+    fn dawdles(&self) -> bool {
+        by_model!(self, m => m.dawdles())
+    }
+    #[inline(always)]
+    fn dawdle(&self, v_min: f64, v_max: f64, r: f64) -> f64 {
+        by_model!(self, m => m.dawdle(v_min, v_max, r))
     }
     #[inline(always)]
     fn plan_speeds(

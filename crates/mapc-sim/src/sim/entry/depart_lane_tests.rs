@@ -25,7 +25,7 @@ fn entry_lanes(sim: &Simulation) -> Vec<LaneIdx> {
 /// Puts a standing vehicle of the flow's type with its front at `pos` on lane `lane` of the entry road.
 fn stand(sim: &mut Simulation, lane: u8, pos: f64) -> VehicleId {
     let from = sim.spec.flows[0].from;
-    let r = sim.add_route(from, None, Some(lane)).unwrap();
+    let r = sim.add_route(from, &[], None, Some(lane)).unwrap();
     let id = sim.create_vehicle(0, r, 0.0);
     let l = sim.routes[r as usize].lanes[0];
     sim.place(id, l, pos, 0.0, false).unwrap();
@@ -71,7 +71,7 @@ fn free_takes_the_least_occupied_lane_and_the_rightmost_on_a_tie() {
     let id = sim.departed_last[0];
     assert_eq!(sim.veh[id as usize].lane, lanes[1]);
     let from = sim.spec.flows[0].from;
-    let lane1_route = sim.add_route(from, None, Some(1)).unwrap();
+    let lane1_route = sim.add_route(from, &[], None, Some(1)).unwrap();
     assert_eq!(sim.veh[id as usize].route, lane1_route);
     assert_eq!(sim.waiting_to_enter(), 0);
 }

@@ -3,6 +3,7 @@
 //! (`lane_choice.rs`).
 
 use super::*;
+use crate::spec::DEPART_SPEED_MAX;
 
 impl Simulation {
     /// Create the flows' vehicles due by now and insert waiting vehicles where it is safe (SUMO's insertion: at
@@ -10,7 +11,19 @@ impl Simulation {
     pub(in crate::sim) fn insert_departures(&mut self) {
         let now = self.time_s - self.spec.step_s; // insertion happens within the step just executed
         for f in 0..self.spec.flows.len() {
-            let flow = self.spec.flows[f].clone();
+            let flow = &self.spec.flows[f];
+            if flow.number.is_some_and(|n| self.flow_next[f] >= n) {
+                continue;
+            }
+            if let Some(p) = flow.probability {
+                // SUMO: one draw a step, a vehicle with probability p per second (at most one a step)
+                let due = flow.begin_s <= now + 1e-9 && now < flow.end_s;
+                if due && self.rng.random::<f64>() < p * self.spec.step_s {
+                    self.enqueue_departure(f);
+                }
+                continue;
+            }
+            let flow = flow.clone();
             if flow.vehs_per_hour <= 0.0 {
                 continue;
             }
@@ -26,29 +39,13 @@ impl Simulation {
                 } else {
                     flow.begin_s + n as f64 * period
                 };
-                if !(depart <= now + 1e-9) || depart >= flow.end_s {
+                if !(depart <= now + 1e-9)
+                    || depart >= flow.end_s
+                    || flow.number.is_some_and(|m| n >= m)
+                {
                     break;
                 }
-                if let Some(fl) = &self.flow_lanes[f] {
-                    let re = fl.entry as usize;
-                    if self.road_entries[re].queue.builds_next() {
-                        let id = self.build_flow_vehicle(f);
-                        self.road_entries[re].queue.push_built(id);
-                    } else {
-                        self.road_entries[re].queue.push_counted(f);
-                    }
-                    self.flow_next[f] += 1;
-                    continue;
-                }
-                let entry = self.routes[self.flow_route[f] as usize].lanes[0];
-                let ei = self.entry_lanes.iter().position(|&l| l == entry).unwrap();
-                if self.pending[ei].builds_next() {
-                    let id = self.build_flow_vehicle(f);
-                    self.pending[ei].push_built(id);
-                } else {
-                    self.pending[ei].push_counted(f);
-                }
-                self.flow_next[f] += 1;
+                self.enqueue_departure(f);
             }
         }
         // lanes where an insertion failed in this step: no later vehicle is tried there (SUMO's failed-insertion
@@ -83,21 +80,100 @@ impl Simulation {
         self.refused_lanes = refused;
     }
 
-    /// A new vehicle of flow `f` (pending until inserted).
+    /// The next vehicle of flow `f` joins the queue at its entry (built now while the queue is short, else
+    /// counted and built when it reaches the front).
+    fn enqueue_departure(&mut self, f: usize) {
+        if let Some(fl) = &self.flow_lanes[f] {
+            let re = fl.entry as usize;
+            if self.road_entries[re].queue.builds_next() {
+                let id = self.build_flow_vehicle(f);
+                self.road_entries[re].queue.push_built(id);
+            } else {
+                self.road_entries[re].queue.push_counted(f);
+            }
+        } else {
+            let entry = self.routes[self.flow_route[f] as usize].lanes[0];
+            let ei = self.entry_lanes.iter().position(|&l| l == entry).unwrap();
+            if self.pending[ei].builds_next() {
+                let id = self.build_flow_vehicle(f);
+                self.pending[ei].push_built(id);
+            } else {
+                self.pending[ei].push_counted(f);
+            }
+        }
+        self.flow_next[f] += 1;
+    }
+
+    /// A new vehicle of flow `f` (pending until inserted); a flow with a mix of types draws its type.
     pub(in crate::sim) fn build_flow_vehicle(&mut self, f: usize) -> VehicleId {
         let flow = &self.spec.flows[f];
-        let (vt, speed) = (flow.vehicle_type, flow.depart_speed);
+        let speed = flow.depart_speed;
+        let vt = if flow.type_mix.is_empty() {
+            flow.vehicle_type
+        } else {
+            let u: f64 = self.rng.random();
+            let mix = &self.spec.flows[f].type_mix;
+            mix.iter()
+                .find(|&&(_, c)| u < c)
+                .unwrap_or(&mix[mix.len() - 1])
+                .0
+        };
         self.create_vehicle(vt, self.flow_route[f], speed)
     }
 
     /// SUMO's insertion check at the start of the entry road: front at length + POSITION_EPS, the depart speed
     /// safe behind the leader and able to stop before a minor link within reach.
     pub(in crate::sim) fn try_insert(&mut self, id: VehicleId) -> bool {
+        let rule = self.veh[id as usize].depart_speed;
+        if rule.is_infinite() {
+            return self.try_insert_at_desired(id, rule == DEPART_SPEED_MAX);
+        }
         if !self.insertion_allowed(id) {
             return false;
         }
         self.place_at_route_start(id, true);
         true
+    }
+
+    /// SUMO's `departSpeed="desired"`: at the vehicle's desired speed on its first lane, or not now; with
+    /// `lower` (`"max"`), the highest speed up to it that passes the insertion check (bisected to 1/256 of it).
+    /// The vehicle keeps its rule for a later try.
+    fn try_insert_at_desired(&mut self, id: VehicleId, lower: bool) -> bool {
+        let v = &self.veh[id as usize];
+        let rule = v.depart_speed;
+        let lane = self.routes[v.route as usize].lanes[0];
+        let desired = self.desired_speed(v, lane);
+        let allowed_at = |sim: &mut Simulation, speed: f64| {
+            sim.veh[id as usize].depart_speed = speed;
+            sim.insertion_allowed(id)
+        };
+        let speed = if allowed_at(self, desired) {
+            Some(desired)
+        } else if lower && allowed_at(self, 0.0) {
+            let (mut lo, mut hi) = (0.0, desired);
+            for _ in 0..8 {
+                let mid = 0.5 * (lo + hi);
+                if allowed_at(self, mid) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            Some(lo)
+        } else {
+            None
+        };
+        match speed {
+            Some(s) => {
+                self.veh[id as usize].depart_speed = s;
+                self.place_at_route_start(id, true);
+                true
+            }
+            None => {
+                self.veh[id as usize].depart_speed = rule;
+                false
+            }
+        }
     }
 
     /// Where a vehicle is inserted: at the start of its route's first lane, its front one length in.

@@ -2,6 +2,7 @@
 //! into a leader, then the passage onto the next lane of the route and arrivals.
 
 use super::*;
+use crate::network::signals::{self, SignalState};
 
 /// Below this speed a vehicle counts as halting (its waiting time grows).
 pub(in crate::sim) const HALTING_SPEED: f64 = 0.1;
@@ -17,6 +18,8 @@ pub(in crate::sim) fn exact_reciprocal(d: f64) -> Option<f64> {
 impl Simulation {
     pub(in crate::sim) fn execute_moves(&mut self) {
         let dt = self.spec.step_s;
+        // the lights' clock: seconds since the run's begin
+        let light_time = self.time_s - self.spec.start_time_s;
         let inv_dt = exact_reciprocal(dt);
         // 1. decide each vehicle's next speed from its plan and the links (plans are in this visiting order)
         let mut pi = 0;
@@ -30,7 +33,12 @@ impl Simulation {
                 let mut v_safe = plan.v_safe;
                 for it in &plan.items[..plan.n_items as usize] {
                     let lk = self.link_at(it.link as usize);
-                    if lk.major && !lk.zipper {
+                    let signal = lk.signal.map(|(light, index)| {
+                        signals::state_at(&self.net.lights[light as usize], index, light_time)
+                    });
+                    if signal == Some(SignalState::Green)
+                        || (signal.is_none() && lk.major && !lk.zipper)
+                    {
                         continue;
                     }
                     let tc = &self.type_consts[v.vtype as usize];
@@ -42,6 +50,19 @@ impl Simulation {
                                 plan.stop_brake_gap
                             }
                         || v.speed < p.decel * dt;
+                    // red: stop; yellow: stop where one still can (SUMO); green yielding: a minor link
+                    if matches!(signal, Some(SignalState::Red | SignalState::Yellow)) {
+                        if signal == Some(SignalState::Red) || can_brake {
+                            let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
+                                it.stop_dist,
+                                v.speed,
+                                it.desired_speed,
+                            ));
+                            v_safe = v_safe.fmin(v_link_wait);
+                            break;
+                        }
+                        continue;
+                    }
                     if lk.zipper {
                         // a zipper link is never waited at: ego takes its turn behind the other stream's
                         // vehicles that reach the merge first, and looks on to the next link
@@ -67,6 +88,11 @@ impl Simulation {
                     .fmin(v_safe.fmax(v.speed - p.emergency_decel * dt))
                     .fmax(0.0);
                 let mut next = v_max.fmax(v_min);
+                if p.dawdles() {
+                    let r = self.veh[id as usize].rng.uniform();
+                    next = self.types[self.veh[id as usize].vtype as usize].dawdle(v_min, next, r);
+                }
+                let v = &self.veh[id as usize];
                 if self.net.multi_lane {
                     let (speed, vtype, lane) = (v.speed, v.vtype as usize, v.lane);
                     let desired = self.desired_speed(v, lane);

@@ -33,8 +33,8 @@ fn merge() -> Merge {
         .find(|&r| r != main)
         .unwrap();
     let mut sim = Simulation::from_spec(spec, 0).unwrap();
-    let main_route = sim.add_route(main, None, None).unwrap();
-    let ramp_route = sim.add_route(ramp, None, None).unwrap();
+    let main_route = sim.add_route(main, &[], None, None).unwrap();
+    let ramp_route = sim.add_route(ramp, &[], None, None).unwrap();
     let lanes = |r: u32| sim.routes[r as usize].lanes.0.clone();
     let (main_lanes, ramp_lanes) = (lanes(main_route), lanes(ramp_route));
     let ramp_k = ramp_lanes

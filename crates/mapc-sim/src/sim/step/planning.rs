@@ -295,7 +295,7 @@ impl Simulation {
                 // only links where right of way is decided need a request: minor links, and major links with
                 // minor foes
                 if (plan.n_items as usize) < MAX_LINK_ITEMS
-                    && (!lk.major || self.link_takes_requests[link as usize])
+                    && (!lk.major || self.link_takes_requests[link as usize] || lk.signal.is_some())
                 {
                     let i = self.link_request(
                         v,

@@ -1,0 +1,285 @@
+//! A `.sumocfg` as SUMO 1.8 reads it: every option is an element with a `value` (`<end value="3600"/>`), in any
+//! section; file names are relative to the configuration's folder and lists are separated by commas or spaces.
+
+use super::SumoError;
+use mapc_import::SumoElement;
+use std::path::{Path, PathBuf};
+
+/// SUMO 1.8's default seed.
+pub const SUMO_DEFAULT_SEED: u64 = 23423;
+/// SUMO 1.8's default `--time-to-teleport` (s).
+pub const SUMO_DEFAULT_TIME_TO_TELEPORT_S: f64 = 300.0;
+
+/// The options of a SUMO run mapc uses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SumoConfig {
+    /// The configuration file, if the run has one.
+    pub path: Option<PathBuf>,
+    pub net_file: PathBuf,
+    pub route_files: Vec<PathBuf>,
+    pub additional_files: Vec<PathBuf>,
+    pub begin_s: f64,
+    /// `None`: SUMO runs until every vehicle has left.
+    pub end_s: Option<f64>,
+    pub step_s: f64,
+    pub seed: u64,
+    /// Negative: never.
+    pub time_to_teleport_s: f64,
+    /// `default.speeddev`; negative: each vClass's own.
+    pub default_speed_dev: f64,
+    /// `default.carfollowmodel` (`Krauss` unless set).
+    pub default_car_follow_model: String,
+    /// `scale`: demand multiplied by this.
+    pub scale: f64,
+    pub tripinfo_output: Option<PathBuf>,
+    pub summary_output: Option<PathBuf>,
+    /// Options read but without effect in mapc, one line each.
+    pub warnings: Vec<String>,
+}
+
+impl SumoConfig {
+    /// SUMO's defaults for a run of these files.
+    pub fn for_files(net: &Path, routes: &[PathBuf], additional: &[PathBuf]) -> SumoConfig {
+        SumoConfig {
+            path: None,
+            net_file: net.to_path_buf(),
+            route_files: routes.to_vec(),
+            additional_files: additional.to_vec(),
+            begin_s: 0.0,
+            end_s: None,
+            step_s: 1.0,
+            seed: SUMO_DEFAULT_SEED,
+            time_to_teleport_s: SUMO_DEFAULT_TIME_TO_TELEPORT_S,
+            default_speed_dev: -1.0,
+            default_car_follow_model: "Krauss".into(),
+            scale: 1.0,
+            tripinfo_output: None,
+            summary_output: None,
+            warnings: Vec::new(),
+        }
+    }
+}
+
+/// Options that only steer SUMO's own outputs, messages, GUI or checks: read and without effect on the run.
+const WITHOUT_EFFECT: &[&str] = &[
+    "verbose",
+    "no-step-log",
+    "no-warnings",
+    "duration-log.statistics",
+    "duration-log.disable",
+    "xml-validation",
+    "xml-validation.net",
+    "xml-validation.routes",
+    "gui-settings-file",
+    "start",
+    "quit-on-end",
+    "delay",
+    "window-size",
+    "window-pos",
+    "collision.action",
+    "collision.check-junctions",
+    "ignore-route-errors",
+    "waiting-time-memory",
+    "message-log",
+    "error-log",
+    "log",
+    "output-prefix",
+    "precision",
+    "human-readable-time",
+    "statistic-output",
+    "fcd-output",
+    "emission-output",
+    "queue-output",
+    "lanechange-output",
+    "netstate-dump",
+    "vehroute-output",
+    "random",
+    "thread-rngs",
+    "threads",
+    "no-internal-links",
+    "lanechange.duration",
+];
+
+/// Read a `.sumocfg`.
+pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
+    let root = mapc_import::read_sumo_xml(
+        path,
+        &["configuration", "sumoConfiguration"],
+        "a SUMO configuration",
+    )?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut options = Vec::new();
+    collect(&root, &mut options);
+    let mut c = SumoConfig::for_files(Path::new(""), &[], &[]);
+    c.path = Some(path.to_path_buf());
+    let mut net = None;
+    for o in options {
+        let value = o.get("value").unwrap_or("").trim();
+        let num = || -> Result<f64, SumoError> {
+            value
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| SumoError::at(&o.place, format!("`{value}` is not a number")))
+        };
+        let flag = || -> Result<bool, SumoError> {
+            match value {
+                "true" | "1" | "on" | "yes" | "x" => Ok(true),
+                "false" | "0" | "off" | "no" | "" => Ok(false),
+                _ => Err(SumoError::at(
+                    &o.place,
+                    format!("`{value}` is not true or false"),
+                )),
+            }
+        };
+        let refuse = |why: &str| {
+            Err(SumoError::at(
+                &o.place,
+                format!("option `{}`: {why}", o.name),
+            ))
+        };
+        match o.name.as_str() {
+            "net-file" => net = Some(dir.join(value)),
+            "route-files" => c.route_files = files(&dir, value),
+            "additional-files" => c.additional_files = files(&dir, value),
+            "begin" => c.begin_s = num()?,
+            "end" => {
+                let e = num()?;
+                // SUMO's -1: no end
+                c.end_s = (e >= 0.0).then_some(e);
+            }
+            "step-length" => {
+                c.step_s = num()?;
+                if !(c.step_s >= 0.001 && c.step_s <= 10.0) {
+                    return Err(SumoError::at(
+                        &o.place,
+                        format!("step-length {value}: must lie in [0.001, 10] s"),
+                    ));
+                }
+            }
+            "seed" => {
+                c.seed = value.parse().map_err(|_| {
+                    SumoError::at(&o.place, format!("seed `{value}` is not a whole number"))
+                })?
+            }
+            "time-to-teleport" => c.time_to_teleport_s = num()?,
+            "time-to-teleport.highways" => {
+                if num()? > 0.0 {
+                    return refuse("mapc teleports only by time-to-teleport, not by road speed");
+                }
+            }
+            "default.speeddev" => c.default_speed_dev = num()?,
+            "default.carfollowmodel" => match value {
+                "Krauss" | "IDM" => c.default_car_follow_model = value.into(),
+                _ => {
+                    return refuse(&format!(
+                        "car-following model `{value}`: mapc has Krauss and IDM"
+                    ));
+                }
+            },
+            "step-method.ballistic" => {
+                if flag()? {
+                    return refuse(
+                        "mapc updates positions as SUMO's default (Euler), not ballistically",
+                    );
+                }
+            }
+            "default.action-step-length" => {
+                // checked against the step once both are known
+                c.warnings
+                    .push(format!("{}: default.action-step-length {value}", o.place));
+            }
+            "max-depart-delay" => {
+                if num()? >= 0.0 {
+                    return refuse("mapc keeps every vehicle waiting until it can be inserted");
+                }
+            }
+            "scale" => {
+                c.scale = num()?;
+                if !(c.scale > 0.0) {
+                    return Err(SumoError::at(
+                        &o.place,
+                        format!("scale {value}: must be positive"),
+                    ));
+                }
+            }
+            "lateral-resolution" => {
+                if num()? > 0.0 {
+                    return refuse("the sublane model is not simulated");
+                }
+            }
+            "mesosim" => {
+                if flag()? {
+                    return refuse("the mesoscopic model is not simulated");
+                }
+            }
+            "device.rerouting.probability" => {
+                if num()? > 0.0 {
+                    return refuse("vehicles are not rerouted while driving");
+                }
+            }
+            "tripinfo-output" => c.tripinfo_output = Some(dir.join(value)),
+            "summary-output" => c.summary_output = Some(dir.join(value)),
+            name if WITHOUT_EFFECT.contains(&name) => {}
+            name => c
+                .warnings
+                .push(format!("{}: option `{name}` ignored", o.place)),
+        }
+    }
+    // the action step: accepted only where it is the step itself
+    let mut warnings = Vec::new();
+    for w in std::mem::take(&mut c.warnings) {
+        match w.rsplit_once("default.action-step-length ") {
+            Some((place, v)) => {
+                let a: f64 = v.parse().unwrap_or(f64::NAN);
+                if a > 0.0 && (a - c.step_s).abs() > 1e-9 {
+                    return Err(SumoError::at(
+                        place.trim_end_matches(": "),
+                        format!(
+                            "default.action-step-length {v}: mapc decides every step (it must equal step-length {})",
+                            c.step_s
+                        ),
+                    ));
+                }
+            }
+            None => warnings.push(w),
+        }
+    }
+    c.warnings = warnings;
+    c.net_file = net.ok_or_else(|| SumoError::File {
+        path: path.to_path_buf(),
+        message: "no `net-file`: a SUMO run needs a network".into(),
+    })?;
+    for f in std::iter::once(&c.net_file)
+        .chain(&c.route_files)
+        .chain(&c.additional_files)
+    {
+        if !f.is_file() {
+            return Err(SumoError::File {
+                path: path.to_path_buf(),
+                message: format!("names `{}`, which is not a file", f.display()),
+            });
+        }
+    }
+    Ok(c)
+}
+
+/// Every element with a `value`, in file order (sections are optional in SUMO).
+fn collect<'a>(e: &'a SumoElement, out: &mut Vec<&'a SumoElement>) {
+    for c in &e.children {
+        if c.get("value").is_some() {
+            out.push(c);
+        }
+        collect(c, out);
+    }
+}
+
+/// A list of file names (commas or spaces) relative to `dir`.
+fn files(dir: &Path, value: &str) -> Vec<PathBuf> {
+    value
+        .split([',', ' '])
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| dir.join(s))
+        .collect()
+}

@@ -1,0 +1,591 @@
+//! SUMO's demand as mapc flows: `vType`s and `vTypeDistribution`s become vehicle types and mixes, `route`s the
+//! roads a flow passes (`from`, `via`, `to`), and each `flow`, `vehicle` and `trip` one mapc flow (a vehicle or a
+//! trip is a flow of one). Rates as SUMO 1.8 reads them: `vehsPerHour`, `period` (3600 / period veh/h),
+//! `probability` (per second) or `number` over [begin, end).
+
+use super::config::SumoConfig;
+use super::vtypes::{default_vtype, num, vtype};
+use super::{ReadOptions, SumoError};
+use crate::model::{CarFollowModel, Flow, NetworkSpec, Scenario, VehicleType};
+use mapc_graph::LaneGraph;
+use mapc_import::SumoElement;
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+
+/// SUMO's name of the type a vehicle without `type` drives.
+const DEFAULT_VTYPE: &str = "DEFAULT_VEHTYPE";
+/// A flow with neither `end` nor `number` runs a day (SUMO 1.8).
+const DEFAULT_FLOW_S: f64 = 86_400.0;
+/// Without an `end`, a run lasts this long after its last departure (SUMO runs until the network is empty).
+pub const DRAIN_AFTER_LAST_DEPARTURE_S: f64 = 3600.0;
+
+/// What a vehicle, flow or trip drives: a route's edges, or from, via and to.
+struct Path {
+    from: String,
+    via: Vec<String>,
+    to: Option<String>,
+}
+
+/// Everything of the files, keyed by id.
+struct Demand<'a> {
+    types: BTreeMap<String, VehicleType>,
+    /// The network's lights.
+    light_ids: BTreeSet<String>,
+    mixes: BTreeMap<String, BTreeMap<String, f64>>,
+    routes: HashMap<String, &'a SumoElement>,
+    departures: Vec<&'a SumoElement>,
+    /// Static light programs of the additional files, in file order (the last of a light runs, as in SUMO).
+    lights: Vec<mapc_graph::TrafficLight>,
+    /// Kinds of element or attribute dropped, once each.
+    skipped: BTreeSet<String>,
+}
+
+/// The mapc scenario of `config`'s files (`files`: route and additional files, read), on the network `graph`
+/// (SUMO's net, imported).
+pub fn scenario(
+    config: &SumoConfig,
+    files: &[SumoElement],
+    graph: &mut LaneGraph,
+    options: &ReadOptions,
+    warnings: &mut Vec<String>,
+) -> Result<Scenario, SumoError> {
+    let model = if config.default_car_follow_model == "IDM" {
+        CarFollowModel::Idm
+    } else {
+        CarFollowModel::Krauss
+    };
+    let mut d = Demand {
+        light_ids: graph.lights.iter().map(|l| l.id.clone()).collect(),
+        types: BTreeMap::new(),
+        mixes: BTreeMap::new(),
+        routes: HashMap::new(),
+        departures: Vec::new(),
+        lights: Vec::new(),
+        skipped: BTreeSet::new(),
+    };
+    for f in files {
+        for e in &f.children {
+            d.read_top(e, config, model, options)?;
+        }
+    }
+    // a program of the additional files replaces the network's (SUMO runs the last one loaded)
+    for light in std::mem::take(&mut d.lights) {
+        if let Some(l) = graph.lights.iter_mut().find(|l| l.id == light.id) {
+            *l = light;
+        }
+    }
+    let graph: &LaneGraph = graph;
+    let mut flows = Vec::new();
+    let mut last_departure: f64 = 0.0;
+    for e in d.departures.clone() {
+        let (flow, last) = d.flow(e, config, graph, options)?;
+        last_departure = last_departure.max(last);
+        if let Some(flow) = flow {
+            flows.push(flow);
+        }
+    }
+    if flows.iter().any(|f| f.vehicle_type == DEFAULT_VTYPE)
+        && !d.types.contains_key(DEFAULT_VTYPE)
+        && !d.mixes.contains_key(DEFAULT_VTYPE)
+    {
+        d.types.insert(
+            DEFAULT_VTYPE.into(),
+            default_vtype(config.default_speed_dev, model),
+        );
+    }
+    let begin = config.begin_s;
+    let end = config
+        .end_s
+        .unwrap_or(last_departure + DRAIN_AFTER_LAST_DEPARTURE_S);
+    let duration = end - begin;
+    if !(duration > 0.0) {
+        return Err(SumoError::File {
+            path: config.path.clone().unwrap_or_default(),
+            message: format!("the run ends at {end} s, not after its begin {begin} s"),
+        });
+    }
+    // a single vehicle's rate: one in the run (what the demand checks add up per entry)
+    for f in &mut flows {
+        if f.number == Some(1) && f.vehs_per_hour == 0.0 {
+            f.vehs_per_hour = 3600.0 / duration;
+        }
+        f.begin_s -= begin;
+        f.end_s = f.end_s.map(|e| e - begin);
+    }
+    warnings.extend(d.skipped.iter().map(|s| format!("dropped: {s}")));
+    let name = config
+        .path
+        .as_deref()
+        .and_then(|p| p.file_name())
+        .and_then(|n| n.to_str())
+        .map_or("sumo", |n| {
+            n.trim_end_matches(".sumocfg").trim_end_matches(".cfg")
+        })
+        .to_string();
+    let steps = (duration / config.step_s).round();
+    if steps > u32::MAX as f64 {
+        return Err(SumoError::File {
+            path: config.path.clone().unwrap_or_default(),
+            message: format!("{duration} s is too many steps of {} s", config.step_s),
+        });
+    }
+    Ok(Scenario {
+        name,
+        description: format!(
+            "SUMO scenario {} (net {})",
+            config
+                .path
+                .as_deref()
+                .map_or("from files".into(), |p| p.display().to_string()),
+            config.net_file.display()
+        ),
+        step_s: config.step_s,
+        horizon_steps: steps as u32,
+        warmup_steps: 0,
+        time_to_teleport_s: (config.time_to_teleport_s > 0.0).then_some(config.time_to_teleport_s),
+        network: NetworkSpec::Map(config.net_file.clone()),
+        vehicle_types: d.types,
+        vehicle_type_mixes: d.mixes,
+        flows,
+        version: crate::model::SCENARIO_VERSION,
+        initial_vehicles: None,
+        control: None,
+        measure: None,
+    })
+}
+
+impl<'a> Demand<'a> {
+    fn unsupported(
+        &mut self,
+        e: &SumoElement,
+        what: String,
+        options: &ReadOptions,
+    ) -> Result<(), SumoError> {
+        if options.skip_unsupported {
+            self.skipped.insert(what);
+            Ok(())
+        } else {
+            Err(SumoError::at(
+                &e.place,
+                format!("{what}: not simulated by mapc; `--skip-unsupported` drops it"),
+            ))
+        }
+    }
+
+    fn read_top(
+        &mut self,
+        e: &'a SumoElement,
+        config: &SumoConfig,
+        model: CarFollowModel,
+        options: &ReadOptions,
+    ) -> Result<(), SumoError> {
+        let id = || {
+            e.get("id")
+                .map(str::to_string)
+                .ok_or_else(|| SumoError::at(&e.place, format!("<{}> without `id`", e.name)))
+        };
+        match e.name.as_str() {
+            "vType" => {
+                let id = id()?;
+                let mut skipped = Vec::new();
+                let t = vtype(
+                    e,
+                    config.default_speed_dev,
+                    model,
+                    options.skip_unsupported,
+                    &mut skipped,
+                )?;
+                self.skipped.extend(skipped);
+                if self.types.insert(id.clone(), t).is_some() || self.mixes.contains_key(&id) {
+                    return Err(SumoError::at(
+                        &e.place,
+                        format!("a second vehicle type `{id}`"),
+                    ));
+                }
+            }
+            "vTypeDistribution" => {
+                let id = id()?;
+                let mut mix = BTreeMap::new();
+                for c in &e.children {
+                    if c.name != "vType" {
+                        continue;
+                    }
+                    let tid = c
+                        .get("id")
+                        .ok_or_else(|| SumoError::at(&c.place, "<vType> without `id`"))?
+                        .to_string();
+                    let mut skipped = Vec::new();
+                    let t = vtype(
+                        c,
+                        config.default_speed_dev,
+                        model,
+                        options.skip_unsupported,
+                        &mut skipped,
+                    )?;
+                    self.skipped.extend(skipped);
+                    let p = num(c, "probability")?.unwrap_or(1.0);
+                    self.types.insert(tid.clone(), t);
+                    mix.insert(tid, p);
+                }
+                if let Some(list) = e.get("vTypes") {
+                    let probs: Vec<f64> = match e.get("probabilities") {
+                        Some(p) => p
+                            .split_whitespace()
+                            .map(|x| x.parse::<f64>())
+                            .collect::<Result<_, _>>()
+                            .map_err(|_| {
+                                SumoError::at(
+                                    &e.place,
+                                    format!("`probabilities` is `{p}`, not numbers"),
+                                )
+                            })?,
+                        None => Vec::new(),
+                    };
+                    for (k, t) in list.split_whitespace().enumerate() {
+                        if !self.types.contains_key(t) {
+                            return Err(SumoError::at(
+                                &e.place,
+                                format!("vTypes names `{t}`, a type not defined before"),
+                            ));
+                        }
+                        mix.insert(t.to_string(), probs.get(k).copied().unwrap_or(1.0));
+                    }
+                }
+                if mix.is_empty() || mix.values().any(|p| !(p.is_finite() && *p > 0.0)) {
+                    return Err(SumoError::at(
+                        &e.place,
+                        "a distribution needs members with positive probabilities",
+                    ));
+                }
+                if self.types.contains_key(&id) || self.mixes.insert(id.clone(), mix).is_some() {
+                    return Err(SumoError::at(
+                        &e.place,
+                        format!("a second vehicle type `{id}`"),
+                    ));
+                }
+            }
+            "route" => {
+                let id = id()?;
+                if e.get("edges").is_none() {
+                    return Err(SumoError::at(&e.place, "a route without `edges`"));
+                }
+                if self.routes.insert(id.clone(), e).is_some() {
+                    return Err(SumoError::at(&e.place, format!("a second route `{id}`")));
+                }
+                for c in &e.children {
+                    if c.name != "param" {
+                        self.unsupported(c, format!("<{}> inside a route", c.name), options)?;
+                    }
+                }
+            }
+            "vehicle" | "flow" | "trip" => self.departures.push(e),
+            "param" | "interval" if e.children.is_empty() => {}
+            "tlLogic" if e.get("type").unwrap_or("static") == "static" => {
+                let mut phases = Vec::new();
+                for p in e.children.iter().filter(|c| c.name == "phase") {
+                    let duration_s = num(p, "duration")?.filter(|d| *d > 0.0).ok_or_else(|| {
+                        SumoError::at(&p.place, "a phase needs a positive `duration`")
+                    })?;
+                    let state = p
+                        .get("state")
+                        .ok_or_else(|| SumoError::at(&p.place, "a phase without `state`"))?
+                        .to_string();
+                    phases.push(mapc_graph::SignalPhase { duration_s, state });
+                }
+                if phases.is_empty() {
+                    return Err(SumoError::at(&e.place, "a light program without phases"));
+                }
+                let id = id()?;
+                if !self.light_ids.contains(&id) {
+                    return Err(SumoError::at(
+                        &e.place,
+                        format!("the network has no traffic light `{id}`"),
+                    ));
+                }
+                self.lights.push(mapc_graph::TrafficLight {
+                    id,
+                    program: e.get("programID").unwrap_or("0").to_string(),
+                    offset_s: num(e, "offset")?.unwrap_or(0.0),
+                    phases,
+                });
+            }
+            "inductionLoop" | "e1Detector" => {
+                self.skipped
+                    .insert("induction loops (their output files are not written yet)".into());
+            }
+            other => self.unsupported(e, format!("<{other}>"), options)?,
+        }
+        Ok(())
+    }
+
+    /// One vehicle, flow or trip as a mapc flow, and the time of its last departure (`None`: dropped).
+    fn flow(
+        &mut self,
+        e: &'a SumoElement,
+        config: &SumoConfig,
+        graph: &LaneGraph,
+        options: &ReadOptions,
+    ) -> Result<(Option<Flow>, f64), SumoError> {
+        let id = e
+            .get("id")
+            .ok_or_else(|| SumoError::at(&e.place, format!("<{}> without `id`", e.name)))?
+            .to_string();
+        let vtype = e.get("type").unwrap_or(DEFAULT_VTYPE).to_string();
+        if vtype != DEFAULT_VTYPE
+            && !self.types.contains_key(&vtype)
+            && !self.mixes.contains_key(&vtype)
+        {
+            return Err(SumoError::at(
+                &e.place,
+                format!("type `{vtype}` is not defined"),
+            ));
+        }
+        for c in &e.children {
+            if c.name != "param" && c.name != "route" {
+                self.unsupported(c, format!("<{}> inside a <{}>", c.name, e.name), options)?;
+                return Ok((None, 0.0));
+            }
+        }
+        // an attribute mapc does not simulate: refused, or (skipping) SUMO's default instead
+        let mut dropped: Vec<&str> = Vec::new();
+        for (k, v) in &e.attrs {
+            let fine = match k.as_str() {
+                "id" | "type" | "route" | "from" | "to" | "via" | "begin" | "end" | "depart"
+                | "vehsPerHour" | "period" | "probability" | "number" | "departLane" | "color"
+                | "line" | "fromTaz" | "toTaz" | "insertionChecks" | "reroute" => true,
+                "departSpeed" => v.trim().parse::<f64>().is_ok() || v == "max" || v == "desired",
+                "departPos" => v == "base",
+                "arrivalLane" => v == "current",
+                "arrivalPos" => v == "max",
+                "arrivalSpeed" => v == "current",
+                _ => false,
+            };
+            if !fine {
+                self.unsupported(e, format!("`{k}=\"{v}\"` on a <{}>", e.name), options)?;
+                dropped.push(k);
+            }
+        }
+        let path = self.path(e, graph)?;
+        let (depart_speed_mps, depart_speed) = match e
+            .get("departSpeed")
+            .filter(|_| !dropped.contains(&"departSpeed"))
+        {
+            Some(rule @ ("max" | "desired")) => (0.0, Some(rule.to_string())),
+            _ => (num(e, "departSpeed")?.unwrap_or(0.0), None),
+        };
+        if depart_speed_mps < 0.0 {
+            return Err(SumoError::at(&e.place, "a negative departSpeed"));
+        }
+        let depart_lane = match e
+            .get("departLane")
+            .filter(|_| !dropped.contains(&"departLane"))
+        {
+            None | Some("first") => None,
+            Some(l @ ("best" | "random" | "free")) => Some(l.to_string()),
+            Some(l) if l.parse::<u32>().is_ok() => Some(l.to_string()),
+            Some(l) => {
+                self.unsupported(e, format!("departLane `{l}`"), options)?;
+                None
+            }
+        };
+        let scale = config.scale;
+        let mut flow = Flow {
+            id: id.clone(),
+            from: path.from,
+            to: path.to,
+            via: path.via,
+            vehicle_type: vtype,
+            depart_speed_mps,
+            depart_speed,
+            depart_lane,
+            ..Flow::default()
+        };
+        let last;
+        if e.name == "flow" {
+            let begin = num(e, "begin")?.unwrap_or(config.begin_s);
+            let rates: Vec<&str> = ["vehsPerHour", "period", "probability"]
+                .into_iter()
+                .filter(|k| e.get(k).is_some())
+                .collect();
+            let number = match e.get("number") {
+                None => None,
+                Some(n) => Some(n.trim().parse::<u64>().map_err(|_| {
+                    SumoError::at(&e.place, format!("`number` is `{n}`, not a whole number"))
+                })?),
+            };
+            let end = num(e, "end")?;
+            if rates.len() > 1 {
+                return Err(SumoError::at(
+                    &e.place,
+                    format!("a flow with two rates: {}", rates.join(" and ")),
+                ));
+            }
+            if rates.is_empty() && (number.is_none() || end.is_none()) {
+                return Err(SumoError::at(
+                    &e.place,
+                    "a flow without a rate: give vehsPerHour, period, probability, or number with end",
+                ));
+            }
+            let end_s = match (end, number) {
+                (Some(e), _) => e,
+                (None, Some(_)) => f64::INFINITY,
+                (None, None) => begin + DEFAULT_FLOW_S,
+            };
+            if !(end_s > begin) {
+                return Err(SumoError::at(
+                    &e.place,
+                    format!("the flow ends at {end_s} s, not after its begin {begin} s"),
+                ));
+            }
+            flow.begin_s = begin;
+            flow.end_s = end_s.is_finite().then_some(end_s);
+            flow.number = number.map(|n| ((n as f64) * scale).round() as u64);
+            let positive = |key: &str| -> Result<f64, SumoError> {
+                let v = num(e, key)?.expect("listed as given");
+                if v > 0.0 {
+                    Ok(v)
+                } else {
+                    Err(SumoError::at(
+                        &e.place,
+                        format!("`{key}` {v}: must be positive"),
+                    ))
+                }
+            };
+            flow.vehs_per_hour = match rates.first().copied() {
+                Some("vehsPerHour") => positive("vehsPerHour")? * scale,
+                Some("period") => 3600.0 / positive("period")? * scale,
+                Some(_) => {
+                    let p = positive("probability")?;
+                    if p > 1.0 {
+                        return Err(SumoError::at(&e.place, format!("probability {p}: above 1")));
+                    }
+                    let p = (p * scale).min(1.0);
+                    flow.probability = Some(p);
+                    3600.0 * p
+                }
+                // number over [begin, end): SUMO's period (end - begin) / number
+                None => 3600.0 * flow.number.unwrap_or(0) as f64 / (end_s - begin),
+            };
+            if flow.number == Some(0) {
+                return Ok((None, 0.0));
+            }
+            last = if end_s.is_finite() {
+                end_s
+            } else {
+                begin + 3600.0 * flow.number.unwrap_or(0) as f64 / flow.vehs_per_hour
+            };
+        } else {
+            let depart = match e.get("depart") {
+                Some(t) => t
+                    .trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        SumoError::at(
+                            &e.place,
+                            format!("depart `{t}`: mapc reads a time in seconds"),
+                        )
+                    })?,
+                None => {
+                    return Err(SumoError::at(
+                        &e.place,
+                        format!("a <{}> without `depart`", e.name),
+                    ));
+                }
+            };
+            flow.begin_s = depart;
+            flow.number = Some(1);
+            last = depart;
+        }
+        Ok((Some(flow), last))
+    }
+
+    /// The roads a departure drives: its route (by id or inside it), or a trip's from, via and to.
+    fn path(&self, e: &SumoElement, graph: &LaneGraph) -> Result<Path, SumoError> {
+        let inner = e.children.iter().find(|c| c.name == "route");
+        let edges: Option<(Vec<String>, &SumoElement)> = match (e.get("route"), inner) {
+            (Some(r), _) => {
+                let route = self.routes.get(r).ok_or_else(|| {
+                    SumoError::at(&e.place, format!("route `{r}` is not defined"))
+                })?;
+                Some((split(route.get("edges").unwrap_or("")), route))
+            }
+            (None, Some(route)) => Some((
+                split(
+                    route
+                        .get("edges")
+                        .ok_or_else(|| SumoError::at(&route.place, "a route without `edges`"))?,
+                ),
+                route,
+            )),
+            (None, None) => None,
+        };
+        let path = match edges {
+            Some((edges, route)) => {
+                if edges.is_empty() {
+                    return Err(SumoError::at(&route.place, "a route without edges"));
+                }
+                check_connected(&edges, graph, &route.place)?;
+                Path {
+                    from: edges[0].clone(),
+                    via: edges[1..edges.len().saturating_sub(1)].to_vec(),
+                    to: (edges.len() > 1).then(|| edges[edges.len() - 1].clone()),
+                }
+            }
+            None => {
+                let from = e.get("from").ok_or_else(|| {
+                    SumoError::at(&e.place, "neither a route nor `from` and `to`")
+                })?;
+                let to = e
+                    .get("to")
+                    .ok_or_else(|| SumoError::at(&e.place, "`from` without `to`"))?;
+                let via = split(e.get("via").unwrap_or(""));
+                for edge in std::iter::once(from)
+                    .chain(via.iter().map(String::as_str))
+                    .chain([to])
+                {
+                    find(edge, graph, &e.place)?;
+                }
+                Path {
+                    from: from.to_string(),
+                    via,
+                    to: Some(to.to_string()),
+                }
+            }
+        };
+        Ok(path)
+    }
+}
+
+fn split(s: &str) -> Vec<String> {
+    s.split_whitespace().map(str::to_string).collect()
+}
+
+fn find(edge: &str, graph: &LaneGraph, place: &str) -> Result<Vec<mapc_graph::RoadId>, SumoError> {
+    graph
+        .find_roads(edge)
+        .map_err(|_| SumoError::at(place, format!("edge `{edge}` is not in the network")))
+}
+
+/// Each edge of a route leads into the next (SUMO refuses a route whose edges do not connect).
+fn check_connected(edges: &[String], graph: &LaneGraph, place: &str) -> Result<(), SumoError> {
+    let roads: Vec<Vec<mapc_graph::RoadId>> = edges
+        .iter()
+        .map(|e| find(e, graph, place))
+        .collect::<Result<_, _>>()?;
+    for (k, pair) in roads.windows(2).enumerate() {
+        let last = *pair[0].last().expect("found roads are never empty");
+        let next = pair[1][0];
+        if !graph.connections_from(last).any(|c| c.to_road == next) {
+            return Err(SumoError::at(
+                place,
+                format!(
+                    "edge `{}` does not lead into `{}`: the route's edges do not connect",
+                    edges[k],
+                    edges[k + 1]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,300 @@
+//! Reading SUMO scenarios: the shipped ones (scenarios/sumo/), and every refusal with its file, line and element.
+
+use super::*;
+use crate::ResolvedScenario;
+use crate::model::CarFollowModel;
+
+fn shipped(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/sumo")
+        .join(rel)
+}
+
+/// A folder with the highway_ramp network and `files` beside it.
+fn with_files(tag: &str, files: &[(&str, &str)]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mapc_sumo_{tag}_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(
+        shipped("highway_ramp/highway.net.xml"),
+        dir.join("highway.net.xml"),
+    )
+    .unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    dir
+}
+
+const CFG: &str = r#"<configuration><input><net-file value="highway.net.xml"/><route-files value="r.rou.xml"/></input>
+<time><end value="600"/><step-length value="0.5"/></time></configuration>"#;
+
+/// The error reading `routes` (a route file) with the highway_ramp network.
+fn refusal(tag: &str, routes: &str) -> String {
+    let dir = with_files(tag, &[("r.rou.xml", routes), ("s.sumocfg", CFG)]);
+    match from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default()) {
+        Ok(_) => panic!("{tag}: read"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn the_highway_ramp_scenario_reads_as_sumo_runs_it() {
+    let r = from_sumocfg(
+        &shipped("highway_ramp/highway-ramp.sumocfg"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    let s = &r.scenario;
+    assert_eq!(s.step_s, 0.1);
+    assert_eq!(s.horizon_steps, 16_000);
+    assert_eq!(s.vehicle_types.len(), 6);
+    let truck = &s.vehicle_types["truck"];
+    assert_eq!(truck.car_follow_model, CarFollowModel::Krauss);
+    assert_eq!(
+        (truck.sigma, truck.length, truck.decel),
+        (Some(0.3), 10.0, 3.5)
+    );
+    // no vClass: a passenger car's defaults where the type is silent (emergency decel max(9, decel))
+    assert_eq!(
+        (truck.emergency_decel, truck.speed_dev, truck.tau),
+        (Some(9.0), 0.1, 1.0)
+    );
+    assert_eq!(s.flows.len(), 24);
+    let exit = s.flows.iter().find(|f| f.id == "f_1_truck_exit").unwrap();
+    assert_eq!(
+        (exit.from.as_str(), exit.via.as_slice(), exit.to.as_deref()),
+        ("M1", &["M2".to_string()][..], Some("offr"))
+    );
+    assert_eq!(
+        (exit.vehs_per_hour, exit.begin_s, exit.end_s),
+        (18.0, 0.0, Some(1600.0))
+    );
+    let rs = ResolvedScenario::from_sumo(r, "highway_ramp").unwrap();
+    assert_eq!(rs.flow_via[0].len(), 1);
+}
+
+#[test]
+fn a_value_mapc_does_not_simulate_is_refused_with_its_place_and_dropped_when_skipping() {
+    let cfg = shipped("ramp_metering_1x3/1ramp_1x3.sumocfg");
+    let e = from_sumocfg(&cfg, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("1ramp_1x3.rou.xml: line 11, column 9, in <flow id=\"main_con\">: `departPos=\"random\"`"),
+        "{e}"
+    );
+    let r = from_sumocfg(
+        &cfg,
+        &ReadOptions {
+            skip_unsupported: true,
+        },
+    )
+    .unwrap();
+    let w = r.warnings.join("\n");
+    assert!(
+        w.contains("departPos=\"random\"") && !w.contains("tlLogic"),
+        "{w}"
+    );
+    // no end: the last departure and an hour to drain
+    assert_eq!(r.scenario.horizon_steps, 7200);
+    let main = r
+        .scenario
+        .flows
+        .iter()
+        .find(|f| f.id == "main_con")
+        .unwrap();
+    assert_eq!(
+        (main.depart_speed.as_deref(), main.depart_lane.as_deref()),
+        (Some("max"), Some("best"))
+    );
+    // the ramp meter: the additional file's program (`rl`) replaces the network's (`0`), as SUMO runs the last
+    let meter = r
+        .graph
+        .lights
+        .iter()
+        .find(|l| l.id == "ramp_meter")
+        .unwrap();
+    assert_eq!(meter.program, "rl");
+    let states: Vec<&str> = meter.phases.iter().map(|p| p.state.as_str()).collect();
+    assert_eq!(states, ["G", "r"]);
+    assert!(
+        r.graph
+            .connections
+            .iter()
+            .any(|c| c.signal.as_ref().is_some_and(|s| s.light == "ramp_meter"))
+    );
+}
+
+#[test]
+fn mixes_probabilities_periods_numbers_and_trips_become_flows() {
+    let dir = with_files(
+        "kinds",
+        &[
+            (
+                "r.rou.xml",
+                r#"<routes>
+  <vTypeDistribution id="mix">
+    <vType id="car" probability="0.8"/>
+    <vType id="lorry" vClass="truck" probability="0.2"/>
+  </vTypeDistribution>
+  <route id="exit" edges="M1 M2 offr"/>
+  <flow id="p" type="mix" route="exit" begin="0" end="600" probability="0.1"/>
+  <flow id="q" from="onr" to="M3" begin="10" end="610" period="4"/>
+  <flow id="n" route="exit" begin="0" end="300" number="30"/>
+  <trip id="t" depart="5" from="M1" to="offr"/>
+  <vehicle id="v" depart="7"><route edges="onr M2 M3"/></vehicle>
+</routes>"#,
+            ),
+            ("s.sumocfg", CFG),
+        ],
+    );
+    let r = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default()).unwrap();
+    let s = &r.scenario;
+    assert_eq!(s.vehicle_type_mixes["mix"]["lorry"], 0.2);
+    // vClass truck: SUMO 1.8's truck
+    let lorry = &s.vehicle_types["lorry"];
+    assert_eq!(
+        (
+            lorry.length,
+            lorry.accel,
+            lorry.decel,
+            lorry.emergency_decel
+        ),
+        (7.1, 1.3, 4.0, Some(7.0))
+    );
+    let f = |id: &str| s.flows.iter().find(|f| f.id == id).unwrap();
+    assert_eq!(
+        (f("p").probability, f("p").vehs_per_hour),
+        (Some(0.1), 360.0)
+    );
+    assert_eq!(
+        (f("q").vehs_per_hour, f("q").to.as_deref()),
+        (900.0, Some("M3"))
+    );
+    assert_eq!((f("n").number, f("n").vehs_per_hour), (Some(30), 360.0));
+    assert_eq!((f("t").number, f("t").begin_s), (Some(1), 5.0));
+    assert_eq!(
+        (f("v").from.as_str(), f("v").to.as_deref()),
+        ("onr", Some("M3"))
+    );
+    // the default type is SUMO's passenger car
+    assert_eq!(s.vehicle_types["DEFAULT_VEHTYPE"].max_speed, 200.0 / 3.6);
+    ResolvedScenario::from_sumo(r, "kinds").unwrap();
+}
+
+#[test]
+fn bad_demand_is_refused_with_file_line_and_element() {
+    let cases = [
+        (
+            "disconnected",
+            r#"<routes><route id="r" edges="M1 M3"/><flow id="f" route="r" vehsPerHour="100"/></routes>"#,
+            "line 1, column 9, in <route id=\"r\">: edge `M1` does not lead into `M3`",
+        ),
+        (
+            "no_type",
+            r#"<routes><flow id="f" type="lorry" from="M1" to="M3" vehsPerHour="100"/></routes>"#,
+            "in <flow id=\"f\">: type `lorry` is not defined",
+        ),
+        (
+            "no_route",
+            r#"<routes><flow id="f" route="gone" vehsPerHour="100"/></routes>"#,
+            "route `gone` is not defined",
+        ),
+        (
+            "two_rates",
+            r#"<routes><flow id="f" from="M1" to="M3" vehsPerHour="100" period="3"/></routes>"#,
+            "two rates: vehsPerHour and period",
+        ),
+        (
+            "no_rate",
+            r#"<routes><flow id="f" from="M1" to="M3" begin="0"/></routes>"#,
+            "a flow without a rate",
+        ),
+        (
+            "probability",
+            r#"<routes><flow id="f" from="M1" to="M3" probability="1.5"/></routes>"#,
+            "probability 1.5: above 1",
+        ),
+        (
+            "bad_value",
+            "<routes>\n<vType id=\"a\" accel=\"fast\"/></routes>",
+            "line 2, column 1, in <vType id=\"a\">: `accel` is `fast`, not a number",
+        ),
+        (
+            "person",
+            "<routes>\n\n<person id=\"p\" depart=\"0\"/></routes>",
+            "line 3, column 1, in <person id=\"p\">: <person>: not simulated",
+        ),
+        (
+            "stop",
+            r#"<routes><vehicle id="v" depart="1" route="x"><stop lane="M2_0" duration="5"/></vehicle></routes>"#,
+            "<stop>",
+        ),
+        (
+            "no_edge",
+            r#"<routes><trip id="t" depart="0" from="M1" to="Nowhere"/></routes>"#,
+            "edge `Nowhere` is not in the network",
+        ),
+        (
+            "lc_param",
+            r#"<routes><vType id="a" lcStrategic="2"/></routes>"#,
+            "`lcStrategic=\"2\"`",
+        ),
+        (
+            "model",
+            r#"<routes><vType id="a" carFollowModel="Wiedemann"/></routes>"#,
+            "carFollowModel `Wiedemann`",
+        ),
+    ];
+    for (tag, routes, expected) in cases {
+        let e = refusal(tag, routes);
+        assert!(e.contains(expected), "{tag}: {e}");
+        assert!(e.contains("r.rou.xml"), "{tag}: no file named: {e}");
+    }
+}
+
+#[test]
+fn options_mapc_does_not_simulate_are_refused_by_name() {
+    let routes = r#"<routes><flow id="f" from="M1" to="M3" vehsPerHour="100"/></routes>"#;
+    for (option, expected) in [
+        (
+            r#"<lateral-resolution value="0.8"/>"#,
+            "option `lateral-resolution`: the sublane model",
+        ),
+        (r#"<mesosim value="true"/>"#, "option `mesosim`"),
+        (
+            r#"<step-method.ballistic value="true"/>"#,
+            "option `step-method.ballistic`",
+        ),
+        (
+            r#"<default.carfollowmodel value="ACC"/>"#,
+            "car-following model `ACC`",
+        ),
+        (
+            r#"<default.action-step-length value="1"/>"#,
+            "default.action-step-length 1",
+        ),
+    ] {
+        let cfg = CFG.replace(
+            "</configuration>",
+            &format!("<processing>{option}</processing></configuration>"),
+        );
+        let dir = with_files("opt", &[("r.rou.xml", routes), ("s.sumocfg", &cfg)]);
+        let e = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(expected) && e.contains("s.sumocfg: line"),
+            "{option}: {e}"
+        );
+    }
+    let cfg = CFG.replace("r.rou.xml", "missing.rou.xml");
+    let dir = with_files("missing", &[("s.sumocfg", &cfg)]);
+    let e = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("missing.rou.xml") && e.contains("not a file"),
+        "{e}"
+    );
+}

@@ -1,0 +1,177 @@
+//! The Krauss model, SUMO 1.8's default driver (`MSCFModel_Krauss` with the Euler update): the fastest speed from
+//! which the driver can still stop behind its leader, given its reaction time `tau`, with one random slowdown a
+//! step (dawdling, `sigma`). Speeds in m/s, distances in m, times in s.
+//!
+//! The leader's deceleration SUMO plans with (its apparent deceleration) is taken as the driver's own: exact where
+//! all types brake alike, and where the leader brakes less hard (a car behind a truck: SUMO takes the larger of
+//! the two).
+
+use super::{CarFollowModel, kinematics};
+use crate::numeric::{FastMinMax, NUMERICAL_EPS, floor_exact};
+
+/// SUMO's factor on the emergency deceleration a driver computes (`EMERGENCY_DECEL_AMPLIFIER`).
+const EMERGENCY_DECEL_AMPLIFIER: f64 = 1.2;
+
+/// One driver type's Krauss parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Krauss {
+    pub accel: f64,
+    pub decel: f64,
+    pub emergency_decel: f64,
+    /// Reaction time (s): the headway the driver keeps to be able to stop.
+    pub tau: f64,
+    /// Dawdling in [0, 1]: each step the driver drives up to `sigma * accel * dt` slower than it could.
+    pub sigma: f64,
+    /// The type's maximum speed (SUMO's `maxNextSpeed` caps by it).
+    pub max_speed: f64,
+    /// Step length (s).
+    pub dt: f64,
+}
+
+impl Krauss {
+    /// SUMO's `maxNextSpeed`: one step of full acceleration, at most the type's maximum.
+    #[inline]
+    fn max_next_speed(&self, speed: f64) -> f64 {
+        (speed + self.accel * self.dt).fmin(self.max_speed)
+    }
+
+    /// SUMO's `maximumSafeStopSpeedEuler`: the speed from which braking `decel` each step after a reaction time
+    /// `headway` stops within `gap`.
+    pub fn maximum_safe_stop_speed(&self, gap: f64, headway: f64) -> f64 {
+        let g = gap - NUMERICAL_EPS;
+        if g <= 0.0 {
+            return 0.0;
+        }
+        let b = self.decel * self.dt;
+        let t = headway;
+        let s = self.dt;
+        let n = floor_exact(
+            0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s,
+        );
+        let h = 0.5 * n * (n - 1.0) * b * s + n * b * t;
+        let r = (g - h) / (n * s + t);
+        n * b + r
+    }
+
+    /// SUMO's `maximumSafeFollowSpeed`: stop within the gap plus the leader's own braking distance; where that
+    /// asks for more than the comfortable deceleration, brake only as hard as needed, up to the emergency
+    /// deceleration (not on insertion).
+    pub fn maximum_safe_follow_speed(
+        &self,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        on_insertion: bool,
+    ) -> f64 {
+        let leader_decel = self.decel;
+        let leader_brake =
+            kinematics::brake_gap(self.dt, leader_speed, self.decel.fmax(leader_decel), 0.0);
+        let mut x = self.maximum_safe_stop_speed(gap + leader_brake, self.tau);
+        if self.decel != self.emergency_decel && !on_insertion {
+            let orig_safe_decel = (speed - x) / self.dt;
+            if orig_safe_decel > self.decel + NUMERICAL_EPS {
+                let safe_decel = (EMERGENCY_DECEL_AMPLIFIER
+                    * self.emergency_deceleration(gap, speed, leader_speed, leader_decel))
+                .fmax(self.decel)
+                .fmin(orig_safe_decel);
+                x = (speed - safe_decel * self.dt).fmax(0.0);
+            }
+        }
+        x
+    }
+
+    /// SUMO's `calculateEmergencyDeceleration`: the deceleration that avoids a collision if the leader brakes at
+    /// `leader_decel` (negative when the gap is gone, as SUMO returns it; the caller raises it to `decel`).
+    fn emergency_deceleration(
+        &self,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        leader_decel: f64,
+    ) -> f64 {
+        let leader_brake_dist = 0.5 * leader_speed * leader_speed / leader_decel;
+        let b1 = 0.5 * speed * speed / (gap + leader_brake_dist);
+        if b1 <= leader_decel {
+            return b1;
+        }
+        if gap <= 0.0 {
+            return -(self.emergency_decel * self.dt);
+        }
+        0.5 * (speed * speed - leader_speed * leader_speed) / gap
+    }
+
+    /// SUMO's `dawdle2` for the speed `v_max` and a uniform draw `r` in [0, 1): slower by up to `sigma` times the
+    /// acceleration of one step, or of the speed itself below it (SUMO compares the speed with the acceleration
+    /// as numbers), never below zero.
+    #[inline]
+    pub fn dawdled(&self, v_max: f64, r: f64) -> f64 {
+        let slower = if v_max < self.accel {
+            self.sigma * v_max * r
+        } else {
+            self.sigma * self.accel * r
+        };
+        (v_max - slower * self.dt).fmax(0.0)
+    }
+}
+
+impl CarFollowModel for Krauss {
+    fn follow_speed(&self, gap: f64, speed: f64, leader_speed: f64, _desired_speed: f64) -> f64 {
+        self.maximum_safe_follow_speed(gap, speed, leader_speed, false)
+            .fmin(self.max_next_speed(speed))
+    }
+
+    /// SUMO's Krauss `stopSpeed`: the reaction time towards a stop point is one step.
+    fn stop_speed(&self, gap: f64, speed: f64, _desired_speed: f64) -> f64 {
+        self.maximum_safe_stop_speed(gap, self.dt)
+            .fmin(self.max_next_speed(speed))
+    }
+
+    /// SUMO's `MSCFModel::freeSpeed` (Euler): brake `decel` each step from this speed to reach `max_speed` where
+    /// it starts, `seen` metres ahead.
+    fn free_speed(&self, _speed: f64, seen: f64, max_speed: f64, _desired_speed: f64) -> f64 {
+        let v = max_speed * self.dt;
+        if seen < v {
+            return max_speed;
+        }
+        let b = self.decel * self.dt * self.dt;
+        let y = ((((b + 2.0 * v) * (b + 2.0 * v) + 8.0 * b * seen).sqrt() - b) * 0.5 - v) / b;
+        let y = y.fmax(0.0);
+        let y_full = floor_exact(y);
+        let exact_gap =
+            (y_full * y_full + y_full) * 0.5 * b + y_full * v + if y > y_full { v } else { 0.0 };
+        let full_speed_gain = y_full * (self.decel * self.dt);
+        (seen - exact_gap).fmax(0.0) / (y_full + 1.0) / self.dt + full_speed_gain + max_speed
+    }
+
+    /// SUMO's `getSecureGap`: own braking distance with the reaction time, less the leader's.
+    fn secure_gap(&self, speed: f64, leader_speed: f64) -> f64 {
+        (kinematics::brake_gap(self.dt, speed, self.decel, self.tau)
+            - kinematics::brake_gap(self.dt, leader_speed, self.decel, 0.0))
+        .fmax(0.0)
+    }
+
+    /// SUMO's `insertionFollowSpeed` (Euler): the safe follow speed without the emergency rule.
+    fn insertion_follow_speed(
+        &self,
+        speed: f64,
+        gap: f64,
+        leader_speed: f64,
+        _desired_speed: f64,
+    ) -> f64 {
+        speed.fmin(self.maximum_safe_follow_speed(gap, speed, leader_speed, true))
+    }
+
+    #[inline]
+    fn dawdle(&self, v_min: f64, v_max: f64, r: f64) -> f64 {
+        v_min.fmax(self.dawdled(v_max, r))
+    }
+
+    #[inline]
+    fn dawdles(&self) -> bool {
+        true
+    }
+}
+
+#[cfg(test)]
+#[path = "krauss_tests.rs"]
+mod tests;

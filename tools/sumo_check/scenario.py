@@ -1,0 +1,96 @@
+"""`sumo_check scenario CFG`: a SUMO user's scenario run as it is in SUMO 1.8 (`sumo -c CFG`) and in mapc
+(`mapc sim CFG`), seed by seed, and the figures of both side by side with the goals of docs/sumo_scenarios.md.
+
+Per run, from SUMO's summary output and lane-change output, and from mapc's `sim --json` runs:
+  inserted, arrived         vehicles in the run
+  trip duration             mean over the arrived (SUMO: the last step's meanTravelTime)
+  speed                     mean over the steps with a vehicle of the running vehicles' mean speed
+  lane changes / veh        lane changes over inserted vehicles
+"""
+import json
+import multiprocessing
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+
+import stats
+
+GOALS = (("inserted", 0.01), ("arrived", 0.01), ("duration", 0.03), ("speed", 0.05), ("lane_changes_per_veh", 0.20))
+LABELS = {"inserted": "inserted veh", "arrived": "arrived veh", "duration": "trip duration s",
+          "speed": "speed m/s", "lane_changes_per_veh": "lane changes / veh"}
+
+
+def _sumo_one(job):
+    cfg, seed, end, extra = job
+    with tempfile.TemporaryDirectory(prefix="sumo_scn_") as tmp:
+        summary = os.path.join(tmp, "summary.xml")
+        changes = os.path.join(tmp, "lc.xml")
+        cmd = ["sumo", "-c", os.path.abspath(cfg), "--seed", str(seed), "--no-step-log", "true",
+               "--xml-validation", "never", "--xml-validation.net", "never",
+               "--summary-output", summary, "--lanechange-output", changes, "--output-prefix", ""] + extra
+        if end is not None:
+            cmd += ["--end", str(end)]
+        out = subprocess.run(cmd, capture_output=True, text=True, cwd=os.path.dirname(os.path.abspath(cfg)))
+        if out.returncode != 0:
+            # an exception, not SystemExit: the pool hands it to the caller instead of losing its worker
+            raise RuntimeError("SUMO failed on %s seed %d:\n%s" % (cfg, seed, out.stderr[-2000:]))
+        steps = ET.parse(summary).getroot().findall("step")
+        last = steps[-1].attrib
+        speeds = [float(s.get("meanSpeed")) for s in steps if int(s.get("running")) > 0]
+        n_changes = sum(1 for _ in ET.parse(changes).getroot().iter("change"))
+        inserted = int(last["inserted"])
+        return dict(seed=seed, inserted=inserted, arrived=int(last["arrived"]),
+                    duration=float(last["meanTravelTime"]), speed=sum(speeds) / max(1, len(speeds)),
+                    lane_changes_per_veh=n_changes / max(1, inserted), teleports=int(last.get("teleports", 0)))
+
+
+def run_sumo(cfg, seeds, end, extra, jobs):
+    with multiprocessing.Pool(jobs) as pool:
+        try:
+            return pool.map(_sumo_one, [(cfg, s, end, extra) for s in seeds], chunksize=1)
+        except RuntimeError as e:
+            raise SystemExit("sumo_check: %s" % e)
+
+
+def run_mapc(mapc, cfg, n, skip):
+    args = mapc + ["sim", cfg, "--seeds", str(n), "--json"] + (["--skip-unsupported"] if skip else [])
+    out = subprocess.run(args, capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.stderr.write(out.stderr)
+        raise SystemExit(2)
+    d = json.loads(out.stdout)
+    runs = []
+    for r in d["runs"]:
+        runs.append(dict(inserted=r["departed"], arrived=r["arrived"], duration=r["mean_travel_time_s"],
+                         speed=r["avg_speed_mps"], lane_changes_per_veh=r["lane_changes"] / max(1, r["departed"]),
+                         teleports=r.get("teleports", 0)))
+    return runs, d
+
+
+def compare(a, mapc, seeds):
+    cfg = a.scenario
+    t0 = time.time()
+    mapc_runs, mapc_d = run_mapc(mapc, cfg, len(seeds), a.skip_unsupported)
+    mapc_s = time.time() - t0
+    end = a.end
+    t0 = time.time()
+    sumo_runs = run_sumo(cfg, seeds, end, [], a.jobs)
+    sumo_s = time.time() - t0
+    rows = []
+    print("%s, %d seeds (mapc %.1f s, SUMO %.1f s wall on %d processes)" % (cfg, len(seeds), mapc_s, sumo_s, a.jobs))
+    print("  %-20s %22s %22s %9s %7s  %s" % ("", "mapc", "SUMO 1.8", "diff", "goal", ""))
+    for key, goal in GOALS:
+        mm, mci, _ = stats.mean_ci([r[key] for r in mapc_runs])
+        sm, sci, _ = stats.mean_ci([r[key] for r in sumo_runs])
+        diff = (mm - sm) / sm if sm else float("nan")
+        ok = abs(diff) <= goal
+        rows.append(dict(metric=key, mapc=mm, mapc_ci=mci, sumo=sm, sumo_ci=sci, diff=diff, goal=goal, met=ok))
+        print("  %-20s %14.3f ± %-6.3f %14.3f ± %-6.3f %+8.2f%% %6.0f%%  %s" % (
+            LABELS[key], mm, mci, sm, sci, 100 * diff, 100 * goal, "ok" if ok else "MISSED"))
+    if a.json_out:
+        with open(a.json_out, "w") as f:
+            json.dump(dict(scenario=cfg, seeds=a.seeds, rows=rows, mapc_runs=mapc_runs, sumo_runs=sumo_runs), f,
+                      indent=1)
