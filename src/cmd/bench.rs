@@ -16,6 +16,8 @@ pub struct Args {
     /// Scenario file, or a built-in scenario name (simple_merge).
     #[arg(long, default_value = super::common::DEFAULT_SCENARIO)]
     pub scenario: String,
+    #[command(flatten)]
+    pub sumo_input: super::common::SumoInputArgs,
     /// Seeds run one after another on one core for the vehicle-steps figure (1 to 100 000).
     #[arg(long, default_value_t = 20, value_parser = super::flags::seeds())]
     pub single_core_seeds: u64,
@@ -48,7 +50,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(iters) = args.train {
         return bench_training(&args, iters);
     }
-    let rs = super::common::load_scenario(&args.scenario)?;
+    let rs = super::common::load_scenario_or_sumo(&args.scenario, &args.sumo_input)?;
     let spec = spec_from_scenario(&rs)?;
 
     let sumo_bin = if args.no_sumo {
