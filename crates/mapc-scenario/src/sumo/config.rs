@@ -113,6 +113,7 @@ pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
     let mut c = SumoConfig::for_files(Path::new(""), &[], &[]);
     c.path = Some(path.to_path_buf());
     let mut net = None;
+    let mut action_step: Option<(f64, String)> = None;
     for o in options {
         let value = o.get("value").unwrap_or("").trim();
         let num = || -> Result<f64, SumoError> {
@@ -184,11 +185,8 @@ pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
                     );
                 }
             }
-            "default.action-step-length" => {
-                // checked against the step once both are known
-                c.warnings
-                    .push(format!("{}: default.action-step-length {value}", o.place));
-            }
+            // checked against the step once both are known
+            "default.action-step-length" => action_step = Some((num()?, o.place.clone())),
             "max-depart-delay" => {
                 if num()? >= 0.0 {
                     return refuse("mapc keeps every vehicle waiting until it can be inserted");
@@ -226,26 +224,19 @@ pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
                 .push(format!("{}: option `{name}` ignored", o.place)),
         }
     }
-    // the action step: accepted only where it is the step itself
-    let mut warnings = Vec::new();
-    for w in std::mem::take(&mut c.warnings) {
-        match w.rsplit_once("default.action-step-length ") {
-            Some((place, v)) => {
-                let a: f64 = v.parse().unwrap_or(f64::NAN);
-                if a > 0.0 && (a - c.step_s).abs() > 1e-9 {
-                    return Err(SumoError::at(
-                        place.trim_end_matches(": "),
-                        format!(
-                            "default.action-step-length {v}: mapc decides every step (it must equal step-length {})",
-                            c.step_s
-                        ),
-                    ));
-                }
-            }
-            None => warnings.push(w),
-        }
+    // the action step: accepted only where it is the step itself (0: the step, SUMO's default)
+    if let Some((a, place)) = action_step
+        && a > 0.0
+        && (a - c.step_s).abs() > 1e-9
+    {
+        return Err(SumoError::at(
+            &place,
+            format!(
+                "default.action-step-length {a}: mapc decides every step (it must equal step-length {})",
+                c.step_s
+            ),
+        ));
     }
-    c.warnings = warnings;
     c.net_file = net.ok_or_else(|| SumoError::File {
         path: path.to_path_buf(),
         message: "no `net-file`: a SUMO run needs a network".into(),

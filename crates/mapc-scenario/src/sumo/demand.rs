@@ -171,6 +171,30 @@ impl<'a> Demand<'a> {
         }
     }
 
+    /// A `vType`'s id and type, what it drops noted.
+    fn read_vtype(
+        &mut self,
+        e: &SumoElement,
+        config: &SumoConfig,
+        model: CarFollowModel,
+        options: &ReadOptions,
+    ) -> Result<(String, VehicleType), SumoError> {
+        let id = e
+            .get("id")
+            .ok_or_else(|| SumoError::at(&e.place, "<vType> without `id`"))?
+            .to_string();
+        let mut skipped = Vec::new();
+        let t = vtype(
+            e,
+            config.default_speed_dev,
+            model,
+            options.skip_unsupported,
+            &mut skipped,
+        )?;
+        self.skipped.extend(skipped);
+        Ok((id, t))
+    }
+
     fn read_top(
         &mut self,
         e: &'a SumoElement,
@@ -185,16 +209,7 @@ impl<'a> Demand<'a> {
         };
         match e.name.as_str() {
             "vType" => {
-                let id = id()?;
-                let mut skipped = Vec::new();
-                let t = vtype(
-                    e,
-                    config.default_speed_dev,
-                    model,
-                    options.skip_unsupported,
-                    &mut skipped,
-                )?;
-                self.skipped.extend(skipped);
+                let (id, t) = self.read_vtype(e, config, model, options)?;
                 if self.types.insert(id.clone(), t).is_some() || self.mixes.contains_key(&id) {
                     return Err(SumoError::at(
                         &e.place,
@@ -209,19 +224,7 @@ impl<'a> Demand<'a> {
                     if c.name != "vType" {
                         continue;
                     }
-                    let tid = c
-                        .get("id")
-                        .ok_or_else(|| SumoError::at(&c.place, "<vType> without `id`"))?
-                        .to_string();
-                    let mut skipped = Vec::new();
-                    let t = vtype(
-                        c,
-                        config.default_speed_dev,
-                        model,
-                        options.skip_unsupported,
-                        &mut skipped,
-                    )?;
-                    self.skipped.extend(skipped);
+                    let (tid, t) = self.read_vtype(c, config, model, options)?;
                     let p = num(c, "probability")?.unwrap_or(1.0);
                     self.types.insert(tid.clone(), t);
                     mix.insert(tid, p);

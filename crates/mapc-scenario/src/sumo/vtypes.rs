@@ -89,21 +89,23 @@ fn speed_factor(text: &str, dev: f64, place: &str) -> Result<(f64, f64), SumoErr
         .split(',')
         .map(|x| x.trim().parse::<f64>().map_err(|_| bad()))
         .collect::<Result<_, _>>()?;
-    match xs.as_slice() {
-        [mean, dev] => Ok((*mean, *dev)),
-        [mean, dev, lo] | [mean, dev, lo, _] if (*lo - 0.2).abs() > 1e-12 => Err(SumoError::at(
-            place,
-            format!("speedFactor `{text}`: mapc bounds the speed factor by [0.2, 2] (SUMO's default), not from {lo}"),
-        ))
-        .map(|()| (*mean, *dev)),
-        [mean, dev, _, hi] if (*hi - 2.0).abs() > 1e-12 => Err(SumoError::at(
-            place,
-            format!("speedFactor `{text}`: mapc bounds the speed factor by [0.2, 2] (SUMO's default), not up to {hi}"),
-        ))
-        .map(|()| (*mean, *dev)),
-        [mean, dev, ..] if xs.len() <= 4 => Ok((*mean, *dev)),
-        _ => Err(bad()),
+    let bound = |k: usize, sumo: f64, what: &str| -> Result<(), SumoError> {
+        match xs.get(k) {
+            Some(x) if (x - sumo).abs() > 1e-12 => Err(SumoError::at(
+                place,
+                format!(
+                    "speedFactor `{text}`: mapc bounds the speed factor by [0.2, 2] (SUMO's default), not {what} {x}"
+                ),
+            )),
+            _ => Ok(()),
+        }
+    };
+    if !(2..=4).contains(&xs.len()) {
+        return Err(bad());
     }
+    bound(2, 0.2, "from")?;
+    bound(3, 2.0, "up to")?;
+    Ok((xs[0], xs[1]))
 }
 
 /// A number attribute of `e`, if given.
