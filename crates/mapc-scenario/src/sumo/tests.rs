@@ -134,7 +134,7 @@ fn mixes_probabilities_periods_numbers_and_trips_become_flows() {
                 "r.rou.xml",
                 r#"<routes>
   <vTypeDistribution id="mix">
-    <vType id="car" probability="0.8"/>
+    <vType id="car" probability="0.8" speedFactor="normc(1.1,0.05,0.2,2)"/>
     <vType id="lorry" vClass="truck" probability="0.2"/>
   </vTypeDistribution>
   <route id="exit" edges="M1 M2 offr"/>
@@ -151,6 +151,13 @@ fn mixes_probabilities_periods_numbers_and_trips_become_flows() {
     let r = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default()).unwrap();
     let s = &r.scenario;
     assert_eq!(s.vehicle_type_mixes["mix"]["lorry"], 0.2);
+    assert_eq!(
+        (
+            s.vehicle_types["car"].speed_factor,
+            s.vehicle_types["car"].speed_dev
+        ),
+        (1.1, 0.05)
+    );
     // vClass truck: SUMO 1.8's truck
     let lorry = &s.vehicle_types["lorry"];
     assert_eq!(
@@ -244,6 +251,16 @@ fn bad_demand_is_refused_with_file_line_and_element() {
             "model",
             r#"<routes><vType id="a" carFollowModel="Wiedemann"/></routes>"#,
             "carFollowModel `Wiedemann`",
+        ),
+        (
+            "bounds",
+            r#"<routes><vType id="a" speedFactor="normc(1,0.1,0.5,1.5)"/></routes>"#,
+            "not from 0.5",
+        ),
+        (
+            "speed_factor",
+            r#"<routes><vType id="a" speedFactor="fast"/></routes>"#,
+            "speedFactor `fast`",
         ),
     ];
     for (tag, routes, expected) in cases {
