@@ -10,6 +10,8 @@ Per run, from SUMO's summary output and lane-change output, and from mapc's `sim
 import json
 import multiprocessing
 import os
+import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -23,9 +25,29 @@ LABELS = {"inserted": "inserted veh", "arrived": "arrived veh", "duration": "tri
           "speed": "speed m/s", "lane_changes_per_veh": "lane changes / veh"}
 
 
+def sumo18_copy(cfg, tmp):
+    """The configuration's folder copied into `tmp`, with the one attribute SUMO 1.8 names otherwise: induction
+    loops' `period` (SUMO 1.8's `freq`). Returns the copied configuration's path."""
+    src = os.path.dirname(os.path.abspath(cfg))
+    dst = os.path.join(tmp, "scenario")
+    shutil.copytree(src, dst)
+    for folder, _, names in os.walk(dst):
+        for n in names:
+            if n.endswith(".xml"):
+                path = os.path.join(folder, n)
+                with open(path, encoding="utf-8", errors="surrogateescape") as f:
+                    text = f.read()
+                fixed = re.sub(r"(<(?:inductionLoop|e1Detector)\b[^>]*?)\bperiod=", r"\1freq=", text)
+                if fixed != text:
+                    with open(path, "w", encoding="utf-8", errors="surrogateescape") as f:
+                        f.write(fixed)
+    return os.path.join(dst, os.path.basename(cfg))
+
+
 def _sumo_one(job):
     cfg, seed, end, extra = job
     with tempfile.TemporaryDirectory(prefix="sumo_scn_") as tmp:
+        cfg = sumo18_copy(cfg, tmp)
         summary = os.path.join(tmp, "summary.xml")
         changes = os.path.join(tmp, "lc.xml")
         cmd = ["sumo", "-c", os.path.abspath(cfg), "--seed", str(seed), "--no-step-log", "true",

@@ -7,8 +7,8 @@ pub enum DepartLane {
     /// The rightmost lane (SUMO 1.8's default `first`).
     #[default]
     First,
-    /// The rightmost of the lanes that go furthest on the route (SUMO's `best`, without its tie-break on free
-    /// space).
+    /// Of the lanes that go furthest on the route without a lane change, the one with the least brutto
+    /// occupancy when the vehicle is inserted (SUMO 1.8's `best`: `free` among the best lanes).
     Best,
     /// This lane (0 = rightmost).
     Index(u8),
@@ -47,19 +47,22 @@ impl DepartLane {
         }
     }
 
-    /// The entry road's lane index, or `None` for the best lane; for `random` and `free`, whose lane is chosen
-    /// at each insertion attempt, the rightmost (the lane the vehicle is created on while it waits).
+    /// The entry road's lane index; for `random`, `free` and `best`, whose lane is chosen at each insertion
+    /// attempt, the rightmost (the lane the vehicle is created on while it waits).
     pub fn start_lane(self) -> Option<u8> {
         match self {
-            DepartLane::First | DepartLane::Random | DepartLane::Free => Some(0),
-            DepartLane::Best => None,
+            DepartLane::First | DepartLane::Random | DepartLane::Free | DepartLane::Best => Some(0),
             DepartLane::Index(i) => Some(i),
         }
     }
 
-    /// Whether the lane is chosen when the vehicle is inserted (`random`, `free`) rather than once for the flow.
+    /// Whether the lane is chosen when the vehicle is inserted (`random`, `free`, `best`) rather than once for
+    /// the flow.
     pub fn chosen_at_insertion(self) -> bool {
-        matches!(self, DepartLane::Random | DepartLane::Free)
+        matches!(
+            self,
+            DepartLane::Random | DepartLane::Free | DepartLane::Best
+        )
     }
 }
 

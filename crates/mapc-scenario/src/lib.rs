@@ -470,6 +470,17 @@ impl ResolvedScenario {
                     ),
                 ));
             }
+            if let Some(rule) = f.depart_pos.as_deref()
+                && !matches!(rule, "base" | "random" | "random_free")
+            {
+                return Err(invalid(
+                    format!("flows[{i}].depart_pos"),
+                    format!(
+                        "flow `{}`: `{rule}`: `base`, `random` or `random_free`",
+                        f.id
+                    ),
+                ));
+            }
             if let Some(rule) = f.depart_speed.as_deref()
                 && rule != "max"
                 && rule != "desired"

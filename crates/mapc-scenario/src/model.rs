@@ -289,6 +289,11 @@ pub struct Flow {
     /// At most this many vehicles (SUMO's `number`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub number: Option<u64>,
+    /// Where on the entry lane a vehicle is inserted (SUMO's `departPos`): the lane's start (default, `base`),
+    /// `random` (a new place along the lane at each try) or `random_free` (up to ten random places a step, then
+    /// the start).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depart_pos: Option<String>,
     /// SUMO's `departSpeed` rules instead of `depart_speed_mps`: `max` (the highest safe speed up to the desired
     /// one) or `desired` (the desired speed, or wait).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -87,12 +87,26 @@ pub struct FlowSpec {
     pub number: Option<u64>,
     /// Demand above what its entry takes queues there (SUMO's behaviour) instead of being refused.
     pub queue_excess: bool,
+    /// Where on the entry lane its vehicles are inserted.
+    pub depart_pos: DepartPos,
     /// A mix of types, as (type index, cumulative weight up to 1): each vehicle's type is drawn; empty: always
     /// `vehicle_type`.
     pub type_mix: Vec<(usize, f64)>,
 }
 
 pub use mapc_scenario::DepartLane;
+
+/// Where a flow's vehicles are inserted on their entry lane (SUMO's `departPos`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DepartPos {
+    /// The front one length and 0.1 m in (SUMO's `base`).
+    #[default]
+    Base,
+    /// A uniform place along the lane, drawn again at each try (never behind `Base`).
+    Random,
+    /// Up to ten random places in a step, then `Base`.
+    RandomFree,
+}
 
 /// A flow's depart speed meaning SUMO's `departSpeed="max"`: the highest speed up to the vehicle's desired speed
 /// at which the insertion is safe.

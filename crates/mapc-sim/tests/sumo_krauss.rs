@@ -68,3 +68,64 @@ fn run_baseline_spec_fingerprints(spec: &mapc_sim::SimSpec, seeds: &[u64]) -> Ve
         .map(fingerprint)
         .collect()
 }
+
+/// scenarios/sumo/ramp_metering_1x3: its flows depart with `departLane="best"`, `departPos="random"` and
+/// `departSpeed="max"` on a three-lane entry road, and its on-ramp has a G 5 s / r 5 s meter.
+#[test]
+fn random_places_best_lanes_and_a_meter_as_sumo_reads_them() {
+    let cfg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
+    );
+    let rs = ResolvedScenario::load(cfg).unwrap();
+    let ramp = rs.graph.find_roads("on_ramp").unwrap()[0];
+    let mut spec = spec_from_scenario(&rs).unwrap();
+    spec.horizon_steps = 300;
+    let (start, dt) = (spec.start_time_s, spec.step_s);
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    let mut places = Vec::new();
+    let mut lanes = std::collections::BTreeSet::new();
+    let mut at_meter = std::collections::BTreeSet::new();
+    let (mut through_on_green, mut through_on_red) = (0, 0);
+    while !sim.is_done() {
+        // the light's clock during this step's move: 5 s green, 5 s red from the run's begin
+        let green = (sim.time_s() - start).rem_euclid(10.0) < 5.0;
+        sim.step().unwrap();
+        for &id in sim.departed_last_step() {
+            let v = sim.vehicle(id).unwrap();
+            places.push(v.pos_m);
+            if v.road == rs.flow_roads[0].0 {
+                lanes.insert(v.lane_index);
+            }
+        }
+        // vehicles past the meter's stop line in this step: on the ramp before it, past it now
+        let now: std::collections::BTreeSet<_> = sim
+            .active_ids()
+            .filter(|&id| {
+                sim.vehicle(id)
+                    .is_some_and(|v| !v.in_junction && v.road == ramp)
+            })
+            .collect();
+        let passed = at_meter.difference(&now).count();
+        if green {
+            through_on_green += passed;
+        } else {
+            through_on_red += passed;
+        }
+        at_meter = now;
+    }
+    let _ = dt;
+    // inserted along the lane, not only at its start
+    assert!(
+        places.iter().filter(|&&p| p > 50.0).count() > 10,
+        "{places:?}"
+    );
+    // the least occupied of the entry's lanes that go on: more than one of them
+    assert!(lanes.len() > 1, "{lanes:?}");
+    // the meter lets vehicles through on green; on red only those too close to stop (its program has no yellow
+    // phase: SUMO warns of it and its drivers brake as hard as they can, as mapc's)
+    assert!(
+        through_on_green > 10 * through_on_red.max(1),
+        "{through_on_green} on green, {through_on_red} on red"
+    );
+}

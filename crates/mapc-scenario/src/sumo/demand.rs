@@ -356,7 +356,7 @@ impl<'a> Demand<'a> {
                 | "vehsPerHour" | "period" | "probability" | "number" | "departLane" | "color"
                 | "line" | "fromTaz" | "toTaz" | "insertionChecks" | "reroute" => true,
                 "departSpeed" => v.trim().parse::<f64>().is_ok() || v == "max" || v == "desired",
-                "departPos" => v == "base",
+                "departPos" => matches!(v.as_str(), "base" | "random" | "random_free"),
                 "arrivalLane" => v == "current",
                 "arrivalPos" => v == "max",
                 "arrivalSpeed" => v == "current",
@@ -400,6 +400,10 @@ impl<'a> Demand<'a> {
             depart_speed_mps,
             depart_speed,
             depart_lane,
+            depart_pos: e
+                .get("departPos")
+                .filter(|p| *p != "base" && !dropped.contains(&"departPos"))
+                .map(str::to_string),
             ..Flow::default()
         };
         let last;

@@ -75,24 +75,29 @@ fn the_highway_ramp_scenario_reads_as_sumo_runs_it() {
 
 #[test]
 fn a_value_mapc_does_not_simulate_is_refused_with_its_place_and_dropped_when_skipping() {
-    let cfg = shipped("ramp_metering_1x3/1ramp_1x3.sumocfg");
-    let e = from_sumocfg(&cfg, &ReadOptions::default())
+    // ramp_game: an output element of its additional file, and its main flows' `departPos="free"`
+    let game = shipped("ramp_game/ramp.sumocfg");
+    let e = from_sumocfg(&game, &ReadOptions::default())
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("1ramp_1x3.rou.xml: line 11, column 9, in <flow id=\"main_con\">: `departPos=\"random\"`"),
+        e.contains("input_additional.add.xml: line 2, column 5, in <timedEvent>"),
         "{e}"
     );
-    let r = from_sumocfg(
-        &cfg,
-        &ReadOptions {
-            skip_unsupported: true,
-        },
-    )
-    .unwrap();
+    let skip = ReadOptions {
+        skip_unsupported: true,
+    };
+    let w = from_sumocfg(&game, &skip).unwrap().warnings.join("\n");
+    assert!(
+        w.contains("<timedEvent>") && w.contains("departPos=\"free\""),
+        "{w}"
+    );
+    // ramp_metering_1x3 reads as it is: its light, random places, best lanes; only its detectors are skipped
+    let cfg = shipped("ramp_metering_1x3/1ramp_1x3.sumocfg");
+    let r = from_sumocfg(&cfg, &ReadOptions::default()).unwrap();
     let w = r.warnings.join("\n");
     assert!(
-        w.contains("departPos=\"random\"") && !w.contains("tlLogic"),
+        w.contains("induction loops") && !w.contains("tlLogic"),
         "{w}"
     );
     // no end: the last departure and an hour to drain
@@ -104,8 +109,12 @@ fn a_value_mapc_does_not_simulate_is_refused_with_its_place_and_dropped_when_ski
         .find(|f| f.id == "main_con")
         .unwrap();
     assert_eq!(
-        (main.depart_speed.as_deref(), main.depart_lane.as_deref()),
-        (Some("max"), Some("best"))
+        (
+            main.depart_speed.as_deref(),
+            main.depart_lane.as_deref(),
+            main.depart_pos.as_deref()
+        ),
+        (Some("max"), Some("best"), Some("random"))
     );
     // the ramp meter: the additional file's program (`rl`) replaces the network's (`0`), as SUMO runs the last
     let meter = r

@@ -7,7 +7,8 @@ use crate::measure::points::MeasurePoint;
 use crate::network::Network;
 use crate::sim::Simulation;
 use crate::spec::{
-    DEPART_SPEED_DESIRED, DEPART_SPEED_MAX, DepartLane, FlowSpec, SimSpec, VehicleTypeSpec,
+    DEPART_SPEED_DESIRED, DEPART_SPEED_MAX, DepartLane, DepartPos, FlowSpec, SimSpec,
+    VehicleTypeSpec,
 };
 use mapc_graph::RoadId;
 use mapc_scenario::ResolvedScenario;
@@ -94,6 +95,11 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             probability: f.probability,
             number: f.number,
             queue_excess: rs.queue_excess_demand,
+            depart_pos: match f.depart_pos.as_deref() {
+                Some("random") => DepartPos::Random,
+                Some("random_free") => DepartPos::RandomFree,
+                _ => DepartPos::Base,
+            },
             depart_speed: match f.depart_speed.as_deref() {
                 Some("max") => DEPART_SPEED_MAX,
                 Some("desired") => DEPART_SPEED_DESIRED,

@@ -21,7 +21,7 @@ use crate::measure::points::MeasureAcc;
 use crate::models::cf::{CarFollowModel, CfModel, IdmParams, Krauss, kinematics};
 use crate::network::{FOE_VISIBILITY_M, LaneIdx, LaneKind, LinkIdx, Network, SimLane, SimLink};
 use crate::numeric::{FastMinMax, NUMERICAL_EPS};
-use crate::spec::{CarFollowModelKind, SimSpec};
+use crate::spec::{CarFollowModelKind, DepartLane, SimSpec};
 use accounting::MetricsAcc;
 use entry::{lane_choice, teleport};
 use junction::Approach;
@@ -252,16 +252,26 @@ impl Simulation {
                     .iter()
                     .map(|&r| sim.routes[r as usize].lanes[0])
                     .collect();
-                let entry = match sim
-                    .road_entries
-                    .iter()
-                    .position(|e| e.lanes == starts && e.mode == flow.depart_lane)
-                {
+                // `best`: the lanes whose routes go furthest without a lane change (SUMO's best lanes)
+                let candidates: Vec<usize> = if flow.depart_lane == DepartLane::Best {
+                    let roads = sim.routes[routes[0] as usize].roads.clone();
+                    let best = sim.net.best_lanes(&roads, 0.0);
+                    let top = best.iter().map(|q| q.length).fold(f64::MIN, f64::max);
+                    (0..lanes)
+                        .filter(|&k| best.get(k).is_some_and(|q| q.length == top))
+                        .collect()
+                } else {
+                    (0..lanes).collect()
+                };
+                let entry = match sim.road_entries.iter().position(|e| {
+                    e.lanes == starts && e.mode == flow.depart_lane && e.candidates == candidates
+                }) {
                     Some(e) => e,
                     None => {
                         sim.road_entries.push(lane_choice::RoadEntry {
                             mode: flow.depart_lane,
                             lanes: starts,
+                            candidates,
                             queue: EntryQueue::default(),
                         });
                         sim.road_entries.len() - 1

@@ -41,6 +41,8 @@ pub(super) struct Veh {
     pub(super) lc: Option<Box<lane_change::LcVeh>>,
     /// The driver's own random draws (dawdling), independent of every other vehicle and of the thread count.
     pub(super) rng: DriverRng,
+    /// Where it is inserted on its entry lane.
+    pub(super) depart_pos: crate::spec::DepartPos,
 }
 
 #[derive(Clone, Debug)]
@@ -164,6 +166,7 @@ impl Simulation {
             free_flow_s,
             lc: None,
             rng: DriverRng::new(self.seed, id),
+            depart_pos: crate::spec::DepartPos::Base,
         });
         id
     }

@@ -3,7 +3,7 @@
 //! (`lane_choice.rs`).
 
 use super::*;
-use crate::spec::DEPART_SPEED_MAX;
+use crate::spec::{DEPART_SPEED_MAX, DepartPos};
 
 impl Simulation {
     /// Create the flows' vehicles due by now and insert waiting vehicles where it is safe (SUMO's insertion: at
@@ -117,34 +117,57 @@ impl Simulation {
                 .unwrap_or(&mix[mix.len() - 1])
                 .0
         };
-        self.create_vehicle(vt, self.flow_route[f], speed)
+        let id = self.create_vehicle(vt, self.flow_route[f], speed);
+        self.veh[id as usize].depart_pos = self.spec.flows[f].depart_pos;
+        id
     }
 
     /// SUMO's insertion check at the start of the entry road: front at length + POSITION_EPS, the depart speed
     /// safe behind the leader and able to stop before a minor link within reach.
     pub(in crate::sim) fn try_insert(&mut self, id: VehicleId) -> bool {
+        let tries = match self.veh[id as usize].depart_pos {
+            DepartPos::Base => return self.try_insert_at(id, None),
+            DepartPos::Random => 1,
+            DepartPos::RandomFree => 10,
+        };
+        let v = &self.veh[id as usize];
+        let lane = self.routes[v.route as usize].lanes[0];
+        let len = self.lane_at(lane as usize).length;
+        let base = (v.length + POSITION_EPS).fmin(len);
+        for _ in 0..tries {
+            let pos = (self.rng.random::<f64>() * len).fmax(base);
+            if self.try_insert_at(id, Some(pos)) {
+                return true;
+            }
+        }
+        self.veh[id as usize].depart_pos == DepartPos::RandomFree && self.try_insert_at(id, None)
+    }
+
+    /// The insertion check and, where it passes, the insertion: the front at `at` on the entry lane, or at its
+    /// start.
+    fn try_insert_at(&mut self, id: VehicleId, at: Option<f64>) -> bool {
         let rule = self.veh[id as usize].depart_speed;
         if rule.is_infinite() {
-            return self.try_insert_at_desired(id, rule == DEPART_SPEED_MAX);
+            return self.try_insert_at_desired(id, at, rule == DEPART_SPEED_MAX);
         }
-        if !self.insertion_allowed(id) {
+        if !self.insertion_allowed_at(id, at) {
             return false;
         }
-        self.place_at_route_start(id, true);
+        self.place_on_entry(id, at, true);
         true
     }
 
     /// SUMO's `departSpeed="desired"`: at the vehicle's desired speed on its first lane, or not now; with
     /// `lower` (`"max"`), the highest speed up to it that passes the insertion check (bisected to 1/256 of it).
     /// The vehicle keeps its rule for a later try.
-    fn try_insert_at_desired(&mut self, id: VehicleId, lower: bool) -> bool {
+    fn try_insert_at_desired(&mut self, id: VehicleId, at: Option<f64>, lower: bool) -> bool {
         let v = &self.veh[id as usize];
         let rule = v.depart_speed;
         let lane = self.routes[v.route as usize].lanes[0];
         let desired = self.desired_speed(v, lane);
         let allowed_at = |sim: &mut Simulation, speed: f64| {
             sim.veh[id as usize].depart_speed = speed;
-            sim.insertion_allowed(id)
+            sim.insertion_allowed_at(id, at)
         };
         let speed = if allowed_at(self, desired) {
             Some(desired)
@@ -165,7 +188,7 @@ impl Simulation {
         match speed {
             Some(s) => {
                 self.veh[id as usize].depart_speed = s;
-                self.place_at_route_start(id, true);
+                self.place_on_entry(id, at, true);
                 true
             }
             None => {
@@ -177,22 +200,46 @@ impl Simulation {
 
     /// Where a vehicle is inserted: at the start of its route's first lane, its front one length in.
     pub(in crate::sim) fn place_at_route_start(&mut self, id: VehicleId, counted: bool) {
+        self.place_on_entry(id, None, counted);
+    }
+
+    /// Inserts a vehicle with its front at `at` on its route's first lane, or at its start.
+    fn place_on_entry(&mut self, id: VehicleId, at: Option<f64>, counted: bool) {
         let v = &self.veh[id as usize];
         let lane = self.routes[v.route as usize].lanes[0];
         let lane_len = self.lane_at(lane as usize).length;
-        let pos = (v.length + POSITION_EPS).fmin(lane_len);
+        let pos = at.unwrap_or((v.length + POSITION_EPS).fmin(lane_len));
         let speed = v.depart_speed;
         let _ = self.place(id, lane, pos, speed, counted);
     }
 
     /// SUMO's insertion check at [`Self::place_at_route_start`] with the vehicle's depart speed.
     pub(in crate::sim) fn insertion_allowed(&self, id: VehicleId) -> bool {
+        self.insertion_allowed_at(id, None)
+    }
+
+    /// SUMO's insertion check with the front at `at` on the entry lane (`None`: its start), with the vehicle's
+    /// depart speed: room behind the leader, a stop possible before a minor link within reach, and away from
+    /// the lane's start, room before the follower (its secure gap).
+    fn insertion_allowed_at(&self, id: VehicleId, at: Option<f64>) -> bool {
         let v = &self.veh[id as usize];
         let p = &self.types[v.vtype as usize];
         let route = &self.routes[v.route as usize];
         let lane = route.lanes[0];
         let lane_len = self.lane_at(lane as usize).length;
-        let pos = (v.length + POSITION_EPS).fmin(lane_len);
+        let pos = at.unwrap_or((v.length + POSITION_EPS).fmin(lane_len));
+        if at.is_some() {
+            // the vehicle behind on the lane needs its secure gap to the inserted one
+            let q = &self.lane_veh[lane as usize];
+            if let Some(&f) = q.iter().find(|&&o| self.veh[o as usize].pos < pos) {
+                let fv = &self.veh[f as usize];
+                let fp = &self.types[fv.vtype as usize];
+                let gap = pos - v.length - fv.pos - fp.min_gap;
+                if gap < 0.0 || gap < fp.secure_gap(fv.speed, v.depart_speed.fmax(0.0)) {
+                    return false;
+                }
+            }
+        }
         let speed = v.depart_speed;
         let des = self.desired_speed(v, lane);
         // leader: last vehicle on the lane, or further along the route
@@ -201,7 +248,15 @@ impl Simulation {
         let reach = speed * self.spec.step_s + p.brake_gap(speed, p.decel, p.tau) + 200.0;
         while k < route.lanes.len() && seen < reach {
             let l = route.lanes[k];
-            if let Some(&o) = self.lane_veh[l as usize].last() {
+            // the leader: the last vehicle on the lane, or on the entry lane the last one ahead of the place
+            let leader = match at {
+                Some(_) if k == 0 => self.lane_veh[l as usize]
+                    .iter()
+                    .rev()
+                    .find(|&&o| self.veh[o as usize].pos >= pos),
+                _ => self.lane_veh[l as usize].last(),
+            };
+            if let Some(&o) = leader {
                 let ov = &self.veh[o as usize];
                 let gap = seen + ov.pos - ov.length - p.min_gap;
                 if gap < 0.0 {

@@ -21,10 +21,12 @@ use crate::spec::DepartLane;
 /// The vehicles waiting at one entry road for a lane chosen at insertion (one per road and mode).
 #[derive(Clone, Debug)]
 pub(in crate::sim) struct RoadEntry {
-    /// `Random` or `Free`.
+    /// `Random`, `Free` or `Best`.
     pub(in crate::sim) mode: DepartLane,
     /// The road's lanes, rightmost first.
     pub(in crate::sim) lanes: Vec<LaneIdx>,
+    /// The lanes (indices into `lanes`) a vehicle may depart on: all, or for `Best` those that go furthest.
+    pub(in crate::sim) candidates: Vec<usize>,
     pub(in crate::sim) queue: EntryQueue,
 }
 
@@ -78,14 +80,21 @@ impl Simulation {
 
     /// The lane (index on the road, 0 = rightmost) the next vehicle at road entry `re` tries.
     pub(in crate::sim) fn choose_lane(&mut self, re: usize) -> usize {
-        let lanes = &self.road_entries[re].lanes;
-        match self.road_entries[re].mode {
+        let e = &self.road_entries[re];
+        match e.mode {
             DepartLane::Random => {
-                let n = lanes.len();
+                let n = e.lanes.len();
                 self.rng.random_range(0..n)
             }
-            _ => least_occupied(lanes.iter().map(|&l| self.brutto_occupancy(l)))
-                .expect("an entry road has a lane"),
+            _ => {
+                let k = least_occupied(
+                    e.candidates
+                        .iter()
+                        .map(|&k| self.brutto_occupancy(e.lanes[k])),
+                )
+                .expect("an entry road has a lane");
+                e.candidates[k]
+            }
         }
     }
 
@@ -93,8 +102,8 @@ impl Simulation {
     pub(in crate::sim) fn insert_at_road(&mut self, re: usize, refused: &mut Vec<LaneIdx>) {
         let mut i = 0;
         loop {
-            let lanes = &self.road_entries[re].lanes;
-            if lanes.iter().all(|l| refused.contains(l)) {
+            let e = &self.road_entries[re];
+            if e.candidates.iter().all(|&k| refused.contains(&e.lanes[k])) {
                 // no later vehicle can enter (SUMO still draws a lane for each: mapc's numbers differ anyway)
                 break;
             }
@@ -116,7 +125,7 @@ impl Simulation {
             let lane = self.road_entries[re].lanes[k];
             if refused.contains(&lane) {
                 // a free choice stays the same until a vehicle enters: every later one is refused too
-                if self.road_entries[re].mode == DepartLane::Free {
+                if self.road_entries[re].mode != DepartLane::Random {
                     break;
                 }
                 i += 1;
@@ -136,7 +145,7 @@ impl Simulation {
                 self.road_entries[re].queue.remove_built(i);
             } else {
                 refused.push(lane);
-                if self.road_entries[re].mode == DepartLane::Free {
+                if self.road_entries[re].mode != DepartLane::Random {
                     break;
                 }
                 i += 1;
