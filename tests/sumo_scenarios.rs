@@ -89,3 +89,90 @@ fn bad_sumo_input_is_refused_with_its_place_and_exit_2() {
         &["gone.rou.xml", "not a file"],
     );
 }
+
+/// The attributes SUMO 1.8 writes on a `<tripinfo>` and a summary `<step>` (read from its own files).
+const TRIPINFO_ATTRS: &[&str] = &[
+    "id",
+    "depart",
+    "departLane",
+    "departPos",
+    "departSpeed",
+    "departDelay",
+    "arrival",
+    "arrivalLane",
+    "arrivalPos",
+    "arrivalSpeed",
+    "duration",
+    "routeLength",
+    "waitingTime",
+    "waitingCount",
+    "stopTime",
+    "timeLoss",
+    "rerouteNo",
+    "devices",
+    "vType",
+    "speedFactor",
+    "vaporized",
+];
+const STEP_ATTRS: &[&str] = &[
+    "time",
+    "loaded",
+    "inserted",
+    "running",
+    "waiting",
+    "ended",
+    "arrived",
+    "collisions",
+    "teleports",
+    "halting",
+    "stopped",
+    "meanWaitingTime",
+    "meanTravelTime",
+    "meanSpeed",
+    "meanSpeedRelative",
+    "duration",
+];
+
+/// The attribute names of the first `<name ` element in `xml`, in order.
+fn attrs_of(xml: &str, name: &str) -> Vec<String> {
+    let start = xml
+        .find(&format!("<{name} "))
+        .unwrap_or_else(|| panic!("no <{name}> in {xml}"));
+    let tag = &xml[start..start + xml[start..].find("/>").unwrap()];
+    tag.split('"')
+        .step_by(2)
+        .filter_map(|part| {
+            part.trim()
+                .rsplit(' ')
+                .next()
+                .and_then(|k| k.strip_suffix('='))
+        })
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn sumo_outputs_have_sumos_elements_and_attributes() {
+    let dir = scratch_dir("sumo-outputs");
+    let trip = dir.join("trip.xml");
+    let summary = dir.join("summary.xml");
+    let out = run_mapc(&[
+        "sim",
+        HIGHWAY_RAMP,
+        "--seeds",
+        "1",
+        "--tripinfo-output",
+        trip.to_str().unwrap(),
+        "--summary-output",
+        summary.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    let trip = std::fs::read_to_string(&trip).unwrap();
+    assert_eq!(attrs_of(&trip, "tripinfo"), TRIPINFO_ATTRS);
+    // SUMO 1.8 has 449 of the 456 arrive in this run; vehicles are named `flow.N`
+    assert_eq!(trip.matches("<tripinfo ").count(), 449);
+    assert!(trip.contains("id=\"f_1_passenger_through.0\""));
+    let summary = std::fs::read_to_string(&summary).unwrap();
+    assert_eq!(attrs_of(&summary, "step"), STEP_ATTRS);
+    assert_eq!(summary.matches("<step ").count(), 16_000);
+}

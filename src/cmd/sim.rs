@@ -27,6 +27,12 @@ pub struct Args {
     /// Print JSON: {"outflow": {"mean", "ci95", ...}, "inflow": ..., "speed": ..., "seeds": N, ...}.
     #[arg(long)]
     pub json: bool,
+    /// Write SUMO's trip-info file of the first seed's run (`--tripinfo-output` of SUMO 1.8).
+    #[arg(long, value_name = "FILE")]
+    pub tripinfo_output: Option<PathBuf>,
+    /// Write SUMO's summary file of the first seed's run (`--summary-output` of SUMO 1.8).
+    #[arg(long, value_name = "FILE")]
+    pub summary_output: Option<PathBuf>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -48,10 +54,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         progress.inc(1);
         Ok(m)
     };
-    // the first seed's run writes the trace (one run, not a second one for it), beside the others
+    // the first seed's run writes the trace or SUMO's outputs (one run, not a second one for them), beside the
+    // others
+    let sumo_outputs = args.tripinfo_output.is_some() || args.summary_output.is_some();
     let (first, rest) = pool.install(|| {
         rayon::join(
             || match &args.trace {
+                None if sumo_outputs => {
+                    let m = write_sumo_outputs(&spec, seeds[0], &args)?;
+                    progress.inc(1);
+                    Ok(m)
+                }
                 Some(path) => {
                     let (m, note) = write_trace(&spec, seeds[0], path)?;
                     if let Some(note) = note {
@@ -161,4 +174,32 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
             .expect("valid template"),
     );
     pb
+}
+
+/// Run `seed` once, watching it for SUMO's trip-info and summary files, and write them (each atomically).
+fn write_sumo_outputs(
+    spec: &mapc_sim::SimSpec,
+    seed: u64,
+    args: &Args,
+) -> anyhow::Result<RunMetrics> {
+    let mut sim = Simulation::from_spec(spec.clone(), seed)?;
+    let mut out = mapc_sim::runs::sumo_outputs::SumoOutputs::new(
+        &mut sim,
+        args.tripinfo_output.is_some(),
+        args.summary_output.is_some(),
+    );
+    while !sim.is_done() {
+        sim.step()?;
+        out.observe(&sim);
+    }
+    for (path, text) in [
+        (&args.tripinfo_output, out.tripinfo_xml()),
+        (&args.summary_output, out.summary_xml()),
+    ] {
+        if let (Some(path), Some(text)) = (path, text) {
+            mapc_graph::write_atomically(path, text.as_bytes())
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+    }
+    Ok(sim.metrics())
 }

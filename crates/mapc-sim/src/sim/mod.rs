@@ -78,6 +78,10 @@ pub struct Simulation {
     /// The entry lanes where an insertion failed in this step (kept to reuse its allocation).
     refused_lanes: Vec<LaneIdx>,
     flow_next: Vec<u64>,
+    /// Per flow, its vehicles built so far; and, once [`Simulation::record_origins`] asked for them, each
+    /// vehicle's flow and number in it (SUMO names a flow's vehicles `flow.N`).
+    flow_built: Vec<u32>,
+    origins: Option<std::collections::HashMap<VehicleId, (u32, u32)>>,
     /// Per flow, its route (for `random` and `free`: the one from the rightmost lane, until a lane is chosen).
     flow_route: Vec<u32>,
     /// Per flow whose lane is chosen at insertion, where its vehicles wait and its route from each lane.
@@ -159,6 +163,8 @@ impl Simulation {
             refused_lanes: Vec::new(),
             lane_order: Vec::new(),
             flow_next: vec![0; spec.flows.len()],
+            flow_built: vec![0; spec.flows.len()],
+            origins: None,
             flow_route: Vec::new(),
             flow_lanes: Vec::new(),
             in_region: Table(vec![true; net.lanes.len()]),
@@ -346,6 +352,21 @@ impl Simulation {
             acc += self.lane_at(l as usize).length;
         }
         Ok(out)
+    }
+
+    /// Keep each vehicle's flow and number in it from now on ([`Self::vehicle_origin`]; for SUMO's outputs, which
+    /// name vehicles `flow.N`). The record grows with the vehicles created.
+    pub fn record_origins(&mut self) {
+        self.origins.get_or_insert_with(Default::default);
+    }
+
+    /// The flow (index into the spec's flows) and the number in it of a vehicle created since
+    /// [`Self::record_origins`]; `None` for others and initial vehicles.
+    pub fn vehicle_origin(&self, id: VehicleId) -> Option<(usize, u32)> {
+        self.origins
+            .as_ref()?
+            .get(&id)
+            .map(|&(f, n)| (f as usize, n))
     }
 
     /// Keep every passage past a measure point or the corridor's end from now on (for tests that follow each

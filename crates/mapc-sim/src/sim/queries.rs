@@ -38,6 +38,12 @@ pub struct VehicleView<'a> {
     pub length: f64,
     pub entry_order: u64,
     pub depart_s: f64,
+    /// Metres driven since its insertion.
+    pub distance_m: f64,
+    /// Its desired speed over the speed limit (SUMO's chosen speed factor).
+    pub speed_factor: f64,
+    /// The time its route takes at its desired speed on every lane.
+    pub free_flow_s: f64,
 }
 
 impl Simulation {
@@ -126,6 +132,9 @@ impl Simulation {
             length: v.length,
             entry_order: v.entry_order,
             depart_s: v.depart_s,
+            distance_m: v.distance_m,
+            speed_factor: v.speed_factor,
+            free_flow_s: v.free_flow_s,
         })
     }
 

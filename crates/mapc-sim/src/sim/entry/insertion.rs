@@ -119,6 +119,10 @@ impl Simulation {
         };
         let id = self.create_vehicle(vt, self.flow_route[f], speed);
         self.veh[id as usize].depart_pos = self.spec.flows[f].depart_pos;
+        if let Some(origins) = &mut self.origins {
+            origins.insert(id, (f as u32, self.flow_built[f]));
+        }
+        self.flow_built[f] += 1;
         id
     }
 

@@ -1,0 +1,203 @@
+//! SUMO 1.8's `--tripinfo-output` and `--summary-output` files of a run, same elements and attributes, so that
+//! a SUMO user's scripts read mapc's runs unchanged. Built by watching the run step by step
+//! ([`SumoOutputs::observe`] after each step); vehicles are named as SUMO names a flow's vehicles (`flow.N`),
+//! lanes `edge_index` by the SUMO edge the road came from.
+//!
+//! What mapc does not model is written as SUMO writes it where nothing happens: no stops (`stopTime` 0), no
+//! rerouting, no collisions. `timeLoss` is the trip's time over the time its route takes at the driver's desired
+//! speed (SUMO sums the shortfall step by step; both are the delay behind free flow).
+
+use crate::ids::VehicleId;
+use crate::sim::Simulation;
+use mapc_graph::{LaneGraph, RoadId};
+use std::collections::HashMap;
+use std::fmt::Write as _;
+
+/// Below this speed a vehicle is halting (SUMO's `SUMO_const_haltingSpeed`).
+const HALTING_SPEED: f64 = 0.1;
+
+#[derive(Clone, Debug, Default)]
+struct Trip {
+    depart: f64,
+    depart_lane: String,
+    depart_pos: f64,
+    depart_speed: f64,
+    waiting_s: f64,
+    waiting_count: u32,
+    halting: bool,
+}
+
+/// The outputs being gathered.
+#[derive(Debug, Default)]
+pub struct SumoOutputs {
+    tripinfo: Option<String>,
+    summary: Option<String>,
+    trips: HashMap<VehicleId, Trip>,
+    inserted: u64,
+    arrived: u64,
+    travel_sum: f64,
+    /// Run time at the first step, where SUMO's clock is 0.
+    begin_s: f64,
+}
+
+/// A SUMO lane id: the road's SUMO edge id (its label where it has none) and the lane index.
+fn lane_name(g: &LaneGraph, road: RoadId, lane: u8) -> String {
+    let edge = g
+        .road(road)
+        .and_then(|r| r.provenance.sumo_ids.first().cloned())
+        .unwrap_or_else(|| road.to_string());
+    format!("{edge}_{lane}")
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+impl SumoOutputs {
+    /// Gather the trip infos, the summary, or both, from `sim` before its first step (which it asks to keep its
+    /// vehicles' origins).
+    pub fn new(sim: &mut Simulation, tripinfo: bool, summary: bool) -> SumoOutputs {
+        sim.record_origins();
+        SumoOutputs {
+            tripinfo: tripinfo.then(String::new),
+            summary: summary.then(String::new),
+            begin_s: sim.time_s(),
+            ..SumoOutputs::default()
+        }
+    }
+
+    /// SUMO's name of a vehicle: `flow.N`, or `veh.ID` for one that came from no flow.
+    fn vehicle_name(sim: &Simulation, id: VehicleId) -> String {
+        match sim.vehicle_origin(id) {
+            Some((f, n)) => format!("{}.{n}", sim.spec().flows[f].id),
+            None => format!("veh.{id}"),
+        }
+    }
+
+    /// Take in the step `sim` just made.
+    pub fn observe(&mut self, sim: &Simulation) {
+        let g = &sim.spec().graph;
+        let now = sim.time_s() - self.begin_s;
+        let dt = sim.step_s();
+        for &id in sim.departed_last_step() {
+            let v = sim.vehicle(id).expect("a vehicle that just departed");
+            self.inserted += 1;
+            self.trips.insert(
+                id,
+                Trip {
+                    depart: v.depart_s - self.begin_s,
+                    depart_lane: lane_name(g, v.road, v.lane_index),
+                    depart_pos: v.pos_m,
+                    depart_speed: v.speed,
+                    ..Trip::default()
+                },
+            );
+        }
+        let (mut running, mut halting, mut speed_sum, mut rel_sum, mut wait_sum) =
+            (0u64, 0u64, 0.0, 0.0, 0.0);
+        for id in sim.active_ids() {
+            let v = sim.vehicle(id).expect("an active vehicle");
+            running += 1;
+            speed_sum += v.speed;
+            let lane_limit = g
+                .road(v.road)
+                .and_then(|r| r.lanes.get(v.lane_index as usize))
+                .map_or(f64::NAN, |l| l.speed_mps);
+            rel_sum += v.speed / lane_limit;
+            // a vehicle just inserted stands at its depart speed until its first move (SUMO counts no wait)
+            let just_departed = sim.departed_last_step().contains(&id);
+            if let Some(t) = self.trips.get_mut(&id).filter(|_| !just_departed) {
+                if v.speed < HALTING_SPEED {
+                    t.waiting_s += dt;
+                    if !t.halting {
+                        t.waiting_count += 1;
+                    }
+                    t.halting = true;
+                    halting += 1;
+                } else {
+                    t.halting = false;
+                }
+                wait_sum += t.waiting_s;
+            }
+        }
+        for &id in sim.arrived_last_step() {
+            let Some(t) = self.trips.remove(&id) else {
+                continue;
+            };
+            let v = sim.vehicle(id).expect("a vehicle that just arrived");
+            let duration = now - t.depart;
+            self.arrived += 1;
+            self.travel_sum += duration;
+            if let Some(out) = &mut self.tripinfo {
+                let name = xml_escape(&Self::vehicle_name(sim, id));
+                let _ = writeln!(
+                    out,
+                    "    <tripinfo id=\"{name}\" depart=\"{:.2}\" departLane=\"{}\" departPos=\"{:.2}\" departSpeed=\"{:.2}\" \
+                     departDelay=\"0.00\" arrival=\"{now:.2}\" arrivalLane=\"{}\" arrivalPos=\"{:.2}\" arrivalSpeed=\"{:.2}\" \
+                     duration=\"{duration:.2}\" routeLength=\"{:.2}\" waitingTime=\"{:.2}\" waitingCount=\"{}\" stopTime=\"0.00\" \
+                     timeLoss=\"{:.2}\" rerouteNo=\"0\" devices=\"tripinfo_{name}\" vType=\"{}\" speedFactor=\"{:.2}\" vaporized=\"\"/>",
+                    t.depart,
+                    xml_escape(&t.depart_lane),
+                    t.depart_pos,
+                    t.depart_speed,
+                    xml_escape(&lane_name(g, v.road, v.lane_index)),
+                    v.pos_m,
+                    v.speed,
+                    v.distance_m,
+                    t.waiting_s,
+                    t.waiting_count,
+                    (duration - v.free_flow_s).max(0.0),
+                    xml_escape(v.vehicle_type),
+                    v.speed_factor,
+                );
+            }
+        }
+        if let Some(out) = &mut self.summary {
+            let waiting = sim.waiting_to_enter() as u64;
+            let mean = |sum: f64, n: u64| if n > 0 { sum / n as f64 } else { 0.0 };
+            // SUMO writes the state after the step, stamped with the step's begin
+            let _ = writeln!(
+                out,
+                "    <step time=\"{:.2}\" loaded=\"{}\" inserted=\"{}\" running=\"{running}\" waiting=\"{waiting}\" \
+                 ended=\"{}\" arrived=\"{}\" collisions=\"0\" teleports=\"0\" halting=\"{halting}\" stopped=\"0\" \
+                 meanWaitingTime=\"{:.2}\" meanTravelTime=\"{:.2}\" meanSpeed=\"{:.2}\" meanSpeedRelative=\"{:.2}\" duration=\"0\"/>",
+                now - dt,
+                self.inserted + waiting,
+                self.inserted,
+                self.arrived,
+                self.arrived,
+                mean(wait_sum, running),
+                if self.arrived > 0 {
+                    self.travel_sum / self.arrived as f64
+                } else {
+                    -1.0
+                },
+                mean(speed_sum, running),
+                mean(rel_sum, running),
+            );
+        }
+    }
+
+    /// The trip-info file, if asked for.
+    pub fn tripinfo_xml(&self) -> Option<String> {
+        self.tripinfo.as_ref().map(|body| {
+            format!(
+                "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\n<tripinfos xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" \
+                 xsi:noNamespaceSchemaLocation=\"http://sumo.dlr.de/xsd/tripinfo_file.xsd\">\n{body}</tripinfos>\n"
+            )
+        })
+    }
+
+    /// The summary file, if asked for.
+    pub fn summary_xml(&self) -> Option<String> {
+        self.summary.as_ref().map(|body| {
+            format!(
+                "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\n<summary xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" \
+                 xsi:noNamespaceSchemaLocation=\"http://sumo.dlr.de/xsd/summary_file.xsd\">\n{body}</summary>\n"
+            )
+        })
+    }
+}
