@@ -94,18 +94,12 @@ fn xml_attr(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// The Simple Merge network (`../shared/maps/simple_merge.net.xml`, else `maps/`) with hostile types, ids and a
+/// The Simple Merge network (`maps/simple_merge.net.xml`) with hostile types, ids and a
 /// name: `highwayType` and `mergeType` become [`IMG`] and [`CLOSE_SCRIPT`], the edges and junctions `left`,
 /// `center` and `bottom` (and so their lanes) [`ID_SVG`], [`ID_IMG`] and [`ID_ENTITY`], and the edge `center`
 /// is named [`COMMENT`] and the probe's loader.
 fn hostile_net(probe: &Probe) -> String {
-    let shared = root().join("../shared/maps/simple_merge.net.xml");
-    let path = if shared.is_file() {
-        shared
-    } else {
-        root().join("maps/simple_merge.net.xml")
-    };
-    let net = std::fs::read_to_string(&path).unwrap();
+    let net = std::fs::read_to_string(root().join("maps/simple_merge.net.xml")).unwrap();
     let named = format!(
         "<edge name=\"{}\" id=\"center\"",
         xml_attr(&format!("{COMMENT} {}", probe.loader()))

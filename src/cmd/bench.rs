@@ -207,7 +207,7 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
     #[derive(Parser)]
     struct Train {
         #[command(flatten)]
-        args: super::train::Args,
+        args: super::training::Args,
     }
     let threads = args.threads.to_string();
     let iters_s = iters.to_string();
@@ -233,7 +233,7 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
         .chain([dir.clone().into_os_string()]),
     )?;
     let (cpu0, start) = (cpu_seconds(), Instant::now());
-    let run = super::train::train(train.args);
+    let run = super::training::train(train.args);
     let (wall_s, cpu_s) = (start.elapsed().as_secs_f64(), cpu_seconds() - cpu0);
     std::fs::remove_dir_all(&dir).ok();
     let (run, _) = run?;

@@ -14,5 +14,6 @@ pub mod scenario;
 pub mod sim;
 pub mod simplify;
 pub mod train;
+pub mod training;
 pub mod view;
 pub mod window;

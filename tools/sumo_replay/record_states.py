@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Record SUMO 1.8's full state of the Simple Merge every step, for mapc's vehicle-by-vehicle replay.
 
-Runs the reference rollout of ../shared/sumo_ref (Flow's procedure: speed mode 9, 5 initial vehicles) through
-TraCI and writes one JSON line per step: {"t": s, "veh": [[id, lane, pos, speed, speed_factor, waiting_s,
+Runs Flow's reference rollout of the Simple Merge (speed mode 9, 5 initial vehicles; the rollout's scripts,
+`run_merge.py` and `build_merge.py`, are not part of this repository: `--sumo-ref DIR` or `MAPC_SUMO_REF` names
+their folder) through TraCI and writes one JSON line per step: {"t": s, "veh": [[id, lane, pos, speed, speed_factor, waiting_s,
 leader_id, leader_gap], ...]}. SUMO is a reference only; mapc never needs it.
 
     python3 tools/sumo_replay/record_states.py --seed 0 --out /tmp/states0.jsonl
@@ -19,7 +20,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", required=True)
-    ap.add_argument("--sumo-ref", default=os.path.join(os.path.dirname(__file__), "../../../shared/sumo_ref"))
+    ap.add_argument("--sumo-ref", default=os.environ.get("MAPC_SUMO_REF"), required="MAPC_SUMO_REF" not in os.environ,
+                    help="the folder of the reference rollout's run_merge.py")
     ap.add_argument("--cfg", default="/tmp/merge_net/merge.sumocfg",
                     help="the Simple Merge built by the reference's build_merge.py")
     args = ap.parse_args()
