@@ -176,3 +176,15 @@ fn sumo_outputs_have_sumos_elements_and_attributes() {
     assert_eq!(attrs_of(&summary, "step"), STEP_ATTRS);
     assert_eq!(summary.matches("<step ").count(), 16_000);
 }
+
+#[test]
+fn a_configuration_named_cfg_is_known_by_its_root_element() {
+    // eccles_interchange: `interchangeSim.cfg`, 1 000 vehicles each with its own route on an OSM interchange
+    let j = mapc_json(&[
+        "scenario",
+        "show",
+        "scenarios/sumo/eccles_interchange/interchangeSim.cfg",
+        "--json",
+    ]);
+    assert_eq!(j["flows"].as_array().unwrap().len(), 1000);
+}
