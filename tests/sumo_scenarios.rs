@@ -188,3 +188,22 @@ fn a_configuration_named_cfg_is_known_by_its_root_element() {
     ]);
     assert_eq!(j["flows"].as_array().unwrap().len(), 1000);
 }
+
+#[test]
+fn from_sumo_writes_a_scenario_that_runs_as_the_configuration() {
+    let dir = scratch_dir("from-sumo");
+    let out = dir.join("ramp_metering.toml");
+    let cfg = "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg";
+    assert_success(&run_mapc(&[
+        "scenario",
+        "from-sumo",
+        cfg,
+        "-o",
+        out.to_str().unwrap(),
+    ]));
+    let text = std::fs::read_to_string(&out).unwrap();
+    // the additional file's light program and SUMO's queueing go with the scenario
+    assert!(text.contains("[[light_programs]]") && text.contains("queue_excess_demand = true"));
+    let runs = |s: &str| mapc_json(&["sim", s, "--seeds", "2", "--json"])["runs"].clone();
+    assert_eq!(runs(out.to_str().unwrap()), runs(cfg));
+}

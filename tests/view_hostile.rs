@@ -104,7 +104,10 @@ fn hostile_net(probe: &Probe) -> String {
         "<edge name=\"{}\" id=\"center\"",
         xml_attr(&format!("{COMMENT} {}", probe.loader()))
     );
-    assert!(net.contains("<edge id=\"center\""), "maps/simple_merge.net.xml");
+    assert!(
+        net.contains("<edge id=\"center\""),
+        "maps/simple_merge.net.xml"
+    );
     net.replace("<edge id=\"center\"", &named)
         .replace("highwayType", &xml_attr(IMG))
         .replace("mergeType", &xml_attr(CLOSE_SCRIPT))

@@ -6,6 +6,20 @@ use mapc_scenario::ResolvedScenario;
 pub enum Command {
     /// Print a scenario with its network summarised and every reference checked.
     Show(ShowArgs),
+    /// Compile a SUMO scenario (`.sumocfg`, or --net with --routes) into a mapc scenario file that every command
+    /// takes.
+    FromSumo(FromSumoArgs),
+}
+
+#[derive(clap::Args)]
+pub struct FromSumoArgs {
+    /// The SUMO configuration (omit with --net).
+    pub config: Option<String>,
+    #[command(flatten)]
+    pub sumo: super::common::SumoInputArgs,
+    /// The scenario file to write (its network is named relative to it).
+    #[arg(short, long)]
+    pub output: std::path::PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -21,7 +35,46 @@ pub struct ShowArgs {
 pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
         Command::Show(a) => show(a),
+        Command::FromSumo(a) => from_sumo(a),
     }
+}
+
+/// The SUMO scenario checked as every command reads it, then written as TOML with its network's path relative to
+/// the output's folder (absolute where it has no relative path).
+fn from_sumo(a: FromSumoArgs) -> anyhow::Result<()> {
+    use std::path::Path;
+    let name = match (&a.config, &a.sumo.net) {
+        (Some(c), _) => c.clone(),
+        (None, Some(_)) => String::new(),
+        (None, None) => anyhow::bail!("give a SUMO configuration, or --net with --routes"),
+    };
+    let rs = super::common::load_scenario_or_sumo(&name, &a.sumo)?;
+    let mut scenario = rs.scenario.clone();
+    if let mapc_scenario::NetworkSpec::Map(net) = &scenario.network {
+        // the network as the scenario file will find it (read, its path is the working folder's)
+        let net = std::fs::canonicalize(net).unwrap_or_else(|_| net.clone());
+        let out_dir = a
+            .output
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let out_dir = std::fs::canonicalize(out_dir).unwrap_or_else(|_| out_dir.to_path_buf());
+        let relative = net
+            .strip_prefix(&out_dir)
+            .map(Path::to_path_buf)
+            .unwrap_or(net);
+        scenario.network = mapc_scenario::NetworkSpec::Map(relative);
+    }
+    scenario.save(&a.output)?;
+    println!(
+        "wrote {}: {} flows, {} vehicle types, {} steps of {} s",
+        a.output.display(),
+        scenario.flows.len(),
+        scenario.vehicle_types.len(),
+        scenario.horizon_steps,
+        scenario.step_s
+    );
+    Ok(())
 }
 
 fn show(a: ShowArgs) -> anyhow::Result<()> {

@@ -150,6 +150,8 @@ impl Scenario {
             initial_vehicles: Some(InitialVehicles { count: 5, vehicle_type: "human".to_string(), speed_mps: 0.0 }),
             control: Some(Control { n_av: 5, region: vec![], window: None, windows: vec![] }),
             measure: None,
+            queue_excess_demand: false,
+            light_programs: Vec::new(),
         }
     }
 
@@ -374,7 +376,7 @@ impl ResolvedScenario {
                     })?
             }
         };
-        ResolvedScenario::on_network(scenario, graph, origin, false)
+        ResolvedScenario::on_network(scenario, graph, origin)
     }
 
     /// A SUMO scenario read ([`sumo::from_sumocfg`], [`sumo::from_files`]) on its network, checked.
@@ -384,7 +386,7 @@ impl ResolvedScenario {
         origin: &str,
     ) -> Result<ResolvedScenario, ScenarioError> {
         check_ranges(&read.scenario, Path::new(origin))?;
-        let mut rs = ResolvedScenario::on_network(read.scenario, read.graph, origin, true)?;
+        let mut rs = ResolvedScenario::on_network(read.scenario, read.graph, origin)?;
         rs.notes.splice(0..0, read.warnings);
         Ok(rs)
     }
@@ -397,17 +399,29 @@ impl ResolvedScenario {
         origin: &str,
     ) -> Result<ResolvedScenario, ScenarioError> {
         check_ranges(&scenario, Path::new(origin))?;
-        ResolvedScenario::on_network(scenario, graph, origin, false)
+        ResolvedScenario::on_network(scenario, graph, origin)
     }
 
     /// Every reference of `scenario` checked against its network `graph`.
     fn on_network(
         scenario: Scenario,
-        graph: LaneGraph,
+        mut graph: LaneGraph,
         origin: &str,
-        queue_excess_demand: bool,
     ) -> Result<ResolvedScenario, ScenarioError> {
         let mut notes = Vec::new();
+        let queue_excess_demand = scenario.queue_excess_demand;
+        for (i, program) in scenario.light_programs.iter().enumerate() {
+            match graph.lights.iter_mut().find(|l| l.id == program.id) {
+                Some(l) => *l = program.clone(),
+                None => {
+                    return Err(ScenarioError::Invalid {
+                        path: PathBuf::from(origin),
+                        key: format!("light_programs[{i}]"),
+                        message: format!("the network has no traffic light `{}`", program.id),
+                    });
+                }
+            }
+        }
         let path = PathBuf::from(origin);
         let invalid = |key: String, message: String| ScenarioError::Invalid {
             path: path.clone(),

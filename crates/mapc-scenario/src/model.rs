@@ -46,6 +46,13 @@ pub struct Scenario {
     /// before, with the default points).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub measure: Option<Measure>,
+    /// Demand above what an entry takes queues there, as SUMO runs it, instead of being refused (a SUMO user's
+    /// scenario).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub queue_excess_demand: bool,
+    /// Fixed-time programs that replace the network's of the same lights (SUMO runs the last program loaded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub light_programs: Vec<mapc_graph::TrafficLight>,
 }
 
 /// Measurement points. Every run reports, per hour of measured time (the horizon after the warm-up), the

@@ -44,7 +44,7 @@ struct Demand<'a> {
 pub fn scenario(
     config: &SumoConfig,
     files: &[SumoElement],
-    graph: &mut LaneGraph,
+    graph: &LaneGraph,
     options: &ReadOptions,
     warnings: &mut Vec<String>,
 ) -> Result<Scenario, SumoError> {
@@ -67,13 +67,9 @@ pub fn scenario(
             d.read_top(e, config, model, options)?;
         }
     }
-    // a program of the additional files replaces the network's (SUMO runs the last one loaded)
-    for light in std::mem::take(&mut d.lights) {
-        if let Some(l) = graph.lights.iter_mut().find(|l| l.id == light.id) {
-            *l = light;
-        }
-    }
-    let graph: &LaneGraph = graph;
+    // a program of the additional files replaces the network's (SUMO runs the last one loaded): the scenario
+    // carries it, and resolving the scenario applies it
+    let lights = std::mem::take(&mut d.lights);
     let mut flows = Vec::new();
     let mut last_departure: f64 = 0.0;
     for e in d.departures.clone() {
@@ -150,6 +146,8 @@ pub fn scenario(
         initial_vehicles: None,
         control: None,
         measure: None,
+        queue_excess_demand: true,
+        light_programs: lights,
     })
 }
 

@@ -120,9 +120,8 @@ fn from_config(config: SumoConfig, options: &ReadOptions) -> Result<FromSumo, Su
             "a SUMO route or additional file",
         )?);
     }
-    let mut graph =
-        mapc_import::import_path(&config.net_file, &mapc_import::ImportOptions::default())?;
-    let scenario = demand::scenario(&config, &files, &mut graph, options, &mut warnings)?;
+    let graph = mapc_import::import_path(&config.net_file, &mapc_import::ImportOptions::default())?;
+    let scenario = demand::scenario(&config, &files, &graph, options, &mut warnings)?;
     Ok(FromSumo {
         scenario,
         graph,

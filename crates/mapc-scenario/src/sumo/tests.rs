@@ -118,8 +118,8 @@ fn a_value_mapc_does_not_simulate_is_refused_with_its_place_and_dropped_when_ski
     );
     // the ramp meter: the additional file's program (`rl`) replaces the network's (`0`), as SUMO runs the last
     let meter = r
-        .graph
-        .lights
+        .scenario
+        .light_programs
         .iter()
         .find(|l| l.id == "ramp_meter")
         .unwrap();

@@ -530,5 +530,7 @@ fn corridor_scenario(
         initial_vehicles: s.initial_vehicles.clone(),
         control: Some(control),
         measure: None,
+        queue_excess_demand: s.queue_excess_demand,
+        light_programs: s.light_programs.clone(),
     }
 }
