@@ -178,6 +178,9 @@ pub fn write_trace_file(
 /// a built-in scenario name (simple_merge).
 pub fn names_scenario(arg: &str) -> bool {
     let path = Path::new(arg);
+    if path.is_file() && mapc_scenario::sumo::is_sumo_config(path) {
+        return true;
+    }
     if path.is_file() {
         return match mapc_graph::filekind::sniff_path(path) {
             Some(kind) => kind == mapc_graph::MapcFile::Scenario,
