@@ -86,16 +86,7 @@ impl Element<'_> {
             .ok_or_else(|| self.err(format!("missing `{key}`")))
     }
     fn num(&self, key: &str) -> Result<Option<f64>, ParseError> {
-        match self.get(key) {
-            None => Ok(None),
-            Some(v) => v
-                .trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .map(Some)
-                .ok_or_else(|| self.err(format!("`{key}` is `{v}`, not a number"))),
-        }
+        crate::sumo_xml::number_attr(key, self.get(key)).map_err(|m| self.err(m))
     }
     fn req_num(&self, key: &str) -> Result<f64, ParseError> {
         self.num(key)?

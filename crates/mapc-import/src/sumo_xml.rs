@@ -27,6 +27,25 @@ impl SumoElement {
             .find(|(k, _)| k == key)
             .map(|(_, v)| v.as_str())
     }
+
+    /// Attribute `key` as a finite number, if given; the message when it is not one.
+    pub fn number(&self, key: &str) -> Result<Option<f64>, String> {
+        number_attr(key, self.get(key))
+    }
+}
+
+/// An attribute's text as a finite number (`None` when absent), or the message naming the attribute and its text.
+pub(crate) fn number_attr(key: &str, text: Option<&str>) -> Result<Option<f64>, String> {
+    match text {
+        None => Ok(None),
+        Some(v) => v
+            .trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .map(Some)
+            .ok_or_else(|| format!("`{key}` is `{v}`, not a number")),
+    }
 }
 
 /// Read `path`, a SUMO XML file whose root element is one of `roots` (`what` names such a file in errors:

@@ -110,16 +110,7 @@ fn speed_factor(text: &str, dev: f64, place: &str) -> Result<(f64, f64), SumoErr
 
 /// A number attribute of `e`, if given.
 pub(super) fn num(e: &SumoElement, key: &str) -> Result<Option<f64>, SumoError> {
-    match e.get(key) {
-        None => Ok(None),
-        Some(v) => v
-            .trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|x| x.is_finite())
-            .map(Some)
-            .ok_or_else(|| SumoError::at(&e.place, format!("`{key}` is `{v}`, not a number"))),
-    }
+    e.number(key).map_err(|m| SumoError::at(&e.place, m))
 }
 
 /// SUMO's default vehicle type (`DEFAULT_VEHTYPE`): a passenger car.
