@@ -58,6 +58,22 @@ const KINDS: &[Kind] = &[
         args: &["window", "{in}", "--all", "-o", "{out}/w.toml"],
     },
     Kind {
+        name: "sumo-routes",
+        seed_file: "scenarios/sumo/highway_ramp/highway-ramp.rou.xml",
+        file_name: "r.rou.xml",
+        text: true,
+        args: &[
+            "sim",
+            "--net",
+            "scenarios/sumo/highway_ramp/highway.net.xml",
+            "--routes",
+            "{in}",
+            "--seeds",
+            "1",
+            "--json",
+        ],
+    },
+    Kind {
         name: "osm-xml",
         seed_file: "maps/a2_braunschweig.osm",
         file_name: "m.osm",

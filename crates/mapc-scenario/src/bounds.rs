@@ -20,6 +20,10 @@ pub const MAX_VEHICLE_STEPS: f64 = 1e9;
 
 /// The most vehicles per hour one entry lane can take: the simulator inserts at most one vehicle per entry lane
 /// and step (SUMO's insertion), so demand above this can only pile up.
+/// Where demand above an entry's capacity queues (a SUMO user's scenario), a flow may still ask for at most this
+/// many vehicles a step: each departure is counted one by one, and no road takes more.
+pub const MOST_QUEUED_VEHICLES_A_STEP: f64 = 64.0;
+
 pub fn entry_capacity_vph(step_s: f64) -> f64 {
     3600.0 / step_s
 }

@@ -575,6 +575,26 @@ impl ResolvedScenario {
                 }
             })
             .collect();
+        // queued demand is still counted departure by departure: a flow past what any road takes is refused
+        let most = bounds::MOST_QUEUED_VEHICLES_A_STEP * 3600.0 / scenario.step_s;
+        if queue_excess_demand
+            && let Some((i, f)) = scenario
+                .flows
+                .iter()
+                .enumerate()
+                .find(|(_, f)| !(f.vehs_per_hour <= most))
+        {
+            return Err(invalid(
+                format!("flows[{i}].vehs_per_hour"),
+                format!(
+                    "flow `{}`: {} veh/h, more than {} vehicles a {} s step, which no road takes",
+                    f.id,
+                    f.vehs_per_hour,
+                    bounds::MOST_QUEUED_VEHICLES_A_STEP,
+                    scenario.step_s
+                ),
+            ));
+        }
         let demand_fits = match bounds::check_demand(&demand, scenario.step_s) {
             Err(r) if queue_excess_demand => {
                 notes.push(format!("{}: {} (they queue, as in SUMO)", r.key, r.message));

@@ -15,6 +15,7 @@ use std::collections::{BTreeMap, BTreeSet, HashMap};
 const DEFAULT_VTYPE: &str = "DEFAULT_VEHTYPE";
 /// A flow with neither `end` nor `number` runs a day (SUMO 1.8).
 const DEFAULT_FLOW_S: f64 = 86_400.0;
+use crate::bounds::MOST_QUEUED_VEHICLES_A_STEP as MOST_VEHICLES_A_STEP;
 /// Without an `end`, a run lasts this long after its last departure (SUMO runs until the network is empty).
 pub const DRAIN_AFTER_LAST_DEPARTURE_S: f64 = 3600.0;
 
@@ -472,6 +473,17 @@ impl<'a> Demand<'a> {
             };
             if flow.number == Some(0) {
                 return Ok((None, 0.0));
+            }
+            // demand above what any road takes queues, but each departure is still counted one by one
+            let most = MOST_VEHICLES_A_STEP * 3600.0 / config.step_s;
+            if !(flow.vehs_per_hour <= most) {
+                return Err(SumoError::at(
+                    &e.place,
+                    format!(
+                        "{:.0} veh/h: more than {MOST_VEHICLES_A_STEP} vehicles a {} s step, which no road takes",
+                        flow.vehs_per_hour, config.step_s
+                    ),
+                ));
             }
             last = if end_s.is_finite() {
                 end_s
