@@ -183,7 +183,7 @@ fn write_sumo_outputs(
     args: &Args,
 ) -> anyhow::Result<RunMetrics> {
     let mut sim = Simulation::from_spec(spec.clone(), seed)?;
-    let mut out = mapc_sim::runs::sumo_outputs::SumoOutputs::new(
+    let mut out = mapc_sumo::run_outputs::SumoOutputs::new(
         &mut sim,
         args.tripinfo_output.is_some(),
         args.summary_output.is_some(),

@@ -289,6 +289,20 @@ impl SimSpec {
                 vehs_per_hour: f.vehs_per_hour,
             })
             .collect();
+        // queued demand is counted departure by departure: bounded all the same
+        let most = mapc_scenario::bounds::MOST_QUEUED_VEHICLES_A_STEP * 3600.0 / self.step_s;
+        if let Some(f) = self
+            .flows
+            .iter()
+            .find(|f| f.queue_excess && !(f.vehs_per_hour <= most))
+        {
+            return Err(SimError::Spec(format!(
+                "flow {}: {} veh/h, more than {} vehicles a step",
+                f.id,
+                f.vehs_per_hour,
+                mapc_scenario::bounds::MOST_QUEUED_VEHICLES_A_STEP
+            )));
+        }
         mapc_scenario::bounds::check_demand(&demand, self.step_s)
             .and_then(|()| {
                 mapc_scenario::bounds::check_horizon(

@@ -81,7 +81,7 @@ fn random_places_best_lanes_and_a_meter_as_sumo_reads_them() {
     let ramp = rs.graph.find_roads("on_ramp").unwrap()[0];
     let mut spec = spec_from_scenario(&rs).unwrap();
     spec.horizon_steps = 300;
-    let (start, dt) = (spec.start_time_s, spec.step_s);
+    let start = spec.start_time_s;
     let mut sim = Simulation::from_spec(spec, 0).unwrap();
     let mut places = Vec::new();
     let mut lanes = std::collections::BTreeSet::new();
@@ -114,7 +114,6 @@ fn random_places_best_lanes_and_a_meter_as_sumo_reads_them() {
         }
         at_meter = now;
     }
-    let _ = dt;
     // inserted along the lane, not only at its start
     assert!(
         places.iter().filter(|&&p| p > 50.0).count() > 10,

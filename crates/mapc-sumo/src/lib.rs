@@ -21,6 +21,7 @@ mod junctions;
 pub mod names;
 pub mod net;
 mod output;
+pub mod run_outputs;
 pub mod xml;
 
 use mapc_graph::LaneGraph;

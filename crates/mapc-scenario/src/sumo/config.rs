@@ -31,8 +31,6 @@ pub struct SumoConfig {
     pub default_car_follow_model: String,
     /// `scale`: demand multiplied by this.
     pub scale: f64,
-    pub tripinfo_output: Option<PathBuf>,
-    pub summary_output: Option<PathBuf>,
     /// Options read but without effect in mapc, one line each.
     pub warnings: Vec<String>,
 }
@@ -53,8 +51,6 @@ impl SumoConfig {
             default_speed_dev: -1.0,
             default_car_follow_model: "Krauss".into(),
             scale: 1.0,
-            tripinfo_output: None,
-            summary_output: None,
             warnings: Vec::new(),
         }
     }
@@ -216,8 +212,11 @@ pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
                     return refuse("vehicles are not rerouted while driving");
                 }
             }
-            "tripinfo-output" => c.tripinfo_output = Some(dir.join(value)),
-            "summary-output" => c.summary_output = Some(dir.join(value)),
+            // written where the run asks for them (`mapc sim --tripinfo-output`), not into the user's folder
+            "tripinfo-output" | "summary-output" => c.warnings.push(format!(
+                "{}: option `{}` not written; `mapc sim --{} FILE` writes it",
+                o.place, o.name, o.name
+            )),
             name if WITHOUT_EFFECT.contains(&name) => {}
             name => c
                 .warnings

@@ -176,16 +176,12 @@ pub fn vtype(
     } else {
         c.speed_dev
     };
-    let (mut speed_factor, mut speed_dev) = match e.get("speedFactor") {
+    let (speed_factor, mut speed_dev) = match e.get("speedFactor") {
         Some(t) => speed_factor(t, dev0, &e.place)?,
         None => (1.0, dev0),
     };
     if let Some(d) = num(e, "speedDev")? {
         speed_dev = d;
-    }
-    if speed_dev == 0.0 {
-        // SUMO draws nothing: the mean is the factor
-        speed_factor = speed_factor.max(0.0);
     }
     let mut t = VehicleType {
         accel: num(e, "accel")?.unwrap_or(c.accel),

@@ -5,5 +5,4 @@
 pub mod regime;
 pub mod replay;
 pub mod scenario;
-pub mod sumo_outputs;
 pub mod trace;

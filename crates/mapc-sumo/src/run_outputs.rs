@@ -1,4 +1,5 @@
-//! SUMO 1.8's `--tripinfo-output` and `--summary-output` files of a run, same elements and attributes, so that
+//! SUMO 1.8's `--tripinfo-output` and `--summary-output` files of a mapc run (watched through the simulator's
+//! public API), same elements and attributes, so that
 //! a SUMO user's scripts read mapc's runs unchanged. Built by watching the run step by step
 //! ([`SumoOutputs::observe`] after each step); vehicles are named as SUMO names a flow's vehicles (`flow.N`),
 //! lanes `edge_index` by the SUMO edge the road came from.
@@ -7,9 +8,9 @@
 //! rerouting, no collisions. `timeLoss` is the trip's time over the time its route takes at the driver's desired
 //! speed (SUMO sums the shortfall step by step; both are the delay behind free flow).
 
-use crate::ids::VehicleId;
-use crate::sim::Simulation;
+use crate::xml::escape as xml_escape;
 use mapc_graph::{LaneGraph, RoadId};
+use mapc_sim::{Simulation, VehicleId};
 use std::collections::HashMap;
 use std::fmt::Write as _;
 
@@ -47,13 +48,6 @@ fn lane_name(g: &LaneGraph, road: RoadId, lane: u8) -> String {
         .and_then(|r| r.provenance.sumo_ids.first().cloned())
         .unwrap_or_else(|| road.to_string());
     format!("{edge}_{lane}")
-}
-
-fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 impl SumoOutputs {
