@@ -310,7 +310,7 @@ impl ResolvedScenario {
                 .flows
                 .iter()
                 .enumerate()
-                .find(|(_, f)| !(f.vehs_per_hour <= most))
+                .find(|(_, f)| f.vehs_per_hour.is_nan() || f.vehs_per_hour > most)
         {
             return Err(invalid(
                 format!("flows[{i}].vehs_per_hour"),
