@@ -207,3 +207,66 @@ fn from_sumo_writes_a_scenario_that_runs_as_the_configuration() {
     let runs = |s: &str| mapc_json(&["sim", s, "--seeds", "2", "--json"])["runs"].clone();
     assert_eq!(runs(out.to_str().unwrap()), runs(cfg));
 }
+
+/// The attributes SUMO 1.8 writes on an induction loop's `<interval>` (read from its own file).
+const E1_ATTRS: [&str; 10] = [
+    "begin",
+    "end",
+    "id",
+    "nVehContrib",
+    "flow",
+    "occupancy",
+    "speed",
+    "harmonicMeanSpeed",
+    "length",
+    "nVehEntered",
+];
+
+#[test]
+fn induction_loops_write_sumos_files_and_their_flows() {
+    let cfg = "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg";
+    let dir = scratch_dir("sumo-detectors");
+    let out = run_mapc(&[
+        "sim",
+        cfg,
+        "--seeds",
+        "1",
+        "--json",
+        "--detector-output",
+        dir.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let detectors = j["detectors"].as_array().unwrap();
+    assert_eq!(detectors.len(), 18);
+    // each loop's file under its own name (the folders of `induction_loop_data/x.xml` dropped), 180 intervals
+    // of 40 s over the 7 200 s run
+    let xml = std::fs::read_to_string(dir.join("outflow_sens_0.xml")).unwrap();
+    assert!(xml.contains("det_e1_file.xsd"), "{xml}");
+    assert_eq!(attrs_of(&xml, "interval"), E1_ATTRS);
+    assert_eq!(xml.matches("<interval ").count(), 180);
+    // the file and the JSON count the same vehicles
+    let passed: u64 = xml
+        .split("nVehContrib=\"")
+        .skip(1)
+        .map(|s| s[..s.find('"').unwrap()].parse::<u64>().unwrap())
+        .sum();
+    let flow = detectors
+        .iter()
+        .find(|d| d["id"] == "outflow_sens_0")
+        .unwrap()["flow"]["mean"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (flow - passed as f64 / 2.0).abs() < 1e-9,
+        "{flow} vs {passed}"
+    );
+    // every ramp vehicle passes both loops of the one-lane passage
+    let of = |id: &str| {
+        detectors.iter().find(|d| d["id"] == id).unwrap()["flow"]["mean"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!((of("passage_sens") - of("passage_queue_sens")).abs() <= 0.5);
+    assert!(of("passage_sens") > 600.0, "{detectors:?}");
+}

@@ -13,9 +13,13 @@ use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scenario file, or a built-in scenario name (simple_merge).
+    /// Scenario file, a SUMO configuration (`.sumocfg`: SUMO then runs it as it is), or a built-in scenario name
+    /// (simple_merge).
     #[arg(long, default_value = super::common::DEFAULT_SCENARIO)]
     pub scenario: String,
+    /// The scenario as the first argument (`mapc bench X.sumocfg`), instead of --scenario.
+    #[arg(value_name = "SCENARIO", conflicts_with = "scenario")]
+    pub input: Option<String>,
     #[command(flatten)]
     pub sumo_input: super::common::SumoInputArgs,
     /// Seeds run one after another on one core for the vehicle-steps figure (1 to 100 000).
@@ -46,11 +50,18 @@ pub struct Args {
     pub train: Option<u64>,
 }
 
+impl Args {
+    fn scenario(&self) -> &str {
+        self.input.as_deref().unwrap_or(&self.scenario)
+    }
+}
+
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(iters) = args.train {
         return bench_training(&args, iters);
     }
-    let rs = super::common::load_scenario_or_sumo(&args.scenario, &args.sumo_input)?;
+    let scenario = args.scenario();
+    let rs = super::common::load_scenario_or_sumo(scenario, &args.sumo_input)?;
     let spec = spec_from_scenario(&rs)?;
 
     let sumo_bin = if args.no_sumo {
@@ -86,7 +97,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let sumo = match &sumo_bin {
         Some(bin) => {
             let dir = std::env::temp_dir().join(format!("mapc-bench-sumo-{}", std::process::id()));
-            let runs = sumo::run_sumo(bin, &rs, &dir, args.sumo_seeds);
+            let input = match &args.sumo_input.net {
+                Some(net) => sumo::SumoInput::Files {
+                    net,
+                    routes: &args.sumo_input.routes,
+                    additional: &args.sumo_input.additional,
+                },
+                None if std::path::Path::new(scenario).is_file()
+                    && mapc_scenario::sumo::is_sumo_config(std::path::Path::new(scenario)) =>
+                {
+                    sumo::SumoInput::Config(std::path::Path::new(scenario))
+                }
+                None => sumo::SumoInput::Export(&rs),
+            };
+            let runs = sumo::run_sumo(bin, input, &dir, args.sumo_seeds);
             std::fs::remove_dir_all(&dir).ok();
             Some(runs?)
         }
@@ -134,7 +158,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.json {
         let sumo_json = match (&sumo, against_sumo) {
             (Some(s), Some((cpu_rate, wall_rate, x_cpu, x_wall, x_run))) => serde_json::json!({
-                "binary": s.binary, "version": s.version, "seeds": s.seeds, "wall_s": s.wall_s,
+                "binary": s.binary, "version": s.version, "input": s.command, "seeds": s.seeds, "wall_s": s.wall_s,
                 "cpu_s": s.cpu_s, "vehicle_steps": s.vehicle_steps, "vehicle_steps_per_cpu_s": cpu_rate,
                 "vehicle_steps_per_s": wall_rate, "peak_rss_mib": s.peak_rss_mib,
                 "mapc_speedup_per_cpu_s": x_cpu, "mapc_speedup_per_wall_s": x_wall,
@@ -173,10 +197,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         match (&sumo, against_sumo) {
             (Some(s), Some((cpu_rate, wall_rate, x_cpu, x_wall, x_run))) => {
                 println!(
-                    "  {} ({}), one core: {} seeds, {:.3} s wall, {:.3} s CPU, {:.3e} vehicle-steps per CPU \
+                    "  {} ({} {}), one core: {} seeds, {:.3} s wall, {:.3} s CPU, {:.3e} vehicle-steps per CPU \
                      second ({:.3e} per wall second); peak memory of a run {:.1} MiB",
                     s.version,
                     s.binary.display(),
+                    s.command,
                     s.seeds,
                     s.wall_s,
                     s.cpu_s,
@@ -215,7 +240,7 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
         [
             "train",
             "--scenario",
-            &args.scenario,
+            &args.scenario(),
             "--reward",
             "outflow",
             "--preset",
@@ -241,7 +266,7 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
     let full = mapc_rl::PpoConfig::default().iterations as f64;
     let per_iter = wall_s / iters as f64;
     let out = serde_json::json!({
-        "scenario": args.scenario,
+        "scenario": args.scenario(),
         "threads": args.threads,
         "iterations": iters,
         "wall_s": wall_s,
@@ -257,7 +282,8 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
     } else {
         println!(
             "training, paper preset, {}: {iters} iterations on {} threads in {wall_s:.2} s wall, {cpu_s:.2} s CPU",
-            args.scenario, args.threads
+            args.scenario(),
+            args.threads
         );
         println!(
             "  per iteration: {per_iter:.3} s wall ({:.3} s rollouts, {:.3} s update), {:.3} s CPU",

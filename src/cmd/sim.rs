@@ -33,6 +33,10 @@ pub struct Args {
     /// Write SUMO's summary file of the first seed's run (`--summary-output` of SUMO 1.8).
     #[arg(long, value_name = "FILE")]
     pub summary_output: Option<PathBuf>,
+    /// Write the induction loops' files of the first seed's run into DIR, each under the name of the file its
+    /// `inductionLoop` names (what SUMO 1.8 writes there).
+    #[arg(long, value_name = "DIR")]
+    pub detector_output: Option<PathBuf>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -56,12 +60,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     // the first seed's run writes the trace or SUMO's outputs (one run, not a second one for them), beside the
     // others
-    let sumo_outputs = args.tripinfo_output.is_some() || args.summary_output.is_some();
+    let sumo_outputs = args.tripinfo_output.is_some()
+        || args.summary_output.is_some()
+        || args.detector_output.is_some();
+    let detector_files: Vec<Option<String>> = rs.detectors.iter().map(|d| d.file.clone()).collect();
     let (first, rest) = pool.install(|| {
         rayon::join(
             || match &args.trace {
                 None if sumo_outputs => {
-                    let m = write_sumo_outputs(&spec, seeds[0], &args)?;
+                    let m = write_sumo_outputs(&spec, seeds[0], &args, &detector_files)?;
                     progress.inc(1);
                     Ok(m)
                 }
@@ -87,13 +94,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     runs.extend(rest?);
     progress.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
-    let s = BaselineReport::of(
-        &rs.origin,
-        args.runs.first_seed,
-        runs,
-        wall_s,
-        &spec.measure_names(),
-    );
+    let s = BaselineReport::of(&rs.origin, args.runs.first_seed, runs, wall_s, &spec);
     // the merges' regime from a few of the same seeds (a second, observed pass: the baseline stays unobserved)
     let regime = mapc_sim::merge_regimes(&spec, &seeds[..seeds.len().min(REGIME_SEEDS)])
         .with_context(|| format!("scenario `{}`: the merges' regime", rs.origin))?;
@@ -155,6 +156,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         for m in &s.merges {
             row(&format!("past {}", m.name), &m.flow, "veh/h");
         }
+        for d in &s.detectors {
+            row(&format!("detector {}", d.id), &d.flow, "veh/h");
+            row("  occupancy", &d.occupancy, "%");
+        }
         // the blocked entries are said above, from every seed
         print_regime_lines(regime.seeds, &regime.merge_lines());
         if let Some(p) = &args.trace {
@@ -181,6 +186,7 @@ fn write_sumo_outputs(
     spec: &mapc_sim::SimSpec,
     seed: u64,
     args: &Args,
+    detector_files: &[Option<String>],
 ) -> anyhow::Result<RunMetrics> {
     let mut sim = Simulation::from_spec(spec.clone(), seed)?;
     let mut out = mapc_sumo::run_outputs::SumoOutputs::new(
@@ -198,6 +204,14 @@ fn write_sumo_outputs(
     ] {
         if let (Some(path), Some(text)) = (path, text) {
             mapc_graph::write_atomically(path, text.as_bytes())
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+    }
+    if let Some(dir) = &args.detector_output {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        for (name, text) in mapc_sumo::run_outputs::detector_files(&sim, detector_files) {
+            let path = dir.join(&name);
+            mapc_graph::write_atomically(&path, text.as_bytes())
                 .with_context(|| format!("writing {}", path.display()))?;
         }
     }

@@ -6,6 +6,8 @@ Per run, from SUMO's summary output and lane-change output, and from mapc's `sim
   trip duration             mean over the arrived (SUMO: the last step's meanTravelTime)
   speed                     mean over the steps with a vehicle of the running vehicles' mean speed
   lane changes / veh        lane changes over inserted vehicles
+  flow at DETECTOR          each induction loop's vehicles passed per hour of the run (SUMO: its own output
+                            files, the nVehContrib of every interval; mapc: `detectors` of `sim --json`)
 """
 import json
 import multiprocessing
@@ -21,6 +23,7 @@ import xml.etree.ElementTree as ET
 import stats
 
 GOALS = (("inserted", 0.01), ("arrived", 0.01), ("duration", 0.03), ("speed", 0.05), ("lane_changes_per_veh", 0.20))
+DETECTOR_GOAL = 0.03
 LABELS = {"inserted": "inserted veh", "arrived": "arrived veh", "duration": "trip duration s",
           "speed": "speed m/s", "lane_changes_per_veh": "lane changes / veh"}
 
@@ -64,9 +67,33 @@ def _sumo_one(job):
         speeds = [float(s.get("meanSpeed")) for s in steps if int(s.get("running")) > 0]
         n_changes = sum(1 for _ in ET.parse(changes).getroot().iter("change"))
         inserted = int(last["inserted"])
-        return dict(seed=seed, inserted=inserted, arrived=int(last["arrived"]),
-                    duration=float(last["meanTravelTime"]), speed=sum(speeds) / max(1, len(speeds)),
-                    lane_changes_per_veh=n_changes / max(1, inserted), teleports=int(last.get("teleports", 0)))
+        run = dict(seed=seed, inserted=inserted, arrived=int(last["arrived"]),
+                   duration=float(last["meanTravelTime"]), speed=sum(speeds) / max(1, len(speeds)),
+                   lane_changes_per_veh=n_changes / max(1, inserted), teleports=int(last.get("teleports", 0)))
+        run.update(detector_flows(os.path.dirname(cfg)))
+        return run
+
+
+def detector_flows(folder):
+    """`det:ID` -> vehicles per hour, from every E1 output file under `folder` (all its intervals)."""
+    passed, span = {}, {}
+    for sub, _, names in os.walk(folder):
+        for n in names:
+            if not n.endswith(".xml"):
+                continue
+            try:
+                root = ET.parse(os.path.join(sub, n)).getroot()
+            except ET.ParseError:
+                continue
+            if root.tag != "detector":
+                continue
+            for i in root.iter("interval"):
+                key = "det:" + i.get("id")
+                passed[key] = passed.get(key, 0) + int(i.get("nVehContrib"))
+                b, e = float(i.get("begin")), float(i.get("end"))
+                lo, hi = span.get(key, (b, e))
+                span[key] = (min(lo, b), max(hi, e))
+    return {k: 3600.0 * passed[k] / max(1e-9, span[k][1] - span[k][0]) for k in passed}
 
 
 def run_sumo(cfg, seeds, end, extra, jobs):
@@ -85,10 +112,13 @@ def run_mapc(mapc, cfg, n, skip):
         raise SystemExit(2)
     d = json.loads(out.stdout)
     runs = []
+    ids = [x["id"] for x in d.get("detectors", [])]
     for r in d["runs"]:
-        runs.append(dict(inserted=r["departed"], arrived=r["arrived"], duration=r["mean_travel_time_s"],
-                         speed=r["avg_speed_mps"], lane_changes_per_veh=r["lane_changes"] / max(1, r["departed"]),
-                         teleports=r.get("teleports", 0)))
+        run = dict(inserted=r["departed"], arrived=r["arrived"], duration=r["mean_travel_time_s"],
+                   speed=r["avg_speed_mps"], lane_changes_per_veh=r["lane_changes"] / max(1, r["departed"]),
+                   teleports=r.get("teleports", 0))
+        run.update({"det:" + i: f for i, f in zip(ids, r.get("detector_flows_veh_h", []))})
+        runs.append(run)
     return runs, d
 
 
@@ -104,14 +134,15 @@ def compare(a, mapc, seeds):
     rows = []
     print("%s, %d seeds (mapc %.1f s, SUMO %.1f s wall on %d processes)" % (cfg, len(seeds), mapc_s, sumo_s, a.jobs))
     print("  %-20s %22s %22s %9s %7s  %s" % ("", "mapc", "SUMO 1.8", "diff", "goal", ""))
-    for key, goal in GOALS:
+    detectors = sorted(k for k in mapc_runs[0] if k.startswith("det:") and all(k in r for r in sumo_runs))
+    for key, goal in list(GOALS) + [(k, DETECTOR_GOAL) for k in detectors]:
         mm, mci, _ = stats.mean_ci([r[key] for r in mapc_runs])
         sm, sci, _ = stats.mean_ci([r[key] for r in sumo_runs])
         diff = (mm - sm) / sm if sm else float("nan")
         ok = abs(diff) <= goal
         rows.append(dict(metric=key, mapc=mm, mapc_ci=mci, sumo=sm, sumo_ci=sci, diff=diff, goal=goal, met=ok))
         print("  %-20s %14.3f ± %-6.3f %14.3f ± %-6.3f %+8.2f%% %6.0f%%  %s" % (
-            LABELS[key], mm, mci, sm, sci, 100 * diff, 100 * goal, "ok" if ok else "MISSED"))
+            LABELS.get(key, "flow at " + key[4:]), mm, mci, sm, sci, 100 * diff, 100 * goal, "ok" if ok else "MISSED"))
     if a.json_out:
         with open(a.json_out, "w") as f:
             json.dump(dict(scenario=cfg, seeds=a.seeds, rows=rows, mapc_runs=mapc_runs, sumo_runs=sumo_runs), f,

@@ -74,7 +74,7 @@ fn simulate(py: Python<'_>, scenario: &str, seeds: u64, first_seed: u64) -> PyRe
         first_seed,
         runs,
         start.elapsed().as_secs_f64(),
-        &spec.measure_names(),
+        &spec,
     );
     serde_json::to_string(&report).map_err(mapc_error)
 }

@@ -119,6 +119,7 @@ impl Scenario {
             measure: None,
             queue_excess_demand: false,
             light_programs: Vec::new(),
+            detectors: Vec::new(),
         }
     }
 

@@ -53,6 +53,36 @@ pub struct Scenario {
     /// Fixed-time programs that replace the network's of the same lights (SUMO runs the last program loaded).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub light_programs: Vec<mapc_graph::TrafficLight>,
+    /// Induction loops (SUMO's `inductionLoop`): each run reports their flow and occupancy.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub detectors: Vec<Detector>,
+}
+
+/// An induction loop (SUMO's E1 detector): a point on one lane that counts the vehicles passing it and the time
+/// it is occupied, over intervals of `period_s`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Detector {
+    pub id: String,
+    /// The road, named as flows name them (a road id, a SUMO edge id, `osm:WAY`).
+    pub road: String,
+    /// Lane index on the road (0: rightmost).
+    #[serde(default)]
+    pub lane: u8,
+    /// Distance from the lane's start (m); negative: from its end, as SUMO reads it.
+    pub pos_m: f64,
+    /// Length of its intervals (s; SUMO's `freq`).
+    pub period_s: f64,
+    /// Move a position off the lane onto its nearest end instead of refusing it (SUMO's `friendlyPos`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub friendly_pos: bool,
+    /// The vehicle types it sees; empty: all.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub vehicle_types: Vec<String>,
+    /// Name of its SUMO output file (SUMO's `file`): `mapc sim --detector-output DIR` writes its intervals to
+    /// that file name inside DIR (the name's folders are dropped).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
 }
 
 /// Measurement points. Every run reports, per hour of measured time (the horizon after the warm-up), the

@@ -25,6 +25,22 @@ pub struct ResolvedScenario {
     pub windows: Vec<ResolvedWindow>,
     /// The merges whose flow every run measures (`measure.merges`, or the region's merges).
     pub measure_junctions: Vec<JunctionId>,
+    /// The induction loops on their roads, positions on the lane.
+    pub detectors: Vec<ResolvedDetector>,
+}
+
+/// An induction loop with its road found and its position on the lane.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedDetector {
+    pub id: String,
+    pub road: RoadId,
+    pub lane: u8,
+    /// From the lane's start, within the lane (m).
+    pub pos_m: f64,
+    pub period_s: f64,
+    pub vehicle_types: Vec<String>,
+    /// The output file's name, folders dropped.
+    pub file: Option<String>,
 }
 
 /// One controlled region of a several-window scenario, its references checked.
@@ -391,7 +407,9 @@ impl ResolvedScenario {
                 .collect::<Result<Vec<_>, _>>()?,
             None => timing::region_merges(&graph, &region_roads),
         };
+        let detectors = resolve_detectors(&scenario, &graph, &invalid)?;
         Ok(ResolvedScenario {
+            detectors,
             scenario,
             graph,
             origin: origin.to_string(),
@@ -404,6 +422,91 @@ impl ResolvedScenario {
             measure_junctions,
         })
     }
+}
+
+/// The induction loops of `scenario` on `graph`: roads, lanes, types and positions checked as SUMO checks them.
+fn resolve_detectors(
+    scenario: &Scenario,
+    graph: &LaneGraph,
+    invalid: &dyn Fn(String, String) -> ScenarioError,
+) -> Result<Vec<ResolvedDetector>, ScenarioError> {
+    let mut seen = std::collections::BTreeSet::new();
+    scenario
+        .detectors
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            let key = |what: &str| format!("detectors[{i}].{what}");
+            if !seen.insert(d.id.as_str()) {
+                return Err(invalid(key("id"), format!("a second detector `{}`", d.id)));
+            }
+            let road = graph
+                .find_roads(&d.road)
+                .map_err(|e| invalid(key("road"), e.to_string()))?[0];
+            let r = graph.road(road).expect("a road found in the graph");
+            if d.lane as usize >= r.lanes.len() {
+                return Err(invalid(
+                    key("lane"),
+                    format!(
+                        "road `{}` has {} lanes, no lane {}",
+                        d.road,
+                        r.lanes.len(),
+                        d.lane
+                    ),
+                ));
+            }
+            let pos = detector_position(d.pos_m, r.length_m, d.friendly_pos)
+                .map_err(|m| invalid(key("pos_m"), m))?;
+            if !(d.period_s > 0.0 && d.period_s.is_finite()) {
+                return Err(invalid(
+                    key("period_s"),
+                    format!("{} s: must be positive", d.period_s),
+                ));
+            }
+            if let Some(t) = d
+                .vehicle_types
+                .iter()
+                .find(|t| !scenario.vehicle_types.contains_key(*t))
+            {
+                return Err(invalid(
+                    key("vehicle_types"),
+                    format!("no vehicle type `{t}`"),
+                ));
+            }
+            Ok(ResolvedDetector {
+                id: d.id.clone(),
+                road,
+                lane: d.lane,
+                pos_m: pos,
+                period_s: d.period_s,
+                vehicle_types: d.vehicle_types.clone(),
+                file: d.file.as_deref().and_then(safe_file_name),
+            })
+        })
+        .collect()
+}
+
+/// Where a detector at `pos_m` lies on a lane of `length` m, as SUMO reads it: negative counts from the end; off
+/// the lane is refused, or moved onto its nearest end with `friendly`.
+pub fn detector_position(pos_m: f64, length: f64, friendly: bool) -> Result<f64, String> {
+    let pos = if pos_m < 0.0 { pos_m + length } else { pos_m };
+    if pos.is_finite() && (0.0..=length).contains(&pos) {
+        return Ok(pos);
+    }
+    if friendly && pos.is_finite() {
+        return Ok(pos.clamp(0.0, length));
+    }
+    Err(format!(
+        "position {pos_m} m is off the {length:.2} m lane (a friendly position moves it onto the lane)"
+    ))
+}
+
+/// The last component of a file name from an input, when it is a plain name (no `..`, no separators left): an
+/// output named by a scenario stays inside the folder it is written to.
+pub fn safe_file_name(name: &str) -> Option<String> {
+    let last = name.rsplit(['/', '\\']).next()?;
+    (!last.is_empty() && last != "." && last != ".." && !last.contains('\0'))
+        .then(|| last.to_string())
 }
 
 /// Every number of `scenario` within its range ([`ranges::check_scenario`]); `path` names the scenario.

@@ -84,9 +84,10 @@ pub mod sim;
 pub mod runs;
 
 pub use demand::vehicle_table::VehicleId;
+pub use measure::detectors::DetectorInterval;
 pub use measure::metrics::{
-    BaselineReport, EntryCounts, EntrySummary, LaneChangeReasons, MeanCi, MergeFlow, RunMetrics,
-    Summary, standstill_lines, t_quantile_975,
+    BaselineReport, DetectorSummary, EntryCounts, EntrySummary, LaneChangeReasons, MeanCi,
+    MergeFlow, RunMetrics, Summary, standstill_lines, t_quantile_975,
 };
 pub use measure::points::{MeasurePoint, Passage};
 pub use models::cf::idm::IdmParams;
@@ -99,7 +100,8 @@ pub use runs::scenario::{run_baseline, run_baseline_spec, spec_from_scenario};
 pub use runs::trace::{MAX_TRACE_ROWS, TraceBudget, TracedRun, trace_run};
 pub use sim::{MergeFoe, Neighbor, SideNeighbors, Simulation, VehicleStatus, VehicleView};
 pub use spec::{
-    ControlWindowSpec, DepartLane, FlowSpec, InitialVehicleSpec, SimSpec, VehicleTypeSpec,
+    ControlWindowSpec, DepartLane, DetectorSpec, FlowSpec, InitialVehicleSpec, SimSpec,
+    VehicleTypeSpec,
 };
 
 /// Header of trace CSV files. `road` is the road (`R3`) or the junction connection (`R1>R2`); `lane` the lane's

@@ -158,6 +158,23 @@ pub struct SimSpec {
     /// A lane's front vehicle that has stood still longer than this is teleported (SUMO's `--time-to-teleport`;
     /// 0: never).
     pub time_to_teleport_s: f64,
+    /// Induction loops: points that count passing vehicles and their occupancy over intervals.
+    pub detectors: Vec<DetectorSpec>,
+}
+
+/// An induction loop (SUMO's E1 detector).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DetectorSpec {
+    pub id: String,
+    pub road: RoadId,
+    /// Lane index on the road (0: rightmost).
+    pub lane: u8,
+    /// Distance of the point from the lane's start (m).
+    pub pos_m: f64,
+    /// Length of the intervals it reports (s).
+    pub period_s: f64,
+    /// The vehicle types it sees (indices in `vehicle_types`); empty: all.
+    pub vehicle_types: Vec<usize>,
 }
 
 /// One window of a several-window scenario.
@@ -318,6 +335,37 @@ impl SimSpec {
                     "initial vehicle {i}: unknown vehicle type index {}",
                     v.vehicle_type
                 )));
+            }
+        }
+        for d in &self.detectors {
+            let bad = |what: String| SimError::Spec(format!("detector `{}`: {what}", d.id));
+            let road = self
+                .graph
+                .road(d.road)
+                .ok_or_else(|| bad(format!("no road {}", d.road)))?;
+            if d.lane as usize >= road.lanes.len() {
+                return Err(bad(format!(
+                    "road {} has no lane {} ({} lanes)",
+                    d.road,
+                    d.lane,
+                    road.lanes.len()
+                )));
+            }
+            if !(0.0..=road.length_m).contains(&d.pos_m) {
+                return Err(bad(format!(
+                    "position {} m is off the lane ({} m)",
+                    d.pos_m, road.length_m
+                )));
+            }
+            if !(d.period_s > 0.0 && d.period_s.is_finite()) {
+                return Err(bad(format!("period {} s", d.period_s)));
+            }
+            if let Some(t) = d
+                .vehicle_types
+                .iter()
+                .find(|&&t| t >= self.vehicle_types.len())
+            {
+                return Err(bad(format!("unknown vehicle type index {t}")));
             }
         }
         Ok(())

@@ -1,4 +1,5 @@
-//! SUMO 1.8's `--tripinfo-output` and `--summary-output` files of a mapc run (watched through the simulator's
+//! SUMO 1.8's `--tripinfo-output` and `--summary-output` files of a mapc run, and its induction loops' files
+//! ([`detector_files`]) (watched through the simulator's
 //! public API), same elements and attributes, so that
 //! a SUMO user's scripts read mapc's runs unchanged. Built by watching the run step by step
 //! ([`SumoOutputs::observe`] after each step); vehicles are named as SUMO names a flow's vehicles (`flow.N`),
@@ -194,4 +195,55 @@ impl SumoOutputs {
             )
         })
     }
+}
+
+/// The induction loops' output files of a finished run, as SUMO 1.8 writes them (`<detector>` of
+/// `<interval .../>`s, two decimals): `(file name, XML)`, one per file name in `files` (each detector's, in the
+/// spec's order; `None`: `detectors.xml`), detectors that share a file interleaved as their intervals end.
+pub fn detector_files(sim: &Simulation, files: &[Option<String>]) -> Vec<(String, String)> {
+    let detectors = &sim.spec().detectors;
+    let name_of = |d: usize| {
+        files
+            .get(d)
+            .cloned()
+            .flatten()
+            .unwrap_or_else(|| "detectors.xml".to_string())
+    };
+    let mut out: Vec<(String, String)> = Vec::new();
+    for d in 0..detectors.len() {
+        let name = name_of(d);
+        if !out.iter().any(|(n, _)| *n == name) {
+            out.push((name, String::new()));
+        }
+    }
+    for i in sim.detector_intervals() {
+        let name = name_of(i.detector);
+        let Some((_, body)) = out.iter_mut().find(|(n, _)| *n == name) else {
+            continue;
+        };
+        let _ = writeln!(
+            body,
+            "    <interval begin=\"{:.2}\" end=\"{:.2}\" id=\"{}\" nVehContrib=\"{}\" flow=\"{:.2}\" \
+             occupancy=\"{:.2}\" speed=\"{:.2}\" harmonicMeanSpeed=\"{:.2}\" length=\"{:.2}\" nVehEntered=\"{}\"/>",
+            i.begin_s,
+            i.end_s,
+            xml_escape(&detectors[i.detector].id),
+            i.vehicles_passed,
+            i.flow_per_hour,
+            i.occupancy_pct,
+            i.mean_speed,
+            i.harmonic_mean_speed,
+            i.mean_length,
+            i.vehicles_entered,
+        );
+    }
+    out.into_iter()
+        .map(|(name, body)| {
+            let xml = format!(
+                "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\n<detector xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" \
+                 xsi:noNamespaceSchemaLocation=\"http://sumo.dlr.de/xsd/det_e1_file.xsd\">\n{body}</detector>\n"
+            );
+            (name, xml)
+        })
+        .collect()
 }

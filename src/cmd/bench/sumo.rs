@@ -1,6 +1,7 @@
-//! SUMO 1.8's command line on the scenario `mapc bench` measures, for the side-by-side speed figure: the scenario
-//! is exported (`mapc_sumo`, as `mapc export --sumo` does) and each seed runs as `sumo -c NAME.sumocfg --seed S
-//! --duration-log.statistics true`; its vehicle-steps are its own count (UPS x duration), its CPU time and peak
+//! SUMO 1.8's command line on the scenario `mapc bench` measures, for the side-by-side speed figure. A SUMO
+//! user's scenario runs as the user runs it (`sumo -c X.sumocfg`, or `sumo -n N -r R -a A`); a mapc scenario is
+//! exported first (`mapc_sumo`, as `mapc export --sumo` does). Each seed runs with `--seed S
+//! --duration-log.statistics true` (and no schema validation); its vehicle-steps are SUMO's own count (UPS x duration), its CPU time and peak
 //! memory the kernel's for the child process.
 
 use anyhow::{Context, bail};
@@ -13,6 +14,8 @@ pub struct SumoRuns {
     pub binary: PathBuf,
     /// First line of `sumo --version`.
     pub version: String,
+    /// SUMO's input options, as run (`-c CFG`, or `-n NET -r R`).
+    pub command: String,
     pub seeds: u64,
     pub wall_s: f64,
     /// User + system CPU time of the SUMO processes.
@@ -71,10 +74,25 @@ fn package_binary(launcher: &Path) -> Option<PathBuf> {
     found.pop()
 }
 
-/// Export `rs` into `dir` and run SUMO on seeds `0..seeds`, one after another.
+/// What SUMO runs: the user's own files, or mapc's export of a scenario.
+pub enum SumoInput<'a> {
+    /// `sumo -c CFG`.
+    Config(&'a Path),
+    /// `sumo -n NET -r R1,R2 -a A1`.
+    Files {
+        net: &'a Path,
+        routes: &'a [PathBuf],
+        additional: &'a [PathBuf],
+    },
+    /// A mapc scenario, exported into the working folder first.
+    Export(&'a mapc_scenario::ResolvedScenario),
+}
+
+/// Run SUMO on `input` for seeds `0..seeds`, one after another, in the working folder `dir` (an export is written
+/// there).
 pub fn run_sumo(
     sumo: &Path,
-    rs: &mapc_scenario::ResolvedScenario,
+    input: SumoInput<'_>,
     dir: &Path,
     seeds: u64,
 ) -> anyhow::Result<SumoRuns> {
@@ -88,26 +106,56 @@ pub fn run_sumo(
         .unwrap_or("")
         .trim()
         .to_string();
-    let summary = mapc_sumo::export_scenario(rs, dir)?;
-    let cfg = summary
-        .files
-        .iter()
-        .find(|f| f.ends_with(".sumocfg"))
-        .context("the export wrote no .sumocfg")?;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let joined = |ps: &[PathBuf]| {
+        ps.iter()
+            .map(|p| absolute(p).display().to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let files: Vec<String> = match input {
+        SumoInput::Config(cfg) => vec!["-c".into(), absolute(cfg).display().to_string()],
+        SumoInput::Files {
+            net,
+            routes,
+            additional,
+        } => {
+            let mut v = vec!["-n".into(), absolute(net).display().to_string()];
+            v.extend(["-r".into(), joined(routes)]);
+            if !additional.is_empty() {
+                v.extend(["-a".into(), joined(additional)]);
+            }
+            v
+        }
+        SumoInput::Export(rs) => {
+            let summary = mapc_sumo::export_scenario(rs, dir)?;
+            let cfg = summary
+                .files
+                .iter()
+                .find(|f| f.ends_with(".sumocfg"))
+                .context("the export wrote no .sumocfg")?;
+            vec!["-c".into(), cfg.clone()]
+        }
+    };
+    let shown = files.join(" ");
     let before = children_usage();
     let start = std::time::Instant::now();
     let mut vehicle_steps = 0.0;
     for seed in 0..seeds {
         let out = Command::new(sumo)
             .current_dir(dir)
-            .args(["-c", cfg, "--seed", &seed.to_string()])
+            .args(&files)
+            .args(["--seed", &seed.to_string()])
             .args(["--duration-log.statistics", "true", "--no-step-log", "true"])
+            // schema checks would fetch sumo.dlr.de's schemas: no network needed, and less load time charged
+            .args(["--xml-validation", "never", "--xml-validation.net", "never"])
             .output()
             .with_context(|| format!("running {}", sumo.display()))?;
         let text = String::from_utf8_lossy(&out.stdout);
         if !out.status.success() {
             bail!(
-                "{} -c {cfg} --seed {seed} failed ({}): {}",
+                "{} {shown} --seed {seed} failed ({}): {}",
                 sumo.display(),
                 out.status,
                 String::from_utf8_lossy(&out.stderr).trim()
@@ -125,6 +173,7 @@ pub fn run_sumo(
     Ok(SumoRuns {
         binary: sumo.to_path_buf(),
         version,
+        command: shown,
         seeds,
         wall_s,
         cpu_s: after.0 - before.0,

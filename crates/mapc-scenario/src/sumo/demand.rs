@@ -36,6 +36,8 @@ struct Demand<'a> {
     departures: Vec<&'a SumoElement>,
     /// Static light programs of the additional files, in file order (the last of a light runs, as in SUMO).
     lights: Vec<mapc_graph::TrafficLight>,
+    /// Induction loops, in file order.
+    detectors: Vec<crate::model::Detector>,
     /// Kinds of element or attribute dropped, once each.
     skipped: BTreeSet<String>,
 }
@@ -61,11 +63,12 @@ pub fn scenario(
         routes: HashMap::new(),
         departures: Vec::new(),
         lights: Vec::new(),
+        detectors: Vec::new(),
         skipped: BTreeSet::new(),
     };
     for f in files {
         for e in &f.children {
-            d.read_top(e, config, model, options)?;
+            d.read_top(e, config, graph, model, options)?;
         }
     }
     // a program of the additional files replaces the network's (SUMO runs the last one loaded): the scenario
@@ -149,6 +152,73 @@ pub fn scenario(
         measure: None,
         queue_excess_demand: true,
         light_programs: lights,
+        detectors: std::mem::take(&mut d.detectors),
+    })
+}
+
+/// An `inductionLoop` (or `e1Detector`) as SUMO 1.8 reads it: `id`, `lane`, `pos`, `freq` (`period` in later
+/// SUMO), `file`, `friendlyPos`, `vTypes`.
+fn induction_loop(e: &SumoElement, graph: &LaneGraph) -> Result<crate::model::Detector, SumoError> {
+    let need = |key: &str| {
+        e.get(key)
+            .ok_or_else(|| SumoError::at(&e.place, format!("<{}> without `{key}`", e.name)))
+    };
+    let id = need("id")?.to_string();
+    let lane_id = need("lane")?;
+    let (edge, index) = lane_id
+        .rsplit_once('_')
+        .and_then(|(edge, i)| Some((edge, i.parse::<u8>().ok()?)))
+        .ok_or_else(|| {
+            SumoError::at(
+                &e.place,
+                format!("`{lane_id}` is not a lane id (EDGE_INDEX)"),
+            )
+        })?;
+    let road = graph
+        .find_roads(edge)
+        .map_err(|_| SumoError::at(&e.place, format!("the network has no lane `{lane_id}`")))?[0];
+    let r = graph.road(road).expect("a road found in the graph");
+    if index as usize >= r.lanes.len() {
+        return Err(SumoError::at(
+            &e.place,
+            format!("the network has no lane `{lane_id}`"),
+        ));
+    }
+    let pos_m =
+        num(e, "pos")?.ok_or_else(|| SumoError::at(&e.place, "<inductionLoop> without `pos`"))?;
+    let friendly_pos = match e.get("friendlyPos") {
+        None => false,
+        Some(v) => crate::sumo::config::sumo_bool(v).ok_or_else(|| {
+            SumoError::at(&e.place, format!("friendlyPos=\"{v}\" is not a boolean"))
+        })?,
+    };
+    crate::resolved::detector_position(pos_m, r.length_m, friendly_pos)
+        .map_err(|m| SumoError::at(&e.place, m))?;
+    let period_s = match (num(e, "freq")?, num(e, "period")?) {
+        (Some(f), None) | (None, Some(f)) => f,
+        (Some(_), Some(_)) => {
+            return Err(SumoError::at(&e.place, "both `freq` and `period`"));
+        }
+        (None, None) => return Err(SumoError::at(&e.place, "<inductionLoop> without `freq`")),
+    };
+    if !(period_s > 0.0 && period_s.is_finite()) {
+        return Err(SumoError::at(
+            &e.place,
+            format!("freq=\"{period_s}\" must be positive"),
+        ));
+    }
+    Ok(crate::model::Detector {
+        id,
+        road: edge.to_string(),
+        lane: index,
+        pos_m,
+        period_s,
+        friendly_pos,
+        vehicle_types: e
+            .get("vTypes")
+            .map(|t| t.split_whitespace().map(str::to_string).collect())
+            .unwrap_or_default(),
+        file: Some(need("file")?.to_string()),
     })
 }
 
@@ -198,6 +268,7 @@ impl<'a> Demand<'a> {
         &mut self,
         e: &'a SumoElement,
         config: &SumoConfig,
+        graph: &LaneGraph,
         model: CarFollowModel,
         options: &ReadOptions,
     ) -> Result<(), SumoError> {
@@ -311,8 +382,14 @@ impl<'a> Demand<'a> {
                 });
             }
             "inductionLoop" | "e1Detector" => {
-                self.skipped
-                    .insert("induction loops (their output files are not written yet)".into());
+                let d = induction_loop(e, graph)?;
+                if self.detectors.iter().any(|o| o.id == d.id) {
+                    return Err(SumoError::at(
+                        &e.place,
+                        format!("a second detector `{}`", d.id),
+                    ));
+                }
+                self.detectors.push(d);
             }
             other => self.unsupported(e, format!("<{other}>"), options)?,
         }

@@ -92,13 +92,20 @@ fn a_value_mapc_does_not_simulate_is_refused_with_its_place_and_dropped_when_ski
         w.contains("<timedEvent>") && w.contains("departPos=\"free\""),
         "{w}"
     );
-    // ramp_metering_1x3 reads as it is: its light, random places, best lanes; only its detectors are skipped
+    // ramp_metering_1x3 reads as it is: its light, random places, best lanes, its induction loops
     let cfg = shipped("ramp_metering_1x3/1ramp_1x3.sumocfg");
     let r = from_sumocfg(&cfg, &ReadOptions::default()).unwrap();
-    let w = r.warnings.join("\n");
-    assert!(
-        w.contains("induction loops") && !w.contains("tlLogic"),
-        "{w}"
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    assert_eq!(r.scenario.detectors.len(), 18);
+    let d = &r.scenario.detectors[0];
+    assert_eq!(
+        (d.id.as_str(), d.road.as_str(), d.lane, d.pos_m, d.period_s),
+        ("bottle_neck_sens_0", "acceleration_area", 0, 58.75, 40.0)
+    );
+    // its `file` keeps the name; resolving drops the folders
+    assert_eq!(
+        d.file.as_deref(),
+        Some("induction_loop_data//bottle_neck_sens_0.xml")
     );
     // no end: the last departure and an hour to drain
     assert_eq!(r.scenario.horizon_steps, 7200);
@@ -271,6 +278,31 @@ fn bad_demand_is_refused_with_file_line_and_element() {
             r#"<routes><vType id="a" speedFactor="fast"/></routes>"#,
             "speedFactor `fast`",
         ),
+        (
+            "loop_lane",
+            r#"<routes><inductionLoop id="d" lane="M1_7" pos="10" freq="60" file="d.xml"/></routes>"#,
+            "in <inductionLoop id=\"d\">: the network has no lane `M1_7`",
+        ),
+        (
+            "loop_pos",
+            r#"<routes><inductionLoop id="d" lane="M1_0" pos="500" freq="60" file="d.xml"/></routes>"#,
+            "position 500 m is off the 192.91 m lane",
+        ),
+        (
+            "loop_freq",
+            r#"<routes><inductionLoop id="d" lane="M1_0" pos="10" file="d.xml"/></routes>"#,
+            "<inductionLoop> without `freq`",
+        ),
+        (
+            "loop_file",
+            r#"<routes><inductionLoop id="d" lane="M1_0" pos="10" freq="60"/></routes>"#,
+            "without `file`",
+        ),
+        (
+            "loop_twice",
+            r#"<routes><inductionLoop id="d" lane="M1_0" pos="10" freq="60" file="a"/><inductionLoop id="d" lane="M1_1" pos="10" freq="60" file="a"/></routes>"#,
+            "a second detector `d`",
+        ),
     ];
     for (tag, routes, expected) in cases {
         let e = refusal(tag, routes);
@@ -323,4 +355,25 @@ fn options_mapc_does_not_simulate_are_refused_by_name() {
         e.contains("missing.rou.xml") && e.contains("not a file"),
         "{e}"
     );
+}
+
+#[test]
+fn induction_loops_read_as_sumo_places_them() {
+    // a negative position counts from the lane's end; a friendly one off the lane goes to its end
+    let routes = r#"<routes><flow id="f" from="M1" to="M3" vehsPerHour="900"/>
+<inductionLoop id="back" lane="M1_1" pos="-12.91" freq="30" file="out/../../d.xml" vTypes="DEFAULT_VEHTYPE"/>
+<e1Detector id="far" lane="M1_0" pos="900" friendlyPos="true" period="60" file="e.xml"/></routes>"#;
+    let dir = with_files("loops", &[("r.rou.xml", routes), ("s.sumocfg", CFG)]);
+    let r = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default()).unwrap();
+    let rs = ResolvedScenario::from_sumo(r, "s.sumocfg").unwrap();
+    let [back, far] = &rs.detectors[..] else {
+        panic!("{:?}", rs.detectors)
+    };
+    assert!((back.pos_m - 180.0).abs() < 1e-9, "{back:?}");
+    assert_eq!((back.lane, back.period_s), (1, 30.0));
+    assert_eq!(back.vehicle_types, ["DEFAULT_VEHTYPE"]);
+    // an output named by the file stays in the output folder: its folders are dropped
+    assert_eq!(back.file.as_deref(), Some("d.xml"));
+    assert!((far.pos_m - 192.91).abs() < 1e-9, "{far:?}");
+    assert_eq!(far.period_s, 60.0);
 }

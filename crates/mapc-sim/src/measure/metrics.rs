@@ -48,6 +48,12 @@ pub struct RunMetrics {
     /// (a gridlock that a run without teleports would otherwise hide).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub stuck: u64,
+    /// Per induction loop (the spec's `detectors`, in order), vehicles passed whole per hour of measured time.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub detector_flows_veh_h: Vec<f64>,
+    /// The same loops' occupancy over the measured time (per cent).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub detector_occupancy_pct: Vec<f64>,
 }
 
 /// Lines for people when vehicles were teleported or stood still to the end in some run, said before any figure.
@@ -316,8 +322,19 @@ pub struct BaselineReport {
     pub lane_changes_per_veh_km: MeanCi,
     /// Per entry road, its demand over the run and what it took (mean over seeds).
     pub entries: Vec<EntrySummary>,
+    /// Per induction loop, its flow (vehicles passed whole per hour of measured time) and occupancy (%).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub detectors: Vec<DetectorSummary>,
     pub wall_s: f64,
     pub runs: Vec<RunMetrics>,
+}
+
+/// One induction loop over seeds.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DetectorSummary {
+    pub id: String,
+    pub flow: MeanCi,
+    pub occupancy: MeanCi,
 }
 
 /// The flow past one measured merge over seeds.
@@ -334,8 +351,9 @@ impl BaselineReport {
         first_seed: u64,
         runs: Vec<RunMetrics>,
         wall_s: f64,
-        merge_names: &[String],
+        spec: &crate::spec::SimSpec,
     ) -> BaselineReport {
+        let merge_names = spec.measure_names();
         let s = Summary::of(&runs);
         let merges = s
             .merge_flows
@@ -366,6 +384,29 @@ impl BaselineReport {
             lane_changes,
             lane_changes_per_veh_km,
             entries: EntrySummary::of(&runs),
+            detectors: spec
+                .detectors
+                .iter()
+                .enumerate()
+                .map(|(i, d)| {
+                    let at = |v: &Vec<f64>| v.get(i).copied().unwrap_or(f64::NAN);
+                    DetectorSummary {
+                        id: d.id.clone(),
+                        flow: MeanCi::of(
+                            &runs
+                                .iter()
+                                .map(|r| at(&r.detector_flows_veh_h))
+                                .collect::<Vec<_>>(),
+                        ),
+                        occupancy: MeanCi::of(
+                            &runs
+                                .iter()
+                                .map(|r| at(&r.detector_occupancy_pct))
+                                .collect::<Vec<_>>(),
+                        ),
+                    }
+                })
+                .collect(),
             wall_s,
             runs,
         }

@@ -7,7 +7,7 @@ use crate::measure::points::MeasurePoint;
 use crate::network::Network;
 use crate::sim::Simulation;
 use crate::spec::{
-    DEPART_SPEED_DESIRED, DEPART_SPEED_MAX, DepartLane, DepartPos, FlowSpec, SimSpec,
+    DEPART_SPEED_DESIRED, DEPART_SPEED_MAX, DepartLane, DepartPos, DetectorSpec, FlowSpec, SimSpec,
     VehicleTypeSpec,
 };
 use mapc_graph::RoadId;
@@ -21,6 +21,35 @@ const KRAUSS_SIGMA: f64 = 0.5;
 /// The original rollouts ran two steps (start, and the reset that inserts the initial vehicles) before the
 /// horizon; the clock at step 0 is two steps in.
 const SETUP_STEPS: f64 = 2.0;
+
+/// The scenario's induction loops on its roads.
+fn detector_specs(rs: &ResolvedScenario, types: &[&String]) -> Result<Vec<DetectorSpec>, SimError> {
+    rs.detectors
+        .iter()
+        .map(|d| {
+            let vehicle_types = d
+                .vehicle_types
+                .iter()
+                .map(|t| {
+                    types.iter().position(|n| *n == t).ok_or_else(|| {
+                        SimError::Spec(format!(
+                            "{}: detector `{}`: no vehicle type `{t}`",
+                            rs.origin, d.id
+                        ))
+                    })
+                })
+                .collect::<Result<_, _>>()?;
+            Ok(DetectorSpec {
+                id: d.id.clone(),
+                road: d.road,
+                lane: d.lane,
+                pos_m: d.pos_m,
+                period_s: d.period_s,
+                vehicle_types,
+            })
+        })
+        .collect()
+}
 
 /// The simulator's description of a resolved scenario.
 pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
@@ -161,6 +190,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
     }
     let step_s = sc.step_s;
     Ok(SimSpec {
+        detectors: detector_specs(rs, &names)?,
         time_to_teleport_s: sc.time_to_teleport_s.unwrap_or(0.0),
         graph: rs.graph.clone(),
         vehicle_types,

@@ -71,6 +71,16 @@ impl Simulation {
                     self.veh[id as usize].waiting_s > mapc_scenario::SUMO_TIME_TO_TELEPORT_S
                 })
                 .count() as u64,
+            detector_flows_veh_h: self
+                .detectors
+                .totals(self.time_s - self.spec.start_time_s)
+                .map(|(passed, _)| 3600.0 * passed as f64 / secs)
+                .collect(),
+            detector_occupancy_pct: self
+                .detectors
+                .totals(self.time_s - self.spec.start_time_s)
+                .map(|(_, occupied)| 100.0 * occupied / secs)
+                .collect(),
         }
     }
 

@@ -98,6 +98,8 @@ pub struct Simulation {
     main_line: Vec<(LaneIdx, f64)>,
     metrics: MetricsAcc,
     measure: MeasureAcc,
+    /// The induction loops and their intervals.
+    detectors: crate::measure::detectors::Detectors,
     check_invariants: bool,
     /// Longest vehicle of any type (m).
     max_length: f64,
@@ -183,6 +185,22 @@ impl Simulation {
             main_line: Vec::new(),
             metrics: MetricsAcc::default(),
             measure: MeasureAcc::new(&net, &spec.measure_points, None),
+            detectors: crate::measure::detectors::Detectors::new(
+                &spec.detectors,
+                &spec
+                    .detectors
+                    .iter()
+                    .map(|d| {
+                        let r = net
+                            .road_ids
+                            .iter()
+                            .position(|&id| id == d.road)
+                            .unwrap_or(0);
+                        (net.road_lanes[r][d.lane as usize], r)
+                    })
+                    .collect::<Vec<_>>(),
+                0.0,
+            ),
             check_invariants: cfg!(debug_assertions),
             max_length: spec
                 .vehicle_types
@@ -404,6 +422,7 @@ impl Simulation {
         if self.step == self.spec.warmup_steps {
             self.metrics = MetricsAcc::default();
             self.measure.reset();
+            self.detectors.reset(self.time_s - self.spec.start_time_s);
         }
         // Metrics see the network as it is before the step (as the original rollouts did).
         let mut n = 0u64;
@@ -455,6 +474,9 @@ impl Simulation {
         self.teleport_stuck();
         if self.net.multi_lane {
             self.change_lanes();
+        }
+        if !self.detectors.is_empty() {
+            self.observe_detectors();
         }
         self.time_s += self.spec.step_s;
         self.step += 1;

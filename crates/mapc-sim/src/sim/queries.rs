@@ -111,6 +111,12 @@ impl Simulation {
         &self.arrived_last
     }
 
+    /// The induction loops' completed intervals, in order of completion (the last, partial ones once the run is
+    /// done), on the run's clock (0 at its begin).
+    pub fn detector_intervals(&self) -> &[crate::measure::detectors::DetectorInterval] {
+        self.detectors.intervals()
+    }
+
     /// Ids of vehicles that entered the network in the last step.
     pub fn departed_last_step(&self) -> &[VehicleId] {
         &self.departed_last

@@ -1,10 +1,11 @@
 //! One step's phases, in the order [`super::Simulation::step`] runs them: every vehicle's plan (safe speed and
 //! link requests, [`planning`], looking ahead with [`lookahead`]), right of way at the junctions ([`junction`]),
-//! the moves front to back ([`moves`]), and the lane-change pass ([`lane_change`], seeing neighbours through
-//! [`side_lanes`]).
+//! the moves front to back ([`moves`]), the lane-change pass ([`lane_change`], seeing neighbours through
+//! [`side_lanes`]), and what the induction loops saw ([`detection`]).
 
 use super::*;
 
+pub(in crate::sim) mod detection;
 pub(in crate::sim) mod junction;
 pub(in crate::sim) mod lane_change;
 #[cfg(test)]

@@ -1,0 +1,45 @@
+//! The induction loops' view of a step ([`crate::measure::detectors`]): after the moves and the lane changes,
+//! each detector is shown the vehicles on its lane and the ones it was tracking, wherever they went.
+
+use super::*;
+use crate::measure::detectors::Seen;
+
+impl Simulation {
+    pub(in crate::sim) fn observe_detectors(&mut self) {
+        let t = self.time_s - self.spec.start_time_s;
+        let dt = self.spec.step_s;
+        let mut on_lane = Vec::new();
+        let mut tracked = Vec::new();
+        for d in 0..self.detectors.len() {
+            let types = &self.spec.detectors[d].vehicle_types;
+            let seen = |id: VehicleId| {
+                let v = &self.veh[id as usize];
+                Seen {
+                    id,
+                    lane: v.lane,
+                    road: self.net.road_of(v.lane),
+                    pos: v.pos,
+                    speed: v.speed,
+                    length: v.length,
+                    odometer: v.distance_m,
+                    active: v.status == VehicleStatus::Active,
+                }
+            };
+            on_lane.clear();
+            on_lane.extend(
+                self.lane_veh[self.detectors.lane(d) as usize]
+                    .iter()
+                    .filter(|&&id| {
+                        types.is_empty() || types.contains(&(self.veh[id as usize].vtype as usize))
+                    })
+                    .map(|&id| seen(id)),
+            );
+            tracked.clear();
+            tracked.extend(self.detectors.tracked(d).map(seen));
+            self.detectors.observe(d, t, dt, &on_lane, &tracked);
+        }
+        if self.step + 1 == self.spec.warmup_steps + self.spec.horizon_steps {
+            self.detectors.close(t + dt);
+        }
+    }
+}
