@@ -9,12 +9,30 @@ use mapc_rl::checkpoint::policy_file;
 use mapc_rl::eval::{EvalRequest, FigureSet, evaluate};
 use mapc_rl::rollout::ActionMode;
 
+mod alinea;
+
+/// A controller evaluated in place of a policy.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum Controller {
+    /// ALINEA ramp metering on a traffic light, from downstream detectors' occupancy.
+    Alinea,
+}
+
 /// Evaluate a policy: mean and 95% CI of outflow, inflow and speed, and a Welch t-test against the humans.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Policy: a checkpoint file (policies/*.json) or a run directory of `mapc train`.
-    #[arg(long)]
-    pub policy: PathBuf,
+    #[arg(
+        long,
+        required_unless_present = "controller",
+        conflicts_with = "controller"
+    )]
+    pub policy: Option<PathBuf>,
+    /// A controller instead of a policy: `alinea` (ramp metering of a scenario's traffic light).
+    #[arg(long, value_enum)]
+    pub controller: Option<Controller>,
+    #[command(flatten)]
+    pub alinea: alinea::AlineaArgs,
     /// Scenario: `simple_merge` or a scenario file (a window from `mapc window` for zero-shot transfer).
     #[arg(long, default_value = "simple_merge")]
     pub scenario: String,
@@ -45,7 +63,21 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     super::common::set_global_threads(args.runs.threads);
-    let file = policy_file(&args.policy);
+    if let Some(Controller::Alinea) = args.controller {
+        let sc = super::common::load_run_scenario(&args.scenario)?;
+        return alinea::run(
+            &args.scenario,
+            &sc.spec,
+            &args.runs.seeds(),
+            &args.alinea,
+            args.json,
+        );
+    }
+    let policy = args
+        .policy
+        .clone()
+        .expect("clap requires --policy without --controller");
+    let file = policy_file(&policy);
     let mut ck = Checkpoint::load(&file)?;
     if let Some(rule) = args.deploy {
         ck.spec.deploy = Some(rule);
@@ -199,8 +231,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     println!("  {:.1} s wall", report.wall_s);
     // a run directory means its last checkpoint; its best policy is a file beside it (a hint: a best.json that
     // cannot be read is named, and the evaluation above stands)
-    let best = mapc_rl::checkpoint::best_path(&args.policy);
-    if args.policy.is_dir() && best.exists() {
+    let best = mapc_rl::checkpoint::best_path(&policy);
+    if policy.is_dir() && best.exists() {
         match Checkpoint::load(&best) {
             Ok(Checkpoint {
                 selected: Some(sel),

@@ -1,7 +1,8 @@
 //! Runs built on the simulator: a scenario turned into a simulation spec and run over many seeds
-//! ([`scenario`]), the merges' regimes ([`regime`]), traces ([`trace`]) and replays of SUMO's states
-//! ([`replay`]).
+//! ([`scenario`]), the merges' regimes ([`regime`]), traces ([`trace`]), replays of SUMO's states
+//! ([`replay`]), and ramp metering by ALINEA ([`alinea`]).
 
+pub mod alinea;
 pub mod regime;
 pub mod replay;
 pub mod scenario;

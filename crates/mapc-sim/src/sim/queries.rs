@@ -111,6 +111,45 @@ impl Simulation {
         &self.arrived_last
     }
 
+    /// The index of the traffic light `id` (its SUMO id).
+    pub fn light_index(&self, id: &str) -> Option<usize> {
+        self.net.lights.iter().position(|l| l.id == id)
+    }
+
+    /// The program light `index` runs now.
+    pub fn light(&self, index: usize) -> Option<&mapc_graph::TrafficLight> {
+        self.net.lights.get(index)
+    }
+
+    /// Light `index` runs `phases` from now on, its cycle starting at this step (a controller's program, as
+    /// SUMO's TraCI `setProgramLogic`). Phases need positive durations and one letter per controlled link.
+    pub fn set_light_phases(
+        &mut self,
+        index: usize,
+        phases: Vec<mapc_graph::SignalPhase>,
+    ) -> Result<(), SimError> {
+        let now = self.time_s - self.spec.start_time_s;
+        let light = self
+            .net
+            .lights
+            .get_mut(index)
+            .ok_or_else(|| SimError::Spec(format!("no traffic light {index}")))?;
+        let links = light.phases.first().map_or(0, |p| p.state.len());
+        if phases.is_empty()
+            || phases.iter().any(|p| {
+                !(p.duration_s > 0.0 && p.duration_s.is_finite()) || p.state.len() != links
+            })
+        {
+            return Err(SimError::Spec(format!(
+                "light `{}`: a program needs phases of positive duration with {links} letters each",
+                light.id
+            )));
+        }
+        light.phases = phases;
+        light.offset_s = now;
+        Ok(())
+    }
+
     /// The induction loops' completed intervals, in order of completion (the last, partial ones once the run is
     /// done), on the run's clock (0 at its begin).
     pub fn detector_intervals(&self) -> &[crate::measure::detectors::DetectorInterval] {

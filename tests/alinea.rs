@@ -1,0 +1,71 @@
+//! `mapc eval --controller alinea`: ramp metering on a SUMO user's scenario with its own meter and detectors,
+//! reported beside the humans; a set-point, light or detector that does not hold is refused with exit 2.
+
+mod common;
+use common::*;
+
+const RAMP_METERING: &str = "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg";
+
+#[test]
+fn alinea_meters_the_scenarios_own_light_from_the_loops_past_the_merge() {
+    let j = mapc_json(&[
+        "eval",
+        "--controller",
+        "alinea",
+        "--scenario",
+        RAMP_METERING,
+        "--seeds",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(j["light"], "ramp_meter");
+    // the loops on the acceleration area, past the merge (not the ramp's own passage loops)
+    let detectors: Vec<&str> = j["detectors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        detectors,
+        [
+            "bottle_neck_sens_0",
+            "bottle_neck_sens_1",
+            "bottle_neck_sens_2",
+            "bottle_neck_sens_3"
+        ]
+    );
+    let rate = j["mean_rate_veh_h"].as_f64().unwrap();
+    assert!((200.0..=1800.0).contains(&rate), "{j}");
+    // the same seeds' humans run under the scenario's fixed program
+    assert_eq!(j["humans"]["outflow"]["n"], 2);
+    assert!(j["alinea"]["outflow"]["mean"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn a_bad_alinea_setting_is_refused_with_exit_2() {
+    for (flag, value, expected) in [
+        ("--alinea-setpoint", "1.5", "set-point 1.5 is not in (0, 1)"),
+        ("--alinea-light", "nope", "no traffic light `nope`"),
+        ("--alinea-detectors", "gone", "no detector `gone`"),
+    ] {
+        refused(
+            &[
+                "eval",
+                "--controller",
+                "alinea",
+                "--scenario",
+                RAMP_METERING,
+                "--seeds",
+                "1",
+                flag,
+                value,
+            ],
+            &[expected],
+        );
+    }
+    refused(
+        &["eval", "--controller", "alinea", "--seeds", "1"],
+        &["no traffic light to meter"],
+    );
+}
