@@ -92,3 +92,59 @@ fn the_page_plays_in_chromium_and_draws_vehicles_moving() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A SUMO user's ramp meter in the page: the bar at its stop line is green in the program's green phase and
+/// red in its red one (G 5 s / r 5 s from the run's begin, two set-up steps before the first frame), and the
+/// page knows each type's length (trucks are drawn longer).
+#[test]
+fn a_ramp_meter_shows_its_phase_and_types_their_length() {
+    let Some(browser) = chromium_or_skip("a_ramp_meter_shows_its_phase_and_types_their_length")
+    else {
+        return;
+    };
+    let dir = scratch_dir("view-lights");
+    let page = dir.join("meter.html");
+    let out = mapc(&[
+        "view",
+        "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg",
+        "-o",
+        page.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(
+        html.contains(r#""lights":[{"id":"ramp_meter""#),
+        "no light in the page"
+    );
+    assert!(
+        html.contains(r#""length_m":5.0"#),
+        "no type length in the page"
+    );
+    let url = format!("file://{}", page.display());
+    // zoomed on the meter: the end of the on-ramp (R7)
+    let count = |t: &str, rgb: [u8; 3]| {
+        let png = dir.join(format!("meter{t}.png"));
+        browse(
+            &browser,
+            &dir.join(format!("profile-{t}")),
+            &format!("{url}#t={t}&zoom=6&at=-3.7,36.3"),
+            &[&format!("--screenshot={}", png.display())],
+        );
+        let (_, pixels) = read_png(&png).unwrap();
+        pixels.iter().filter(|p| **p == rgb).count()
+    };
+    const GREEN: [u8; 3] = [0x2e, 0xcc, 0x40];
+    const RED: [u8; 3] = [0xff, 0x2d, 0x2d];
+    // light time 301 s: 1 s into a green; 306 s: 1 s into a red
+    let (green, red) = (count("303", GREEN), count("303", RED));
+    assert!(
+        green > 10 && red == 0,
+        "t = 303 s: {green} green, {red} red pixels"
+    );
+    let (green, red) = (count("308", GREEN), count("308", RED));
+    assert!(
+        red > 10 && green == 0,
+        "t = 308 s: {green} green, {red} red pixels"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -122,6 +122,15 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
         .filter(|(_, t)| t.controlled)
         .map(|(name, _)| name.clone())
         .collect();
+    page.type_lengths = resolved
+        .scenario
+        .vehicle_types
+        .iter()
+        .map(|(name, t)| (name.clone(), t.length))
+        .collect();
+    if !page.network.lights.is_empty() {
+        page.network.light_clock_start_s = Some(spec.start_time_s);
+    }
     page.speed_max_mps = resolved
         .graph
         .roads

@@ -221,7 +221,7 @@ def print_table(columns, comparisons, points=()):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=["baseline", "policy", "scenario"])
+    ap.add_argument("mode", choices=["baseline", "policy", "scenario", "curve"])
     ap.add_argument("scenario")
     ap.add_argument("--policy", help="a centralized mapc policy file (policies/*.json)")
     ap.add_argument("--seeds", default="0-99", help="SUMO seeds and as many mapc seeds from 0 (default 0-99)")
@@ -234,11 +234,25 @@ def main():
     ap.add_argument("--skip-unsupported", action="store_true",
                     help="scenario: mapc drops what it does not simulate (SUMO still runs it)")
     ap.add_argument("--end", type=float, help="scenario: end time for SUMO where the configuration has none")
+    ap.add_argument("--inflows", default="1000:3000:250",
+                    help="curve: inflows LOW:HIGH:STEP in veh/h (every flow scaled to each)")
+    ap.add_argument("--svg", help="curve: draw both curves into this file")
     a = ap.parse_args()
     if a.mode == "scenario":
         import scenario
         root = os.path.dirname(os.path.dirname(HERE))
         scenario.compare(a, [a.mapc or os.path.join(root, "target", "release", "mapc")], parse_seeds(a.seeds))
+        return
+    if a.mode == "curve":
+        import curve
+        root = os.path.dirname(os.path.dirname(HERE))
+        work = a.work or tempfile.mkdtemp(prefix="sumo_curve_")
+        try:
+            curve.curve(a, [a.mapc or os.path.join(root, "target", "release", "mapc")], parse_seeds(a.seeds),
+                        work, sys.modules[__name__])
+        finally:
+            if not a.work:
+                shutil.rmtree(work, ignore_errors=True)
         return
     if a.mode == "policy" and not a.policy:
         ap.error("policy mode needs --policy FILE")

@@ -122,8 +122,11 @@ pub(crate) fn junction(
     start(out, 4, "junction", &attrs);
     let n = links.len();
     // Bit k of a row, counted from the right, is link k: the link's foes, and the foes it must yield to.
+    // two lanes of one road that end in one lane conflict too (a lane drop, the pairs of Flow's bottleneck)
     let conflicts = |a: &Connection, b: &Connection| {
-        a.to_road == b.to_road && a.to_lane == b.to_lane && a.from_road != b.from_road
+        a.to_road == b.to_road
+            && a.to_lane == b.to_lane
+            && (a.from_road, a.from_lane) != (b.from_road, b.from_lane)
     };
     for l in links {
         let mut foes = vec!['0'; n];

@@ -28,7 +28,7 @@ use base64::Engine;
 use mapc_graph::LaneGraph;
 use serde::Serialize;
 use serde_json::{Value, json};
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
 
 /// Rows (vehicle-steps over all panes) kept in a page written to a file: about 13 MB of data; larger runs are
@@ -45,6 +45,8 @@ pub struct ViewPage {
     pub network: NetworkView,
     /// Vehicle types that are AVs (drawn in their own colour).
     pub av_types: BTreeSet<String>,
+    /// Length of each vehicle type (m), drawn to scale when zoomed in; a type not listed is 5 m.
+    pub type_lengths: BTreeMap<String, f64>,
     pub replays: Vec<Replay>,
     /// Top of the speed scale, m/s.
     pub speed_max_mps: f64,
@@ -92,6 +94,7 @@ impl ViewPage {
             subtitle: String::new(),
             network,
             av_types: BTreeSet::new(),
+            type_lengths: BTreeMap::new(),
             replays: Vec::new(),
             speed_max_mps: 30.0,
             summary,
@@ -144,7 +147,15 @@ impl ViewPage {
         let replays = self
             .replays
             .iter()
-            .map(|r| replay_json(r, &self.network, &road_index, &self.av_types))
+            .map(|r| {
+                replay_json(
+                    r,
+                    &self.network,
+                    &road_index,
+                    &self.av_types,
+                    &self.type_lengths,
+                )
+            })
             .collect::<Result<Vec<_>, _>>()?;
         let stops: Vec<Value> = crate::colors::SPEED_STOPS
             .iter()
@@ -197,6 +208,7 @@ fn replay_json(
     network: &NetworkView,
     road_index: &HashMap<&str, usize>,
     av_types: &BTreeSet<String>,
+    type_lengths: &BTreeMap<String, f64>,
 ) -> Result<Value, VizError> {
     let unknown = |name: &str| VizError::Input {
         path: r.source.clone(),
@@ -240,7 +252,10 @@ fn replay_json(
         .types
         .iter()
         .zip(r.av_type_flags(av_types))
-        .map(|(name, av)| json!({ "name": name, "av": av }))
+        .map(|(name, av)| match type_lengths.get(name) {
+            Some(l) => json!({ "name": name, "av": av, "length_m": l }),
+            None => json!({ "name": name, "av": av }),
+        })
         .collect();
     let col = |f: fn(&Track) -> u32| -> Vec<u32> { r.tracks.iter().map(f).collect() };
     Ok(json!({

@@ -47,6 +47,18 @@ pub struct JunctionView {
     pub roads_out: Vec<String>,
 }
 
+/// A traffic light's program and where its links stop.
+#[derive(Clone, Debug, Serialize)]
+pub struct LightView {
+    pub id: String,
+    pub offset_s: f64,
+    /// `[duration_s, state]` per phase.
+    pub phases: Vec<(f64, String)>,
+    /// Per controlled link: the road it leaves (its id in `roads`), that road's lane, and the link's index in
+    /// the phase states.
+    pub links: Vec<(String, u8, u32)>,
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct WindowView {
     pub label: String,
@@ -63,6 +75,12 @@ pub struct NetworkView {
     pub roads: Vec<RoadView>,
     pub junctions: Vec<JunctionView>,
     pub windows: Vec<WindowView>,
+    /// Fixed-time traffic lights, drawn at their links' stop lines in the colour of the current phase.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub lights: Vec<LightView>,
+    /// Run time at which the lights' programs start (the simulation's clock at its first step).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_clock_start_s: Option<f64>,
     /// Length driven inside each connection, by its trace label `R1>R2` (the page places vehicles on it).
     #[serde(skip)]
     pub via_length_m: BTreeMap<String, f64>,
@@ -132,6 +150,28 @@ impl NetworkView {
             roads,
             junctions,
             windows,
+            lights: graph
+                .lights
+                .iter()
+                .map(|l| LightView {
+                    id: l.id.clone(),
+                    offset_s: l.offset_s,
+                    phases: l
+                        .phases
+                        .iter()
+                        .map(|p| (p.duration_s, p.state.clone()))
+                        .collect(),
+                    links: graph
+                        .connections
+                        .iter()
+                        .filter_map(|c| {
+                            let s = c.signal.as_ref().filter(|s| s.light == l.id)?;
+                            Some((c.from_road.to_string(), c.from_lane, s.index))
+                        })
+                        .collect(),
+                })
+                .collect(),
+            light_clock_start_s: None,
             via_length_m: graph
                 .connections
                 .iter()

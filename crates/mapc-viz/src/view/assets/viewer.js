@@ -226,11 +226,12 @@ function drawVehicles(ctx, canvas, pane, frame) {
     if (sx < -20 || sy < -20 || sx > canvas.clientWidth + 20 || sy > canvas.clientHeight + 20) continue;
     const speed = rows.speed[k] / 100;
     const av = rep.types[v.type[i]].av;
+    const len = rep.types[v.type[i]].length_m || 5; // trucks and buses drawn longer
     ctx.fillStyle = vehicleColor(av, speed / vmax);
     ctx.beginPath();
     if (big) {
       ctx.save(); ctx.translate(sx, sy); ctx.rotate(-heading);
-      ctx.rect(-5 * view.scale, -1 * view.scale, 5 * view.scale, 2 * view.scale); // the front is at the position
+      ctx.rect(-len * view.scale, -1 * view.scale, len * view.scale, 2 * view.scale); // the front is at the position
       ctx.restore();
     } else {
       ctx.arc(sx, sy, av ? 3.2 : 2.6, 0, 2 * Math.PI);
@@ -240,6 +241,40 @@ function drawVehicles(ctx, canvas, pane, frame) {
     pane.drawn.push([sx, sy, i, k]);
   }
   return pane.drawn.length;
+}
+
+// Fixed-time lights: the letter of link `index` at `t` seconds into the run (the simulator's rule).
+function lightLetter(light, index, t) {
+  const cycle = light.phases.reduce((a, p) => a + p[0], 0);
+  if (!(cycle > 0)) return "G";
+  let into = (((t - light.offset_s) % cycle) + cycle) % cycle;
+  for (const [d, state] of light.phases) {
+    if (into < d) return state[index] || "G";
+    into -= d;
+  }
+  return "G";
+}
+
+// A bar across each controlled lane at its stop line, in the colour of the light's phase at `t`.
+function drawLights(ctx, canvas, net, t) {
+  if (!net.lights) return;
+  for (const light of net.lights) for (const [roadId, lane, index] of light.links) {
+    const r = net.byId.get(roadId);
+    if (!r || r.pl.xs.length < 2) continue;
+    const n = r.pl.xs.length;
+    const [ex, ey] = toScreen(canvas, r.pl.xs[n - 1], r.pl.ys[n - 1]);
+    const [px, py] = toScreen(canvas, r.pl.xs[n - 2], r.pl.ys[n - 2]);
+    const l = Math.hypot(ex - px, ey - py) || 1;
+    const nx = (ey - py) / l, ny = -(ex - px) / l; // the left of travel on screen
+    const d = laneOffsetPx(r.lanes, lane), half = Math.max(6, 0.6 * laneSpacingPx());
+    const cx = ex + nx * d, cy = ey + ny * d;
+    const c = lightLetter(light, index, t);
+    ctx.lineCap = "butt";
+    ctx.beginPath(); ctx.moveTo(cx - nx * half, cy - ny * half); ctx.lineTo(cx + nx * half, cy + ny * half);
+    ctx.strokeStyle = "#111"; ctx.lineWidth = 7; ctx.stroke(); // an outline, to stand out on any road colour
+    ctx.strokeStyle = "GgoO".includes(c) ? "#2ecc40" : "yY".includes(c) ? "#ffdc00" : "#ff2d2d";
+    ctx.lineWidth = 4; ctx.stroke();
+  }
 }
 
 // The time-space diagram: drawn once into an image, then the cursor on top.
@@ -329,6 +364,8 @@ function drawPane(pane, frame) {
   if (pane.replay) {
     const f = Math.min(frame, pane.replay.frames - 1);
     n = drawVehicles(ctx, pane.map, pane, f);
+    const rep = pane.replay;
+    drawLights(ctx, pane.map, DATA.network, rep.start_s + f * rep.step_s - (DATA.network.light_clock_start_s || 0));
     drawTimeSpace(pane, f);
     const m = pane.replay.metrics, warm = f <= pane.replay.warmup_frames;
     if (warm && pane.replay.warmup_frames > 0) {
