@@ -1,7 +1,7 @@
 //! `mapc eval --controller alinea`: the humans with ALINEA metering a light, over the same seeds as the humans
 //! alone, each reported as mean and 95 % CI (the controller is a baseline, reported like the humans).
 
-use mapc_sim::{AlineaConfig, MeanCi, RunMetrics, SimSpec};
+use mapc_sim::{AlineaConfig, MeanCi, RunMetrics, SimSpec, Summary};
 use rayon::prelude::*;
 
 /// ALINEA's options.
@@ -38,28 +38,6 @@ impl AlineaArgs {
     }
 }
 
-#[derive(serde::Serialize)]
-struct Figures {
-    outflow: MeanCi,
-    inflow: MeanCi,
-    speed: MeanCi,
-    travel_time: MeanCi,
-    delay: MeanCi,
-}
-
-impl Figures {
-    fn of(runs: &[RunMetrics]) -> Figures {
-        let col = |f: fn(&RunMetrics) -> f64| MeanCi::of(&runs.iter().map(f).collect::<Vec<_>>());
-        Figures {
-            outflow: col(|r| r.outflow_veh_h),
-            inflow: col(|r| r.inflow_veh_h),
-            speed: col(|r| r.avg_speed_mps),
-            travel_time: col(|r| r.mean_travel_time_s),
-            delay: col(|r| r.mean_delay_s),
-        }
-    }
-}
-
 /// Run the humans and ALINEA on `seeds` and print both.
 pub fn run(
     scenario: &str,
@@ -84,7 +62,8 @@ pub fn run(
         .collect();
     let mean_rate = rates.iter().sum::<f64>() / rates.len().max(1) as f64;
     let metered: Vec<RunMetrics> = metered.into_iter().map(|(m, _)| m).collect();
-    let (h, a) = (Figures::of(&humans), Figures::of(&metered));
+    // each figure over the seeds computed where every run's summary is (`Summary::of`)
+    let (h, a) = (Summary::of(&humans), Summary::of(&metered));
     let detectors: Vec<&str> = alinea
         .detectors()
         .iter()

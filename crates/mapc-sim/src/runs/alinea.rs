@@ -6,9 +6,11 @@
 //! r(k) = clamp( r(k-1) + K_R * (o_set - o_out(k)),  r_min, r_max )      [veh/h, occupancies in %]
 //! ```
 //!
-//! and the ramp's traffic light lets vehicles pass at that rate: each cycle is a fixed green (one or two vehicles)
-//! and a red that makes the cycle last `3600 / r` seconds. The control interval is the downstream detectors' own
-//! (a new `r` each time all of them have closed an interval); `o_out` is the mean of their occupancies.
+//! and the ramp's traffic light lets vehicles pass at that rate: each cycle is a fixed green (one vehicle per lane)
+//! and a red that makes the cycle last `3600 / r` seconds. Rates are per metered lane (per link of the light), so
+//! one meter across four lanes passes up to four vehicles a cycle. The control interval is the downstream
+//! detectors' own (a new `r` each time all of them have closed an interval); `o_out` is the mean of their
+//! occupancies.
 
 use crate::error::SimError;
 use crate::measure::metrics::RunMetrics;
@@ -27,8 +29,9 @@ pub struct AlineaConfig {
     pub detectors: Vec<String>,
     /// Target occupancy, a fraction in (0, 1).
     pub setpoint: f64,
-    /// K_R: veh/h of rate per percentage point of occupancy error.
+    /// K_R: veh/h of rate (per metered lane) per percentage point of occupancy error.
     pub gain_veh_h: f64,
+    /// Bounds of the rate, per metered lane.
     pub min_rate_veh_h: f64,
     pub max_rate_veh_h: f64,
     /// Green time of each cycle (s).
@@ -215,10 +218,12 @@ fn names<'a>(ids: impl Iterator<Item = &'a str>) -> String {
     }
 }
 
-/// Past the merge the metered ramp joins (the first road downstream of `light`'s links that more than one road
-/// leads into, and the roads after it), the first road with detectors: the furthest detector of each lane.
+/// Past the merge the metered ramp joins or the lane drop downstream of the meter (the first road downstream of
+/// `light`'s links that more than one road leads into, or that has fewer lanes than a road leading into it, and the
+/// roads after it), the first road with detectors: the furthest detector of each lane.
 fn downstream_detectors(spec: &SimSpec, light: &str) -> Option<Vec<usize>> {
     let g: &LaneGraph = &spec.graph;
+    let lanes = |road: RoadId| g.road(road).map_or(0, |r| r.lanes.len());
     let is_merge_exit = |road: RoadId| {
         let mut from: Vec<RoadId> = g
             .connections
@@ -228,7 +233,7 @@ fn downstream_detectors(spec: &SimSpec, light: &str) -> Option<Vec<usize>> {
             .collect();
         from.sort();
         from.dedup();
-        from.len() > 1
+        from.len() > 1 || from.iter().any(|&f| lanes(f) > lanes(road))
     };
     // (road, past the merge)
     let mut frontier: Vec<(RoadId, bool)> = g
