@@ -270,3 +270,42 @@ fn induction_loops_write_sumos_files_and_their_flows() {
     assert!((of("passage_sens") - of("passage_queue_sens")).abs() <= 0.5);
     assert!(of("passage_sens") > 600.0, "{detectors:?}");
 }
+
+#[test]
+fn av_share_puts_avs_into_a_sumo_users_scenario_for_a_policy() {
+    // a tenth of every flow's vehicles become AVs; the total demand is the configuration's
+    let j = mapc_json(&[
+        "sim",
+        HIGHWAY_RAMP,
+        "--seeds",
+        "1",
+        "--av-share",
+        "0.1",
+        "--json",
+    ]);
+    let departed = j["runs"][0]["departed"].as_u64().unwrap();
+    assert!((440..=470).contains(&departed), "{departed}");
+    // a policy drives them: the Simple Merge's centralized policy, zero-shot on the user's freeway
+    let e = mapc_json(&[
+        "eval",
+        "--policy",
+        "policies/simple_merge_outflow.json",
+        "--scenario",
+        HIGHWAY_RAMP,
+        "--av-share",
+        "0.1",
+        "--seeds",
+        "2",
+        "--json",
+    ]);
+    // the AVs drive as humans in the baseline: a policy run that differs from it was driven
+    assert_ne!(
+        e["outflow"]["mean"], e["baseline"]["outflow"]["mean"],
+        "no AV was driven: {e}"
+    );
+    // a share outside [0, 1] is refused
+    refused(
+        &["sim", HIGHWAY_RAMP, "--av-share", "1.5", "--seeds", "1"],
+        &["AV share 1.5 is outside [0, 1]"],
+    );
+}

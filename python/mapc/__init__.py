@@ -7,6 +7,8 @@
 - ``simulate(scenario, seeds)`` and ``evaluate(policy, scenario, seeds)``: the dicts that ``mapc sim --json`` and
   ``mapc eval --json`` print, computed by the same library code.
 - ``Policy(path)``: a trained policy's mean action.
+- ``with_avs(scenario, share, output)``: the scenario with a share of its flows' vehicles as AVs, written as a
+  scenario file (``av_share=`` of the env makers does it for them).
 - ``import_map``, ``simplify``, ``window``: the scenario pipeline, writing the stages' files and returning the
   reports of ``mapc import|simplify|window --json``.
 - ``mapc.rllib``: RLlib's env runners on the vector env (``env_creator`` for ``register_env``); ``mapc.export``:
@@ -28,6 +30,7 @@ from ._mapc import import_map as _import_map
 from ._mapc import simplify as _simplify
 from ._mapc import simulate as _simulate
 from ._mapc import window as _window
+from ._mapc import with_avs as _with_avs
 from .env import MergeEnv, MergeVecEnv
 
 __all__ = [
@@ -43,10 +46,38 @@ __all__ = [
     "simplify",
     "simulate",
     "window",
+    "with_avs",
     "__version__",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+
+def with_avs(
+    scenario: PathLike,
+    share: float,
+    output: Optional[PathLike] = None,
+    flows: Sequence[str] = (),
+    n_av: int = 5,
+) -> str:
+    """``scenario`` with ``share`` of each flow's vehicles (of ``flows``, by flow id or vehicle type; all when
+    empty) driven as AVs, each flow split into its humans and an ``ID_av`` flow, as ``--av-share`` does. Written
+    to ``output`` (a temporary file when omitted, kept for the process's life); returns its path. A scenario
+    without a controlled region gets the whole network with ``n_av`` AVs controlled at once."""
+    if output is None:
+        import atexit
+        import tempfile
+
+        fd, output = tempfile.mkstemp(prefix="mapc_avs_", suffix=".toml")
+        os.close(fd)
+        atexit.register(lambda p=output: os.path.exists(p) and os.remove(p))
+    return _with_avs(os.fspath(scenario), float(share), os.fspath(output), list(flows), n_av)
+
+
+def _scenario_with_avs(scenario: PathLike, av_share: Optional[float], av_flows: Sequence[str]) -> str:
+    if av_share is None:
+        return os.fspath(scenario)
+    return with_avs(scenario, av_share, flows=av_flows)
 
 
 def make_env(
@@ -54,13 +85,18 @@ def make_env(
     reward: str = "outflow",
     seed: int = 0,
     n_av: Optional[int] = None,
+    av_share: Optional[float] = None,
+    av_flows: Sequence[str] = (),
 ) -> MergeEnv:
-    """The centralized environment on ``scenario`` (a built-in name or a scenario file, windows included).
+    """The centralized environment on ``scenario`` (a built-in name, a scenario file, windows included, or a
+    SUMO configuration).
 
     ``reward`` is ``outflow``, ``flow`` or ``speed``; ``seed`` is the first episode's seed (each reset without
-    a seed takes the next one); ``n_av`` defaults to the scenario's.
+    a seed takes the next one); ``n_av`` defaults to the scenario's. ``av_share`` makes that share of each flow's
+    vehicles (of ``av_flows``; all when empty) AVs (``with_avs``).
     """
-    return MergeEnv(os.fspath(scenario), reward=reward, seed=seed, n_av=n_av)
+    scenario = _scenario_with_avs(scenario, av_share, av_flows)
+    return MergeEnv(scenario, reward=reward, seed=seed, n_av=n_av)
 
 
 def make_vec_env(
@@ -87,15 +123,19 @@ def parallel_env(
     exit_bonus: float = 20.0,
     count_waiting: bool = False,
     reward_share: float = 0.0,
+    av_share: Optional[float] = None,
+    av_flows: Sequence[str] = (),
 ):
     """The distributed setting as a PettingZoo ``ParallelEnv``: one agent per AV in the control region.
 
     ``features`` is ``full``, ``none`` or a list of ``dist``, ``congestion``, ``merge`` (the paper's Table 4);
-    the reward is ``0.1 (-eta1 + eta2 * mean speed / V)`` per step and ``exit_bonus`` when the agent leaves.
+    the reward is ``0.1 (-eta1 + eta2 * mean speed / V)`` per step and ``exit_bonus`` when the agent leaves;
+    ``av_share`` and ``av_flows`` as in ``make_env``.
     """
     from .parallel import MergeParallelEnv
 
-    return MergeParallelEnv(os.fspath(scenario), features=features, seed=seed, eta1=eta1, eta2=eta2,
+    scenario = _scenario_with_avs(scenario, av_share, av_flows)
+    return MergeParallelEnv(scenario, features=features, seed=seed, eta1=eta1, eta2=eta2,
                             exit_bonus=exit_bonus, count_waiting=count_waiting, reward_share=reward_share)
 
 

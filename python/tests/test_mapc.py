@@ -369,3 +369,22 @@ def test_the_parallel_env_takes_a_multi_lane_scenario_and_the_adjacent_lanes():
             flags |= {float(o[9]), float(o[14])}
         obs, *_ = env.step({a: np.zeros(1, dtype=np.float32) for a in env.agents})
     assert flags == {0.0, 1.0}
+
+
+def test_avs_in_a_sumo_users_scenario_from_python(tmp_path):
+    cfg = str(ROOT / "scenarios" / "sumo" / "highway_ramp" / "highway-ramp.sumocfg")
+    written = mapc.with_avs(cfg, 0.1, tmp_path / "avs.toml")
+    text = pathlib.Path(written).read_text()
+    # each flow split into its humans and an `_av` flow of an AV copy of its type
+    assert "controlled = true" in text and '_av"' in text
+    env = mapc.make_env(cfg, av_share=0.1, seed=3)
+    obs, _ = env.reset()
+    controlled = 0
+    for _ in range(600):
+        obs, _, done, truncated, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+        controlled = max(controlled, int(np.count_nonzero(obs)))
+        if done or truncated:
+            break
+    assert controlled > 0, "no AV was ever observed"
+    with pytest.raises(mapc.MapcError, match=r"outside \[0, 1\]"):
+        mapc.make_env(cfg, av_share=1.5)

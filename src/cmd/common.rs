@@ -81,6 +81,36 @@ pub struct SumoInputArgs {
     pub skip_unsupported: bool,
 }
 
+/// AVs in any scenario: a share of its flows' vehicles driven as AVs (`mapc_scenario::av_share`).
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct AvArgs {
+    /// Make this fraction (0 to 1) of each flow's vehicles AVs: each flow is split into its humans and an `ID_av`
+    /// flow of AVs (an AV copy of its type), as Flow's benchmarks give AVs their own inflow.
+    #[arg(long, value_name = "P")]
+    pub av_share: Option<f64>,
+    /// Only these flows (by flow id or vehicle type, comma-separated) get AVs.
+    #[arg(
+        long,
+        value_name = "ID,ID",
+        value_delimiter = ',',
+        requires = "av_share"
+    )]
+    pub av_flows: Vec<String>,
+    /// AVs controlled at once where the scenario has no controlled region of its own (then the whole network).
+    #[arg(long, value_name = "N", default_value_t = 5, requires = "av_share")]
+    pub av_n: u32,
+}
+
+impl AvArgs {
+    /// `rs` with the AVs asked for (unchanged without `--av-share`).
+    pub fn apply(&self, rs: ResolvedScenario) -> anyhow::Result<ResolvedScenario> {
+        match self.av_share {
+            None => Ok(rs),
+            Some(share) => Ok(rs.with_av_share(share, &self.av_flows, self.av_n)?),
+        }
+    }
+}
+
 /// The scenario `name` names (a scenario file, a `.sumocfg`, a built-in name), or the SUMO files of `sumo`;
 /// what reading a SUMO scenario dropped is printed as warnings.
 pub fn load_scenario_or_sumo(name: &str, sumo: &SumoInputArgs) -> anyhow::Result<ResolvedScenario> {
@@ -266,7 +296,12 @@ pub struct LoadedScenario {
 /// A scenario file or built-in name (the default file falling back to the built-in) resolved into a simulator
 /// spec.
 pub fn load_run_scenario(arg: &str) -> anyhow::Result<LoadedScenario> {
-    let resolved = load_scenario(arg)?;
+    load_run_scenario_with(arg, &AvArgs::default())
+}
+
+/// [`load_run_scenario`] with the AVs of `avs`.
+pub fn load_run_scenario_with(arg: &str, avs: &AvArgs) -> anyhow::Result<LoadedScenario> {
+    let resolved = avs.apply(load_scenario(arg)?)?;
     let spec =
         mapc_sim::spec_from_scenario(&resolved).with_context(|| format!("scenario {arg}"))?;
     let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);

@@ -33,6 +33,8 @@ pub struct Args {
     pub controller: Option<Controller>,
     #[command(flatten)]
     pub alinea: alinea::AlineaArgs,
+    #[command(flatten)]
+    pub avs: super::common::AvArgs,
     /// Scenario: `simple_merge` or a scenario file (a window from `mapc window` for zero-shot transfer).
     #[arg(long, default_value = "simple_merge")]
     pub scenario: String,
@@ -64,7 +66,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     super::common::set_global_threads(args.runs.threads);
     if let Some(Controller::Alinea) = args.controller {
-        let sc = super::common::load_run_scenario(&args.scenario)?;
+        let sc = super::common::load_run_scenario_with(&args.scenario, &args.avs)?;
         return alinea::run(
             &args.scenario,
             &sc.spec,
@@ -82,7 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(rule) = args.deploy {
         ck.spec.deploy = Some(rule);
     }
-    let sc = super::common::load_run_scenario(&args.scenario)?;
+    let sc = super::common::load_run_scenario_with(&args.scenario, &args.avs)?;
     if let Some(w) = &sc.horizon_warning {
         eprintln!("warning: {}: {w}", args.scenario);
     }

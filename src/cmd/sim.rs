@@ -20,6 +20,8 @@ pub struct Args {
     pub sumo: super::common::SumoInputArgs,
     #[command(flatten)]
     pub runs: super::common::SeedArgs,
+    #[command(flatten)]
+    pub avs: super::common::AvArgs,
     /// Write the first seed's trajectories as CSV (time_s, vehicle_id, vehicle_type, road, pos_on_road_m,
     /// corridor_x_m, speed_mps, controlled).
     #[arg(long)]
@@ -40,10 +42,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let rs = super::common::load_scenario_or_sumo(
+    let rs = args.avs.apply(super::common::load_scenario_or_sumo(
         args.input.as_deref().unwrap_or(&args.scenario),
         &args.sumo,
-    )?;
+    )?)?;
     let spec = spec_from_scenario(&rs).with_context(|| format!("scenario `{}`", rs.origin))?;
     let fit = mapc_scenario::timing::HorizonFit::of_resolved(&rs);
     if let Some(w) = fit.warning() {

@@ -21,6 +21,8 @@ use std::sync::Arc;
 /// hyperparameters; `--preset fast` for minutes on CPU).
 #[derive(ClapArgs, Debug)]
 pub struct Args {
+    #[command(flatten)]
+    pub avs: super::common::AvArgs,
     /// Scenario: `simple_merge`, a scenario file, or a merge distribution file (`format =
     /// "mapc-merge-distribution"`: each episode draws its merge from its seed).
     #[arg(long, default_value = "simple_merge")]
@@ -278,8 +280,39 @@ pub fn train(args: Args) -> anyhow::Result<(TrainRun, Option<IterationStats>)> {
             config = read_config(p, config)?;
         }
         apply_flags(&mut config, &args);
-        let sc = load_training_scenario(&args.scenario)?;
-        if args.distributed && distribution_of(&args.scenario)?.is_some() {
+        // with AVs asked for, the run trains on its own scenario file (RUN_DIR/scenario.toml), which a resumed
+        // run and the policy's users read back
+        let with_avs = match args.avs.av_share {
+            None => None,
+            Some(_) => {
+                let rs = args
+                    .avs
+                    .apply(super::common::load_scenario(&args.scenario)?)?;
+                Some(rs.scenario_with_absolute_paths())
+            }
+        };
+        let av_out = with_avs.as_ref().map(|sc| {
+            args.out.clone().unwrap_or_else(|| {
+                PathBuf::from(format!("out/train-{}-av-{}", sc.name, args.reward))
+            })
+        });
+        let scenario_arg = match &av_out {
+            None => args.scenario.clone(),
+            Some(out) => out.join("scenario.toml").display().to_string(),
+        };
+        if let (Some(s), Some(out)) = (&with_avs, &av_out) {
+            if mapc_rl::checkpoint::checkpoint_path(out).exists() {
+                bail!(
+                    "{} already holds a run; continue it with --resume {} or choose another -o",
+                    out.display(),
+                    out.display()
+                );
+            }
+            std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+            s.save(Path::new(&scenario_arg))?;
+        }
+        let sc = load_training_scenario(&scenario_arg)?;
+        if args.distributed && distribution_of(&scenario_arg)?.is_some() {
             bail!(
                 "{}: a merge distribution trains centralized policies only",
                 args.scenario
@@ -294,7 +327,7 @@ pub fn train(args: Args) -> anyhow::Result<(TrainRun, Option<IterationStats>)> {
             None => anyhow::anyhow!("hyperparameters: {e}"),
         })?;
         let n_av = args.n_av.or(sc.n_av).unwrap_or(5);
-        let mut spec = PolicySpec::centralized(&args.scenario, reward.name(), n_av);
+        let mut spec = PolicySpec::centralized(&scenario_arg, reward.name(), n_av);
         if !args.distributed
             && let Some(f) = &args.features
         {
@@ -312,7 +345,7 @@ pub fn train(args: Args) -> anyhow::Result<(TrainRun, Option<IterationStats>)> {
             let features = Features::parse(args.features.as_deref().unwrap_or("full"))
                 .map_err(anyhow::Error::msg)?;
             spec = PolicySpec::distributed(
-                &args.scenario,
+                &scenario_arg,
                 n_av,
                 features,
                 AgentReward {
@@ -324,10 +357,11 @@ pub fn train(args: Args) -> anyhow::Result<(TrainRun, Option<IterationStats>)> {
                 },
             );
         }
-        let out = args
-            .out
-            .clone()
-            .unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, spec.reward)));
+        let out = av_out.unwrap_or_else(|| {
+            args.out
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(format!("out/train-{}-{}", sc.name, spec.reward)))
+        });
         spec.deploy = args.deploy;
         let mut run = TrainRun::create(&out, spec, config, args.checkpoint_every)?;
         if let Some(init) = &args.init {

@@ -52,6 +52,25 @@ pub(crate) fn load_scenario(scenario: &str) -> PyResult<(ResolvedScenario, SimSp
     Ok((resolved, spec))
 }
 
+/// Write `scenario` with `share` of its flows' vehicles (those of `flows`; all when empty) as AVs to `output`, a
+/// scenario file every function takes (`mapc_scenario::av_share`; `--av-share` of the binary).
+#[pyfunction]
+#[pyo3(signature = (scenario, share, output, flows = Vec::new(), n_av = 5))]
+fn with_avs(
+    scenario: &str,
+    share: f64,
+    output: &str,
+    flows: Vec<String>,
+    n_av: u32,
+) -> PyResult<String> {
+    let rs = ResolvedScenario::load(scenario).map_err(mapc_error)?;
+    let rs = rs.with_av_share(share, &flows, n_av).map_err(mapc_error)?;
+    rs.scenario_with_absolute_paths()
+        .save(std::path::Path::new(output))
+        .map_err(mapc_error)?;
+    Ok(output.to_string())
+}
+
 fn seed_list(seeds: u64, first_seed: u64) -> PyResult<Vec<u64>> {
     if seeds == 0 {
         return Err(mapc_error("seeds must be at least 1"));
@@ -207,6 +226,7 @@ fn _mapc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MapcError", m.py().get_type::<MapcError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(with_avs, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(save_policy, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::import_map, m)?)?;

@@ -6,6 +6,8 @@
 //! - **flow**: periodic departures from an entry road at `vehs_per_hour` (SUMO's semantics), of one vehicle type.
 //! - **vehicle type**: IDM driver parameters; `controlled = true` marks an AV a policy may drive.
 //! - **controlled region**: the roads where AVs are driven by a policy (a transfer window), and `n_av`, how many.
+//! - **AV share** (`av_share`): a fraction of each flow's vehicles made AVs, as a flow of their own beside the
+//!   humans'.
 //! - **corridor**: a single-lane main road with the roads merging into it (what `simplify` makes of a highway).
 //! - **merge distribution**: a Simple Merge whose demand, right of way, lengths, speed limit and AV share are
 //!   drawn per episode from the seed (`distribution`), to train one policy over many merges.
@@ -23,6 +25,7 @@
 //! - **fill time**: the free-flow travel time of the longest route (`timing.rs`); a horizon that leaves too little
 //!   after it is warned about, and `mapc window` picks a warm-up for it.
 
+pub mod av_share;
 pub mod bounds;
 pub mod compile;
 pub mod compile_error;

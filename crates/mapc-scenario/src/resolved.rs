@@ -123,6 +123,49 @@ impl ResolvedScenario {
         ResolvedScenario::on_network(scenario, graph, origin)
     }
 
+    /// This scenario with `share` of its flows' vehicles (those named in `only`; all when empty) driven as AVs
+    /// ([`crate::av_share`]); a scenario without a controlled region gets the whole network, `n_av` at once.
+    pub fn with_av_share(
+        self,
+        share: f64,
+        only: &[String],
+        n_av: u32,
+    ) -> Result<ResolvedScenario, ScenarioError> {
+        let origin = self.origin.clone();
+        let scenario = crate::av_share::with_av_share(self.scenario, share, only, n_av).map_err(
+            |message| ScenarioError::Invalid {
+                path: PathBuf::from(&origin),
+                key: "av_share".into(),
+                message,
+            },
+        )?;
+        let mut rs = ResolvedScenario::on_network(scenario, self.graph, &origin)?;
+        rs.notes.splice(0..0, self.notes);
+        Ok(rs)
+    }
+
+    /// The scenario as a file anywhere can hold it: its network's path made absolute (a scenario file's are
+    /// relative to its folder, a SUMO configuration's to the working folder).
+    pub fn scenario_with_absolute_paths(&self) -> Scenario {
+        let mut scenario = self.scenario.clone();
+        let origin = Path::new(&self.origin);
+        let base = if origin.is_file() && !sumo::is_sumo_config(origin) {
+            origin.parent().map(Path::to_path_buf).unwrap_or_default()
+        } else {
+            PathBuf::new()
+        };
+        let absolute = |p: &Path| {
+            let joined = base.join(p);
+            std::fs::canonicalize(&joined).unwrap_or(joined)
+        };
+        scenario.network = match &scenario.network {
+            NetworkSpec::Graph(g) => NetworkSpec::Graph(absolute(g)),
+            NetworkSpec::Map(m) => NetworkSpec::Map(absolute(m)),
+            other => other.clone(),
+        };
+        scenario
+    }
+
     /// A SUMO scenario read ([`sumo::from_sumocfg`], [`sumo::from_files`]) on its network, checked.
     /// Demand above what an entry takes is SUMO's to queue, as SUMO does: a note, not a refusal.
     pub fn from_sumo(
