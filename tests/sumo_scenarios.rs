@@ -309,3 +309,32 @@ fn av_share_puts_avs_into_a_sumo_users_scenario_for_a_policy() {
         &["AV share 1.5 is outside [0, 1]"],
     );
 }
+
+#[test]
+fn depart_pos_free_inserts_at_the_lane_start_behind_the_last_vehicle_as_sumo_does() {
+    // ramp_game runs from its own configuration: its main flows depart with departPos="free"
+    let dir = scratch_dir("sumo-free");
+    let trip = dir.join("trip.xml");
+    let out = run_mapc(&[
+        "sim",
+        "scenarios/sumo/ramp_game/ramp.sumocfg",
+        "--seeds",
+        "1",
+        "--tripinfo-output",
+        trip.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    let trip = std::fs::read_to_string(&trip).unwrap();
+    let main: Vec<&str> = trip
+        .lines()
+        .filter(|l| l.contains("id=\"highway1."))
+        .collect();
+    assert!(main.len() > 100, "{} main-road trips", main.len());
+    // SUMO's freeInsertion puts the front at 0 behind the last vehicle when there is room (the base place
+    // would be one length in)
+    let at_start = main
+        .iter()
+        .filter(|l| l.contains("departPos=\"0.00\""))
+        .count();
+    assert!(at_start * 2 > main.len(), "{at_start} of {} at the lane start", main.len());
+}

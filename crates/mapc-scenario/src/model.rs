@@ -327,7 +327,8 @@ pub struct Flow {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub number: Option<u64>,
     /// Where on the entry lane a vehicle is inserted (SUMO's `departPos`): the lane's start (default, `base`),
-    /// `random` (a new place along the lane at each try) or `random_free` (up to ten random places a step, then
+    /// `random` (a new place along the lane at each try), `free` (the first free place: behind the last vehicle at
+    /// the lane's start, else the first gap wide enough) or `random_free` (up to ten random places a step, then
     /// the start).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depart_pos: Option<String>,

@@ -272,12 +272,12 @@ impl ResolvedScenario {
                 ));
             }
             if let Some(rule) = f.depart_pos.as_deref()
-                && !matches!(rule, "base" | "random" | "random_free")
+                && !matches!(rule, "base" | "random" | "random_free" | "free")
             {
                 return Err(invalid(
                     format!("flows[{i}].depart_pos"),
                     format!(
-                        "flow `{}`: `{rule}`: `base`, `random` or `random_free`",
+                        "flow `{}`: `{rule}`: `base`, `random`, `random_free` or `free`",
                         f.id
                     ),
                 ));

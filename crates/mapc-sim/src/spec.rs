@@ -104,8 +104,11 @@ pub enum DepartPos {
     Base,
     /// A uniform place along the lane, drawn again at each try (never behind `Base`).
     Random,
-    /// Up to ten random places in a step, then `Base`.
+    /// Up to ten random places in a step, then as `Free`.
     RandomFree,
+    /// The first free place on the lane (SUMO's `free`, `MSLane::freeInsertion`): at the lane's start behind
+    /// the last vehicle, else in the first gap between vehicles wide enough for both secure gaps.
+    Free,
 }
 
 /// A flow's depart speed meaning SUMO's `departSpeed="max"`: the highest speed up to the vehicle's desired speed

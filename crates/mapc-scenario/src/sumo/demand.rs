@@ -352,6 +352,15 @@ impl<'a> Demand<'a> {
             }
             "vehicle" | "flow" | "trip" => self.departures.push(e),
             "param" | "interval" if e.children.is_empty() => {}
+            // outputs that change nothing in the run: read, and said once each not to be written
+            "edgeData" | "laneData" | "timedEvent" | "laneAreaDetector" | "e2Detector"
+            | "entryExitDetector" | "e3Detector" | "instantInductionLoop" | "routeProbe"
+            | "vTypeProbe" => {
+                self.skipped.insert(format!(
+                    "<{}> (an output of SUMO's that mapc does not write; the run is the same)",
+                    e.name
+                ));
+            }
             "tlLogic" if e.get("type").unwrap_or("static") == "static" => {
                 let mut phases = Vec::new();
                 for p in e.children.iter().filter(|c| c.name == "phase") {
@@ -432,7 +441,7 @@ impl<'a> Demand<'a> {
                 | "vehsPerHour" | "period" | "probability" | "number" | "departLane" | "color"
                 | "line" | "fromTaz" | "toTaz" | "insertionChecks" | "reroute" => true,
                 "departSpeed" => v.trim().parse::<f64>().is_ok() || v == "max" || v == "desired",
-                "departPos" => matches!(v.as_str(), "base" | "random" | "random_free"),
+                "departPos" => matches!(v.as_str(), "base" | "random" | "random_free" | "free"),
                 "arrivalLane" => v == "current",
                 "arrivalPos" => v == "max",
                 "arrivalSpeed" => v == "current",

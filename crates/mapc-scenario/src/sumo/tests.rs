@@ -75,23 +75,29 @@ fn the_highway_ramp_scenario_reads_as_sumo_runs_it() {
 
 #[test]
 fn a_value_mapc_does_not_simulate_is_refused_with_its_place_and_dropped_when_skipping() {
-    // ramp_game: an output element of its additional file, and its main flows' `departPos="free"`
+    // ramp_game reads as it is: its main flows' `departPos="free"`; its additional file's outputs (a timed
+    // event, edge data) are said not to be written
     let game = shipped("ramp_game/ramp.sumocfg");
-    let e = from_sumocfg(&game, &ReadOptions::default())
+    let r = from_sumocfg(&game, &ReadOptions::default()).unwrap();
+    let w = r.warnings.join("\n");
+    assert!(w.contains("<timedEvent>") && w.contains("<edgeData>"), "{w}");
+    let highway = r.scenario.flows.iter().find(|f| f.id == "highway1").unwrap();
+    assert_eq!(highway.depart_pos.as_deref(), Some("free"));
+    // what mapc does not simulate is refused with its place, and dropped with --skip-unsupported
+    let routes = "<routes>\n<flow id=\"f\" from=\"M1\" to=\"M3\" vehsPerHour=\"100\" departPos=\"last\"/></routes>";
+    let dir = with_files("skip", &[("r.rou.xml", routes), ("s.sumocfg", CFG)]);
+    let e = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default())
         .unwrap_err()
         .to_string();
-    assert!(
-        e.contains("input_additional.add.xml: line 2, column 5, in <timedEvent>"),
-        "{e}"
-    );
+    assert!(e.contains("r.rou.xml: line 2, column 1, in <flow id=\"f\">"), "{e}");
     let skip = ReadOptions {
         skip_unsupported: true,
     };
-    let w = from_sumocfg(&game, &skip).unwrap().warnings.join("\n");
-    assert!(
-        w.contains("<timedEvent>") && w.contains("departPos=\"free\""),
-        "{w}"
-    );
+    let w = from_sumocfg(&dir.join("s.sumocfg"), &skip)
+        .unwrap()
+        .warnings
+        .join("\n");
+    assert!(w.contains("departPos=\"last\""), "{w}");
     // ramp_metering_1x3 reads as it is: its light, random places, best lanes, its induction loops
     let cfg = shipped("ramp_metering_1x3/1ramp_1x3.sumocfg");
     let r = from_sumocfg(&cfg, &ReadOptions::default()).unwrap();

@@ -127,6 +127,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             depart_pos: match f.depart_pos.as_deref() {
                 Some("random") => DepartPos::Random,
                 Some("random_free") => DepartPos::RandomFree,
+                Some("free") => DepartPos::Free,
                 _ => DepartPos::Base,
             },
             depart_speed: match f.depart_speed.as_deref() {

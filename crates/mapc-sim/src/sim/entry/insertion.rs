@@ -134,6 +134,7 @@ impl Simulation {
     pub(in crate::sim) fn try_insert(&mut self, id: VehicleId) -> bool {
         let tries = match self.veh[id as usize].depart_pos {
             DepartPos::Base => return self.try_insert_at(id, None),
+            DepartPos::Free => return self.try_insert_free(id),
             DepartPos::Random => 1,
             DepartPos::RandomFree => 10,
         };
@@ -147,7 +148,90 @@ impl Simulation {
                 return true;
             }
         }
-        self.veh[id as usize].depart_pos == DepartPos::RandomFree && self.try_insert_at(id, None)
+        self.veh[id as usize].depart_pos == DepartPos::RandomFree && self.try_insert_free(id)
+    }
+
+    /// SUMO 1.8's `freeInsertion` with the speed adapted (the front at the lane's start behind the last vehicle,
+    /// else the first gap, upstream first, that leaves both the leader's and the follower's secure gaps).
+    fn try_insert_free(&mut self, id: VehicleId) -> bool {
+        let v = &self.veh[id as usize];
+        let p = &self.types[v.vtype as usize];
+        let lane = self.routes[v.route as usize].lanes[0];
+        let lane_len = self.lane_at(lane as usize).length;
+        let top = match v.depart_speed {
+            s if s.is_infinite() => self.desired_speed(v, lane),
+            s => s,
+        };
+        let (length, min_gap) = (v.length, p.min_gap);
+        // upstream first: mapc keeps each lane front first
+        let on_lane: Vec<(f64, f64, f64, usize)> = self.lane_veh[lane as usize]
+            .iter()
+            .rev()
+            .map(|&o| {
+                let ov = &self.veh[o as usize];
+                (ov.pos, ov.length, ov.speed, ov.vtype as usize)
+            })
+            .collect();
+        let mut candidates: Vec<(f64, f64)> = Vec::new();
+        match on_lane.first() {
+            None => candidates.push((0.0, top)),
+            Some(&(pos, len, speed, _)) => {
+                let needed = p.secure_gap(speed, speed) + min_gap;
+                if pos - len >= needed {
+                    candidates.push((0.0, p.insertion_follow_speed(top, needed, speed, top).fmin(top)));
+                }
+            }
+        }
+        for (i, &(f_pos, _, f_speed, f_type)) in on_lane.iter().enumerate() {
+            let (front_max, speed) = match on_lane.get(i + 1) {
+                Some(&(l_pos, l_len, l_speed, _)) => {
+                    let speed = l_speed.fmin(top);
+                    (l_pos - l_len - (p.secure_gap(speed, l_speed) + min_gap), speed)
+                }
+                None => (lane_len, top),
+            };
+            let fp = &self.types[f_type];
+            let back_min = f_pos + fp.min_gap + fp.secure_gap(f_speed, 0.0) + length;
+            if front_max > 0.0 && back_min + POSITION_EPS < front_max {
+                candidates.push((back_min + POSITION_EPS, speed));
+            }
+        }
+        let rule = self.veh[id as usize].depart_speed;
+        for (at, speed) in candidates {
+            if self.try_insert_adapted(id, at, speed) {
+                return true;
+            }
+            self.veh[id as usize].depart_speed = rule;
+        }
+        false
+    }
+
+    /// The insertion with the front at `at` and the highest speed up to `upper` that passes the check (SUMO's
+    /// adaptable speed, bisected to 1/256 of it).
+    fn try_insert_adapted(&mut self, id: VehicleId, at: f64, upper: f64) -> bool {
+        let allowed_at = |sim: &mut Simulation, speed: f64| {
+            sim.veh[id as usize].depart_speed = speed;
+            sim.insertion_allowed_at(id, Some(at))
+        };
+        let speed = if allowed_at(self, upper) {
+            upper
+        } else if allowed_at(self, 0.0) {
+            let (mut lo, mut hi) = (0.0, upper);
+            for _ in 0..8 {
+                let mid = 0.5 * (lo + hi);
+                if allowed_at(self, mid) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        } else {
+            return false;
+        };
+        self.veh[id as usize].depart_speed = speed;
+        self.place_on_entry(id, Some(at), true);
+        true
     }
 
     /// The insertion check and, where it passes, the insertion: the front at `at` on the entry lane, or at its
