@@ -336,5 +336,9 @@ fn depart_pos_free_inserts_at_the_lane_start_behind_the_last_vehicle_as_sumo_doe
         .iter()
         .filter(|l| l.contains("departPos=\"0.00\""))
         .count();
-    assert!(at_start * 2 > main.len(), "{at_start} of {} at the lane start", main.len());
+    assert!(
+        at_start * 2 > main.len(),
+        "{at_start} of {} at the lane start",
+        main.len()
+    );
 }

@@ -353,8 +353,15 @@ impl<'a> Demand<'a> {
             "vehicle" | "flow" | "trip" => self.departures.push(e),
             "param" | "interval" if e.children.is_empty() => {}
             // outputs that change nothing in the run: read, and said once each not to be written
-            "edgeData" | "laneData" | "timedEvent" | "laneAreaDetector" | "e2Detector"
-            | "entryExitDetector" | "e3Detector" | "instantInductionLoop" | "routeProbe"
+            "edgeData"
+            | "laneData"
+            | "timedEvent"
+            | "laneAreaDetector"
+            | "e2Detector"
+            | "entryExitDetector"
+            | "e3Detector"
+            | "instantInductionLoop"
+            | "routeProbe"
             | "vTypeProbe" => {
                 self.skipped.insert(format!(
                     "<{}> (an output of SUMO's that mapc does not write; the run is the same)",
@@ -603,6 +610,49 @@ impl<'a> Demand<'a> {
         Ok((Some(flow), last))
     }
 
+    /// A trip's roads between its first and last, routed as SUMO 1.8 routes a trip at its departure: the fastest
+    /// way at the speed limits (capped by the type's maximum speed) from each of its stops (from, each via, to) to
+    /// the next.
+    fn fastest_via(
+        &self,
+        e: &SumoElement,
+        stops: &[Vec<mapc_graph::RoadId>],
+        graph: &LaneGraph,
+    ) -> Result<Vec<String>, SumoError> {
+        let max_speed = e
+            .get("type")
+            .and_then(|t| self.types.get(t))
+            .map_or(f64::INFINITY, |t| t.max_speed);
+        let mut roads: Vec<mapc_graph::RoadId> = vec![*stops[0].last().expect("found roads")];
+        for next in &stops[1..] {
+            let here = *roads.last().expect("a first road");
+            let leg = graph
+                .fastest_road_route(here, next[0], max_speed)
+                .ok_or_else(|| {
+                    SumoError::at(
+                        &e.place,
+                        format!(
+                            "no way from `{}` to `{}` in the network",
+                            road_name(graph, here),
+                            road_name(graph, next[0])
+                        ),
+                    )
+                })?;
+            roads.extend(leg.into_iter().skip(1));
+            roads.extend(next.iter().skip(1));
+        }
+        let inner = &roads[1..roads.len().saturating_sub(stops.last().map_or(1, Vec::len))];
+        let mut names: Vec<String> = Vec::new();
+        for &r in inner {
+            let name = road_name(graph, r);
+            // a SUMO edge of several roads is named once
+            if names.last() != Some(&name) {
+                names.push(name);
+            }
+        }
+        Ok(names)
+    }
+
     /// The roads a departure drives: its route (by id or inside it), or a trip's from, via and to.
     fn path(&self, e: &SumoElement, graph: &LaneGraph) -> Result<Path, SumoError> {
         let inner = e.children.iter().find(|c| c.name == "route");
@@ -643,15 +693,14 @@ impl<'a> Demand<'a> {
                     .get("to")
                     .ok_or_else(|| SumoError::at(&e.place, "`from` without `to`"))?;
                 let via = split(e.get("via").unwrap_or(""));
-                for edge in std::iter::once(from)
+                let stops: Vec<Vec<mapc_graph::RoadId>> = std::iter::once(from)
                     .chain(via.iter().map(String::as_str))
                     .chain([to])
-                {
-                    find(edge, graph, &e.place)?;
-                }
+                    .map(|edge| find(edge, graph, &e.place))
+                    .collect::<Result<_, _>>()?;
                 Path {
                     from: from.to_string(),
-                    via,
+                    via: self.fastest_via(e, &stops, graph)?,
                     to: Some(to.to_string()),
                 }
             }
@@ -668,6 +717,16 @@ fn find(edge: &str, graph: &LaneGraph, place: &str) -> Result<Vec<mapc_graph::Ro
     graph
         .find_roads(edge)
         .map_err(|_| SumoError::at(place, format!("edge `{edge}` is not in the network")))
+}
+
+/// How a scenario names road `r` of `graph`: its SUMO edge id where that names it alone, else its mapc id.
+fn road_name(graph: &LaneGraph, r: mapc_graph::RoadId) -> String {
+    graph
+        .road(r)
+        .and_then(|road| road.provenance.sumo_ids.first())
+        .filter(|id| graph.find_roads(id).is_ok_and(|found| found == [r]))
+        .cloned()
+        .unwrap_or_else(|| r.to_string())
 }
 
 /// Each edge of a route leads into the next (SUMO refuses a route whose edges do not connect).

@@ -80,8 +80,16 @@ fn a_value_mapc_does_not_simulate_is_refused_with_its_place_and_dropped_when_ski
     let game = shipped("ramp_game/ramp.sumocfg");
     let r = from_sumocfg(&game, &ReadOptions::default()).unwrap();
     let w = r.warnings.join("\n");
-    assert!(w.contains("<timedEvent>") && w.contains("<edgeData>"), "{w}");
-    let highway = r.scenario.flows.iter().find(|f| f.id == "highway1").unwrap();
+    assert!(
+        w.contains("<timedEvent>") && w.contains("<edgeData>"),
+        "{w}"
+    );
+    let highway = r
+        .scenario
+        .flows
+        .iter()
+        .find(|f| f.id == "highway1")
+        .unwrap();
     assert_eq!(highway.depart_pos.as_deref(), Some("free"));
     // what mapc does not simulate is refused with its place, and dropped with --skip-unsupported
     let routes = "<routes>\n<flow id=\"f\" from=\"M1\" to=\"M3\" vehsPerHour=\"100\" departPos=\"last\"/></routes>";
@@ -89,7 +97,10 @@ fn a_value_mapc_does_not_simulate_is_refused_with_its_place_and_dropped_when_ski
     let e = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default())
         .unwrap_err()
         .to_string();
-    assert!(e.contains("r.rou.xml: line 2, column 1, in <flow id=\"f\">"), "{e}");
+    assert!(
+        e.contains("r.rou.xml: line 2, column 1, in <flow id=\"f\">"),
+        "{e}"
+    );
     let skip = ReadOptions {
         skip_unsupported: true,
     };
@@ -382,4 +393,20 @@ fn induction_loops_read_as_sumo_places_them() {
     assert_eq!(back.file.as_deref(), Some("d.xml"));
     assert!((far.pos_m - 192.91).abs() < 1e-9, "{far:?}");
     assert_eq!(far.period_s, 60.0);
+}
+
+#[test]
+fn a_trip_is_routed_by_travel_time_as_sumo_routes_it() {
+    // one road at 5 m/s or two at 30 m/s: SUMO 1.8's duarouter takes the two (scenarios/sumo/route_choice)
+    let r = from_sumocfg(
+        &shipped("route_choice/route_choice.sumocfg"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    let trip = &r.scenario.flows[0];
+    assert_eq!(
+        (trip.from.as_str(), trip.to.as_deref()),
+        ("in", Some("out"))
+    );
+    assert_eq!(trip.via, ["fast1", "fast2"]);
 }

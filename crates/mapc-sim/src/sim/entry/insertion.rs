@@ -178,7 +178,10 @@ impl Simulation {
             Some(&(pos, len, speed, _)) => {
                 let needed = p.secure_gap(speed, speed) + min_gap;
                 if pos - len >= needed {
-                    candidates.push((0.0, p.insertion_follow_speed(top, needed, speed, top).fmin(top)));
+                    candidates.push((
+                        0.0,
+                        p.insertion_follow_speed(top, needed, speed, top).fmin(top),
+                    ));
                 }
             }
         }
@@ -186,7 +189,10 @@ impl Simulation {
             let (front_max, speed) = match on_lane.get(i + 1) {
                 Some(&(l_pos, l_len, l_speed, _)) => {
                     let speed = l_speed.fmin(top);
-                    (l_pos - l_len - (p.secure_gap(speed, l_speed) + min_gap), speed)
+                    (
+                        l_pos - l_len - (p.secure_gap(speed, l_speed) + min_gap),
+                        speed,
+                    )
                 }
                 None => (lane_len, top),
             };
