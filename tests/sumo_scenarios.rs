@@ -342,3 +342,35 @@ fn depart_pos_free_inserts_at_the_lane_start_behind_the_last_vehicle_as_sumo_doe
         main.len()
     );
 }
+
+#[test]
+fn a_types_lc_parameters_change_how_it_changes_lanes() {
+    // highway_ramp with every vType given lcSpeedGain="0": no lane change for speed is left
+    let dir = scratch_dir("sumo-lc-params");
+    for f in [
+        "highway.net.xml",
+        "highway-ramp.rou.xml",
+        "highway-ramp.sumocfg",
+    ] {
+        std::fs::copy(format!("scenarios/sumo/highway_ramp/{f}"), dir.join(f)).unwrap();
+    }
+    let routes = dir.join("highway-ramp.rou.xml");
+    let text = std::fs::read_to_string(&routes).unwrap();
+    std::fs::write(
+        &routes,
+        text.replace("<vType ", "<vType lcSpeedGain=\"0\" "),
+    )
+    .unwrap();
+    let reasons = |cfg: &str| {
+        let j = mapc_json(&["sim", cfg, "--seeds", "1", "--json"]);
+        j["runs"][0]["lane_changes_by_reason"]["speed_gain"]
+            .as_u64()
+            .unwrap()
+    };
+    assert!(reasons(HIGHWAY_RAMP) > 20);
+    assert_eq!(
+        reasons(dir.join("highway-ramp.sumocfg").to_str().unwrap()),
+        0
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

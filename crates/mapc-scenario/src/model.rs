@@ -254,6 +254,58 @@ pub struct VehicleType {
     /// larger, when not given).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub emergency_decel: Option<f64>,
+    /// LC2013's parameters of this type (SUMO's `lc*` attributes); absent: SUMO 1.8's defaults.
+    #[serde(default, skip_serializing_if = "LaneChangeParams::is_default")]
+    pub lane_change: LaneChangeParams,
+}
+
+/// LC2013's per-type parameters (SUMO's `lcStrategic`, `lcCooperative`, `lcSpeedGain`, `lcKeepRight`,
+/// `lcLookaheadLeft`, `lcSpeedGainRight`, `lcAssertive`); a value left out is SUMO 1.8's default.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LaneChangeParams {
+    /// Scales the strategic look-ahead; negative: no strategic changes (1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strategic: Option<f64>,
+    /// Willingness to change lanes for others (1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cooperative: Option<f64>,
+    /// Eagerness to change lanes for speed (1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_gain: Option<f64>,
+    /// Eagerness to keep right (1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keep_right: Option<f64>,
+    /// Strategic look-ahead to the left relative to the right (2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lookahead_left: Option<f64>,
+    /// Speed-gain wish to the right relative to the left (0.1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_gain_right: Option<f64>,
+    /// Accepts gaps this many times smaller than the secure ones (1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub assertive: Option<f64>,
+}
+
+impl LaneChangeParams {
+    pub fn is_default(&self) -> bool {
+        *self == LaneChangeParams::default()
+    }
+
+    /// Each parameter given, by its scenario name.
+    pub fn given(&self) -> impl Iterator<Item = (&'static str, f64)> {
+        [
+            ("strategic", self.strategic),
+            ("cooperative", self.cooperative),
+            ("speed_gain", self.speed_gain),
+            ("keep_right", self.keep_right),
+            ("lookahead_left", self.lookahead_left),
+            ("speed_gain_right", self.speed_gain_right),
+            ("assertive", self.assertive),
+        ]
+        .into_iter()
+        .filter_map(|(name, v)| Some((name, v?)))
+    }
 }
 
 /// The car-following models a vehicle type may drive with (SUMO's `carFollowModel`).
@@ -291,6 +343,7 @@ impl Default for VehicleType {
             car_follow_model: CarFollowModel::Idm,
             sigma: None,
             emergency_decel: None,
+            lane_change: LaneChangeParams::default(),
         }
     }
 }

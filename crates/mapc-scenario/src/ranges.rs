@@ -40,6 +40,14 @@ pub const SPEED_DEV: Range = closed(0.0, 1.0, "");
 pub const IMPATIENCE: Range = closed(0.0, 1.0, "");
 /// Krauss' dawdling.
 pub const SIGMA: Range = closed(0.0, 1.0, "");
+/// LC2013's per-type parameters: `strategic` may be negative (no strategic changes), `assertive` divides gaps.
+pub fn lane_change_range(name: &str) -> Range {
+    match name {
+        "strategic" => closed(-1000.0, 1000.0, ""),
+        "assertive" => closed(0.01, 1000.0, ""),
+        _ => closed(0.0, 1000.0, ""),
+    }
+}
 /// IDM sub-step: with a step of at most 10 s, at most 10 000 sub-steps.
 pub const IDM_STEPPING_S: Range = closed(0.001, 10.0, "s");
 pub const INITIAL_VEHICLES: Range = closed(0.0, 100_000.0, "vehicles");
@@ -159,6 +167,9 @@ pub fn check_scenario(s: &Scenario) -> Result<(), Refusal> {
         }
         if let Some(e) = t.emergency_decel {
             check(key("emergency_decel"), e, closed(t.decel, 50.0, "m/s²"))?;
+        }
+        for (f, v) in t.lane_change.given() {
+            check(key(&format!("lane_change.{f}")), v, lane_change_range(f))?;
         }
     }
     let vph = closed(0.0, entry_capacity_vph(s.step_s), "veh/h");

@@ -33,6 +33,8 @@ pub struct VehicleTypeSpec {
     pub car_follow_model: CarFollowModelKind,
     /// Krauss' dawdling in [0, 1].
     pub sigma: f64,
+    /// LC2013's parameters of the type (absent ones: SUMO 1.8's defaults).
+    pub lane_change: mapc_scenario::LaneChangeParams,
 }
 
 pub use mapc_scenario::CarFollowModel as CarFollowModelKind;
@@ -57,6 +59,7 @@ impl VehicleTypeSpec {
             idm_stepping_s: 0.25,
             car_follow_model: CarFollowModelKind::Idm,
             sigma: 0.0,
+            lane_change: mapc_scenario::LaneChangeParams::default(),
         }
     }
 }

@@ -277,8 +277,13 @@ fn bad_demand_is_refused_with_file_line_and_element() {
         ),
         (
             "lc_param",
-            r#"<routes><vType id="a" lcStrategic="2"/></routes>"#,
-            "`lcStrategic=\"2\"`",
+            r#"<routes><vType id="a" lcSublane="2"/></routes>"#,
+            "`lcSublane=\"2\"`: a lane-change parameter mapc does not simulate",
+        ),
+        (
+            "lc_range",
+            r#"<routes><vType id="a" lcAssertive="0"/></routes>"#,
+            "lane-change assertive",
         ),
         (
             "model",
@@ -409,4 +414,18 @@ fn a_trip_is_routed_by_travel_time_as_sumo_routes_it() {
         ("in", Some("out"))
     );
     assert_eq!(trip.via, ["fast1", "fast2"]);
+}
+
+#[test]
+fn a_types_lane_change_parameters_are_read() {
+    let routes = r#"<routes><vType id="eager" lcSpeedGain="2.5" lcKeepRight="0" lcStrategic="-1" lcAssertive="1.5"/>
+<flow id="f" type="eager" from="M1" to="M3" vehsPerHour="600"/></routes>"#;
+    let dir = with_files("lc", &[("r.rou.xml", routes), ("s.sumocfg", CFG)]);
+    let r = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default()).unwrap();
+    let lc = r.scenario.vehicle_types["eager"].lane_change;
+    assert_eq!(
+        (lc.speed_gain, lc.keep_right, lc.strategic, lc.assertive),
+        (Some(2.5), Some(0.0), Some(-1.0), Some(1.5))
+    );
+    assert_eq!((lc.cooperative, lc.lookahead_left), (None, None));
 }

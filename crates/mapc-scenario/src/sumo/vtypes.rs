@@ -204,6 +204,20 @@ pub fn vtype(
     if let Some(stepping) = num(e, "stepping")? {
         t.idm_stepping_s = stepping;
     }
+    t.lane_change = crate::model::LaneChangeParams {
+        strategic: num(e, "lcStrategic")?,
+        cooperative: num(e, "lcCooperative")?,
+        speed_gain: num(e, "lcSpeedGain")?,
+        keep_right: num(e, "lcKeepRight")?,
+        lookahead_left: num(e, "lcLookaheadLeft")?,
+        speed_gain_right: num(e, "lcSpeedGainRight")?,
+        assertive: num(e, "lcAssertive")?,
+    };
+    for (name, v) in t.lane_change.given() {
+        crate::ranges::check(name, v, crate::ranges::lane_change_range(name)).map_err(|r| {
+            SumoError::at(&e.place, format!("lane-change {}: {}", r.key, r.message))
+        })?;
+    }
     for (k, v) in &e.attrs {
         let known = matches!(
             k.as_str(),
@@ -222,13 +236,21 @@ pub fn vtype(
                 | "sigma"
                 | "delta"
                 | "stepping"
+                | "lcStrategic"
+                | "lcCooperative"
+                | "lcSpeedGain"
+                | "lcKeepRight"
+                | "lcLookaheadLeft"
+                | "lcSpeedGainRight"
+                | "lcAssertive"
         ) || WITHOUT_EFFECT.contains(&k.as_str());
         if known {
             continue;
         }
         // lane-change and junction-model parameters other than SUMO's defaults change the driving
         let what = if k.starts_with("lc") {
-            "per-type lane-change parameters are not simulated (every type drives LC2013 with SUMO's defaults)"
+            "a lane-change parameter mapc does not simulate (it reads lcStrategic, lcCooperative, lcSpeedGain, \
+             lcKeepRight, lcLookaheadLeft, lcSpeedGainRight and lcAssertive)"
         } else if k.starts_with("jm") {
             "junction-model parameters are not simulated"
         } else {

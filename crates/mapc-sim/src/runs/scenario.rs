@@ -75,6 +75,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             idm_stepping_s: t.idm_stepping_s,
             car_follow_model: t.car_follow_model,
             sigma: t.sigma.unwrap_or(KRAUSS_SIGMA),
+            lane_change: t.lane_change,
         })
         .collect();
     let type_index = |name: &str, what: &str| -> Result<usize, SimError> {

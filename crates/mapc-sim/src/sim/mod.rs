@@ -106,7 +106,8 @@ pub struct Simulation {
     /// Per vehicle type, what the hot loop reads (cached from the spec and the IDM parameters).
     type_consts: Table<TypeConsts>,
     /// Lane changing (networks with a road of several lanes only): the model (each vehicle's record is in `Veh`).
-    lc_model: lane_change::LcModel,
+    /// Per vehicle type, its LC2013 (its `lc*` parameters).
+    lc_models: Table<lane_change::LcModel>,
     /// Road sequences of the routes, numbered (routes that differ only in lanes share one).
     road_seqs: std::collections::HashMap<Vec<usize>, u32>,
     /// Best lanes computed so far, by (road sequence, index of the current road in it, vehicle type).
@@ -224,7 +225,11 @@ impl Simulation {
                 })
                 .collect(),
             types: Table(types),
-            lc_model: lane_change::default_model(dt),
+            lc_models: spec
+                .vehicle_types
+                .iter()
+                .map(|t| lane_change::model_of(&t.lane_change, dt))
+                .collect(),
             road_seqs: std::collections::HashMap::new(),
             best_cache: BestLanesCache::default(),
             lane_brutto: Vec::new(),

@@ -120,6 +120,13 @@ impl CarFollowModel for Krauss {
             .fmin(self.max_next_speed(speed))
     }
 
+    /// SUMO 1.8 skips the emergency-braking correction while lanes are changed (`MSGlobals::gComputeLC`), as it
+    /// does on insertion.
+    fn follow_speed_lc(&self, gap: f64, speed: f64, leader_speed: f64, _desired_speed: f64) -> f64 {
+        self.maximum_safe_follow_speed(gap, speed, leader_speed, true)
+            .fmin(self.max_next_speed(speed))
+    }
+
     /// SUMO's Krauss `stopSpeed`: the reaction time towards a stop point is one step.
     fn stop_speed(&self, gap: f64, speed: f64, _desired_speed: f64) -> f64 {
         self.maximum_safe_stop_speed(gap, self.dt)

@@ -24,6 +24,13 @@ pub trait CarFollowModel {
     /// The speed after one step behind a leader `gap` ahead driving at `leader_speed`.
     fn follow_speed(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64) -> f64;
 
+    /// [`Self::follow_speed`] as the lane-change model computes it (SUMO's `gComputeLC`): Krauss then leaves out
+    /// its emergency-braking correction.
+    #[inline(always)]
+    fn follow_speed_lc(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64) -> f64 {
+        self.follow_speed(gap, speed, leader_speed, desired_speed)
+    }
+
     /// The speed after one step that lets the vehicle stop within `gap`.
     fn stop_speed(&self, gap: f64, speed: f64, desired_speed: f64) -> f64;
 
@@ -187,6 +194,10 @@ impl CarFollowModel for CfModel {
     #[inline(always)]
     fn follow_speed(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64) -> f64 {
         by_model!(self, m => m.follow_speed(gap, speed, leader_speed, desired_speed))
+    }
+    #[inline(always)]
+    fn follow_speed_lc(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64) -> f64 {
+        by_model!(self, m => m.follow_speed_lc(gap, speed, leader_speed, desired_speed))
     }
     #[inline(always)]
     fn stop_speed(&self, gap: f64, speed: f64, desired_speed: f64) -> f64 {

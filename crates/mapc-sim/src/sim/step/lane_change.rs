@@ -108,7 +108,7 @@ impl Simulation {
         let Some(rec) = self.veh[id as usize].lc.as_deref_mut() else {
             return wanted;
         };
-        self.lc_model.patch_speed(
+        self.lc_models[vtype].patch_speed(
             &mut rec.mem,
             speed,
             &self.types[vtype],
@@ -151,7 +151,8 @@ impl Simulation {
                 });
                 rec.accel = (speed - rec.prev_speed) / dt;
                 rec.prev_speed = speed;
-                self.lc_model.prepare_step(&mut rec.mem);
+                // (the memory's step, the same for every type's model)
+                self.lc_models[0].prepare_step(&mut rec.mem);
             }
         }
         let mut scratch = std::mem::take(&mut self.lc_scratch);
@@ -382,18 +383,20 @@ impl Simulation {
         if let Some(o) = first.filter(|&f| Some(f) != last) {
             s.blocked_ahead.first = Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
         }
+        let vtype = self.veh[id as usize].vtype as usize;
         let mem = &mut self.veh[id as usize]
             .lc
             .as_deref_mut()
             .expect("recorded at the pass's start")
             .mem;
-        let d = self.lc_model.decide(mem, &s);
+        let d = self.lc_models[vtype].decide(mem, &s);
         for m in &d.messages {
             let (Message::SpeedAdvice { to, .. } | Message::KeepRoom { to, .. }) = *m;
             let v = &mut self.veh[to as VehicleId as usize];
             let own = v.speed;
+            let to_type = v.vtype as usize;
             let mem = &mut v.lc.get_or_insert_default().mem;
-            self.lc_model.receive(mem, m, own);
+            self.lc_models[to_type].receive(mem, m, own);
         }
         for side in &d.urgent_blocked {
             let t = (index as i32 + side.offset()) as usize;
@@ -498,7 +501,7 @@ impl Simulation {
             length: ov.length,
             max_speed: self.desired_speed(ov, ov.lane),
             stopped: false,
-            lc_state: rec.map_or(0, |r| self.lc_model.state(&r.mem)),
+            lc_state: rec.map_or(0, |r| self.lc_models[ov.vtype as usize].state(&r.mem)),
         }
     }
 
@@ -737,6 +740,21 @@ impl Simulation {
 /// The lane-change model every vehicle drives with.
 pub(in crate::sim) type LcModel = Lc2013;
 
-pub(in crate::sim) fn default_model(dt: f64) -> LcModel {
-    Lc2013::default().for_step(dt)
+/// A type's LC2013 from its `lc*` parameters (SUMO 1.8's defaults where absent), for steps of `dt` seconds.
+pub(in crate::sim) fn model_of(p: &mapc_scenario::LaneChangeParams, dt: f64) -> LcModel {
+    let d = crate::models::lc::Lc2013Params::default();
+    let cooperative = p.cooperative.unwrap_or(d.cooperative);
+    Lc2013::new(crate::models::lc::Lc2013Params {
+        strategic: p.strategic.unwrap_or(d.strategic),
+        cooperative,
+        speed_gain: p.speed_gain.unwrap_or(d.speed_gain),
+        keep_right: p.keep_right.unwrap_or(d.keep_right),
+        lookahead_left: p.lookahead_left.unwrap_or(d.lookahead_left),
+        speed_gain_right: p.speed_gain_right.unwrap_or(d.speed_gain_right),
+        assertive: p.assertive.unwrap_or(d.assertive),
+        // SUMO: lcCooperativeSpeed defaults to lcCooperative
+        cooperative_speed: cooperative,
+        ..d
+    })
+    .for_step(dt)
 }

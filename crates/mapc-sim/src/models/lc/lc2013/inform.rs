@@ -95,7 +95,7 @@ impl Lc2013 {
                 // slow down smoothly to follow the leader, allowing for its small decelerations
                 let target_speed = max2(
                     min_next_speed(p, ego.speed),
-                    p.follow_speed(neigh_next_gap, ego.speed, neigh_next_speed, ego.max_speed),
+                    p.follow_speed_lc(neigh_next_gap, ego.speed, neigh_next_speed, ego.max_speed),
                 );
                 if target_speed < ego.speed {
                     let decel = if remaining_seconds == 0.0 {
@@ -130,7 +130,7 @@ impl Lc2013 {
             // not blocked now: stay far enough behind the leader
             let target_speed = max2(
                 min_next_speed(p, ego.speed),
-                p.follow_speed(neigh_next_gap, ego.speed, neigh_next_speed, ego.max_speed),
+                p.follow_speed_lc(neigh_next_gap, ego.speed, neigh_next_speed, ego.max_speed),
             );
             mem.add_speed_advice(target_speed, ego.speed, dt);
             min2(target_speed, planned_speed)
@@ -183,7 +183,7 @@ impl Lc2013 {
                 // from above by computing it twice
                 let v_safe_1 = max2(
                     neigh_new_speed,
-                    np.follow_speed(
+                    np.follow_speed_lc(
                         nv.gap + planned_speed * dt,
                         nv.speed,
                         planned_speed,
@@ -192,7 +192,7 @@ impl Lc2013 {
                 );
                 let v_safe = max2(
                     neigh_new_speed,
-                    np.follow_speed(
+                    np.follow_speed_lc(
                         nv.gap + dt * (planned_speed - v_safe_1),
                         nv.speed,
                         planned_speed,
@@ -245,13 +245,13 @@ impl Lc2013 {
             }
         } else if blocked & lca::BLOCKED_BY_LEADER != 0 {
             // not blocked by the follower now: keep it that way
-            let v_safe_1 = np.follow_speed(
+            let v_safe_1 = np.follow_speed_lc(
                 nv.gap + dt * planned_speed,
                 nv.speed,
                 planned_speed,
                 nv.max_speed,
             );
-            let v_safe = np.follow_speed(
+            let v_safe = np.follow_speed_lc(
                 nv.gap + dt * (planned_speed - v_safe_1),
                 nv.speed,
                 planned_speed,
@@ -303,7 +303,7 @@ impl Lc2013 {
             } else {
                 lca::AMBACKBLOCKER
             };
-            let v = p.follow_speed(b.gap - POSITION_EPS, ego.speed, b.speed, ego.max_speed);
+            let v = p.follow_speed_lc(b.gap - POSITION_EPS, ego.speed, b.speed, ego.max_speed);
             mem.add_speed_advice(v, ego.speed, p.dt);
         }
         state

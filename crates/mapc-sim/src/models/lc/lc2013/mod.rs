@@ -344,7 +344,7 @@ impl Lc2013 {
                 if delta_v > 0.0 {
                     let p = &ego.params;
                     let v_max_decel = max2(0.0, ego.speed - p.decel * dt);
-                    let v_safe_follow = p.follow_speed(nl.gap, ego.speed, nl.speed, v_max);
+                    let v_safe_follow = p.follow_speed_lc(nl.gap, ego.speed, nl.speed, v_max);
                     let v_stay_behind = nl.speed - HELP_OVERTAKE;
                     let mut v_safe = if v_safe_follow >= v_max_decel {
                         v_safe_follow
@@ -359,7 +359,7 @@ impl Lc2013 {
                     // the wish to go left only grows shortly before braking would be needed
                     let delta_gap_future = delta_v * 8.0;
                     let v_safe_future =
-                        p.follow_speed(nl.gap - delta_gap_future, ego.speed, nl.speed, v_max);
+                        p.follow_speed_lc(nl.gap - delta_gap_future, ego.speed, nl.speed, v_max);
                     if v_safe_future < v_safe {
                         let relative_gain = delta_v / max2(v_max, RELGAIN_NORMALIZATION_MIN_SPEED);
                         mem.speed_gain_probability += dt * relative_gain;

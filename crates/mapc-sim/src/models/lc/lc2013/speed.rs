@@ -70,8 +70,8 @@ pub(super) fn anticipate_follow_speed(
         // the speed one second ahead (SUMO's #6562)
         let max_speed_1s = ego.speed + p.accel - p.accel * p.dt;
         match leader {
-            None => p.follow_speed(dist, max_speed_1s, 0.0, v_max),
-            Some(l) => p.follow_speed(l.gap, max_speed_1s, l.speed, v_max),
+            None => p.follow_speed_lc(dist, max_speed_1s, 0.0, v_max),
+            Some(l) => p.follow_speed_lc(l.gap, max_speed_1s, l.speed, v_max),
         }
     } else {
         match leader {
