@@ -213,31 +213,47 @@ impl Simulation {
     }
 
     /// The insertion with the front at `at` and the highest speed up to `upper` that passes the check (SUMO's
-    /// adaptable speed, bisected to 1/256 of it).
+    /// adaptable speed).
     fn try_insert_adapted(&mut self, id: VehicleId, at: f64, upper: f64) -> bool {
+        match self.highest_allowed_speed(id, Some(at), upper, true) {
+            Some(speed) => {
+                self.veh[id as usize].depart_speed = speed;
+                self.place_on_entry(id, Some(at), true);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// `upper` when the insertion check passes at it; else, with `lower`, the highest speed below it that passes
+    /// (bisected to 1/256 of it), if standing does. Leaves the vehicle's depart speed at the last speed tried.
+    fn highest_allowed_speed(
+        &mut self,
+        id: VehicleId,
+        at: Option<f64>,
+        upper: f64,
+        lower: bool,
+    ) -> Option<f64> {
         let allowed_at = |sim: &mut Simulation, speed: f64| {
             sim.veh[id as usize].depart_speed = speed;
-            sim.insertion_allowed_at(id, Some(at))
+            sim.insertion_allowed_at(id, at)
         };
-        let speed = if allowed_at(self, upper) {
-            upper
-        } else if allowed_at(self, 0.0) {
-            let (mut lo, mut hi) = (0.0, upper);
-            for _ in 0..8 {
-                let mid = 0.5 * (lo + hi);
-                if allowed_at(self, mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
+        if allowed_at(self, upper) {
+            return Some(upper);
+        }
+        if !(lower && allowed_at(self, 0.0)) {
+            return None;
+        }
+        let (mut lo, mut hi) = (0.0, upper);
+        for _ in 0..8 {
+            let mid = 0.5 * (lo + hi);
+            if allowed_at(self, mid) {
+                lo = mid;
+            } else {
+                hi = mid;
             }
-            lo
-        } else {
-            return false;
-        };
-        self.veh[id as usize].depart_speed = speed;
-        self.place_on_entry(id, Some(at), true);
-        true
+        }
+        Some(lo)
     }
 
     /// The insertion check and, where it passes, the insertion: the front at `at` on the entry lane, or at its
@@ -262,27 +278,7 @@ impl Simulation {
         let rule = v.depart_speed;
         let lane = self.routes[v.route as usize].lanes[0];
         let desired = self.desired_speed(v, lane);
-        let allowed_at = |sim: &mut Simulation, speed: f64| {
-            sim.veh[id as usize].depart_speed = speed;
-            sim.insertion_allowed_at(id, at)
-        };
-        let speed = if allowed_at(self, desired) {
-            Some(desired)
-        } else if lower && allowed_at(self, 0.0) {
-            let (mut lo, mut hi) = (0.0, desired);
-            for _ in 0..8 {
-                let mid = 0.5 * (lo + hi);
-                if allowed_at(self, mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            Some(lo)
-        } else {
-            None
-        };
-        match speed {
+        match self.highest_allowed_speed(id, at, desired, lower) {
             Some(s) => {
                 self.veh[id as usize].depart_speed = s;
                 self.place_on_entry(id, at, true);
