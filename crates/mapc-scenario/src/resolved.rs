@@ -332,11 +332,22 @@ impl ResolvedScenario {
             if let Some(lane) = f.depart_lane.as_deref().and_then(|l| l.parse::<u32>().ok()) {
                 let lanes = graph.road(from).map_or(0, |r| r.lanes.len());
                 if lane as usize >= lanes {
+                    // a generated network's lanes come from its own keys: name them
+                    let from_keys = match &scenario.network {
+                        NetworkSpec::SimpleMerge(p) => {
+                            format!("; network.simple_merge.lanes = {}", p.lanes)
+                        }
+                        NetworkSpec::LaneDrop(p) => format!(
+                            "; network.lane_drop.lanes_before = {}, lanes_after = {}",
+                            p.lanes_before, p.lanes_after
+                        ),
+                        _ => String::new(),
+                    };
                     return Err(invalid(
                         format!("flows[{i}].depart_lane"),
                         format!(
                             "flow `{}` departs on lane {lane}, but its entry road `{}` ({from}) has {lanes} lane(s) \
-                             (0 to {})",
+                             (0 to {}{from_keys})",
                             f.id,
                             f.from,
                             lanes.saturating_sub(1)
