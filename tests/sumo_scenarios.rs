@@ -374,3 +374,27 @@ fn a_types_lc_parameters_change_how_it_changes_lanes() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_sumo_users_scenario_exports_with_its_drivers_mixes_and_departure_rules() {
+    // ramp_game: Krauss drivers, a truck mix, flows by probability, departPos free and random
+    let dir = scratch_dir("sumo-export-users");
+    let out = run_mapc(&[
+        "export",
+        "scenarios/sumo/ramp_game/ramp.sumocfg",
+        "--sumo",
+        dir.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    let routes = std::fs::read_to_string(dir.join("ramp.rou.xml")).unwrap();
+    assert!(
+        routes.contains(r#"<vType id="truck" carFollowModel="Krauss""#),
+        "{routes}"
+    );
+    assert!(routes.contains(r#"sigma="0.5000""#));
+    assert!(routes.contains(r#"<vTypeDistribution id="highway1_types">"#));
+    assert!(routes.contains(r#"<vType id="truck@highway1_types" probability="0.200000""#));
+    assert!(routes.contains(r#"probability="0.220000""#));
+    assert!(routes.contains(r#"departPos="free""#) && routes.contains(r#"departPos="random""#));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -60,35 +60,32 @@ pub fn routes_xml(
     out.push_str("<!-- written by `mapc export` for SUMO 1.8 -->\n");
     start(&mut out, 0, "routes", &[]);
     for t in &spec.vehicle_types {
-        // SUMO 1.8 reads IDM's `stepping` as a whole number and computes its sub-steps from its own default of
-        // 0.25 s, which is what mapc's default mirrors; any other value has no SUMO 1.8 equivalent.
-        if t.idm_stepping_s != SUMO_IDM_STEPPING_S {
-            return Err(SimError::Spec(format!(
-                "vehicle type `{}`: idm_stepping_s = {} s, but SUMO 1.8's IDM only steps at {SUMO_IDM_STEPPING_S} s",
-                t.name, t.idm_stepping_s
-            )));
+        element(&mut out, 4, "vType", &vtype_attrs(t, &t.name, None)?);
+    }
+    // a flow drawing its vehicles' types from a mix: SUMO 1.8's vTypeDistribution of copies of the types
+    for (i, f) in spec.flows.iter().enumerate() {
+        if f.type_mix.is_empty() {
+            continue;
         }
-        element(
+        start(
             &mut out,
             4,
-            "vType",
-            &[
-                ("id", t.name.clone()),
-                ("carFollowModel", "IDM".into()),
-                ("accel", num(t.accel, 4)),
-                ("decel", num(t.decel, 4)),
-                ("emergencyDecel", num(t.emergency_decel, 4)),
-                ("tau", num(t.tau, 4)),
-                ("minGap", num(t.min_gap, 4)),
-                ("maxSpeed", num(t.max_speed, 4)),
-                ("length", num(t.length, 4)),
-                ("delta", num(t.delta, 4)),
-                ("speedFactor", num(t.speed_factor, 4)),
-                ("speedDev", num(t.speed_dev, 4)),
-                ("impatience", num(t.impatience, 4)),
-                ("color", if t.controlled { "red" } else { "yellow" }.into()),
-            ],
+            "vTypeDistribution",
+            &[("id", mix_id(&flow_ids[i]))],
         );
+        let mut below = 0.0;
+        for &(t, cumulative) in &f.type_mix {
+            let vt = &spec.vehicle_types[t];
+            let id = format!("{}@{}", vt.name, mix_id(&flow_ids[i]));
+            element(
+                &mut out,
+                8,
+                "vType",
+                &vtype_attrs(vt, &id, Some(cumulative - below))?,
+            );
+            below = cumulative;
+        }
+        out.push_str("    </vTypeDistribution>\n");
     }
     // Initial vehicles first: SUMO wants a route file sorted by departure.
     let depart = initial_depart_s(spec.step_s);
@@ -126,20 +123,35 @@ pub fn routes_xml(
         } else {
             86_400.0
         };
-        start(
-            &mut out,
-            4,
-            "flow",
-            &[
-                ("id", flow_ids[i].clone()),
-                ("type", spec.vehicle_types[f.vehicle_type].name.clone()),
-                ("begin", num(f.begin_s, 4)),
-                ("end", num(end, 4)),
-                ("vehsPerHour", num(f.vehs_per_hour, 4)),
-                ("departLane", depart_lane(graph, f)),
-                ("departSpeed", depart_speed(f.depart_speed)),
-            ],
-        );
+        let vtype = if f.type_mix.is_empty() {
+            spec.vehicle_types[f.vehicle_type].name.clone()
+        } else {
+            mix_id(&flow_ids[i])
+        };
+        let mut attrs = vec![
+            ("id", flow_ids[i].clone()),
+            ("type", vtype),
+            ("begin", num(f.begin_s, 4)),
+            ("end", num(end, 4)),
+        ];
+        match f.probability {
+            Some(p) => attrs.push(("probability", num(p, 6))),
+            None => attrs.push(("vehsPerHour", num(f.vehs_per_hour, 4))),
+        }
+        if let Some(n) = f.number {
+            attrs.push(("number", n.to_string()));
+        }
+        attrs.push(("departLane", depart_lane(graph, f)));
+        attrs.push(("departSpeed", depart_speed(f.depart_speed)));
+        match f.depart_pos {
+            mapc_sim::spec::DepartPos::Base => {}
+            mapc_sim::spec::DepartPos::Random => attrs.push(("departPos", "random".into())),
+            mapc_sim::spec::DepartPos::RandomFree => {
+                attrs.push(("departPos", "random_free".into()))
+            }
+            mapc_sim::spec::DepartPos::Free => attrs.push(("departPos", "free".into())),
+        }
+        start(&mut out, 4, "flow", &attrs);
         element(
             &mut out,
             8,
@@ -234,6 +246,72 @@ pub fn sumocfg(
     );
     out.push_str("</configuration>\n");
     out
+}
+
+/// The id of flow `flow`'s type mix.
+fn mix_id(flow: &str) -> String {
+    format!("{flow}_types")
+}
+
+/// A vType's attributes in SUMO 1.8's terms: the type's car-following model (IDM, or Krauss with its `sigma`),
+/// its parameters, its LC2013 parameters where given, and `probability` inside a distribution.
+fn vtype_attrs(
+    t: &mapc_sim::VehicleTypeSpec,
+    id: &str,
+    probability: Option<f64>,
+) -> Result<Vec<(&'static str, String)>, SimError> {
+    let krauss = t.car_follow_model == mapc_sim::spec::CarFollowModelKind::Krauss;
+    // SUMO 1.8 reads IDM's `stepping` as a whole number and computes its sub-steps from its own default of
+    // 0.25 s, which is what mapc's default mirrors; any other value has no SUMO 1.8 equivalent.
+    if !krauss && t.idm_stepping_s != SUMO_IDM_STEPPING_S {
+        return Err(SimError::Spec(format!(
+            "vehicle type `{}`: idm_stepping_s = {} s, but SUMO 1.8's IDM only steps at {SUMO_IDM_STEPPING_S} s",
+            t.name, t.idm_stepping_s
+        )));
+    }
+    let mut a = vec![("id", id.to_string())];
+    if let Some(p) = probability {
+        a.push(("probability", num(p, 6)));
+    }
+    a.push((
+        "carFollowModel",
+        if krauss { "Krauss" } else { "IDM" }.into(),
+    ));
+    a.extend([
+        ("accel", num(t.accel, 4)),
+        ("decel", num(t.decel, 4)),
+        ("emergencyDecel", num(t.emergency_decel, 4)),
+        ("tau", num(t.tau, 4)),
+        ("minGap", num(t.min_gap, 4)),
+        ("maxSpeed", num(t.max_speed, 4)),
+        ("length", num(t.length, 4)),
+    ]);
+    if krauss {
+        a.push(("sigma", num(t.sigma, 4)));
+    } else {
+        a.push(("delta", num(t.delta, 4)));
+    }
+    a.extend([
+        ("speedFactor", num(t.speed_factor, 4)),
+        ("speedDev", num(t.speed_dev, 4)),
+        ("impatience", num(t.impatience, 4)),
+    ]);
+    let lc = &t.lane_change;
+    for (attr, v) in [
+        ("lcStrategic", lc.strategic),
+        ("lcCooperative", lc.cooperative),
+        ("lcSpeedGain", lc.speed_gain),
+        ("lcKeepRight", lc.keep_right),
+        ("lcLookaheadLeft", lc.lookahead_left),
+        ("lcSpeedGainRight", lc.speed_gain_right),
+        ("lcAssertive", lc.assertive),
+    ] {
+        if let Some(v) = v {
+            a.push((attr, num(v, 4)));
+        }
+    }
+    a.push(("color", if t.controlled { "red" } else { "yellow" }.into()));
+    Ok(a)
 }
 
 /// SUMO's `departSpeed` of a flow: a number, or `max` / `desired`.
