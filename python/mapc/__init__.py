@@ -58,12 +58,12 @@ def with_avs(
     share: float,
     output: Optional[PathLike] = None,
     flows: Sequence[str] = (),
-    n_av: int = 5,
 ) -> str:
     """``scenario`` with ``share`` of each flow's vehicles (of ``flows``, by flow id or vehicle type; all when
     empty) driven as AVs, each flow split into its humans and an ``ID_av`` flow, as ``--av-share`` does. Written
     to ``output`` (a temporary file when omitted, kept for the process's life); returns its path. A scenario
-    without a controlled region gets the whole network with ``n_av`` AVs controlled at once."""
+    without a controlled region gets the whole network with 5 AVs controlled at once (``make_env``'s ``n_av``
+    sets another)."""
     if output is None:
         import atexit
         import tempfile
@@ -71,7 +71,7 @@ def with_avs(
         fd, output = tempfile.mkstemp(prefix="mapc_avs_", suffix=".toml")
         os.close(fd)
         atexit.register(lambda p=output: os.path.exists(p) and os.remove(p))
-    return _with_avs(os.fspath(scenario), float(share), os.fspath(output), list(flows), n_av)
+    return _with_avs(os.fspath(scenario), float(share), os.fspath(output), list(flows))
 
 
 def _scenario_with_avs(scenario: PathLike, av_share: Optional[float], av_flows: Sequence[str]) -> str:

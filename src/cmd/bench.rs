@@ -240,7 +240,7 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
         [
             "train",
             "--scenario",
-            &args.scenario(),
+            args.scenario(),
             "--reward",
             "outflow",
             "--preset",

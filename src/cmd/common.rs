@@ -85,7 +85,8 @@ pub struct SumoInputArgs {
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct AvArgs {
     /// Make this fraction (0 to 1) of each flow's vehicles AVs: each flow is split into its humans and an `ID_av`
-    /// flow of AVs (an AV copy of its type), as Flow's benchmarks give AVs their own inflow.
+    /// flow of AVs (an AV copy of its type), as Flow's benchmarks give AVs their own inflow. A scenario without a
+    /// controlled region gets the whole network with 5 AVs controlled at once (`mapc train --n-av` sets another).
     #[arg(long, value_name = "P")]
     pub av_share: Option<f64>,
     /// Only these flows (by flow id or vehicle type, comma-separated) get AVs.
@@ -96,9 +97,6 @@ pub struct AvArgs {
         requires = "av_share"
     )]
     pub av_flows: Vec<String>,
-    /// AVs controlled at once where the scenario has no controlled region of its own (then the whole network).
-    #[arg(long, value_name = "N", default_value_t = 5, requires = "av_share")]
-    pub av_n: u32,
 }
 
 impl AvArgs {
@@ -106,7 +104,7 @@ impl AvArgs {
     pub fn apply(&self, rs: ResolvedScenario) -> anyhow::Result<ResolvedScenario> {
         match self.av_share {
             None => Ok(rs),
-            Some(share) => Ok(rs.with_av_share(share, &self.av_flows, self.av_n)?),
+            Some(share) => Ok(rs.with_av_share(share, &self.av_flows)?),
         }
     }
 }

@@ -25,8 +25,8 @@ pub struct Args {
     )]
     pub geojson: Option<PathBuf>,
     /// Output directory for SUMO 1.8: NAME.net.xml (mapc's lane lengths and right of way), and for a scenario
-    /// NAME.rou.xml (IDM vehicle types, flows, initial vehicles) and NAME.sumocfg (step and the paper's options),
-    /// plus NAME.mapc.json (horizon, controlled region, N_AV). The directory is replaced as a whole.
+    /// NAME.rou.xml (vehicle types with their models, type mixes, flows, initial vehicles), NAME.sumocfg (step
+    /// and the paper's options) and NAME.mapc.json (horizon, controlled region, N_AV). The directory is replaced as a whole.
     #[arg(long, value_name = "DIR")]
     pub sumo: Option<PathBuf>,
     /// Print what was written as JSON.

@@ -34,6 +34,65 @@ impl Topology {
     }
 }
 
+/// Roads as nodes and the connections between them as edges, for routing (built once, queried per trip).
+pub struct RoadRoutes {
+    graph: DiGraph<RoadId, ()>,
+    node_of: HashMap<RoadId, NodeIndex>,
+}
+
+impl RoadRoutes {
+    pub fn new(g: &LaneGraph) -> RoadRoutes {
+        let mut graph = DiGraph::with_capacity(g.roads.len(), g.connections.len());
+        let node_of: HashMap<RoadId, NodeIndex> = g
+            .roads
+            .iter()
+            .map(|r| (r.id, graph.add_node(r.id)))
+            .collect();
+        let mut pairs: Vec<(RoadId, RoadId)> = g
+            .connections
+            .iter()
+            .map(|c| (c.from_road, c.to_road))
+            .collect();
+        pairs.sort();
+        pairs.dedup();
+        for (a, b) in pairs {
+            if let (Some(&na), Some(&nb)) = (node_of.get(&a), node_of.get(&b)) {
+                graph.add_edge(na, nb, ());
+            }
+        }
+        RoadRoutes { graph, node_of }
+    }
+
+    /// The fastest route of `g` (the graph these routes were built from) from road `from` to road `to`, as roads
+    /// in driving order, both ends included: each road costs its length over its speed limit, capped at
+    /// `max_speed` (SUMO's routing of a trip at its departure on an empty network).
+    pub fn fastest(
+        &self,
+        g: &LaneGraph,
+        from: RoadId,
+        to: RoadId,
+        max_speed: f64,
+    ) -> Option<Vec<RoadId>> {
+        if from == to {
+            return Some(vec![from]);
+        }
+        let cost = |rid: RoadId| {
+            g.road(rid).map_or(f64::INFINITY, |r| {
+                r.length_m / r.speed_mps().min(max_speed).max(0.1)
+            })
+        };
+        let (&start, &goal) = (self.node_of.get(&from)?, self.node_of.get(&to)?);
+        let (_cost, path) = petgraph::algo::astar(
+            &self.graph,
+            start,
+            |n| n == goal,
+            |e| cost(self.graph[petgraph::visit::EdgeRef::target(&e)]),
+            |_| 0.0,
+        )?;
+        Some(path.into_iter().map(|n| self.graph[n]).collect())
+    }
+}
+
 impl LaneGraph {
     /// The shortest route by length from junction `from` to junction `to`, as roads in driving order.
     pub fn shortest_route(&self, from: JunctionId, to: JunctionId) -> Option<Vec<RoadId>> {
@@ -58,48 +117,6 @@ impl LaneGraph {
             roads.push(best);
         }
         Some(roads)
-    }
-
-    /// The fastest route from road `from` to road `to` along the graph's connections, as roads in driving order
-    /// (both ends included): each road costs its length over its speed limit, capped at `max_speed` (SUMO's
-    /// routing of a trip at its departure on an empty network). Ties go to the lower road ids.
-    pub fn fastest_road_route(
-        &self,
-        from: RoadId,
-        to: RoadId,
-        max_speed: f64,
-    ) -> Option<Vec<RoadId>> {
-        if from == to {
-            return Some(vec![from]);
-        }
-        let mut graph: DiGraph<RoadId, f64> =
-            DiGraph::with_capacity(self.roads.len(), self.connections.len());
-        let node_of: HashMap<RoadId, NodeIndex> = self
-            .roads
-            .iter()
-            .map(|r| (r.id, graph.add_node(r.id)))
-            .collect();
-        let cost = |rid: RoadId| {
-            self.road(rid).map_or(f64::INFINITY, |r| {
-                r.length_m / r.speed_mps().min(max_speed).max(0.1)
-            })
-        };
-        let mut pairs: Vec<(RoadId, RoadId)> = self
-            .connections
-            .iter()
-            .map(|c| (c.from_road, c.to_road))
-            .collect();
-        pairs.sort();
-        pairs.dedup();
-        for (a, b) in pairs {
-            if let (Some(&na), Some(&nb)) = (node_of.get(&a), node_of.get(&b)) {
-                graph.add_edge(na, nb, cost(b));
-            }
-        }
-        let (&start, &goal) = (node_of.get(&from)?, node_of.get(&to)?);
-        let (_cost, path) =
-            petgraph::algo::astar(&graph, start, |n| n == goal, |e| *e.weight(), |_| 0.0)?;
-        Some(path.into_iter().map(|n| graph[n]).collect())
     }
 
     /// Road-length distance from `from` to every junction reachable from it.

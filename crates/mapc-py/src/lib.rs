@@ -55,16 +55,10 @@ pub(crate) fn load_scenario(scenario: &str) -> PyResult<(ResolvedScenario, SimSp
 /// Write `scenario` with `share` of its flows' vehicles (those of `flows`; all when empty) as AVs to `output`, a
 /// scenario file every function takes (`mapc_scenario::av_share`; `--av-share` of the binary).
 #[pyfunction]
-#[pyo3(signature = (scenario, share, output, flows = Vec::new(), n_av = 5))]
-fn with_avs(
-    scenario: &str,
-    share: f64,
-    output: &str,
-    flows: Vec<String>,
-    n_av: u32,
-) -> PyResult<String> {
+#[pyo3(signature = (scenario, share, output, flows = Vec::new()))]
+fn with_avs(scenario: &str, share: f64, output: &str, flows: Vec<String>) -> PyResult<String> {
     let rs = ResolvedScenario::load(scenario).map_err(mapc_error)?;
-    let rs = rs.with_av_share(share, &flows, n_av).map_err(mapc_error)?;
+    let rs = rs.with_av_share(share, &flows).map_err(mapc_error)?;
     rs.scenario_with_absolute_paths()
         .save(std::path::Path::new(output))
         .map_err(mapc_error)?;

@@ -11,14 +11,16 @@ fn av_name(name: &str) -> String {
     format!("{name}_av")
 }
 
+/// AVs controlled at once in a scenario that gets its controlled region from [`with_av_share`] (the paper's N_AV).
+pub const DEFAULT_N_AV: u32 = 5;
+
 /// `scenario` with `share` of the vehicles of its flows (those named in `only` by flow id or vehicle type; all
 /// when empty) driven as AVs. Flows of AV types are left as they are. A scenario without a `control` section
-/// gets one: the whole network, at most `n_av` AVs controlled at once.
+/// gets one: the whole network, at most [`DEFAULT_N_AV`] AVs controlled at once.
 pub fn with_av_share(
     mut scenario: Scenario,
     share: f64,
     only: &[String],
-    n_av: u32,
 ) -> Result<Scenario, String> {
     if !(0.0..=1.0).contains(&share) {
         return Err(format!("AV share {share} is outside [0, 1]"));
@@ -65,7 +67,7 @@ pub fn with_av_share(
     scenario.flows = flows;
     if scenario.control.is_none() {
         scenario.control = Some(Control {
-            n_av,
+            n_av: DEFAULT_N_AV,
             region: Vec::new(),
             window: None,
             windows: Vec::new(),
@@ -139,7 +141,7 @@ mod tests {
             h
         };
         let n = humans_only.flows.len();
-        let out = with_av_share(humans_only.clone(), 0.1, &[], 5).unwrap();
+        let out = with_av_share(humans_only.clone(), 0.1, &[]).unwrap();
         assert_eq!(out.flows.len(), 2 * n);
         let av: f64 = out
             .flows
@@ -154,7 +156,7 @@ mod tests {
         assert_eq!(out.control.as_ref().unwrap().n_av, 5);
         // only one flow, by its id
         let first = humans_only.flows[0].id.clone();
-        let one = with_av_share(humans_only.clone(), 0.5, std::slice::from_ref(&first), 5).unwrap();
+        let one = with_av_share(humans_only.clone(), 0.5, std::slice::from_ref(&first)).unwrap();
         assert_eq!(one.flows.len(), n + 1);
         assert!(one.flows.iter().any(|f| f.id == format!("{first}_av")));
     }
@@ -163,12 +165,12 @@ mod tests {
     fn a_share_outside_0_1_or_an_unknown_flow_is_refused() {
         let s = Scenario::builtin("simple_merge").unwrap();
         assert!(
-            with_av_share(s.clone(), 1.5, &[], 5)
+            with_av_share(s.clone(), 1.5, &[])
                 .unwrap_err()
                 .contains("outside [0, 1]")
         );
-        assert!(with_av_share(s.clone(), -0.1, &[], 5).is_err());
-        let e = with_av_share(s, 0.1, &["nope".into()], 5).unwrap_err();
+        assert!(with_av_share(s.clone(), -0.1, &[]).is_err());
+        let e = with_av_share(s, 0.1, &["nope".into()]).unwrap_err();
         assert!(e.contains("`nope`"), "{e}");
     }
 
@@ -178,13 +180,13 @@ mod tests {
         s.flows
             .retain(|f| !s.vehicle_types[&f.vehicle_type].controlled);
         s.flows[0].number = Some(7);
-        let out = with_av_share(s.clone(), 1.0, &[], 5).unwrap();
+        let out = with_av_share(s.clone(), 1.0, &[]).unwrap();
         assert!(
             out.flows
                 .iter()
                 .all(|f| out.vehicle_types[&f.vehicle_type].controlled)
         );
-        let out = with_av_share(s, 0.3, &[], 5).unwrap();
+        let out = with_av_share(s, 0.3, &[]).unwrap();
         let n: Vec<u64> = out.flows.iter().filter_map(|f| f.number).collect();
         assert_eq!(n, [5, 2]);
     }

@@ -259,6 +259,17 @@ pub struct VehicleType {
     pub lane_change: LaneChangeParams,
 }
 
+/// [`LaneChangeParams`]' names in a scenario and SUMO's attributes, in the order of its fields.
+pub const LANE_CHANGE_NAMES: [(&str, &str); 7] = [
+    ("strategic", "lcStrategic"),
+    ("cooperative", "lcCooperative"),
+    ("speed_gain", "lcSpeedGain"),
+    ("keep_right", "lcKeepRight"),
+    ("lookahead_left", "lcLookaheadLeft"),
+    ("speed_gain_right", "lcSpeedGainRight"),
+    ("assertive", "lcAssertive"),
+];
+
 /// LC2013's per-type parameters (SUMO's `lcStrategic`, `lcCooperative`, `lcSpeedGain`, `lcKeepRight`,
 /// `lcLookaheadLeft`, `lcSpeedGainRight`, `lcAssertive`); a value left out is SUMO 1.8's default.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -292,19 +303,37 @@ impl LaneChangeParams {
         *self == LaneChangeParams::default()
     }
 
-    /// Each parameter given, by its scenario name.
-    pub fn given(&self) -> impl Iterator<Item = (&'static str, f64)> {
+    fn slots(&mut self) -> [&mut Option<f64>; 7] {
         [
-            ("strategic", self.strategic),
-            ("cooperative", self.cooperative),
-            ("speed_gain", self.speed_gain),
-            ("keep_right", self.keep_right),
-            ("lookahead_left", self.lookahead_left),
-            ("speed_gain_right", self.speed_gain_right),
-            ("assertive", self.assertive),
+            &mut self.strategic,
+            &mut self.cooperative,
+            &mut self.speed_gain,
+            &mut self.keep_right,
+            &mut self.lookahead_left,
+            &mut self.speed_gain_right,
+            &mut self.assertive,
         ]
-        .into_iter()
-        .filter_map(|(name, v)| Some((name, v?)))
+    }
+
+    /// Each parameter given: its scenario name, its SUMO attribute and its value.
+    pub fn given(&self) -> impl Iterator<Item = (&'static str, &'static str, f64)> {
+        let mut copy = *self;
+        let values = copy.slots().map(|v| *v);
+        LANE_CHANGE_NAMES
+            .into_iter()
+            .zip(values)
+            .filter_map(|((name, attr), v)| Some((name, attr, v?)))
+    }
+
+    /// The parameters read by SUMO attribute with `read` (`None`: not given).
+    pub fn from_sumo<E>(
+        mut read: impl FnMut(&'static str) -> Result<Option<f64>, E>,
+    ) -> Result<LaneChangeParams, E> {
+        let mut p = LaneChangeParams::default();
+        for (slot, (_, attr)) in p.slots().into_iter().zip(LANE_CHANGE_NAMES) {
+            *slot = read(attr)?;
+        }
+        Ok(p)
     }
 }
 

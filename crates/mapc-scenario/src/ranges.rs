@@ -168,7 +168,7 @@ pub fn check_scenario(s: &Scenario) -> Result<(), Refusal> {
         if let Some(e) = t.emergency_decel {
             check(key("emergency_decel"), e, closed(t.decel, 50.0, "m/s²"))?;
         }
-        for (f, v) in t.lane_change.given() {
+        for (f, _, v) in t.lane_change.given() {
             check(key(&format!("lane_change.{f}")), v, lane_change_range(f))?;
         }
     }

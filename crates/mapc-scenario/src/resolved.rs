@@ -124,21 +124,21 @@ impl ResolvedScenario {
     }
 
     /// This scenario with `share` of its flows' vehicles (those named in `only`; all when empty) driven as AVs
-    /// ([`crate::av_share`]); a scenario without a controlled region gets the whole network, `n_av` at once.
+    /// ([`crate::av_share`]); a scenario without a controlled region gets the whole network.
     pub fn with_av_share(
         self,
         share: f64,
         only: &[String],
-        n_av: u32,
     ) -> Result<ResolvedScenario, ScenarioError> {
         let origin = self.origin.clone();
-        let scenario = crate::av_share::with_av_share(self.scenario, share, only, n_av).map_err(
-            |message| ScenarioError::Invalid {
-                path: PathBuf::from(&origin),
-                key: "av_share".into(),
-                message,
-            },
-        )?;
+        let scenario =
+            crate::av_share::with_av_share(self.scenario, share, only).map_err(|message| {
+                ScenarioError::Invalid {
+                    path: PathBuf::from(&origin),
+                    key: "av_share".into(),
+                    message,
+                }
+            })?;
         let mut rs = ResolvedScenario::on_network(scenario, self.graph, &origin)?;
         rs.notes.splice(0..0, self.notes);
         Ok(rs)

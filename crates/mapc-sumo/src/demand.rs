@@ -296,20 +296,7 @@ fn vtype_attrs(
         ("speedDev", num(t.speed_dev, 4)),
         ("impatience", num(t.impatience, 4)),
     ]);
-    let lc = &t.lane_change;
-    for (attr, v) in [
-        ("lcStrategic", lc.strategic),
-        ("lcCooperative", lc.cooperative),
-        ("lcSpeedGain", lc.speed_gain),
-        ("lcKeepRight", lc.keep_right),
-        ("lcLookaheadLeft", lc.lookahead_left),
-        ("lcSpeedGainRight", lc.speed_gain_right),
-        ("lcAssertive", lc.assertive),
-    ] {
-        if let Some(v) = v {
-            a.push((attr, num(v, 4)));
-        }
-    }
+    a.extend(t.lane_change.given().map(|(_, attr, v)| (attr, num(v, 4))));
     a.push(("color", if t.controlled { "red" } else { "yellow" }.into()));
     Ok(a)
 }

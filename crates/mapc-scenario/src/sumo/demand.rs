@@ -38,6 +38,8 @@ struct Demand<'a> {
     lights: Vec<mapc_graph::TrafficLight>,
     /// Induction loops, in file order.
     detectors: Vec<crate::model::Detector>,
+    /// The network's roads for routing trips (built at the first trip).
+    routes_by_road: std::cell::OnceCell<mapc_graph::topology::RoadRoutes>,
     /// Kinds of element or attribute dropped, once each.
     skipped: BTreeSet<String>,
 }
@@ -64,6 +66,7 @@ pub fn scenario(
         departures: Vec::new(),
         lights: Vec::new(),
         detectors: Vec::new(),
+        routes_by_road: std::cell::OnceCell::new(),
         skipped: BTreeSet::new(),
     };
     for f in files {
@@ -626,8 +629,10 @@ impl<'a> Demand<'a> {
         let mut roads: Vec<mapc_graph::RoadId> = vec![*stops[0].last().expect("found roads")];
         for next in &stops[1..] {
             let here = *roads.last().expect("a first road");
-            let leg = graph
-                .fastest_road_route(here, next[0], max_speed)
+            let leg = self
+                .routes_by_road
+                .get_or_init(|| mapc_graph::topology::RoadRoutes::new(graph))
+                .fastest(graph, here, next[0], max_speed)
                 .ok_or_else(|| {
                     SumoError::at(
                         &e.place,

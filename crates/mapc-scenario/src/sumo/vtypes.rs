@@ -204,16 +204,8 @@ pub fn vtype(
     if let Some(stepping) = num(e, "stepping")? {
         t.idm_stepping_s = stepping;
     }
-    t.lane_change = crate::model::LaneChangeParams {
-        strategic: num(e, "lcStrategic")?,
-        cooperative: num(e, "lcCooperative")?,
-        speed_gain: num(e, "lcSpeedGain")?,
-        keep_right: num(e, "lcKeepRight")?,
-        lookahead_left: num(e, "lcLookaheadLeft")?,
-        speed_gain_right: num(e, "lcSpeedGainRight")?,
-        assertive: num(e, "lcAssertive")?,
-    };
-    for (name, v) in t.lane_change.given() {
+    t.lane_change = crate::model::LaneChangeParams::from_sumo(|attr| num(e, attr))?;
+    for (name, _, v) in t.lane_change.given() {
         crate::ranges::check(name, v, crate::ranges::lane_change_range(name)).map_err(|r| {
             SumoError::at(&e.place, format!("lane-change {}: {}", r.key, r.message))
         })?;
@@ -236,14 +228,10 @@ pub fn vtype(
                 | "sigma"
                 | "delta"
                 | "stepping"
-                | "lcStrategic"
-                | "lcCooperative"
-                | "lcSpeedGain"
-                | "lcKeepRight"
-                | "lcLookaheadLeft"
-                | "lcSpeedGainRight"
-                | "lcAssertive"
-        ) || WITHOUT_EFFECT.contains(&k.as_str());
+        ) || WITHOUT_EFFECT.contains(&k.as_str())
+            || crate::model::LANE_CHANGE_NAMES
+                .iter()
+                .any(|(_, attr)| attr == k);
         if known {
             continue;
         }

@@ -325,15 +325,6 @@ impl Detectors {
     pub fn intervals(&self) -> &[DetectorInterval] {
         &self.intervals
     }
-
-    /// The last completed interval of `detector`.
-    pub fn last_interval(&self, detector: usize) -> Option<&DetectorInterval> {
-        self.intervals.iter().rev().find(|i| i.detector == detector)
-    }
-
-    pub fn specs(&self) -> impl Iterator<Item = &DetectorSpec> {
-        self.loops.iter().map(|l| &l.spec)
-    }
 }
 
 #[cfg(test)]

@@ -100,6 +100,11 @@ pub struct Simulation {
     measure: MeasureAcc,
     /// The induction loops and their intervals.
     detectors: crate::measure::detectors::Detectors,
+    /// What a loop sees of the vehicles on its lane and of those it tracks (kept to reuse its allocation).
+    detector_seen: (
+        Vec<crate::measure::detectors::Seen>,
+        Vec<crate::measure::detectors::Seen>,
+    ),
     check_invariants: bool,
     /// Longest vehicle of any type (m).
     max_length: f64,
@@ -186,6 +191,7 @@ impl Simulation {
             main_line: Vec::new(),
             metrics: MetricsAcc::default(),
             measure: MeasureAcc::new(&net, &spec.measure_points, None),
+            detector_seen: (Vec::new(), Vec::new()),
             detectors: crate::measure::detectors::Detectors::new(
                 &spec.detectors,
                 &spec

@@ -8,8 +8,7 @@ impl Simulation {
     pub(in crate::sim) fn observe_detectors(&mut self) {
         let t = self.time_s - self.spec.start_time_s;
         let dt = self.spec.step_s;
-        let mut on_lane = Vec::new();
-        let mut tracked = Vec::new();
+        let (mut on_lane, mut tracked) = std::mem::take(&mut self.detector_seen);
         for d in 0..self.detectors.len() {
             let types = &self.spec.detectors[d].vehicle_types;
             let seen = |id: VehicleId| {
@@ -38,6 +37,7 @@ impl Simulation {
             tracked.extend(self.detectors.tracked(d).map(seen));
             self.detectors.observe(d, t, dt, &on_lane, &tracked);
         }
+        self.detector_seen = (on_lane, tracked);
         if self.step + 1 == self.spec.warmup_steps + self.spec.horizon_steps {
             self.detectors.close(t + dt);
         }
