@@ -34,6 +34,24 @@ pub(crate) fn ceil_exact(x: f64) -> f64 {
     }
 }
 
+/// `exact().floor()`, bit for bit, given `approx`, a value of the same expression computed with fewer divisions
+/// (multiplications by reciprocals of parameters, whose own divisions wait for no data): its floor unless it lies
+/// within a tolerance of an integer, far above the few ulps by which the two can differ, where `exact` decides.
+/// The divisions then leave the chain of dependent operations in all but rare cases.
+#[inline(always)]
+pub(crate) fn floor_near(approx: f64, exact: impl FnOnce() -> f64) -> f64 {
+    let f = floor_exact(approx);
+    let tol = FLOOR_NEAR_TOLERANCE * (1.0 + approx.abs());
+    if approx - f > tol && (f + 1.0) - approx > tol && approx.abs() < 1e12 {
+        f
+    } else {
+        floor_exact(exact())
+    }
+}
+
+/// Relative distance to an integer below which [`floor_near`] computes the exact expression.
+const FLOOR_NEAR_TOLERANCE: f64 = 1e-9;
+
 // The rare paths out of line: inlined, the library calls are speculated (executed before the test that selects
 // them) wherever the optimizer hoists the arithmetic around them.
 #[cold]

@@ -77,3 +77,30 @@ fn floor_and_ceil_exact_are_the_library_bit_for_bit() {
         assert_eq!(ceil_exact(p).to_bits(), p.ceil().to_bits(), "ceil {p:e}");
     }
 }
+
+#[test]
+fn floor_near_is_the_exact_floor_bit_for_bit() {
+    // quotients by a parameter, as the kinematics take them: by the reciprocal, and at and around integers
+    let mut x = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..200_000 {
+        let b = [0.45, 0.75, 0.9, 4.5 * 0.1, 2.5, 7.5 * 0.5, 9.0][(next() * 7.0) as usize];
+        let a = match (next() * 3.0) as usize {
+            0 => next() * 60.0,
+            // exact multiples of the divisor and their neighbours
+            1 => (next() * 100.0).floor() * b,
+            _ => f64::from_bits(((next() * 100.0).floor() * b).to_bits() + 1),
+        };
+        let exact = (a / b).floor();
+        assert_eq!(
+            floor_near(a * (1.0 / b), || a / b).to_bits(),
+            exact.to_bits(),
+            "{a} / {b}"
+        );
+    }
+}

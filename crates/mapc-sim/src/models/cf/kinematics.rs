@@ -2,16 +2,17 @@
 //! update: how far a vehicle needs to stop, the fastest it may drive to still stop within a gap, when and how
 //! fast it reaches a point. Pure functions of the type's parameters; speeds in m/s, distances in m, times in s.
 
-use crate::numeric::{FastMinMax, NUMERICAL_EPS, floor_exact};
+use crate::numeric::{FastMinMax, NUMERICAL_EPS, floor_near};
 
 /// Distance needed to stop from `speed` braking `decel` each step of `dt`, plus `headway` seconds at `speed`
 /// (SUMO's Euler `brakeGap`).
+#[inline]
 pub fn brake_gap(dt: f64, speed: f64, decel: f64, headway: f64) -> f64 {
     let reduction = decel * dt;
     if reduction <= 0.0 {
         return f64::INFINITY;
     }
-    let steps = floor_exact(speed / reduction);
+    let steps = floor_near(speed * (1.0 / reduction), || speed / reduction);
     dt * (steps * speed - reduction * steps * (steps + 1.0) / 2.0) + speed * headway
 }
 
@@ -23,15 +24,25 @@ pub fn maximum_safe_stop_speed(dt: f64, decel: f64, gap: f64) -> f64 {
         return 0.0;
     }
     let b = decel * dt;
-    let s = dt;
-    let t = 0.0;
-    let n = floor_exact(
-        0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s,
-    );
+    let (s, t) = (dt, 0.0);
+    let n = euler_stop_steps(g, b, s, t);
     let h = 0.5 * n * (n - 1.0) * b * s + n * b * t;
     let r = (g - h) / (n * s + t);
     // n steps of driving: the last at speed r, each earlier one b faster
     (n - 1.0) * b + r
+}
+
+/// The whole steps of braking `b` per step of `s` after a reaction time `t` that fit in the distance `g` (the
+/// `n` of SUMO's Euler `maximumSafeStopSpeed`): its formula's floor, bit for bit, with the divisions by `b` and
+/// `s` as multiplications wherever that cannot change the floor ([`floor_near`]).
+#[inline(always)]
+pub(crate) fn euler_stop_steps(g: f64, b: f64, s: f64, t: f64) -> f64 {
+    let (inv_b, inv_s) = (1.0 / b, 1.0 / s);
+    let approx =
+        0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g * inv_b - t)) + t * t)).sqrt() * -0.5) * inv_s;
+    floor_near(approx, || {
+        0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s
+    })
 }
 
 /// The lowest speed at which a vehicle now at `speed` can reach a point `dist` ahead when it brakes

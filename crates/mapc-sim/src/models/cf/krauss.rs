@@ -45,9 +45,7 @@ impl Krauss {
         let b = self.decel * self.dt;
         let t = headway;
         let s = self.dt;
-        let n = floor_exact(
-            0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s,
-        );
+        let n = kinematics::euler_stop_steps(g, b, s, t);
         let h = 0.5 * n * (n - 1.0) * b * s + n * b * t;
         let r = (g - h) / (n * s + t);
         n * b + r
@@ -67,7 +65,11 @@ impl Krauss {
         let leader_brake =
             kinematics::brake_gap(self.dt, leader_speed, self.decel.fmax(leader_decel), 0.0);
         let mut x = self.maximum_safe_stop_speed(gap + leader_brake, self.tau);
-        if self.decel != self.emergency_decel && !on_insertion {
+        // (the division only where the product by the step's reciprocal cannot decide the comparison)
+        if self.decel != self.emergency_decel
+            && !on_insertion
+            && (speed - x) * (1.0 / self.dt) > (self.decel + NUMERICAL_EPS) * (1.0 - 1e-9)
+        {
             let orig_safe_decel = (speed - x) / self.dt;
             if orig_safe_decel > self.decel + NUMERICAL_EPS {
                 let safe_decel = (EMERGENCY_DECEL_AMPLIFIER
@@ -112,19 +114,47 @@ impl Krauss {
         };
         (v_max - slower * self.dt).fmax(0.0)
     }
+
+    /// `maximum_safe_follow_speed(..).fmin(cap)`, the same bits, without the square root and divisions where the
+    /// gap alone is long enough to stop from `cap` (most leaders of free-flowing traffic and of neighbour lanes).
+    #[inline(always)]
+    fn safe_follow_speed_below(
+        &self,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        on_insertion: bool,
+        cap: f64,
+    ) -> f64 {
+        if self.stops_within(gap, cap) {
+            return cap;
+        }
+        self.maximum_safe_follow_speed(gap, speed, leader_speed, on_insertion)
+            .fmin(cap)
+    }
+
+    /// Whether a driver at `speed` surely stops within `gap` with its reaction time, the leader standing: Euler's
+    /// stopping distance from `v` is at most `tau v + v^2 / (2 decel)`, and a metre of margin covers the rounding.
+    /// Then the safe stop speed, and so the safe follow speed (the leader's braking distance only adds, and the
+    /// emergency correction only raises it), are at least `speed`.
+    #[inline(always)]
+    fn stops_within(&self, gap: f64, speed: f64) -> bool {
+        (gap - STOP_BOUND_MARGIN_M - self.tau * speed) * (2.0 * self.decel) >= speed * speed
+    }
 }
+
+/// The margin (m) of [`Krauss::stops_within`]'s bound.
+const STOP_BOUND_MARGIN_M: f64 = 1.0;
 
 impl CarFollowModel for Krauss {
     fn follow_speed(&self, gap: f64, speed: f64, leader_speed: f64, _desired_speed: f64) -> f64 {
-        self.maximum_safe_follow_speed(gap, speed, leader_speed, false)
-            .fmin(self.max_next_speed(speed))
+        self.safe_follow_speed_below(gap, speed, leader_speed, false, self.max_next_speed(speed))
     }
 
     /// SUMO 1.8 skips the emergency-braking correction while lanes are changed (`MSGlobals::gComputeLC`), as it
     /// does on insertion.
     fn follow_speed_lc(&self, gap: f64, speed: f64, leader_speed: f64, _desired_speed: f64) -> f64 {
-        self.maximum_safe_follow_speed(gap, speed, leader_speed, true)
-            .fmin(self.max_next_speed(speed))
+        self.safe_follow_speed_below(gap, speed, leader_speed, true, self.max_next_speed(speed))
     }
 
     /// SUMO's Krauss `stopSpeed`: the reaction time towards a stop point is one step.
@@ -165,6 +195,9 @@ impl CarFollowModel for Krauss {
         leader_speed: f64,
         _desired_speed: f64,
     ) -> f64 {
+        if self.stops_within(gap, speed) {
+            return speed;
+        }
         speed.fmin(self.maximum_safe_follow_speed(gap, speed, leader_speed, true))
     }
 
@@ -176,6 +209,24 @@ impl CarFollowModel for Krauss {
     #[inline]
     fn dawdles(&self) -> bool {
         true
+    }
+
+    #[inline(always)]
+    fn free_speed_at_least_limit(&self) -> bool {
+        true
+    }
+
+    /// Krauss' speeds have no vector form: each is computed where the plan reads it, and only then (most plans
+    /// never reach the lanes ahead).
+    #[inline(always)]
+    fn plan_speeds(
+        &self,
+        _gap: [f64; 4],
+        _speed: f64,
+        _leader_speed: [f64; 4],
+        _desired_speed: f64,
+    ) -> [f64; 4] {
+        super::BATCHED_NOT
     }
 }
 

@@ -141,3 +141,78 @@ fn dawdling_takes_up_to_sigma_of_one_steps_acceleration() {
     no_sigma.sigma = 0.0;
     assert_eq!(no_sigma.dawdled(20.0, 0.7), 20.0);
 }
+
+/// SUMO's formulas as written, with their divisions: the fast paths must give the same bits.
+fn reference_follow_speed(k: &Krauss, gap: f64, speed: f64, leader_speed: f64, lc: bool) -> f64 {
+    let brake_gap = |v: f64, decel: f64| {
+        let red = decel * k.dt;
+        let n = (v / red).floor();
+        k.dt * (n * v - red * n * (n + 1.0) / 2.0)
+    };
+    let stop = |gap: f64| {
+        let g = gap - NUMERICAL_EPS;
+        if g <= 0.0 {
+            return 0.0;
+        }
+        let (b, t, s) = (k.decel * k.dt, k.tau, k.dt);
+        let n = (0.5 - (t + ((s * s) + 4.0 * ((s * (2.0 * g / b - t)) + t * t)).sqrt() * -0.5) / s)
+            .floor();
+        let h = 0.5 * n * (n - 1.0) * b * s + n * b * t;
+        n * b + (g - h) / (n * s + t)
+    };
+    let mut x = stop(gap + brake_gap(leader_speed, k.decel));
+    if !lc {
+        let orig = (speed - x) / k.dt;
+        if orig > k.decel + NUMERICAL_EPS {
+            let lb = 0.5 * leader_speed * leader_speed / k.decel;
+            let b1 = 0.5 * speed * speed / (gap + lb);
+            let em = if b1 <= k.decel {
+                b1
+            } else if gap <= 0.0 {
+                -(k.emergency_decel * k.dt)
+            } else {
+                0.5 * (speed * speed - leader_speed * leader_speed) / gap
+            };
+            x = (speed - (1.2 * em).max(k.decel).min(orig) * k.dt).max(0.0);
+        }
+    }
+    x.min((speed + k.accel * k.dt).min(k.max_speed))
+}
+
+#[test]
+fn fast_paths_give_the_formulas_bits() {
+    let mut s = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for dt in [1.0, 0.5, 0.1, 0.2] {
+        let k = krauss(dt);
+        for _ in 0..100_000 {
+            let speed = next() * 35.0;
+            let leader = if next() < 0.2 { 0.0 } else { next() * 35.0 };
+            // gaps from overlapping to far, and speeds on the brake steps' boundaries
+            let gap = next() * next() * 300.0 - 5.0;
+            let leader = if next() < 0.1 {
+                (leader / (k.decel * dt)).floor() * k.decel * dt
+            } else {
+                leader
+            };
+            for lc in [false, true] {
+                let fast = if lc {
+                    k.follow_speed_lc(gap, speed, leader, 30.0)
+                } else {
+                    k.follow_speed(gap, speed, leader, 30.0)
+                };
+                let reference = reference_follow_speed(&k, gap, speed, leader, lc);
+                assert_eq!(
+                    fast.to_bits(),
+                    reference.to_bits(),
+                    "gap {gap} speed {speed} leader {leader} dt {dt} lc {lc}"
+                );
+            }
+        }
+    }
+}

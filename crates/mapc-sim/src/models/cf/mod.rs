@@ -83,9 +83,17 @@ pub trait CarFollowModel {
         v_max
     }
 
+    /// Whether [`Self::free_speed`] is never below its `max_speed` (Krauss' is not: it brakes towards the limit
+    /// from above only), so that a limit no lower than a speed already planned cannot lower it.
+    #[inline(always)]
+    fn free_speed_at_least_limit(&self) -> bool {
+        false
+    }
+
     /// The four speeds most plans need, known before planning: behind leaders 0, 2 and 3, and
     /// [`Self::free_speed_below_limit`] towards `leader_speed[1]` (`gap[1]` unused). One at a time unless a
-    /// model computes them together.
+    /// model computes them together; a model that gains nothing from the batch returns NaN for the entries the
+    /// plan then computes where it reads them ([`BATCHED_NOT`]).
     #[inline(always)]
     fn plan_speeds(
         &self,
@@ -102,6 +110,9 @@ pub trait CarFollowModel {
         ]
     }
 }
+
+/// [`CarFollowModel::plan_speeds`]' entry for a speed left to the plan to compute where it reads it.
+pub const BATCHED_NOT: [f64; 4] = [f64::NAN; 4];
 
 /// The models a vehicle type may drive with.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -239,6 +250,10 @@ impl CarFollowModel for CfModel {
     #[inline(always)]
     fn dawdles(&self) -> bool {
         by_model!(self, m => m.dawdles())
+    }
+    #[inline(always)]
+    fn free_speed_at_least_limit(&self) -> bool {
+        by_model!(self, m => m.free_speed_at_least_limit())
     }
     #[inline(always)]
     fn dawdle(&self, v_min: f64, v_max: f64, r: f64) -> f64 {

@@ -125,8 +125,7 @@ impl Simulation {
 
         // Leader on the own lane.
         if qi > 0 {
-            let vs = pre[0];
-            debug_assert_eq!(vs.to_bits(), {
+            let own_leader = || {
                 let lv = &self.veh[self.lane_veh[v.lane as usize][qi - 1] as usize];
                 p.follow_speed(
                     lv.pos - lv.length - v.pos - p.min_gap,
@@ -134,8 +133,13 @@ impl Simulation {
                     lv.speed,
                     des_cur,
                 )
-                .to_bits()
-            });
+            };
+            let vs = if pre[0].is_nan() {
+                own_leader()
+            } else {
+                pre[0]
+            };
+            debug_assert_eq!(vs.to_bits(), own_leader().to_bits());
             vv = vv.fmin(vs);
             v_link_pass.lower(vs);
         }
@@ -203,6 +207,7 @@ impl Simulation {
             seen > max_next * dt + tc.brake_gap_above(max_next, p.tau)
                 || seen > max_next * dt + p.brake_gap(max_next, p.decel, p.tau)
         };
+        let free_at_least_limit = p.free_speed_at_least_limit();
         let mut had_non_internal = false;
         let mut seen_non_internal = 0.0;
         let mut k = v.route_pos as usize;
@@ -215,7 +220,7 @@ impl Simulation {
                     let ov = &self.veh[o as usize];
                     let gap = seen - lane_ref.length + ov.pos - ov.length - p.min_gap;
                     let ahead = k - v.route_pos as usize;
-                    let vs = if ahead <= 2 {
+                    let vs = if ahead <= 2 && !pre[1 + ahead].is_nan() {
                         debug_assert_eq!(
                             pre[1 + ahead].to_bits(),
                             p.follow_speed(gap, speed, ov.speed, des_cur).to_bits()
@@ -322,8 +327,12 @@ impl Simulation {
             // onto the next lane: arrive there no faster than its speed allows (IDM's free speed), but limits
             // are no emergencies
             let next_max = self.desired_speed(v, next);
-            let va = free_speed(seen, next_max).fmax(min_comfortable);
-            vv = vv.fmin(va);
+            // (a model whose free speed never falls below the limit needs it only for a limit below the speed
+            // planned so far)
+            if !(free_at_least_limit && next_max >= vv) {
+                let va = free_speed(seen, next_max).fmax(min_comfortable);
+                vv = vv.fmin(va);
+            }
             if !matches!(next_ref.kind, LaneKind::Via(_)) {
                 seen_non_internal += next_ref.length;
             }
