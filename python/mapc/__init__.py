@@ -62,7 +62,8 @@ def with_avs(
     """``scenario`` with ``share`` of each flow's vehicles (of ``flows``, by flow id or vehicle type; all when
     empty) driven as AVs, each flow split into its humans and an ``ID_av`` flow, as ``--av-share`` does. Written
     to ``output`` (a temporary file when omitted, kept for the process's life); returns its path. A scenario
-    without a controlled region gets the whole network with 5 AVs controlled at once (``make_env``'s ``n_av``
+    without a ``[control]`` section gets the approach to its merges and lane drops as its controlled region, with
+    5 AVs controlled at once (``make_env``'s ``n_av``
     sets another)."""
     if output is None:
         import atexit

@@ -16,7 +16,8 @@ pub const DEFAULT_N_AV: u32 = 5;
 
 /// `scenario` with `share` of the vehicles of its flows (those named in `only` by flow id or vehicle type; all
 /// when empty) driven as AVs. Flows of AV types are left as they are. A scenario without a `control` section
-/// gets one: the whole network, at most [`DEFAULT_N_AV`] AVs controlled at once.
+/// gets one: at most [`DEFAULT_N_AV`] AVs controlled at once, on the whole network (the resolved scenario's
+/// `with_av_share` narrows it to the approach to the network's bottlenecks).
 pub fn with_av_share(
     mut scenario: Scenario,
     share: f64,

@@ -25,6 +25,7 @@
 //! - **fill time**: the free-flow travel time of the longest route (`timing.rs`); a horizon that leaves too little
 //!   after it is warned about, and `mapc window` picks a warm-up for it.
 
+pub mod approach;
 pub mod av_share;
 pub mod bounds;
 pub mod compile;

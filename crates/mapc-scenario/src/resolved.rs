@@ -124,14 +124,16 @@ impl ResolvedScenario {
     }
 
     /// This scenario with `share` of its flows' vehicles (those named in `only`; all when empty) driven as AVs
-    /// ([`crate::av_share`]); a scenario without a controlled region gets the whole network.
+    /// ([`crate::av_share`]); a scenario without a `control` section gets the approach to each of its merges and
+    /// lane drops as its controlled region ([`crate::approach`]; the whole network where it has none).
     pub fn with_av_share(
         self,
         share: f64,
         only: &[String],
     ) -> Result<ResolvedScenario, ScenarioError> {
         let origin = self.origin.clone();
-        let scenario =
+        let had_control = self.scenario.control.is_some();
+        let mut scenario =
             crate::av_share::with_av_share(self.scenario, share, only).map_err(|message| {
                 ScenarioError::Invalid {
                     path: PathBuf::from(&origin),
@@ -139,6 +141,12 @@ impl ResolvedScenario {
                     message,
                 }
             })?;
+        if let Some(c) = scenario.control.as_mut().filter(|_| !had_control) {
+            c.region = crate::approach::approach_roads(&self.graph)
+                .iter()
+                .map(|r| r.to_string())
+                .collect();
+        }
         let mut rs = ResolvedScenario::on_network(scenario, self.graph, &origin)?;
         rs.notes.splice(0..0, self.notes);
         Ok(rs)
