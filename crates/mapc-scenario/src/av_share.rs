@@ -63,7 +63,7 @@ pub fn with_av_share(
         add_av_type(&mut scenario, &f.vehicle_type)?;
         let (humans, avs) = split(&f, share);
         flows.extend(humans);
-        flows.push(avs);
+        flows.extend(avs);
     }
     scenario.flows = flows;
     if scenario.control.is_none() {
@@ -107,8 +107,9 @@ fn add_av_type(s: &mut Scenario, name: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// The humans' part of `f` (none when nothing is left of it) and the AVs'.
-fn split(f: &Flow, share: f64) -> (Option<Flow>, Flow) {
+/// The humans' part of `f` and the AVs' (none when nothing is left of either: a flow of a few vehicles by
+/// number whose share rounds to none stays human).
+fn split(f: &Flow, share: f64) -> (Option<Flow>, Option<Flow>) {
     let mut avs = f.clone();
     avs.id = av_name(&f.id);
     avs.vehicle_type = av_name(&f.vehicle_type);
@@ -123,7 +124,11 @@ fn split(f: &Flow, share: f64) -> (Option<Flow>, Flow) {
         humans.number = Some(n - av_n);
     }
     let nothing_left = humans.vehs_per_hour <= 0.0 || humans.number == Some(0);
-    (if nothing_left { None } else { Some(humans) }, avs)
+    let no_av = avs.number == Some(0);
+    (
+        if nothing_left { None } else { Some(humans) },
+        if no_av { None } else { Some(avs) },
+    )
 }
 
 #[cfg(test)]
@@ -160,6 +165,17 @@ mod tests {
         let one = with_av_share(humans_only.clone(), 0.5, std::slice::from_ref(&first)).unwrap();
         assert_eq!(one.flows.len(), n + 1);
         assert!(one.flows.iter().any(|f| f.id == format!("{first}_av")));
+    }
+
+    #[test]
+    fn a_flow_of_a_few_vehicles_whose_share_rounds_to_none_stays_human() {
+        let mut f = Scenario::builtin("simple_merge").unwrap().flows[0].clone();
+        f.number = Some(3);
+        let (humans, avs) = split(&f, 0.1);
+        assert_eq!(humans.unwrap().number, Some(3));
+        assert!(avs.is_none());
+        let (humans, avs) = split(&f, 0.5);
+        assert_eq!((humans.unwrap().number, avs.unwrap().number), (Some(1), Some(2)));
     }
 
     #[test]

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Zero-shot: policies trained on one scenario, evaluated with 10 % AVs (`--av-share 0.1`) on the others, driving
+# everywhere in their controlled region and under the deployment rule that never loses (`simple-merge-regime`:
+# only one-lane merges the humans congest; elsewhere the AVs drive as humans). One markdown row per scenario and
+# policy: humans, policy everywhere, policy under the rule (outflow veh/h, mean +- 95 % CI, and the change).
+#
+#   tools/zero_shot.sh [POLICY...]    # default: the Simple Merge's and the bottleneck's policies
+#
+# MAPC (default target/release/mapc), SEEDS (default 100).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+MAPC=${MAPC:-target/release/mapc}
+SEEDS=${SEEDS:-100}
+POLICIES=("$@")
+[ ${#POLICIES[@]} -gt 0 ] || POLICIES=(policies/simple_merge_outflow.json policies/flow_bottleneck_av10_outflow.json)
+SCENARIOS=(
+  scenarios/simple_merge.toml
+  scenarios/flow_bottleneck.toml
+  scenarios/sumo/highway_ramp/highway-ramp.sumocfg
+  scenarios/sumo/ramp_game/ramp.sumocfg
+  scenarios/sumo/eccles_interchange/interchangeSim.cfg
+  scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg
+)
+
+# outflow of one eval: "humans|policy|change"
+run() {
+  "$MAPC" eval --policy "$1" --scenario "$2" --av-share 0.1 --seeds "$SEEDS" --deploy "$3" --json 2>/dev/null |
+    python3 -c '
+import json, sys
+j = json.load(sys.stdin)
+def f(o):
+    return "%.1f ± %.1f" % (o["mean"], o["ci95"])
+h, p = j["baseline"]["outflow"], j["outflow"]
+d = 100.0 * (p["mean"] - h["mean"]) / h["mean"]
+disjoint = p["mean"] - p["ci95"] > h["mean"] + h["ci95"] or p["mean"] + p["ci95"] < h["mean"] - h["ci95"]
+print("%s|%s (%+.1f %%%s)" % (f(h), f(p), d, ", CIs disjoint" if disjoint else ""))'
+}
+
+echo "| scenario | policy | humans | policy everywhere | policy, simple-merge-regime |"
+echo "|---|---|---|---|---|"
+for s in "${SCENARIOS[@]}"; do
+  for p in "${POLICIES[@]}"; do
+    every=$(run "$p" "$s" everywhere)
+    rule=$(run "$p" "$s" simple-merge-regime)
+    echo "| $(basename "$s") | $(basename "$p" .json) | ${every%%|*} | ${every#*|} | ${rule#*|} |"
+  done
+done
