@@ -398,3 +398,48 @@ fn a_sumo_users_scenario_exports_with_its_drivers_mixes_and_departure_rules() {
     assert!(routes.contains(r#"departPos="free""#) && routes.contains(r#"departPos="random""#));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn av_share_exports_the_avs_and_the_approach_they_are_controlled_on() {
+    // highway_ramp has no controlled region of its own: --av-share gives it the approach to its on-ramp merge
+    let dir = scratch_dir("sumo-export-avs");
+    let out = run_mapc(&[
+        "export",
+        HIGHWAY_RAMP,
+        "--sumo",
+        dir.to_str().unwrap(),
+        "--av-share",
+        "0.1",
+    ]);
+    assert_success(&out);
+    let manifest_path = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.to_string_lossy().ends_with(".mapc.json"))
+        .expect("a manifest");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(manifest_path).unwrap()).unwrap();
+    let av_types = manifest["av_types"].as_array().unwrap();
+    assert!(
+        av_types
+            .iter()
+            .any(|t| t.as_str().unwrap().ends_with("_av")),
+        "{manifest}"
+    );
+    let region = manifest["control_edges"].as_array().unwrap();
+    let net = std::fs::read_to_string(
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| p.to_string_lossy().ends_with(".net.xml"))
+            .unwrap(),
+    )
+    .unwrap();
+    let edges = net.matches("<edge id=\"").count() - net.matches("function=\"internal\"").count();
+    assert!(
+        !region.is_empty() && region.len() < edges,
+        "{} of {edges} edges",
+        region.len()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -86,7 +86,8 @@ pub struct SumoInputArgs {
 pub struct AvArgs {
     /// Make this fraction (0 to 1) of each flow's vehicles AVs: each flow is split into its humans and an `ID_av`
     /// flow of AVs (an AV copy of its type), as Flow's benchmarks give AVs their own inflow. A scenario without a
-    /// controlled region gets the whole network with 5 AVs controlled at once (`mapc train --n-av` sets another).
+    /// `[control]` section gets the approach to its merges and lane drops (600 m before, 100 m past) as its
+    /// controlled region, with 5 AVs controlled at once (`mapc train --n-av` sets another).
     #[arg(long, value_name = "P")]
     pub av_share: Option<f64>,
     /// Only these flows (by flow id or vehicle type, comma-separated) get AVs.

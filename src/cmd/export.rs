@@ -32,21 +32,28 @@ pub struct Args {
     /// Print what was written as JSON.
     #[arg(long)]
     pub json: bool,
+    /// A scenario's AVs (`--sumo` only), as `mapc eval` gives them: the export carries their flows, types and
+    /// controlled region for tools/sumo_check's policy runs.
+    #[command(flatten)]
+    pub avs: super::common::AvArgs,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     match (&args.geojson, &args.sumo) {
         (Some(file), None) => geojson(&args.map, file, args.json),
-        (None, Some(dir)) => sumo(&args.map, dir, args.json),
+        (None, Some(dir)) => sumo(&args.map, dir, args.json, &args.avs),
         _ => bail!("give exactly one of --geojson FILE and --sumo DIR"),
     }
 }
 
-fn sumo(map: &str, dir: &Path, json: bool) -> anyhow::Result<()> {
+fn sumo(map: &str, dir: &Path, json: bool, avs: &super::common::AvArgs) -> anyhow::Result<()> {
     let summary = if super::common::names_scenario(map) {
-        let resolved = mapc_scenario::ResolvedScenario::load(map)?;
+        let resolved = avs.apply(mapc_scenario::ResolvedScenario::load(map)?)?;
         mapc_sumo::export_scenario(&resolved, dir)?
     } else {
+        if avs.av_share.is_some() {
+            bail!("--av-share needs a scenario; {map} is a map");
+        }
         let graph = mapc_import::load_any(Path::new(map))?;
         let name = Path::new(map)
             .file_name()

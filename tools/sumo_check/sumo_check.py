@@ -58,9 +58,9 @@ def mapc_json(mapc, args):
     return json.loads(run_mapc(mapc, args + ["--json"]))
 
 
-def export(mapc, scenario, work):
+def export(mapc, scenario, work, avs=()):
     out_dir = os.path.join(work, "export")
-    run_mapc(mapc, ["export", scenario, "--sumo", out_dir])
+    run_mapc(mapc, ["export", scenario, "--sumo", out_dir] + list(avs))
     manifests = [f for f in os.listdir(out_dir) if f.endswith(".mapc.json")]
     with open(os.path.join(out_dir, manifests[0])) as f:
         return out_dir, json.load(f)
@@ -179,9 +179,17 @@ def summary_of_runs(runs, points):
 def summary_of_mapc(block, n, points):
     out = {k: dict(mean=block[k]["mean"], ci95=block[k]["ci95"], std=stats.sd_from_ci(block[k]["ci95"], n), n=n)
            for k, _ in METRICS if k != LANE_CHANGES}
-    runs = block["runs"]
-    out[LANE_CHANGES] = _mean([r["lane_changes"] / r["departed"] if r["departed"] else 0.0 for r in runs])
     nan = float("nan")
+    # `mapc eval --json` gives the means only: the per-run columns are then left empty
+    runs = block.get("runs")
+    if runs is None:
+        for key in [LANE_CHANGES] + [k for k, _ in points]:
+            out[key] = dict(mean=nan, ci95=nan, std=nan, n=0)
+        end = (block.get("end_flow") or {}).get("flow")
+        if end and "end_flow" in out:
+            out["end_flow"] = dict(mean=end["mean"], ci95=end["ci95"], std=stats.sd_from_ci(end["ci95"], n), n=n)
+        return out
+    out[LANE_CHANGES] = _mean([r["lane_changes"] / r["departed"] if r["departed"] else 0.0 for r in runs])
     for key, _ in points:
         if key.startswith("lc_"):
             out[key] = _mean([_per_veh_reason(r, key) for r in runs])
@@ -198,6 +206,8 @@ def fmt(s, decimals=2):
 
 
 def welch_line(a, b):
+    if a["n"] == 0 or b["n"] == 0:
+        return "n/a"
     if b["mean"] == 0:
         return "%+.3f (difference)" % (a["mean"] - b["mean"])
     t, p = stats.welch(a["mean"], a["std"], a["n"], b["mean"], b["std"], b["n"])
@@ -237,6 +247,8 @@ def main():
     ap.add_argument("--inflows", default="1000:3000:250",
                     help="curve: inflows LOW:HIGH:STEP in veh/h (every flow scaled to each)")
     ap.add_argument("--svg", help="curve: draw both curves into this file")
+    ap.add_argument("--av-share", help="baseline/policy: this share of each flow's vehicles are AVs, as mapc's "
+                                       "--av-share gives them (export, humans and policy alike)")
     a = ap.parse_args()
     if a.mode == "scenario":
         import scenario
@@ -268,9 +280,10 @@ def main():
 
 
 def compare(a, mapc, seeds, work):
-    export_dir, manifest = export(mapc, a.scenario, work)
+    avs = ["--av-share", a.av_share] if a.av_share else []
+    export_dir, manifest = export(mapc, a.scenario, work, avs)
     n = len(seeds)
-    mapc_h = mapc_json(mapc, ["sim", "--scenario", a.scenario, "--seeds", str(n)])
+    mapc_h = mapc_json(mapc, ["sim", "--scenario", a.scenario, "--seeds", str(n)] + avs)
     multi_lane = any(r["lane_changes"] > 0 for r in mapc_h["runs"])
     points = reason_metrics(multi_lane) + point_metrics(manifest)
     mapc_h = summary_of_mapc(mapc_h, n, points)
@@ -287,7 +300,7 @@ def compare(a, mapc, seeds, work):
         print_table([("mapc humans", mapc_h), ("SUMO humans", sumo_h)],
                     [("mapc vs SUMO", mapc_h, sumo_h)], points)
     else:
-        ev = mapc_json(mapc, ["eval", "--policy", a.policy, "--scenario", a.scenario, "--seeds", str(n)])
+        ev = mapc_json(mapc, ["eval", "--policy", a.policy, "--scenario", a.scenario, "--seeds", str(n)] + avs)
         mapc_p = summary_of_mapc(ev, n, points)
         sumo_p_runs = run_sumo(export_dir, manifest, seeds, a.policy, a.jobs)
         sumo_p = summary_of_runs(sumo_p_runs, points)

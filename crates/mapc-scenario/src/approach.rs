@@ -45,7 +45,13 @@ pub fn approach_roads(g: &LaneGraph) -> Vec<RoadId> {
 
 /// Adds the roads that start (upstream: end) less than `within_m` from `from`, walking against or with the
 /// traffic; a road reached again by a shorter way is walked again from there.
-fn walk(g: &LaneGraph, from: JunctionId, within_m: f64, upstream: bool, region: &mut BTreeSet<RoadId>) {
+fn walk(
+    g: &LaneGraph,
+    from: JunctionId,
+    within_m: f64,
+    upstream: bool,
+    region: &mut BTreeSet<RoadId>,
+) {
     let mut best: std::collections::HashMap<RoadId, f64> = Default::default();
     let mut stack: Vec<(JunctionId, f64)> = vec![(from, 0.0)];
     while let Some((j, dist)) = stack.pop() {
@@ -87,13 +93,19 @@ mod tests {
         assert!(!b.is_empty());
         let region = approach_roads(&g);
         // not the whole network: roads far before the merge and beyond 100 m past it are left out
-        assert!(!region.is_empty() && region.len() < g.roads.len(), "{region:?} of {}", g.roads.len());
+        assert!(
+            !region.is_empty() && region.len() < g.roads.len(),
+            "{region:?} of {}",
+            g.roads.len()
+        );
         for &r in &region {
             let road = g.road(r).unwrap();
             // each road leads into a bottleneck within the approach, or leaves one
             assert!(
                 b.iter().any(|&j| road.to == j || road.from == j)
-                    || g.roads.iter().any(|n| n.from == road.to && region.contains(&n.id)),
+                    || g.roads
+                        .iter()
+                        .any(|n| n.from == road.to && region.contains(&n.id)),
                 "{r} is cut off from every bottleneck"
             );
         }

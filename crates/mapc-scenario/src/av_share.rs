@@ -175,7 +175,10 @@ mod tests {
         assert_eq!(humans.unwrap().number, Some(3));
         assert!(avs.is_none());
         let (humans, avs) = split(&f, 0.5);
-        assert_eq!((humans.unwrap().number, avs.unwrap().number), (Some(1), Some(2)));
+        assert_eq!(
+            (humans.unwrap().number, avs.unwrap().number),
+            (Some(1), Some(2))
+        );
     }
 
     #[test]
