@@ -49,7 +49,7 @@ pub struct Args {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Write the first seed's trajectories under the policy as CSV (the columns of `mapc sim --trace`; draw
+    /// Write the first seed's trajectories under the policy (or the controller) as CSV (the columns of `mapc sim --trace`; draw
     /// them with `mapc plot timespace`).
     #[arg(long)]
     pub trace: Option<PathBuf>,
@@ -73,6 +73,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             &args.runs.seeds(),
             &args.alinea,
             args.json,
+            args.trace.as_deref(),
         );
     }
     let policy = args

@@ -45,6 +45,7 @@ pub fn run(
     seeds: &[u64],
     args: &AlineaArgs,
     json: bool,
+    trace: Option<&std::path::Path>,
 ) -> anyhow::Result<()> {
     let cfg = args.config();
     // refused before any run: a set-point, light or detector that does not hold
@@ -62,6 +63,14 @@ pub fn run(
         .collect();
     let mean_rate = rates.iter().sum::<f64>() / rates.len().max(1) as f64;
     let metered: Vec<RunMetrics> = metered.into_iter().map(|(m, _)| m).collect();
+    let mut trace_note = None;
+    if let Some(path) = trace {
+        // the first seed under ALINEA, as `--trace` writes a policy's
+        super::super::common::write_trace_file(path, |w| {
+            trace_note = mapc_sim::trace_with_alinea(spec, seeds[0], &cfg, w)?.note;
+            Ok(())
+        })?;
+    }
     // each figure over the seeds computed where every run's summary is (`Summary::of`)
     let (h, a) = (Summary::of(&humans), Summary::of(&metered));
     let detectors: Vec<&str> = alinea
@@ -106,6 +115,14 @@ pub fn run(
             pm(&f.inflow),
             pm(&f.speed),
             pm(&f.travel_time)
+        );
+    }
+    if let Some(p) = trace {
+        println!(
+            "  trace of seed {} under ALINEA written to {}{}",
+            seeds[0],
+            p.display(),
+            trace_note.map(|n| format!(" ({n})")).unwrap_or_default()
         );
     }
     let change = |x: &MeanCi, y: &MeanCi| 100.0 * (y.mean - x.mean) / x.mean;

@@ -295,6 +295,30 @@ pub fn run_with_alinea(
     Ok((sim.metrics(), alinea.rates))
 }
 
+/// [`run_with_alinea`] writing its trace as [`crate::trace_run`] writes the humans' (the same frames and rows;
+/// a simulation error comes back as an I/O error of kind `Other` carrying its message).
+pub fn trace_with_alinea(
+    spec: &SimSpec,
+    seed: u64,
+    cfg: &AlineaConfig,
+    out: &mut impl std::io::Write,
+) -> std::io::Result<crate::TracedRun> {
+    let mut alinea = Alinea::new(spec, cfg).map_err(std::io::Error::other)?;
+    let mut sim = Simulation::from_spec(spec.clone(), seed).map_err(std::io::Error::other)?;
+    let mut budget = crate::TraceBudget::new(spec);
+    alinea.start(&mut sim).map_err(std::io::Error::other)?;
+    budget.write_frame(&sim, out)?;
+    while !sim.is_done() {
+        sim.step().map_err(std::io::Error::other)?;
+        alinea.after_step(&mut sim).map_err(std::io::Error::other)?;
+        budget.write_frame(&sim, out)?;
+    }
+    Ok(crate::TracedRun {
+        metrics: sim.metrics(),
+        note: budget.note(),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
