@@ -43,6 +43,31 @@ fn alinea_meters_the_scenarios_own_light_from_the_loops_past_the_merge() {
 }
 
 #[test]
+fn alinea_on_the_ramp_game_reads_the_first_loops_past_its_meter_and_writes_its_trace() {
+    // SUMO's ramp game, metered from loops this project added (scenarios/sumo/ramp_game_alinea)
+    let dir = scratch_dir("alinea-trace");
+    let trace = dir.join("alinea.csv");
+    let j = mapc_json(&[
+        "eval",
+        "--controller",
+        "alinea",
+        "--scenario",
+        "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg",
+        "--seeds",
+        "1",
+        "--trace",
+        trace.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(j["light"], "gneJ16");
+    assert_eq!(j["detectors"], serde_json::json!(["ramps_0"]));
+    let rows = std::fs::read_to_string(&trace).expect("the trace under ALINEA");
+    assert!(rows.starts_with("time_s,vehicle_id"), "{}", &rows[..80.min(rows.len())]);
+    assert!(rows.lines().count() > 1000, "{} rows", rows.lines().count());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn a_bad_alinea_setting_is_refused_with_exit_2() {
     for (flag, value, expected) in [
         ("--alinea-setpoint", "1.5", "set-point 1.5 is not in (0, 1)"),

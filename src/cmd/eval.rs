@@ -117,6 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         outflow: report.outflow,
         inflow: report.inflow,
         speed: report.speed,
+        travel_time: report.travel_time,
         seeds: report.seeds,
     };
     if args.json {
@@ -137,10 +138,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
         };
         println!(
-            "  {name:<8} outflow {} veh/h   inflow {} veh/h   speed {} m/s",
+            "  {name:<8} outflow {} veh/h   inflow {} veh/h   speed {} m/s   trip {} s",
             pm(f.outflow.mean, f.outflow.ci95, 8, 2),
             pm(f.inflow.mean, f.inflow.ci95, 8, 2),
-            pm(f.speed.mean, f.speed.ci95, 6, 2)
+            pm(f.speed.mean, f.speed.ci95, 6, 2),
+            pm(f.travel_time.mean, f.travel_time.ci95, 7, 2)
         )
     };
     row("policy", &figs);

@@ -26,7 +26,7 @@ use crate::rollout::{ActionMode, EpisodeSettings, collect_agents_with, over_seed
 use crate::stats::{WelchTest, welch_t_test};
 
 /// Mean and 95% CI of one metric.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Figure {
     pub mean: f64,
     pub ci95: f64,
@@ -41,12 +41,15 @@ impl From<MeanCi> for Figure {
     }
 }
 
-/// `mapc sim`'s summary shape: outflow, inflow and speed over `seeds` runs.
+/// `mapc sim`'s summary shape: outflow, inflow, speed and mean trip duration over `seeds` runs.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FigureSet {
     pub outflow: Figure,
     pub inflow: Figure,
     pub speed: Figure,
+    /// Mean trip duration (s); absent from reports written before it was measured.
+    #[serde(default)]
+    pub travel_time: Figure,
     pub seeds: usize,
 }
 
@@ -59,6 +62,7 @@ impl FigureSet {
             outflow: col(|m| m.outflow),
             inflow: col(|m| m.inflow),
             speed: col(|m| m.speed),
+            travel_time: col(|m| m.travel_time),
             seeds: runs.len(),
         }
     }
@@ -94,6 +98,9 @@ pub struct EvalReport {
     pub outflow: Figure,
     pub inflow: Figure,
     pub speed: Figure,
+    /// Mean trip duration (s).
+    #[serde(default)]
+    pub travel_time: Figure,
     pub seeds: usize,
     pub policy: String,
     pub scenario: String,
@@ -197,6 +204,7 @@ pub fn evaluate(req: &EvalRequest) -> Result<(EvalReport, PolicyDriver), RlError
         outflow: figs.outflow,
         inflow: figs.inflow,
         speed: figs.speed,
+        travel_time: figs.travel_time,
         seeds: figs.seeds,
         policy: policy_file.display().to_string(),
         scenario: scenario.to_string(),
@@ -545,6 +553,7 @@ pub fn figures_of_summary(s: &Summary) -> FigureSet {
         outflow: s.outflow.into(),
         inflow: s.inflow.into(),
         speed: s.speed.into(),
+        travel_time: s.travel_time.into(),
         seeds: s.seeds,
     }
 }

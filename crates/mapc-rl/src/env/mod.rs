@@ -25,6 +25,8 @@ pub struct EpisodeMetrics {
     pub inflow: f64,
     /// m/s.
     pub speed: f64,
+    /// Mean trip duration of the vehicles that arrived (s).
+    pub travel_time: f64,
 }
 
 impl From<&mapc_sim::RunMetrics> for EpisodeMetrics {
@@ -33,6 +35,7 @@ impl From<&mapc_sim::RunMetrics> for EpisodeMetrics {
             outflow: r.outflow_veh_h,
             inflow: r.inflow_veh_h,
             speed: r.avg_speed_mps,
+            travel_time: r.mean_travel_time_s,
         }
     }
 }

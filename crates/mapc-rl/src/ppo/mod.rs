@@ -456,6 +456,7 @@ mod tests {
                 outflow: self.total,
                 inflow: 0.0,
                 speed: 0.0,
+                travel_time: 0.0,
             }
         }
     }
