@@ -62,7 +62,11 @@ fn alinea_on_the_ramp_game_reads_the_first_loops_past_its_meter_and_writes_its_t
     assert_eq!(j["light"], "gneJ16");
     assert_eq!(j["detectors"], serde_json::json!(["ramps_0"]));
     let rows = std::fs::read_to_string(&trace).expect("the trace under ALINEA");
-    assert!(rows.starts_with("time_s,vehicle_id"), "{}", &rows[..80.min(rows.len())]);
+    assert!(
+        rows.starts_with("time_s,vehicle_id"),
+        "{}",
+        &rows[..80.min(rows.len())]
+    );
     assert!(rows.lines().count() > 1000, "{} rows", rows.lines().count());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -54,6 +54,9 @@ pub fn with_av_share(
         }),
     };
     let mut flows = Vec::with_capacity(scenario.flows.len() * 2);
+    // flows by number share their rounding: a scenario of single vehicles (each its own flow of one) still gets
+    // `share` of them as AVs, every 1 / share-th vehicle in file order
+    let mut carry = 0.0;
     for f in std::mem::take(&mut scenario.flows) {
         let chosen = only.is_empty() || only.iter().any(|n| *n == f.id || *n == f.vehicle_type);
         if !chosen || is_av_type(&scenario, &f.vehicle_type) {
@@ -61,7 +64,7 @@ pub fn with_av_share(
             continue;
         }
         add_av_type(&mut scenario, &f.vehicle_type)?;
-        let (humans, avs) = split(&f, share);
+        let (humans, avs) = split(&f, share, &mut carry);
         flows.extend(humans);
         flows.extend(avs);
     }
@@ -108,8 +111,9 @@ fn add_av_type(s: &mut Scenario, name: &str) -> Result<(), String> {
 }
 
 /// The humans' part of `f` and the AVs' (none when nothing is left of either: a flow of a few vehicles by
-/// number whose share rounds to none stays human).
-fn split(f: &Flow, share: f64) -> (Option<Flow>, Option<Flow>) {
+/// number whose share rounds to none stays human). `carry`: the AVs owed by the flows by number before this one
+/// (the rounding of each is carried to the next, so their total is `share` of theirs).
+fn split(f: &Flow, share: f64, carry: &mut f64) -> (Option<Flow>, Option<Flow>) {
     let mut avs = f.clone();
     avs.id = av_name(&f.id);
     avs.vehicle_type = av_name(&f.vehicle_type);
@@ -119,7 +123,9 @@ fn split(f: &Flow, share: f64) -> (Option<Flow>, Option<Flow>) {
     humans.vehs_per_hour = f.vehs_per_hour * (1.0 - share);
     humans.probability = f.probability.map(|p| p * (1.0 - share));
     if let Some(n) = f.number {
-        let av_n = (n as f64 * share).round() as u64;
+        let owed = n as f64 * share + *carry;
+        let av_n = (owed.round().max(0.0) as u64).min(n);
+        *carry = owed - av_n as f64;
         avs.number = Some(av_n);
         humans.number = Some(n - av_n);
     }
@@ -168,17 +174,24 @@ mod tests {
     }
 
     #[test]
-    fn a_flow_of_a_few_vehicles_whose_share_rounds_to_none_stays_human() {
+    fn flows_by_number_share_their_rounding_so_single_vehicles_get_their_share() {
         let mut f = Scenario::builtin("simple_merge").unwrap().flows[0].clone();
         f.number = Some(3);
-        let (humans, avs) = split(&f, 0.1);
+        let (humans, avs) = split(&f, 0.1, &mut 0.0);
         assert_eq!(humans.unwrap().number, Some(3));
         assert!(avs.is_none());
-        let (humans, avs) = split(&f, 0.5);
+        let (humans, avs) = split(&f, 0.5, &mut 0.0);
         assert_eq!(
             (humans.unwrap().number, avs.unwrap().number),
             (Some(1), Some(2))
         );
+        // single vehicles, each a flow of one: every tenth becomes an AV
+        f.number = Some(1);
+        let mut carry = 0.0;
+        let avs = (0..100)
+            .filter(|_| split(&f, 0.1, &mut carry).1.is_some())
+            .count();
+        assert_eq!(avs, 10);
     }
 
     #[test]
