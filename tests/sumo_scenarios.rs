@@ -443,3 +443,45 @@ fn av_share_exports_the_avs_and_the_approach_they_are_controlled_on() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_shipped_eccles_policy_drives_a_sumo_users_interchange_faster_than_its_humans() {
+    // every tenth of the interchange's 1 000 vehicles an AV, controlled on the approach to its zippers
+    let e = mapc_json(&[
+        "eval",
+        "--policy",
+        "policies/eccles_av10_speed.json",
+        "--scenario",
+        "scenarios/sumo/eccles_interchange/interchangeSim.cfg",
+        "--av-share",
+        "0.1",
+        "--seeds",
+        "3",
+        "--json",
+    ]);
+    let of = |v: &serde_json::Value| v["mean"].as_f64().unwrap();
+    let (speed, human_speed) = (of(&e["speed"]), of(&e["baseline"]["speed"]));
+    let (trip, human_trip) = (of(&e["travel_time"]), of(&e["baseline"]["travel_time"]));
+    assert!(speed > 1.02 * human_speed, "{speed} against {human_speed}");
+    assert!(trip < 0.97 * human_trip, "{trip} against {human_trip}");
+}
+
+#[test]
+fn flows_by_number_export_without_an_end_as_sumo_1_8_takes_them() {
+    // eccles: 1 000 vehicles, each a flow of one; SUMO 1.8 refuses a flow with a rate, an end and a number
+    let dir = scratch_dir("sumo-export-number");
+    let out = run_mapc(&[
+        "export",
+        "scenarios/sumo/eccles_interchange/interchangeSim.cfg",
+        "--sumo",
+        dir.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    let routes = std::fs::read_to_string(dir.join("interchangeSim.rou.xml")).unwrap();
+    let flows: Vec<&str> = routes.lines().filter(|l| l.contains("<flow ")).collect();
+    assert_eq!(flows.len(), 1000);
+    for f in flows {
+        assert!(f.contains("number=\"1\"") && !f.contains(" end="), "{f}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -132,8 +132,12 @@ pub fn routes_xml(
             ("id", flow_ids[i].clone()),
             ("type", vtype),
             ("begin", num(f.begin_s, 4)),
-            ("end", num(end, 4)),
         ];
+        // SUMO 1.8 takes a rate with an end or with a number, not both: a flow by number ends with its last
+        // vehicle
+        if f.number.is_none() {
+            attrs.push(("end", num(end, 4)));
+        }
         match f.probability {
             Some(p) => attrs.push(("probability", num(p, 6))),
             None => attrs.push(("vehsPerHour", num(f.vehs_per_hour, 4))),
