@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Zero-shot: policies trained on one scenario, evaluated with 10 % AVs (`--av-share 0.1`; the Simple Merge with its
 # own 10 %) on the others, driving
-# everywhere in their controlled region and under the deployment rule that never loses (`simple-merge-regime`:
-# only one-lane merges the humans congest; elsewhere the AVs drive as humans). One markdown row per scenario and
+# everywhere in their controlled region, under `simple-merge-regime` (only one-lane merges the humans congest;
+# elsewhere the AVs drive as humans) and under `measured` (only where the policy first beats the humans on 20
+# calibration seeds of its own). One markdown row per scenario and
 # policy: humans, policy everywhere, policy under the rule (outflow veh/h, mean +- 95 % CI, and the change; the
 # mean speed's change beside it: where every vehicle of a fixed number arrives, the outflow cannot change).
 #
@@ -43,12 +44,13 @@ ds = 100.0 * (j["speed"]["mean"] - j["baseline"]["speed"]["mean"]) / j["baseline
 print("%s|%s (%+.1f %%%s; speed %+.1f %%)" % (f(h), f(p), d, ", CIs disjoint" if disjoint else "", ds))'
 }
 
-echo "| scenario | policy | humans | policy everywhere | policy, simple-merge-regime |"
-echo "|---|---|---|---|---|"
+echo "| scenario | policy | humans | policy everywhere | policy, simple-merge-regime | policy, measured |"
+echo "|---|---|---|---|---|---|"
 for s in "${SCENARIOS[@]}"; do
   for p in "${POLICIES[@]}"; do
     every=$(run "$p" "$s" everywhere)
     rule=$(run "$p" "$s" simple-merge-regime)
-    echo "| $(basename "$s") | $(basename "$p" .json) | ${every%%|*} | ${every#*|} | ${rule#*|} |"
+    measured=$(run "$p" "$s" measured)
+    echo "| $(basename "$s") | $(basename "$p" .json) | ${every%%|*} | ${every#*|} | ${rule#*|} | ${measured#*|} |"
   done
 done

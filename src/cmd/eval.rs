@@ -58,7 +58,9 @@ pub struct Args {
     /// merge is one; the others are left to the humans), or `main-road-yields-congested` (of those, only merges
     /// that the regime report's human runs find congested: a merge that flows or is only dense is left to the
     /// humans, and the report says why), or `simple-merge-regime` (of those, only merges with one lane on every
-    /// road in and out). Default: the policy file's rule, else everywhere.
+    /// road in and out), or `measured` (everywhere, but only if the policy first beats the humans on 20
+    /// calibration seeds of its own: the rule that never loses, whatever the policy). Default: the policy file's
+    /// rule, else everywhere.
     #[arg(long)]
     pub deploy: Option<mapc_rl::deploy::Deploy>,
 }

@@ -32,6 +32,11 @@ pub enum Deploy {
     /// [`Deploy::MainRoadYieldsCongested`] at merges whose roads in and out have one lane each. On a multi-lane
     /// merge such a policy loses even where the humans congest it (docs/results.md, "Multi-lane windows").
     SimpleMergeRegime,
+    /// Wherever the policy drives, but only if it beats the humans there on calibration seeds of its own
+    /// ([`crate::eval::deployed_spec`]): on its reward's measure (speed for a speed reward, else outflow) with
+    /// disjoint 95 % intervals, and not lower in outflow with disjoint intervals. The rule that never loses by
+    /// construction, for a policy whose regime no other rule describes.
+    Measured,
 }
 
 /// What a rule reads of one measured merge: its right of way, its regime under humans where the rule asks, and
@@ -49,6 +54,7 @@ impl Deploy {
             Deploy::MainRoadYields => "main-road-yields",
             Deploy::MainRoadYieldsCongested => "main-road-yields-congested",
             Deploy::SimpleMergeRegime => "simple-merge-regime",
+            Deploy::Measured => "measured",
         }
     }
 
@@ -77,7 +83,7 @@ impl Deploy {
             _ => None,
         };
         match self {
-            Deploy::Everywhere => None,
+            Deploy::Everywhere | Deploy::Measured => None,
             Deploy::MainRoadYields => yields(),
             Deploy::MainRoadYieldsCongested => yields().or_else(congested),
             Deploy::SimpleMergeRegime => yields().or_else(one_lane).or_else(congested),
@@ -170,9 +176,10 @@ impl FromStr for Deploy {
                 Ok(Deploy::MainRoadYieldsCongested)
             }
             "simple-merge-regime" | "simple_merge_regime" => Ok(Deploy::SimpleMergeRegime),
+            "measured" => Ok(Deploy::Measured),
             _ => Err(format!(
                 "unknown deployment rule `{s}` (expected everywhere, main-road-yields, \
-                 main-road-yields-congested or simple-merge-regime)"
+                 main-road-yields-congested, simple-merge-regime or measured)"
             )),
         }
     }
@@ -201,7 +208,7 @@ pub struct Deployment {
 /// downstream admits it, and an AV on any other road drives as a human. A merge the scenario does not measure has
 /// no known right of way and admits nothing.
 pub fn deploy_by_road(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlError> {
-    if rule == Deploy::Everywhere {
+    if matches!(rule, Deploy::Everywhere | Deploy::Measured) {
         return deploy(spec, rule);
     }
     let merges = rule.facts(spec)?;
@@ -246,7 +253,7 @@ pub fn deploy_by_road(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlErro
 /// The windows of `spec` that `rule` admits. A scenario with one controlled region is one window made of its
 /// measured merges.
 pub fn deploy(spec: &SimSpec, rule: Deploy) -> Result<Deployment, RlError> {
-    if rule == Deploy::Everywhere {
+    if matches!(rule, Deploy::Everywhere | Deploy::Measured) {
         return Ok(Deployment {
             spec: Some(spec.clone()),
             withheld: Vec::new(),

@@ -130,10 +130,63 @@ pub fn deployed_spec(
     spec: &SimSpec,
 ) -> Result<Deployment, RlError> {
     let rule = ck.spec.deploy.unwrap_or(Deploy::Everywhere);
-    match driver {
-        PolicyDriver::Distributed(_) => crate::deploy::deploy_by_road(spec, rule),
-        PolicyDriver::Centralized(_) => crate::deploy::deploy(spec, rule),
+    let deployment = match driver {
+        PolicyDriver::Distributed(_) => crate::deploy::deploy_by_road(spec, rule)?,
+        PolicyDriver::Centralized(_) => crate::deploy::deploy(spec, rule)?,
+    };
+    if rule != Deploy::Measured || deployment.spec.is_none() {
+        return Ok(deployment);
     }
+    // `measured`: the policy against the humans on seeds no evaluation uses, with the actions it deploys with
+    let seeds: Vec<u64> = (CALIBRATION_SEED..CALIBRATION_SEED + CALIBRATION_SEEDS).collect();
+    let policy = driver.run_deployed(ck, spec, &deployment, &seeds, ActionMode::Mean)?;
+    let human = run_human(spec, &seeds)?;
+    let of = |runs: &[RunMetrics]| {
+        FigureSet::of(&runs.iter().map(EpisodeMetrics::from).collect::<Vec<_>>())
+    };
+    Ok(
+        match measured_refusal(&ck.spec.reward, &of(&policy), &of(&human)) {
+            None => deployment,
+            Some(reason) => Deployment {
+                spec: None,
+                withheld: vec![crate::deploy::Withheld {
+                    window: "the control region".into(),
+                    reason,
+                }],
+            },
+        },
+    )
+}
+
+/// Seeds of the `measured` rule's calibration: 20, from one million on, apart from any evaluation's.
+pub const CALIBRATION_SEED: u64 = 1_000_000;
+pub const CALIBRATION_SEEDS: u64 = 20;
+
+/// Why the `measured` rule withholds a policy whose calibration runs are `p` against the humans' `h` (`None`: it
+/// deploys it): its reward's measure must be higher with disjoint 95 % intervals, and its outflow not lower with
+/// disjoint intervals.
+pub fn measured_refusal(reward: &str, p: &FigureSet, h: &FigureSet) -> Option<String> {
+    let above = |a: Figure, b: Figure| a.mean - a.ci95 > b.mean + b.ci95;
+    let (name, pm, hm) = if reward == "speed" {
+        ("speed", p.speed, h.speed)
+    } else {
+        ("outflow", p.outflow, h.outflow)
+    };
+    let seeds = CALIBRATION_SEEDS;
+    if !above(pm, hm) {
+        return Some(format!(
+            "on {seeds} calibration seeds its {name} ({:.2} ± {:.2}) is not above the humans' ({:.2} ± {:.2}) \
+             with disjoint intervals",
+            pm.mean, pm.ci95, hm.mean, hm.ci95
+        ));
+    }
+    if above(h.outflow, p.outflow) {
+        return Some(format!(
+            "on {seeds} calibration seeds its outflow ({:.2} ± {:.2}) is below the humans' ({:.2} ± {:.2})",
+            p.outflow.mean, p.outflow.ci95, h.outflow.mean, h.outflow.ci95
+        ));
+    }
+    None
 }
 
 /// The human episode of `seed` written as trace rows (what a policy whose rule withholds every window drives).

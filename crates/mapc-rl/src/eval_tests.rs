@@ -107,3 +107,38 @@ fn under_a_policy_and_a_warmup_the_merges_agree_with_the_corridors_end() {
         assert_eq!(run.steps, spec.horizon_steps, "{run:?}");
     }
 }
+
+#[test]
+fn the_measured_rule_deploys_only_a_policy_that_beats_the_humans_on_its_own_measure() {
+    let set = |outflow: (f64, f64), speed: (f64, f64)| FigureSet {
+        outflow: Figure {
+            mean: outflow.0,
+            ci95: outflow.1,
+        },
+        inflow: Figure::default(),
+        speed: Figure {
+            mean: speed.0,
+            ci95: speed.1,
+        },
+        travel_time: Figure::default(),
+        seeds: 20,
+    };
+    let humans = set((3600.0, 0.0), (13.5, 0.1));
+    // a speed policy faster with disjoint intervals, the same outflow: deployed
+    assert_eq!(
+        measured_refusal("speed", &set((3600.0, 0.0), (14.0, 0.1)), &humans),
+        None
+    );
+    // faster, but its intervals overlap the humans': withheld
+    let overlap = measured_refusal("speed", &set((3600.0, 0.0), (13.65, 0.1)), &humans).unwrap();
+    assert!(overlap.contains("not above"), "{overlap}");
+    // faster, but losing vehicles: withheld
+    let loses = measured_refusal("speed", &set((3400.0, 10.0), (14.0, 0.1)), &humans).unwrap();
+    assert!(loses.contains("below the humans'"), "{loses}");
+    // an outflow policy is judged on its outflow
+    assert!(measured_refusal("outflow", &set((3600.0, 0.0), (14.0, 0.1)), &humans).is_some());
+    assert_eq!(
+        measured_refusal("outflow", &set((3700.0, 5.0), (13.0, 0.1)), &humans),
+        None
+    );
+}
