@@ -485,3 +485,25 @@ fn flows_by_number_export_without_an_end_as_sumo_1_8_takes_them() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_measured_rule_leaves_a_policy_that_loses_to_the_humans() {
+    // the Simple Merge's policy loses on this freeway (docs/results.md, zero-shot): its calibration withholds it
+    let e = mapc_json(&[
+        "eval",
+        "--policy",
+        "policies/simple_merge_outflow.json",
+        "--scenario",
+        HIGHWAY_RAMP,
+        "--av-share",
+        "0.1",
+        "--deploy",
+        "measured",
+        "--seeds",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(e["outflow"], e["baseline"]["outflow"], "{e}");
+    let reason = e["withheld"][0]["reason"].as_str().unwrap();
+    assert!(reason.contains("20 calibration seeds"), "{reason}");
+}

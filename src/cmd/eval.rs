@@ -97,7 +97,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         ActionMode::Mean
     };
-    let (report, driver) = evaluate(&EvalRequest {
+    let (report, driver, deployment) = evaluate(&EvalRequest {
         ck: &ck,
         policy_file: &file,
         scenario: &args.scenario,
@@ -111,7 +111,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(path) = &args.trace {
         // one seed under the policy, every step's vehicles, written atomically
         super::common::write_trace_file(path, |w| {
-            driver.trace(&ck, &sc.spec, seeds[0], mode, w)?;
+            driver.trace_deployed(&ck, &sc.spec, &deployment, seeds[0], mode, w)?;
             Ok(())
         })?;
     }

@@ -177,13 +177,22 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
             let n_av = resolved.scenario.control.as_ref().map(|c| c.n_av as usize);
             let driver =
                 PolicyDriver::for_scenario(&ck, &file, &args.target, Some(n_av.unwrap_or(5)))?;
+            // worked out once: the `measured` rule runs its calibration for it
+            let deployment = mapc_rl::eval::deployed_spec(&ck, &driver, &spec)?;
             // the humans' run of --compare beside the policy's
             let (humans, policy_run) = rayon::join(
                 || args.compare.then(|| human_replay(&spec, seed, clock)),
                 || {
                     let mut measured = None;
                     trace(|w| {
-                        measured = Some(driver.trace(&ck, &spec, seed, ActionMode::Mean, w)?);
+                        measured = Some(driver.trace_deployed(
+                            &ck,
+                            &spec,
+                            &deployment,
+                            seed,
+                            ActionMode::Mean,
+                            w,
+                        )?);
                         Ok(())
                     })
                     .map(|rows| (rows, measured))
@@ -205,9 +214,9 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
             }
             page.replays.push(replay);
             // where the policy's deployment rule leaves the AVs to drive as humans, the page says so
-            let withheld: Vec<String> = mapc_rl::eval::deployed_spec(&ck, &driver, &spec)?
+            let withheld: Vec<String> = deployment
                 .withheld
-                .into_iter()
+                .iter()
                 .map(|w| format!("{} left to the humans ({})", w.window, w.reason))
                 .collect();
             page.subtitle = format!(

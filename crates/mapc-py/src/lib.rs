@@ -119,7 +119,7 @@ fn evaluate(
     } else {
         ActionMode::Mean
     };
-    let (report, _) = py
+    let (report, ..) = py
         .detach(|| {
             evaluate_policy(&mapc_rl::eval::EvalRequest {
                 ck: &ck,

@@ -32,10 +32,10 @@ pub enum Deploy {
     /// [`Deploy::MainRoadYieldsCongested`] at merges whose roads in and out have one lane each. On a multi-lane
     /// merge such a policy loses even where the humans congest it (docs/results.md, "Multi-lane windows").
     SimpleMergeRegime,
-    /// Wherever the policy drives, but only if it beats the humans there on calibration seeds of its own
-    /// ([`crate::eval::deployed_spec`]): on its reward's measure (speed for a speed reward, else outflow) with
-    /// disjoint 95 % intervals, and not lower in outflow with disjoint intervals. The rule that never loses by
-    /// construction, for a policy whose regime no other rule describes.
+    /// Wherever the policy drives, but only if it beats the humans there on calibration seeds of its own (the
+    /// evaluation calibrates it before the runs it reports): on its reward's measure (speed for a speed reward,
+    /// else outflow) with disjoint 95 % intervals, and not lower in outflow with disjoint intervals. The rule that
+    /// never loses by construction, for a policy whose regime no other rule describes.
     Measured,
 }
 

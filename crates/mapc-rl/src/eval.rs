@@ -167,7 +167,7 @@ pub const CALIBRATION_SEEDS: u64 = 20;
 /// disjoint intervals.
 pub fn measured_refusal(reward: &str, p: &FigureSet, h: &FigureSet) -> Option<String> {
     let above = |a: Figure, b: Figure| a.mean - a.ci95 > b.mean + b.ci95;
-    let (name, pm, hm) = if reward == "speed" {
+    let (name, pm, hm) = if reward == crate::env::merge::RewardKind::Speed.name() {
         ("speed", p.speed, h.speed)
     } else {
         ("outflow", p.outflow, h.outflow)
@@ -219,8 +219,9 @@ pub struct EvalRequest<'a> {
 
 /// A policy evaluated on a scenario over `seeds` (in parallel, results in seed order), with the human baseline on
 /// the same seeds unless `baseline` is false: what `mapc eval` and the Python package's `evaluate` report. Also
-/// returns how the policy drove, for a trace of the same episodes.
-pub fn evaluate(req: &EvalRequest) -> Result<(EvalReport, PolicyDriver), RlError> {
+/// returns how the policy drove and where, for a trace of the same episodes (the `measured` rule's calibration
+/// is not run again).
+pub fn evaluate(req: &EvalRequest) -> Result<(EvalReport, PolicyDriver, Deployment), RlError> {
     let EvalRequest {
         ck,
         policy_file,
@@ -272,9 +273,9 @@ pub fn evaluate(req: &EvalRequest) -> Result<(EvalReport, PolicyDriver), RlError
         merges,
         end_flow,
         deploy: ck.spec.deploy,
-        withheld: deployment.withheld,
+        withheld: deployment.withheld.clone(),
     };
-    Ok((report, driver))
+    Ok((report, driver, deployment))
 }
 
 /// The all-human version of a spec: every AV type drives like the humans (its `controlled` flag off).
@@ -356,8 +357,21 @@ impl PolicyDriver {
         mode: ActionMode,
         out: &mut impl std::io::Write,
     ) -> Result<EpisodeMetrics, RlError> {
-        let deployed = deployed_spec(ck, self, spec)?;
-        let Some(spec) = deployed.spec.as_ref() else {
+        let deployment = deployed_spec(ck, self, spec)?;
+        self.trace_deployed(ck, spec, &deployment, seed, mode, out)
+    }
+
+    /// [`Self::trace`] with the deployment already worked out ([`deployed_spec`]).
+    pub fn trace_deployed(
+        &self,
+        ck: &Checkpoint,
+        spec: &SimSpec,
+        deployment: &Deployment,
+        seed: u64,
+        mode: ActionMode,
+        out: &mut impl std::io::Write,
+    ) -> Result<EpisodeMetrics, RlError> {
+        let Some(spec) = deployment.spec.as_ref() else {
             return trace_human(spec, seed, out);
         };
         match self {

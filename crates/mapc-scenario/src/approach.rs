@@ -8,7 +8,7 @@
 //!   lengths.
 
 use mapc_graph::{JunctionId, LaneGraph, RoadId};
-use std::collections::BTreeSet;
+use std::collections::{BTreeSet, HashMap};
 
 /// Road before a bottleneck in its approach (m): the Simple Merge window's main road before the merge.
 pub const APPROACH_UPSTREAM_M: f64 = 600.0;
@@ -52,10 +52,10 @@ fn walk(
     upstream: bool,
     region: &mut BTreeSet<RoadId>,
 ) {
-    let mut best: std::collections::HashMap<RoadId, f64> = Default::default();
+    let mut best: HashMap<RoadId, f64> = HashMap::new();
     let mut stack: Vec<(JunctionId, f64)> = vec![(from, 0.0)];
     while let Some((j, dist)) = stack.pop() {
-        let Some(junction) = g.junctions.iter().find(|x| x.id == j) else {
+        let Some(junction) = g.junction(j) else {
             continue;
         };
         let roads = if upstream {

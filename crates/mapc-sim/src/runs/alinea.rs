@@ -303,20 +303,14 @@ pub fn trace_with_alinea(
     cfg: &AlineaConfig,
     out: &mut impl std::io::Write,
 ) -> std::io::Result<crate::TracedRun> {
-    let mut alinea = Alinea::new(spec, cfg).map_err(std::io::Error::other)?;
-    let mut sim = Simulation::from_spec(spec.clone(), seed).map_err(std::io::Error::other)?;
-    let mut budget = crate::TraceBudget::new(spec);
-    alinea.start(&mut sim).map_err(std::io::Error::other)?;
-    budget.write_frame(&sim, out)?;
-    while !sim.is_done() {
-        sim.step().map_err(std::io::Error::other)?;
-        alinea.after_step(&mut sim).map_err(std::io::Error::other)?;
-        budget.write_frame(&sim, out)?;
-    }
-    Ok(crate::TracedRun {
-        metrics: sim.metrics(),
-        note: budget.note(),
-    })
+    let alinea = std::cell::RefCell::new(Alinea::new(spec, cfg).map_err(std::io::Error::other)?);
+    crate::runs::trace::trace_run_with(
+        spec,
+        seed,
+        out,
+        |sim| alinea.borrow_mut().start(sim),
+        |sim| alinea.borrow_mut().after_step(sim),
+    )
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Trace runs: one seed to the horizon, the measured frames' vehicles written as CSV rows
 //! ([`crate::TRACE_HEADER`]), within a bound on the rows ([`TraceBudget`]).
 
+use crate::error::SimError;
 use crate::measure::metrics::RunMetrics;
 use crate::sim::Simulation;
 use crate::spec::SimSpec;
@@ -109,11 +110,25 @@ pub fn trace_run(
     seed: u64,
     out: &mut impl std::io::Write,
 ) -> std::io::Result<TracedRun> {
+    trace_run_with(spec, seed, out, |_| Ok(()), |_| Ok(()))
+}
+
+/// [`trace_run`] with a controller: `start` before the first frame, `after_step` after every step (ALINEA sets
+/// its light there).
+pub fn trace_run_with(
+    spec: &SimSpec,
+    seed: u64,
+    out: &mut impl std::io::Write,
+    start: impl FnOnce(&mut Simulation) -> Result<(), SimError>,
+    mut after_step: impl FnMut(&mut Simulation) -> Result<(), SimError>,
+) -> std::io::Result<TracedRun> {
     let mut sim = Simulation::from_spec(spec.clone(), seed).map_err(std::io::Error::other)?;
     let mut budget = TraceBudget::new(spec);
+    start(&mut sim).map_err(std::io::Error::other)?;
     budget.write_frame(&sim, out)?;
     while !sim.is_done() {
         sim.step().map_err(std::io::Error::other)?;
+        after_step(&mut sim).map_err(std::io::Error::other)?;
         budget.write_frame(&sim, out)?;
     }
     Ok(TracedRun {
