@@ -330,11 +330,21 @@ fn machine() -> serde_json::Value {
         let names: Vec<&str> = has.iter().filter(|(_, on)| *on).map(|(n, _)| *n).collect();
         // gemm's stable build dispatches to its AVX2+FMA microkernels where both exist (its AVX-512 ones need
         // its nightly feature), so an AVX-512 machine runs the same kernels and sums in the same order
-        let kernels = if has[0].1 && has[1].1 {
-            "matrix products: gemm's AVX2+FMA f32 kernels; exp: glibc's FMA expf; allocator: mimalloc"
-        } else {
-            "matrix products: gemm's generic kernels (other sums: results differ from an FMA machine's); \
-             allocator: mimalloc"
+        // the element-wise loops' AVX2 copies give the baseline's bits (mapc-rl's `ppo::tensor::simd`)
+        let kernels = match (has[0].1, has[1].1) {
+            (true, true) => {
+                "matrix products: gemm's AVX2+FMA f32 kernels; element-wise loops: AVX2; update's exp: \
+                 straight-line (rollouts': glibc's FMA expf); allocator: mimalloc"
+            }
+            (avx2, _) => {
+                if avx2 {
+                    "matrix products: gemm's generic kernels (other sums: results differ from an FMA \
+                     machine's); element-wise loops: AVX2; allocator: mimalloc"
+                } else {
+                    "matrix products: gemm's generic kernels (other sums: results differ from an FMA \
+                     machine's); element-wise loops: baseline x86-64; allocator: mimalloc"
+                }
+            }
         };
         (names.join(" "), kernels)
     };

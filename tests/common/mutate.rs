@@ -57,7 +57,7 @@ pub const HOSTILE_NUMBERS: &[&str] = &[
 pub fn mutate_text(text: &str, d: &mut Draw) -> (String, String) {
     let numbers: Vec<(usize, usize)> = number_spans(text);
     match d.below(6) {
-        0 | 1 | 2 if !numbers.is_empty() => {
+        0..=2 if !numbers.is_empty() => {
             let (a, b) = *d.pick(&numbers);
             let with = *d.pick(HOSTILE_NUMBERS);
             let what = format!("number `{}` at byte {a} -> `{with}`", &text[a..b]);

@@ -1,5 +1,5 @@
 """A mapc policy file driven outside mapc: the MLP's forward pass in numpy, the centralized observation and the
-FIFO controlled set, as crates/mapc-rl computes them (env/obs.rs, env/merge.rs, ppo/tensor.rs)."""
+FIFO controlled set, as crates/mapc-rl computes them (env/obs.rs, env/merge.rs, ppo/tensor/mod.rs)."""
 import json
 
 import numpy as np
@@ -28,7 +28,7 @@ class Policy:
         self.act_dim = arch["act_dim"]
         sizes = [arch["obs_dim"]] + list(arch["hidden"]) + [2 * self.act_dim]
         params = np.asarray(model["params"], dtype=np.float32)
-        # Layer by layer: weights row-major [n_in][n_out], then the biases (ppo/tensor.rs, mlp_forward).
+        # Layer by layer: weights row-major [n_in][n_out], then the biases (ppo/tensor/mod.rs, mlp_forward).
         self.layers = []
         off = 0
         for n_in, n_out in zip(sizes[:-1], sizes[1:]):

@@ -339,8 +339,8 @@ impl Policy {
     /// AV (centralized) or the agent's own (distributed).
     fn act<'py>(&mut self, py: Python<'py>, obs: &[u8]) -> PyResult<Bound<'py, PyBytes>> {
         let obs = from_bytes(obs, self.ck.spec.obs_dim, "observation")?;
-        let out = self.ck.state.model.infer(&obs, &mut self.scratch);
-        Ok(to_bytes(py, &out.mean))
+        let dist = self.ck.state.model.action_dist(&obs, &mut self.scratch);
+        Ok(to_bytes(py, &dist.mean))
     }
 }
 

@@ -89,8 +89,8 @@ pub fn run_windows_episode(
     for _ in 0..settings.horizon {
         for (k, o) in obs.iter().enumerate() {
             actions[k] = (!env.controlled(k).is_empty()).then(|| {
-                let out = model.infer(o, scratch);
-                action_of(&out.mean, &out.log_std, settings.mode, &mut rng)
+                let dist = model.action_dist(o, scratch);
+                action_of(&dist.mean, &dist.log_std, settings.mode, &mut rng)
             });
         }
         let next = env.step(&actions)?;

@@ -26,7 +26,8 @@
 //!   with its own FIFO of `N_AV` AVs and its own observation (`env::windows`). **Flow past a merge**: vehicles
 //!   entering the road after the merge per hour.
 //!
-//! Layout: `ppo::tensor` holds all tensor code (burn for the loss gradient, plain `f32` for rollout inference),
+//! Layout: `ppo::tensor` holds all tensor code (the loss gradient written out, its matrix products on burn's flex
+//! backend; plain `f32` for rollout inference),
 //! `ppo::gae` the advantage estimation, `rollout` the `Env` trait and parallel collection, `env` the merge
 //! environment on `mapc-sim`, `run` a training run on disk, `eval` evaluation against the human baseline (every run's
 //! figures, per-merge flows included, are the simulation's own measurement), `eval_windows` the several-window

@@ -42,13 +42,18 @@ impl Episode {
 
     /// Keeps what training needs of one step: the observation, the action and the policy's output for it.
     fn record_step(&mut self, obs: &[f32], action: &[f32], out: &PolicyOutput) {
+        self.record_action(obs, action, &out.mean, &out.log_std);
+        self.values.push(out.value);
+    }
+
+    /// One step without its value estimate (added for the whole episode at its end).
+    fn record_action(&mut self, obs: &[f32], action: &[f32], mean: &[f32], log_std: &[f32]) {
         self.log_probs
-            .push(gaussian_log_prob(action, &out.mean, &out.log_std));
+            .push(gaussian_log_prob(action, mean, log_std));
         self.obs.extend_from_slice(obs);
         self.actions.extend_from_slice(action);
-        self.means.extend_from_slice(&out.mean);
-        self.log_stds.extend_from_slice(&out.log_std);
-        self.values.push(out.value);
+        self.means.extend_from_slice(mean);
+        self.log_stds.extend_from_slice(log_std);
     }
 }
 
@@ -120,12 +125,12 @@ pub fn run_episode_observed<E: Env + ?Sized>(
     observe(env)?;
     let mut terminal = false;
     for _ in 0..horizon {
-        let out = model.infer(&obs, scratch);
-        let action = action_of(&out.mean, &out.log_std, mode, &mut rng);
+        let dist = model.action_dist(&obs, scratch);
+        let action = action_of(&dist.mean, &dist.log_std, mode, &mut rng);
         let tr = env.step(&action)?;
         observe(env)?;
         if record {
-            ep.record_step(&obs, &action, &out);
+            ep.record_action(&obs, &action, &dist.mean, &dist.log_std);
         }
         ep.rewards.push(tr.reward);
         obs = tr.obs;
@@ -133,6 +138,10 @@ pub fn run_episode_observed<E: Env + ?Sized>(
             terminal = true;
             break;
         }
+    }
+    if record {
+        // the value estimates in one batched pass (the episode's actions never depend on them)
+        ep.values = model.values(&ep.obs);
     }
     ep.end = Some(if terminal {
         EpisodeEnd::Terminal

@@ -11,9 +11,7 @@ use serde::{Deserialize, Serialize};
 
 pub use config::PpoConfig;
 use gae::{EpisodeEnd, gae, standardize};
-use tensor::{
-    Adam, Architecture, LossCoeffs, LossStats, Minibatch, Model, loss_and_grad, update_device,
-};
+use tensor::{Adam, Architecture, LossCoeffs, LossStats, Minibatch, Model, loss_and_grad};
 
 use crate::env::EpisodeMetrics;
 use crate::error::RlError;
@@ -221,6 +219,7 @@ impl TrainerState {
         };
         let lr = c.lr_at(self.env_steps);
         let mut order: Vec<usize> = (0..b.n).collect();
+        let records = b.records();
         let mut last = LossStats::default();
         let mb_size = c.minibatch.clamp(1, b.n.max(1));
         for epoch in 0..c.epochs {
@@ -228,7 +227,7 @@ impl TrainerState {
             let mut sum = LossStats::default();
             let mut count = 0usize;
             for idx in order.chunks(mb_size) {
-                let mb = b.gather(idx);
+                let mb = records.gather(idx);
                 let (stats, grad) = sliced_loss_and_grad(&self.model, &mb, &coeffs, c.grad_slices);
                 // One overflowing minibatch (a collapsing log-std) must not poison the weights and Adam's moments.
                 if !grad.iter().all(|g| g.is_finite()) {
@@ -278,7 +277,7 @@ fn sliced_loss_and_grad(
     let parts: Vec<(usize, LossStats, Vec<f32>)> = bounds
         .par_iter()
         .map(|&(lo, hi)| {
-            let (s, g) = loss_and_grad(model, &mb.view(lo, hi), c, &update_device());
+            let (s, g) = loss_and_grad(model, &mb.view(lo, hi), c);
             (hi - lo, s, g)
         })
         .collect();
@@ -385,33 +384,74 @@ impl Batch {
         b
     }
 
-    fn gather(&self, idx: &[usize]) -> OwnedMinibatch {
+    /// The batch row by row: each step's fields side by side, so that gathering a random row reads two or three
+    /// cache lines instead of one per field (on a 40 000-step batch, larger than a core's cache, the gathers' misses
+    /// were a tenth of an update).
+    fn records(&self) -> Records {
         let (d, a) = (self.obs_dim, self.act_dim);
-        // rows are a few floats wide: copied element by element (a `memcpy` call per row cost more than the
-        // copy; gathering was 4 % of a distributed iteration)
-        let rows = |src: &[f32], w: usize| -> Vec<f32> {
-            if w == 1 {
-                return idx.iter().map(|&i| src[i]).collect();
-            }
-            let mut v = Vec::with_capacity(idx.len() * w);
-            for &i in idx {
-                v.extend(src[i * w..(i + 1) * w].iter().copied());
-            }
-            v
-        };
-        OwnedMinibatch {
-            n: idx.len(),
+        let stride = d + 3 * a + 4;
+        let mut data = Vec::with_capacity(self.n * stride);
+        for i in 0..self.n {
+            data.extend_from_slice(&self.obs[i * d..(i + 1) * d]);
+            data.extend_from_slice(&self.actions[i * a..(i + 1) * a]);
+            data.extend_from_slice(&self.means[i * a..(i + 1) * a]);
+            data.extend_from_slice(&self.log_stds[i * a..(i + 1) * a]);
+            data.extend_from_slice(&[
+                self.log_probs[i],
+                self.values[i],
+                self.advantages[i],
+                self.value_targets[i],
+            ]);
+        }
+        Records {
             obs_dim: d,
             act_dim: a,
-            obs: rows(&self.obs, d),
-            actions: rows(&self.actions, a),
-            log_probs: rows(&self.log_probs, 1),
-            means: rows(&self.means, a),
-            log_stds: rows(&self.log_stds, a),
-            values: rows(&self.values, 1),
-            advantages: rows(&self.advantages, 1),
-            value_targets: rows(&self.value_targets, 1),
+            stride,
+            data,
         }
+    }
+}
+
+/// A batch stored row by row ([`Batch::records`]).
+struct Records {
+    obs_dim: usize,
+    act_dim: usize,
+    stride: usize,
+    data: Vec<f32>,
+}
+
+impl Records {
+    fn gather(&self, idx: &[usize]) -> OwnedMinibatch {
+        let (d, a, n) = (self.obs_dim, self.act_dim, idx.len());
+        let mut mb = OwnedMinibatch {
+            n,
+            obs_dim: d,
+            act_dim: a,
+            obs: Vec::with_capacity(n * d),
+            actions: Vec::with_capacity(n * a),
+            log_probs: Vec::with_capacity(n),
+            means: Vec::with_capacity(n * a),
+            log_stds: Vec::with_capacity(n * a),
+            values: Vec::with_capacity(n),
+            advantages: Vec::with_capacity(n),
+            value_targets: Vec::with_capacity(n),
+        };
+        for &i in idx {
+            let row = &self.data[i * self.stride..(i + 1) * self.stride];
+            let (obs, rest) = row.split_at(d);
+            let (actions, rest) = rest.split_at(a);
+            let (means, rest) = rest.split_at(a);
+            let (log_stds, rest) = rest.split_at(a);
+            mb.obs.extend_from_slice(obs);
+            mb.actions.extend_from_slice(actions);
+            mb.means.extend_from_slice(means);
+            mb.log_stds.extend_from_slice(log_stds);
+            mb.log_probs.push(rest[0]);
+            mb.values.push(rest[1]);
+            mb.advantages.push(rest[2]);
+            mb.value_targets.push(rest[3]);
+        }
+        mb
     }
 }
 

@@ -1,4 +1,4 @@
-//! Tests of the tensor code: plain inference, the PPO loss and its gradient, the fused tanh, Adam.
+//! Tests of the tensor code: plain inference, the PPO loss and its gradient (against burn's autodiff), the update's tanh, the AVX2 loops, Adam.
 use super::*;
 
 /// The paper's clip, KL and value coefficients, with the given entropy coefficient.
@@ -73,7 +73,7 @@ fn ppo_loss_matches_hand_computation() {
         advantages: &[2.0],
         value_targets: &[3.5],
     };
-    let (s, g) = loss_and_grad(&m, &mb, &c, &update_device());
+    let (s, g) = loss_and_grad(&m, &mb, &c);
     // Surrogate: min(2 * 1.6487, 2 * 1.3) = 2.6 -> policy loss -2.6.
     assert!((s.policy_loss + 2.6).abs() < 1e-5, "{:?}", s);
     // KL: dim 1: 0 - 0 + (1 + 0.25)/2 - 0.5 = 0.125; dim 2: -0.5 - 0 + (1 + 0) / (2 e^-1) - 0.5 = e/2 - 1.
@@ -130,7 +130,7 @@ fn a_shared_value_is_the_policy_nets_last_output() {
         vf_clip: 10.0,
         entropy_coeff: 0.0,
     };
-    let (_, g) = loss_and_grad(&m, &mb, &c, &update_device());
+    let (_, g) = loss_and_grad(&m, &mb, &c);
     assert!(
         g[..3 * 4].iter().any(|x| x.abs() > 1e-6),
         "first layer: {:?}",
@@ -176,8 +176,7 @@ fn gradient_matches_finite_differences_for(arch: Architecture) {
         value_targets: &[0.7, -0.4],
     };
     let c = test_coeffs(0.01);
-    let dev = update_device();
-    let (_, g) = loss_and_grad(&m, &mb, &c, &dev);
+    let (_, g) = loss_and_grad(&m, &mb, &c);
     // (with a shared value, `policy_len() + 3` lies past the parameters: skipped)
     for i in [
         0usize,
@@ -193,9 +192,9 @@ fn gradient_matches_finite_differences_for(arch: Architecture) {
         let h = 1e-2;
         let mut p = m.clone();
         p.params[i] += h;
-        let (sp, _) = loss_and_grad(&p, &mb, &c, &dev);
+        let (sp, _) = loss_and_grad(&p, &mb, &c);
         p.params[i] -= 2.0 * h;
-        let (sm, _) = loss_and_grad(&p, &mb, &c, &dev);
+        let (sm, _) = loss_and_grad(&p, &mb, &c);
         let fd = (sp.total - sm.total) / (2.0 * h);
         assert!(
             (fd - g[i]).abs() < 2e-3 + 0.02 * g[i].abs(),
@@ -257,52 +256,58 @@ impl OwnedRows {
     }
 }
 
-fn stats_bits(s: &LossStats) -> [u32; 5] {
-    [s.total, s.policy_loss, s.value_loss, s.kl, s.entropy].map(f32::to_bits)
+fn stats_values(s: &LossStats) -> [f32; 5] {
+    [s.total, s.policy_loss, s.value_loss, s.kl, s.entropy]
 }
 
 #[test]
-fn split_graphs_give_the_joint_graphs_bits() {
+fn written_gradient_is_burns_autodiff_gradient() {
     let mut rng = Rng::new(17);
-    for (seed, n, entropy_coeff) in [(1, 128, 0.0), (2, 37, 0.01), (3, 1, 0.0)] {
-        let mut m = Model::new(
-            Architecture {
-                obs_dim: 25,
-                act_dim: 5,
-                hidden: vec![100, 50, 25],
-                shared_value: false,
-            },
-            seed,
-        );
-        // weights away from the initial ones (the output layers start 100 times smaller)
-        for p in m.params.iter_mut() {
-            *p += (rng.normal() * 0.05) as f32;
+    for shared_value in [false, true] {
+        for (seed, n, entropy_coeff) in [(1, 128, 0.0), (2, 37, 0.01), (3, 1, 0.0)] {
+            let mut m = Model::new(
+                Architecture {
+                    obs_dim: 25,
+                    act_dim: 5,
+                    hidden: vec![100, 50, 25],
+                    shared_value,
+                },
+                seed,
+            );
+            // weights away from the initial ones (the output layers start 100 times smaller)
+            for p in m.params.iter_mut() {
+                *p += (rng.normal() * 0.05) as f32;
+            }
+            let rows = random_minibatch(&m, n, &mut rng);
+            let c = test_coeffs(entropy_coeff);
+            let (s_ref, g_ref) = autodiff::loss_and_grad(&m, &rows.view(), &c);
+            let (s, g) = loss_and_grad(&m, &rows.view(), &c);
+            let close = |a: f32, b: f32, scale: f32| (a - b).abs() <= 1e-4 * scale.max(b.abs());
+            for (a, b) in stats_values(&s).into_iter().zip(stats_values(&s_ref)) {
+                assert!(close(a, b, 1e-3), "{s:?} vs {s_ref:?}");
+            }
+            assert_eq!(g.len(), g_ref.len());
+            let largest = g_ref.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+            assert!(largest > 0.0);
+            for (i, (&a, &b)) in g.iter().zip(&g_ref).enumerate() {
+                assert!(
+                    close(a, b, 1e-2 * largest),
+                    "shared {shared_value}, seed {seed}, parameter {i}: {a} vs {b}"
+                );
+            }
         }
-        let rows = random_minibatch(&m, n, &mut rng);
-        let c = test_coeffs(entropy_coeff);
-        let dev = update_device();
-        let (s_joint, g_joint) = joint_loss_and_grad(&m, &rows.view(), &c, &dev);
-        let (s_split, g_split) = split_loss_and_grad(&m, &rows.view(), &c, &dev);
-        assert_eq!(
-            stats_bits(&s_split),
-            stats_bits(&s_joint),
-            "{s_split:?} vs {s_joint:?}"
-        );
-        let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&g_split), bits(&g_joint), "seed {seed}");
-        assert!(g_joint.iter().any(|&g| g != 0.0));
     }
 }
 
 #[test]
-fn burn_forward_matches_plain_inference() {
-    // (the value loss below is zero only if burn reads the same value output as `infer`)
+fn update_forward_matches_plain_inference() {
+    // (the value loss below is zero only if the update reads the same value output as `infer`)
     for shared_value in [false, true] {
-        burn_forward_matches_plain_inference_for(shared_value);
+        update_forward_matches_plain_inference_for(shared_value);
     }
 }
 
-fn burn_forward_matches_plain_inference_for(shared_value: bool) {
+fn update_forward_matches_plain_inference_for(shared_value: bool) {
     let m = Model::new(
         Architecture {
             obs_dim: 4,
@@ -329,7 +334,7 @@ fn burn_forward_matches_plain_inference_for(shared_value: bool) {
         value_targets: &[plain.value],
     };
     let c = test_coeffs(0.0);
-    let (s, _) = loss_and_grad(&m, &mb, &c, &update_device());
+    let (s, _) = loss_and_grad(&m, &mb, &c);
     assert!(s.kl.abs() < 1e-6, "{:?}", s);
     assert!((s.policy_loss + 1.0).abs() < 1e-5, "{:?}", s);
     assert!(s.value_loss < 1e-10, "{:?}", s);
@@ -346,34 +351,10 @@ fn adam_first_step_moves_by_lr() {
     );
 }
 
-/// Value and gradient of `tanh` at `x` under the upstream gradient `w` (the gradient of sum(w * tanh(x))).
-/// With `transposed`, `x` is stored as its transpose and `tanh` sees a non-contiguous view of it.
-fn tanh_value_and_grad(
-    tanh: fn(Tensor<2>) -> Tensor<2>,
-    x: &[f32],
-    w: &[f32],
-    transposed: bool,
-) -> (Vec<f32>, Vec<f32>) {
-    let device = update_device();
-    let shape = [x.len() / 4, 4];
-    let (xt, input) = if transposed {
-        let xt = leaf(x.to_vec(), [4, x.len() / 4], &device).require_grad();
-        (xt.clone(), xt.transpose())
-    } else {
-        let xt = leaf(x.to_vec(), shape, &device).require_grad();
-        (xt.clone(), xt)
-    };
-    let wt = leaf(w.to_vec(), shape, &device);
-    let y = tanh(input);
-    let grads = (y.clone() * wt).sum().backward();
-    let values = |t: Tensor<2>| t.into_data().try_to_vec::<f32>().unwrap();
-    (values(y), values(xt.grad(&grads).unwrap()))
-}
-
-#[test]
-fn fused_tanh_has_the_chains_bits_in_value_and_gradient() {
+/// Inputs over the tanh's whole range, its bounds and beyond.
+fn tanh_inputs(n: usize) -> Vec<f32> {
     let mut rng = Rng::new(11);
-    let mut x: Vec<f32> = (0..40_000)
+    let mut x: Vec<f32> = (0..n)
         .map(|i| {
             let scale = [0.01, 1.0, 5.0, 20.0][i % 4];
             (rng.normal() * scale) as f32
@@ -398,28 +379,69 @@ fn fused_tanh_has_the_chains_bits_in_value_and_gradient() {
         0.5,
     ];
     x[..edges.len()].copy_from_slice(&edges);
-    let w: Vec<f32> = (0..x.len()).map(|_| (rng.normal() * 3.0) as f32).collect();
-    // the loss graph's tensors take the fused path (not the chain as a fallback)
-    let on_update_device = leaf(x[..4].to_vec(), [1, 4], &update_device()).require_grad();
-    assert!(fused_tanh::apply(&on_update_device).is_some());
-    let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
-    for transposed in [false, true] {
-        let (y_chain, g_chain) = tanh_value_and_grad(tanh_chain, &x, &w, transposed);
-        let (y_fused, g_fused) = tanh_value_and_grad(burn_tanh, &x, &w, transposed);
-        assert_eq!(
-            bits(&y_fused),
-            bits(&y_chain),
-            "values, transposed {transposed}"
-        );
-        assert_eq!(
-            bits(&g_fused),
-            bits(&g_chain),
-            "gradients, transposed {transposed}"
-        );
+    x
+}
+
+#[test]
+fn exp_straight_is_within_two_ulp_of_exp() {
+    let ulps = |a: f32, b: f32| (a.to_bits() as i64 - b.to_bits() as i64).abs();
+    let mut worst = 0;
+    for i in -3_000_000..=3_000_000 {
+        let x = i as f32 * 1e-5;
+        let d = ulps(backprop::exp_straight(x), (x as f64).exp() as f32);
+        worst = worst.max(d);
     }
-    let (y_fused, _) = tanh_value_and_grad(burn_tanh, &x, &w, false);
-    for (&x, &y) in x.iter().zip(&y_fused) {
-        assert_eq!(y.to_bits(), fast_tanh(x).to_bits(), "x = {x}");
+    assert!(worst <= 2, "{worst} ulp");
+    assert_eq!(backprop::exp_straight(0.0), 1.0);
+}
+
+#[test]
+fn the_updates_tanh_is_the_rollouts_within_4e_7() {
+    let x = tanh_inputs(40_000);
+    let mut y = x.clone();
+    let mut e = vec![0.0; x.len()];
+    backprop::tanh_keeping_exp(&mut y, &mut e);
+    for (&x, &y) in x.iter().zip(&y) {
+        let t = fast_tanh(x);
+        // (an ulp or two of exp(2x) moves 1 - 2 / (exp(2x) + 1) by up to about 3e-7 near -1)
+        assert!((y - t).abs() <= 4e-7, "x = {x}: {y} vs {t}");
+    }
+}
+
+#[test]
+fn wide_loops_give_the_baselines_bits() {
+    let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+    // lengths that leave remainders for every vector width
+    for n in [1, 7, 13, 100, 40_003] {
+        let x = tanh_inputs(n.max(16))[..n].to_vec();
+        let (mut y_wide, mut e_wide) = (x.clone(), vec![0.0; n]);
+        let (mut y_base, mut e_base) = (x.clone(), vec![0.0; n]);
+        backprop::tanh_keeping_exp(&mut y_wide, &mut e_wide);
+        backprop::tanh_keeping_exp_lanes(&mut y_base, &mut e_base);
+        assert_eq!(bits(&y_wide), bits(&y_base));
+        assert_eq!(bits(&e_wide), bits(&e_base));
+        let (mut d_wide, mut d_base) = (x.clone(), x.clone());
+        backprop::times_tanh_slope(&mut d_wide, &e_wide);
+        backprop::times_tanh_slope_lanes(&mut d_base, &e_base);
+        assert_eq!(bits(&d_wide), bits(&d_base));
+    }
+    let m = Model::new(
+        Architecture {
+            obs_dim: 25,
+            act_dim: 5,
+            hidden: vec![100, 50, 25],
+            shared_value: false,
+        },
+        4,
+    );
+    let mut rng = Rng::new(5);
+    for _ in 0..200 {
+        let obs: Vec<f32> = (0..25).map(|_| (rng.normal() * 2.0) as f32).collect();
+        let (mut buf, mut wide, mut base) = (vec![], vec![], vec![]);
+        let pp = &m.params[..m.arch.policy_len()];
+        mlp_forward(pp, 25, &m.arch.hidden, 10, &obs, &mut buf, &mut wide);
+        mlp_forward_lanes(pp, 25, &m.arch.hidden, 10, &obs, &mut buf, &mut base);
+        assert_eq!(bits(&wide), bits(&base));
     }
 }
 
@@ -437,19 +459,31 @@ fn tanh_is_unchanged_by_its_input_bound_and_its_gradient_stays_finite() {
         assert_eq!(fast_tanh(x), unbounded, "x = {x}");
         assert!((fast_tanh(x) - x.tanh()).abs() < 1e-6, "x = {x}");
     }
-    let device = update_device();
-    let x = Tensor::<2>::from_data(
-        burn::tensor::TensorData::new(vec![60.0f32, -60.0, 0.5], [1, 3]),
-        &device,
-    )
-    .require_grad();
-    let grads = burn_tanh(x.clone()).sum().backward();
-    let g: Vec<f32> = x
-        .grad(&grads)
-        .unwrap()
-        .into_data()
-        .try_to_vec::<f32>()
-        .unwrap();
+    // the update's tanh slope stays finite (and zero) far past the bound
+    let mut z = vec![60.0f32, -60.0, 0.5];
+    let mut e = vec![0.0; 3];
+    backprop::tanh_keeping_exp(&mut z, &mut e);
+    let mut g = vec![1.0f32; 3];
+    backprop::times_tanh_slope(&mut g, &e);
     assert!(g.iter().all(|v| v.is_finite()), "{g:?}");
-    assert!((g[2] - (1.0 - 0.5f32.tanh().powi(2))).abs() < 1e-5, "{g:?}");
+    assert!(g[0].abs() < 1e-12 && g[1].abs() < 1e-12, "{g:?}");
+    assert!((g[2] - (1.0 - 0.5f32.tanh().powi(2))).abs() < 1e-6, "{g:?}");
+}
+
+#[test]
+fn adams_moments_never_go_subnormal() {
+    // a parameter whose gradient goes to zero (an input that is always 0) and one whose gradient is tiny
+    let mut p = vec![1.0f32, 1.0, 1.0];
+    let mut a = Adam::new(3);
+    a.step(&mut p, &[1e-3, 1e-3, 1e-3], 1e-3);
+    // (v decays by 0.999 a step: from 1e-9 to the floor in about 48 000 steps)
+    for _ in 0..60_000 {
+        a.step(&mut p, &[0.0, 1e-20, -1e-3], 1e-3);
+        for x in a.m.iter().chain(&a.v) {
+            assert!(*x == 0.0 || x.is_normal(), "{:?} {:?}", a.m, a.v);
+        }
+    }
+    assert_eq!((a.m[0], a.v[0]), (0.0, 0.0));
+    assert_eq!((a.m[1], a.v[1]), (0.0, 0.0));
+    assert!(a.m[2] < 0.0 && a.v[2] > 0.0);
 }
