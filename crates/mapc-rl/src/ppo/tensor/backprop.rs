@@ -29,13 +29,7 @@ pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs) -> (LossStat
         let (terms, mut d_out) = policy_terms(pass.out(), arch, mb, c);
         let value_loss = arch.shared_value.then(|| {
             let outs = net.outputs();
-            let value: Vec<f32> = pass
-                .out()
-                .iter()
-                .skip(2 * arch.act_dim)
-                .step_by(outs)
-                .copied()
-                .collect();
+            let value = pass.out_column(2 * arch.act_dim);
             let (loss, d_value) = value_term(&value, mb, c);
             for (row, d) in d_out.chunks_exact_mut(outs).zip(d_value) {
                 row[2 * arch.act_dim] = d;
@@ -91,16 +85,8 @@ pub fn values(model: &Model, obs: &[f32]) -> Vec<f32> {
     let x = matrix(obs[..rows * arch.obs_dim].to_vec(), rows, arch.obs_dim);
     let (pp, vp) = model.params.split_at(arch.policy_len());
     if arch.shared_value {
-        let net = Mlp::new(pp, arch.policy_sizes());
-        let outs = net.outputs();
-        let pass = net.forward(x);
-        return pass
-            .out()
-            .iter()
-            .skip(2 * arch.act_dim)
-            .step_by(outs)
-            .copied()
-            .collect();
+        let pass = Mlp::new(pp, arch.policy_sizes()).forward(x);
+        return pass.out_column(2 * arch.act_dim);
     }
     Mlp::new(vp, arch.value_sizes()).forward(x).out().to_vec()
 }
@@ -195,6 +181,12 @@ struct Pass {
 impl Pass {
     fn out(&self) -> &[f32] {
         elements(&self.out)
+    }
+
+    /// Column `k` of the output (the shared value's, for one).
+    fn out_column(&self, k: usize) -> Vec<f32> {
+        let outs = self.out.layout().shape()[1];
+        self.out().iter().skip(k).step_by(outs).copied().collect()
     }
 }
 
