@@ -292,7 +292,8 @@ fn bench_training(args: &Args, iters: u64) -> anyhow::Result<()> {
             cpu_s / iters as f64
         );
         println!(
-            "  the preset's {full} iterations at this rate: {:.1} min",
+            "  the preset's {full} iterations at this rate: {:.1} min (a fresh policy's iterations: a trained \
+             one's cost up to 30 % more, docs/perf.md)",
             per_iter * full / 60.0
         );
         let m = machine();
