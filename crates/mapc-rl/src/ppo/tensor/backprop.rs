@@ -4,7 +4,7 @@
 //! backend (gemm's kernels; strided, so a transpose is a view); the element-wise steps are loops over slices.
 //!
 //! Why not burn's autodiff: on the paper's minibatches of 128 rows, recording the loss's ~80 operations as a
-//! graph and replaying it cost three times the arithmetic (docs/perf.md, "Training speed"). The autodiff version
+//! graph and replaying it cost three times the arithmetic (docs/perf.md, "The gradient written out"). The autodiff version
 //! stays as the reference the tests compare this one with ([`super::autodiff`]).
 
 use burn::tensor::TensorData;
