@@ -57,6 +57,59 @@ fn exports_the_i696_window_and_replaces_an_old_export_whole() {
 }
 
 #[test]
+fn a_users_induction_loops_are_exported_for_sumo() {
+    // the ramp game with the loops of its additional file: SUMO writes their intervals from the export as it
+    // would from the user's own files (checked by hand with SUMO 1.8; SUMO is not a dependency of the tests)
+    let dir = scratch_dir("sumo-export-loops");
+    let out = dir.join("game");
+    let run = run_mapc(&[
+        "export",
+        "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg",
+        "--sumo",
+        out.to_str().unwrap(),
+    ]);
+    assert_success(&run);
+    let add = std::fs::read_to_string(out.join("ramp_alinea.add.xml")).unwrap();
+    let loops: Vec<&str> = add
+        .lines()
+        .filter(|l| l.trim_start().starts_with("<inductionLoop"))
+        .collect();
+    assert_eq!(loops.len(), 6, "{add}");
+    for (id, lane, pos) in [
+        ("ramps_0", "gneE18_0", "60.00"),
+        ("merge_2", "gneE7_2", "80.00"),
+        ("drop_1", "gneE8_1", "60.00"),
+    ] {
+        let l = loops
+            .iter()
+            .find(|l| l.contains(&format!("id=\"{id}\"")))
+            .unwrap();
+        assert!(l.contains(&format!("lane=\"{lane}\"")), "{l}");
+        assert!(l.contains(&format!("pos=\"{pos}\"")), "{l}");
+        assert!(l.contains("freq=\"60.00\""), "{l}");
+        assert!(l.contains("file=\"ramp_alinea.e1.xml\""), "{l}");
+    }
+    // each loop's lane is a lane of the exported network
+    let net = std::fs::read_to_string(out.join("ramp_alinea.net.xml")).unwrap();
+    for l in &loops {
+        let lane = l
+            .split("lane=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
+        assert!(net.contains(&format!("<lane id=\"{lane}\"")), "{lane}");
+    }
+    let cfg = std::fs::read_to_string(out.join("ramp_alinea.sumocfg")).unwrap();
+    assert!(
+        cfg.contains("<additional-files value=\"ramp_alinea.add.xml\"/>"),
+        "{cfg}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn help_names_the_sumo_version() {
     let run = run_mapc(&["export", "--help"]);
     assert_success(&run);

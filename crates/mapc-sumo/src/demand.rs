@@ -186,9 +186,50 @@ fn depart_lane(graph: &LaneGraph, f: &FlowSpec) -> String {
 /// collisions checked inside junctions but not acted on, no min gap in the collision check; with `multi_lane`,
 /// lane changes done in one step (`lanechange.duration` 0, SUMO 1.8's default, written out as mapc's LC2013
 /// assumes it) by each vehicle type's default model, LC2013.
+/// The scenario's induction loops as a SUMO additional file (`None` when it has none): each loop on its lane of
+/// the exported network, at its position and with its interval, its types if it sees only some. All write their
+/// intervals to `output_file`, which the export names (a name from a map never becomes a path).
+pub fn detectors_xml(spec: &SimSpec, names: &SumoNames, output_file: &str) -> Option<String> {
+    if spec.detectors.is_empty() {
+        return None;
+    }
+    let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\n");
+    out.push_str(
+        "<!-- written by `mapc export` for SUMO 1.8: the scenario's induction loops -->\n",
+    );
+    start(&mut out, 0, "additional", &[]);
+    for d in &spec.detectors {
+        let i = spec
+            .graph
+            .roads
+            .binary_search_by_key(&d.road, |r| r.id)
+            .expect("a detector's road is the graph's");
+        let edge = &names.edges[i];
+        let mut attrs = vec![
+            ("id", d.id.clone()),
+            ("lane", format!("{edge}_{}", d.lane)),
+            ("pos", num(d.pos_m, 2)),
+            ("freq", num(d.period_s, 2)),
+            ("file", output_file.to_string()),
+        ];
+        if !d.vehicle_types.is_empty() {
+            let types: Vec<&str> = d
+                .vehicle_types
+                .iter()
+                .map(|&t| spec.vehicle_types[t].name.as_str())
+                .collect();
+            attrs.push(("vTypes", types.join(" ")));
+        }
+        element(&mut out, 4, "inductionLoop", &attrs);
+    }
+    out.push_str("</additional>\n");
+    Some(out)
+}
+
 pub fn sumocfg(
     net_file: &str,
     routes_file: &str,
+    additional_file: Option<&str>,
     step_s: f64,
     end_s: f64,
     multi_lane: bool,
@@ -204,14 +245,14 @@ pub fn sumocfg(
         }
         out.push_str(&format!("    </{name}>\n"));
     };
-    section(
-        &mut out,
-        "input",
-        &[
-            ("net-file", net_file.into()),
-            ("route-files", routes_file.into()),
-        ],
-    );
+    let mut input = vec![
+        ("net-file", net_file.to_string()),
+        ("route-files", routes_file.to_string()),
+    ];
+    if let Some(additional) = additional_file {
+        input.push(("additional-files", additional.to_string()));
+    }
+    section(&mut out, "input", &input);
     section(
         &mut out,
         "time",

@@ -175,7 +175,8 @@ pub fn export_network(
     write(dir, files, graph, 0, 0)
 }
 
-/// Write a scenario into `dir`: net, routes, sumocfg and the manifest.
+/// Write a scenario into `dir`: net, routes, sumocfg, the manifest, and its induction loops as an additional file
+/// if it has any.
 pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummary, ExportError> {
     let scenario_err = |error| ExportError::Scenario {
         origin: rs.origin.clone(),
@@ -248,7 +249,9 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
         measure_points,
         edges,
     };
-    let files = vec![
+    let detectors = demand::detectors_xml(&spec, &names, &format!("{stem}.e1.xml"));
+    let additional_file = detectors.as_ref().map(|_| format!("{stem}.add.xml"));
+    let mut files = vec![
         (net_file.clone(), net::net_xml(graph, &names)),
         (routes_file.clone(), routes),
         (
@@ -256,6 +259,7 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
             demand::sumocfg(
                 &net_file,
                 &routes_file,
+                additional_file.as_deref(),
                 spec.step_s,
                 end_s,
                 spec.graph.roads.iter().any(|r| r.lanes.len() > 1),
@@ -264,6 +268,9 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
         ),
         (format!("{stem}.mapc.json"), to_json(&manifest)),
     ];
+    if let (Some(name), Some(xml)) = (additional_file, detectors) {
+        files.push((name, xml));
+    }
     write(dir, files, graph, spec.flows.len(), spec.initial.len())
 }
 
