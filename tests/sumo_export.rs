@@ -60,15 +60,11 @@ fn exports_the_i696_window_and_replaces_an_old_export_whole() {
 fn a_users_induction_loops_are_exported_for_sumo() {
     // the ramp game with the loops of its additional file: SUMO writes their intervals from the export as it
     // would from the user's own files (checked by hand with SUMO 1.8; SUMO is not a dependency of the tests)
-    let dir = scratch_dir("sumo-export-loops");
-    let out = dir.join("game");
-    let run = run_mapc(&[
-        "export",
+    let out = export_for_sumo(
         "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg",
-        "--sumo",
-        out.to_str().unwrap(),
-    ]);
-    assert_success(&run);
+        "sumo-export-loops",
+        &[],
+    );
     let add = std::fs::read_to_string(out.join("ramp_alinea.add.xml")).unwrap();
     let loops: Vec<&str> = add
         .lines()
@@ -106,7 +102,7 @@ fn a_users_induction_loops_are_exported_for_sumo() {
         cfg.contains("<additional-files value=\"ramp_alinea.add.xml\"/>"),
         "{cfg}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&out).unwrap();
 }
 
 #[test]

@@ -378,14 +378,11 @@ fn a_types_lc_parameters_change_how_it_changes_lanes() {
 #[test]
 fn a_sumo_users_scenario_exports_with_its_drivers_mixes_and_departure_rules() {
     // ramp_game: Krauss drivers, a truck mix, flows by probability, departPos free and random
-    let dir = scratch_dir("sumo-export-users");
-    let out = run_mapc(&[
-        "export",
+    let dir = export_for_sumo(
         "scenarios/sumo/ramp_game/ramp.sumocfg",
-        "--sumo",
-        dir.to_str().unwrap(),
-    ]);
-    assert_success(&out);
+        "sumo-export-users",
+        &[],
+    );
     let routes = std::fs::read_to_string(dir.join("ramp.rou.xml")).unwrap();
     assert!(
         routes.contains(r#"<vType id="truck" carFollowModel="Krauss""#),
@@ -402,16 +399,7 @@ fn a_sumo_users_scenario_exports_with_its_drivers_mixes_and_departure_rules() {
 #[test]
 fn av_share_exports_the_avs_and_the_approach_they_are_controlled_on() {
     // highway_ramp has no controlled region of its own: --av-share gives it the approach to its on-ramp merge
-    let dir = scratch_dir("sumo-export-avs");
-    let out = run_mapc(&[
-        "export",
-        HIGHWAY_RAMP,
-        "--sumo",
-        dir.to_str().unwrap(),
-        "--av-share",
-        "0.1",
-    ]);
-    assert_success(&out);
+    let dir = export_for_sumo(HIGHWAY_RAMP, "sumo-export-avs", &["--av-share", "0.1"]);
     let manifest_path = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -469,14 +457,11 @@ fn the_shipped_eccles_policy_drives_a_sumo_users_interchange_faster_than_its_hum
 #[test]
 fn flows_by_number_export_without_an_end_as_sumo_1_8_takes_them() {
     // eccles: 1 000 vehicles, each a flow of one; SUMO 1.8 refuses a flow with a rate, an end and a number
-    let dir = scratch_dir("sumo-export-number");
-    let out = run_mapc(&[
-        "export",
+    let dir = export_for_sumo(
         "scenarios/sumo/eccles_interchange/interchangeSim.cfg",
-        "--sumo",
-        dir.to_str().unwrap(),
-    ]);
-    assert_success(&out);
+        "sumo-export-number",
+        &[],
+    );
     let routes = std::fs::read_to_string(dir.join("interchangeSim.rou.xml")).unwrap();
     let flows: Vec<&str> = routes.lines().filter(|l| l.contains("<flow ")).collect();
     assert_eq!(flows.len(), 1000);

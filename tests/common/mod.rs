@@ -48,6 +48,15 @@ pub fn scratch_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// `mapc export SCENARIO --sumo DIR [EXTRA]` into a fresh folder named after `name`; the folder, once it succeeded.
+pub fn export_for_sumo(scenario: &str, name: &str, extra: &[&str]) -> PathBuf {
+    let dir = scratch_dir(name);
+    let mut args = vec!["export", scenario, "--sumo", dir.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    assert_success(&run_mapc(&args));
+    dir
+}
+
 /// A path of this test process under Cargo's folder for integration tests' files with nothing there yet, for a
 /// command that makes its output folder itself.
 pub fn fresh_path(name: &str) -> PathBuf {

@@ -232,7 +232,7 @@ impl Model {
         );
     }
 
-    /// Policy mean, log-std and value for one observation, in plain `f32` (no burn: ~50x cheaper per sample).
+    /// Policy mean, log-std and value for one observation, in plain `f32` (one row: no tensor library in the way).
     pub fn infer(&self, obs: &[f32], scratch: &mut Scratch) -> PolicyOutput {
         let a = self.arch.act_dim;
         let vp = &self.params[self.arch.policy_len()..];
