@@ -2,9 +2,10 @@
 //! smaller batches) writes the same log rows and the same weights on one thread and on two, and the same as
 //! recorded here, so a change to the trainer that moves any bit of any shipped policy's training fails.
 //!
-//! The recorded digests hold for x86-64 machines with FMA (matrix products run gemm's FMA kernels there); another
-//! kernel sums in another order. Recorded again when the gradient was written out and Adam's moments got their
-//! floor (docs/perf.md, "The gradient written out").
+//! The recorded digests hold for x86-64 machines: the update's matrix products and element-wise loops give the
+//! same bits with AVX-512, with AVX2 or with neither (`ppo::tensor::matmul`, `ppo::tensor::simd`). Recorded again
+//! when the gradient was written out and Adam's moments got their floor, and when the matrix products became
+//! mapc's own (docs/perf.md, "The gradient written out", "The update's matrix products").
 
 use std::path::{Path, PathBuf};
 
@@ -92,7 +93,7 @@ fn a_short_centralized_paper_run_is_pinned() {
             "--horizon",
             "1000",
         ],
-        "e43061e6b351e7fac43e82a044b3489bda5cc4eb1d597fcf1e7a1e9dd7de1bec",
+        "918f69b1473a826d049597504aaaf2778109ee5f09f8221a602d30b1cba686b8",
     );
 }
 
@@ -116,6 +117,6 @@ fn a_short_distributed_paper_run_is_pinned() {
             "--horizon",
             "1000",
         ],
-        "5fd2b62d66961b8b8d6692130a904593056e61133d831db05f35d6926a919d1e",
+        "9aff54b2ad05de11e4e03415a76aaf59c95aa816c8ac72dbc322b6a146f381bc",
     );
 }

@@ -329,30 +329,28 @@ fn machine() -> serde_json::Value {
             ("avx512f", std::arch::is_x86_feature_detected!("avx512f")),
         ];
         let names: Vec<&str> = has.iter().filter(|(_, on)| *on).map(|(n, _)| *n).collect();
-        // gemm's stable build dispatches to its AVX2+FMA microkernels where both exist (its AVX-512 ones need
-        // its nightly feature), so an AVX-512 machine runs the same kernels and sums in the same order
-        // the element-wise loops' AVX2 copies give the baseline's bits (mapc-rl's `ppo::tensor::simd`)
-        let kernels = match (has[0].1, has[1].1) {
-            (true, true) => {
-                "matrix products: gemm's AVX2+FMA f32 kernels; element-wise loops: AVX2; update's exp: \
-                 straight-line (rollouts': glibc's FMA expf); allocator: mimalloc"
-            }
-            (avx2, _) => {
-                if avx2 {
-                    "matrix products: gemm's generic kernels (other sums: results differ from an FMA \
-                     machine's); element-wise loops: AVX2; allocator: mimalloc"
-                } else {
-                    "matrix products: gemm's generic kernels (other sums: results differ from an FMA \
-                     machine's); element-wise loops: baseline x86-64; allocator: mimalloc"
-                }
-            }
+        // the matrix kernels and the element-wise loops' wide copies give the plain code's bits (mapc-rl's
+        // `ppo::tensor::matmul` and `ppo::tensor::simd`), so only the speed depends on what is found here
+        let loops = match (has[2].1, has[0].1) {
+            (true, _) => "AVX-512",
+            (false, true) => "AVX2",
+            (false, false) => "baseline x86-64",
         };
+        let kernels = format!(
+            "matrix products: mapc's {} kernels (one fused multiply-add per term, the same bits on every \
+             machine); element-wise loops: {loops}; update's exp: straight-line (rollouts': glibc's expf); \
+             allocator: mimalloc",
+            mapc_rl::ppo::tensor::matrix_kernel_name()
+        );
         (names.join(" "), kernels)
     };
     #[cfg(not(target_arch = "x86_64"))]
     let (features, kernels) = (
         String::from("(not x86-64)"),
-        "matrix products: gemm's kernels for this architecture; allocator: mimalloc",
+        format!(
+            "matrix products: mapc's {} kernels; allocator: mimalloc",
+            mapc_rl::ppo::tensor::matrix_kernel_name()
+        ),
     );
     serde_json::json!({
         "cpu": cpu,

@@ -1,5 +1,5 @@
-//! mapc-rl: reinforcement learning for merge control — the environment layer on the simulator, PPO on burn
-//! (pure-Rust flex CPU backend) and policy evaluation.
+//! mapc-rl: reinforcement learning for merge control — the environment layer on the simulator, PPO (its
+//! gradient written out, tested against burn's autodiff) and policy evaluation.
 //!
 //! Glossary
 //! - **AV**: autonomous vehicle; **controlled AV**: one of the first `N_AV` AVs (by entry time, FIFO) inside the
@@ -26,8 +26,8 @@
 //!   with its own FIFO of `N_AV` AVs and its own observation (`env::windows`). **Flow past a merge**: vehicles
 //!   entering the road after the merge per hour.
 //!
-//! Layout: `ppo::tensor` holds all tensor code (the loss gradient written out, its matrix products on burn's flex
-//! backend; plain `f32` for rollout inference),
+//! Layout: `ppo::tensor` holds all tensor code (the loss gradient written out, its matrix products with fused
+//! multiply-adds, the same bits on every machine; plain `f32` for rollout inference),
 //! `ppo::gae` the advantage estimation, `rollout` the `Env` trait and parallel collection, `env` the merge
 //! environment on `mapc-sim`, `run` a training run on disk, `eval` evaluation against the human baseline (every run's
 //! figures, per-merge flows included, are the simulation's own measurement), `eval_windows` the several-window

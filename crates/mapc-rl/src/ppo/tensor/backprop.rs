@@ -1,16 +1,13 @@
 //! The PPO loss and its gradient, written out. Each net's forward pass keeps what its backward pass needs (each
 //! layer's input, and exp(2z) of each tanh); the loss's derivative with respect to the nets' outputs is one loop
-//! over the minibatch's rows; the backward pass then goes layer by layer. Matrix products run on burn's flex
-//! backend (gemm's kernels; strided, so a transpose is a view); the element-wise steps are loops over slices.
+//! over the minibatch's rows; the backward pass then goes layer by layer. Matrix products are [`super::matmul`]'s
+//! (one fused multiply-add per term, in order); the element-wise steps are loops over slices.
 //!
 //! Why not burn's autodiff: on the paper's minibatches of 128 rows, recording the loss's ~80 operations as a
 //! graph and replaying it cost three times the arithmetic (docs/perf.md, "The gradient written out"). The autodiff version
 //! stays as the reference the tests compare this one with ([`super::autodiff`]).
 
-use burn::tensor::TensorData;
-use burn_backend::ops::FloatTensorOps;
-use burn_flex::{Flex, FlexTensor};
-
+use super::matmul::{self, Strided};
 use super::{
     Architecture, LN_2PI, LOG_STD_MAX, LOG_STD_MIN, LossCoeffs, LossStats, Minibatch, Model,
     TANH_INPUT_BOUND,
@@ -21,8 +18,7 @@ use super::{
 pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs) -> (LossStats, Vec<f32>) {
     let arch = &model.arch;
     let (pp, vp) = model.params.split_at(arch.policy_len());
-    let obs_tensor = matrix(mb.obs.to_vec(), mb.n, arch.obs_dim);
-    let obs = || obs_tensor.clone();
+    let obs = || mb.obs[..mb.n * arch.obs_dim].to_vec();
     let policy = || {
         let net = Mlp::new(pp, arch.policy_sizes());
         let pass = net.forward(obs());
@@ -82,26 +78,13 @@ pub fn values(model: &Model, obs: &[f32]) -> Vec<f32> {
     if rows == 0 {
         return Vec::new();
     }
-    let x = matrix(obs[..rows * arch.obs_dim].to_vec(), rows, arch.obs_dim);
+    let x = obs[..rows * arch.obs_dim].to_vec();
     let (pp, vp) = model.params.split_at(arch.policy_len());
     if arch.shared_value {
         let pass = Mlp::new(pp, arch.policy_sizes()).forward(x);
         return pass.out_column(2 * arch.act_dim);
     }
-    Mlp::new(vp, arch.value_sizes()).forward(x).out().to_vec()
-}
-
-fn matrix(values: Vec<f32>, rows: usize, cols: usize) -> FlexTensor {
-    FlexTensor::from_data(TensorData::new(values, [rows, cols]))
-}
-
-fn matmul(lhs: FlexTensor, rhs: FlexTensor) -> FlexTensor {
-    Flex::float_matmul(lhs, rhs)
-}
-
-/// The elements of a tensor this module made (contiguous f32, row-major).
-fn elements(t: &FlexTensor) -> &[f32] {
-    t.as_slice::<f32>().expect("a contiguous f32 tensor")
+    Mlp::new(vp, arch.value_sizes()).forward(x).out
 }
 
 /// exp(x) for |x| ≤ 2 [`TANH_INPUT_BOUND`] as straight-line arithmetic, so that the tanh's loop runs on vector
@@ -163,88 +146,90 @@ pub(super) fn times_tanh_slope_lanes(d: &mut [f32], e: &[f32]) {
 struct Mlp<'a> {
     params: &'a [f32],
     sizes: Vec<usize>,
-    /// Each layer's weight matrix `[inputs, outputs]`.
-    weights: Vec<FlexTensor>,
 }
 
 /// What a forward pass keeps for the backward pass.
 struct Pass {
     rows: usize,
-    /// Each layer's input, `[rows, inputs]`.
-    inputs: Vec<FlexTensor>,
+    /// Each layer's input, `[rows, inputs]` row-major.
+    inputs: Vec<Vec<f32>>,
     /// exp(2z) of each hidden unit, z its (bounded) pre-activation, for the tanh's derivative.
     exps: Vec<Vec<f32>>,
-    /// The last layer's output, `[rows, outputs]`.
-    out: FlexTensor,
+    /// The last layer's output, `[rows, outputs]` row-major.
+    out: Vec<f32>,
+    outputs: usize,
 }
 
 impl Pass {
     fn out(&self) -> &[f32] {
-        elements(&self.out)
+        &self.out
     }
 
     /// Column `k` of the output (the shared value's, for one).
     fn out_column(&self, k: usize) -> Vec<f32> {
-        let outs = self.out.layout().shape()[1];
-        self.out().iter().skip(k).step_by(outs).copied().collect()
+        self.out
+            .iter()
+            .skip(k)
+            .step_by(self.outputs)
+            .copied()
+            .collect()
     }
 }
 
 impl<'a> Mlp<'a> {
     fn new(params: &'a [f32], sizes: Vec<usize>) -> Self {
-        let mut weights = Vec::with_capacity(sizes.len() - 1);
-        let mut off = 0;
-        for w in sizes.windows(2) {
-            let (n_in, n_out) = (w[0], w[1]);
-            weights.push(matrix(
-                params[off..off + n_in * n_out].to_vec(),
-                n_in,
-                n_out,
-            ));
-            off += n_in * n_out + n_out;
-        }
-        Self {
-            params,
-            sizes,
-            weights,
-        }
+        Self { params, sizes }
     }
 
     fn outputs(&self) -> usize {
         *self.sizes.last().expect("an MLP has layers")
     }
 
-    /// Where layer `l`'s bias starts in the parameters.
-    fn bias_offset(&self, l: usize) -> usize {
-        let before: usize = self
-            .sizes
+    fn layers(&self) -> usize {
+        self.sizes.len() - 1
+    }
+
+    /// Where layer `l`'s weights start in the parameters (its bias follows them).
+    fn weight_offset(&self, l: usize) -> usize {
+        self.sizes
             .windows(2)
             .take(l)
             .map(|w| w[0] * w[1] + w[1])
-            .sum();
-        before + self.sizes[l] * self.sizes[l + 1]
+            .sum()
     }
 
-    fn forward(&self, x: FlexTensor) -> Pass {
-        let rows = x.layout().shape()[0];
-        let layers = self.weights.len();
+    /// Layer `l`'s weights `[inputs, outputs]` row-major, then its bias.
+    fn layer(&self, l: usize) -> (&'a [f32], &'a [f32]) {
+        let (n_in, n_out) = (self.sizes[l], self.sizes[l + 1]);
+        let w = &self.params[self.weight_offset(l)..];
+        (&w[..n_in * n_out], &w[n_in * n_out..][..n_out])
+    }
+
+    /// `x`: `[rows, inputs]` row-major.
+    fn forward(&self, x: Vec<f32>) -> Pass {
+        let rows = x.len() / self.sizes[0].max(1);
+        let layers = self.layers();
         let mut inputs = Vec::with_capacity(layers);
         let mut exps = Vec::with_capacity(layers - 1);
         let mut h = x;
-        for (l, w) in self.weights.iter().enumerate() {
-            let mut z = matmul(h.clone(), w.clone());
-            inputs.push(h);
-            let n_out = self.sizes[l + 1];
-            let bias = &self.params[self.bias_offset(l)..][..n_out];
-            let zs = z.storage_mut::<f32>();
-            for row in zs.chunks_exact_mut(n_out) {
-                for (v, b) in row.iter_mut().zip(bias) {
-                    *v += b;
-                }
+        for l in 0..layers {
+            let (n_in, n_out) = (self.sizes[l], self.sizes[l + 1]);
+            let (w, bias) = self.layer(l);
+            // z = bias + h w, the bias as the products' starting value
+            let mut z: Vec<f32> = Vec::with_capacity(rows * n_out);
+            for _ in 0..rows {
+                z.extend_from_slice(bias);
             }
+            let h_rows = Strided {
+                data: &h,
+                row: n_in,
+                term: 1,
+            };
+            matmul::accumulate(rows, n_out, n_in, h_rows, w, n_out, &mut z);
+            inputs.push(h);
             if l + 1 < layers {
-                let mut e = vec![0.0f32; zs.len()];
-                tanh_keeping_exp(zs, &mut e);
+                let mut e = vec![0.0f32; z.len()];
+                tanh_keeping_exp(&mut z, &mut e);
                 exps.push(e);
             }
             h = z;
@@ -254,21 +239,28 @@ impl<'a> Mlp<'a> {
             inputs,
             exps,
             out: h,
+            outputs: self.outputs(),
         }
     }
 
     /// The gradient of the loss with respect to this net's parameters, given its derivative `d_out` with
     /// respect to the net's outputs (`[rows, outputs]`).
     fn backward(&self, pass: &Pass, d_out: Vec<f32>) -> Vec<f32> {
+        let rows = pass.rows;
         let mut grad = vec![0.0f32; self.params.len()];
-        let mut g_t = matrix(d_out, pass.rows, self.outputs());
-        for l in (0..self.weights.len()).rev() {
+        let mut g = d_out;
+        for l in (0..self.layers()).rev() {
             let (n_in, n_out) = (self.sizes[l], self.sizes[l + 1]);
-            let d_w = matmul(pass.inputs[l].transpose(0, 1), g_t.clone());
-            let w_off = self.bias_offset(l) - n_in * n_out;
-            grad[w_off..w_off + n_in * n_out].copy_from_slice(elements(&d_w));
-            let d_b = &mut grad[w_off + n_in * n_out..][..n_out];
-            for row in elements(&g_t).chunks_exact(n_out) {
+            let w_off = self.weight_offset(l);
+            let (d_w, d_b) = grad[w_off..][..n_in * n_out + n_out].split_at_mut(n_in * n_out);
+            // d_w = input^T g: term t is row t of both
+            let input_columns = Strided {
+                data: &pass.inputs[l],
+                row: 1,
+                term: n_in,
+            };
+            matmul::accumulate(n_in, n_out, rows, input_columns, &g, n_out, d_w);
+            for row in g.chunks_exact(n_out) {
                 for (d, &x) in d_b.iter_mut().zip(row) {
                     *d += x;
                 }
@@ -276,10 +268,23 @@ impl<'a> Mlp<'a> {
             if l == 0 {
                 break;
             }
-            // through the weights, then the tanh: d tanh(z) / dz = 4 e / (e + 1)^2 with e = exp(2z)
-            let mut d_h = matmul(g_t, self.weights[l].transpose(0, 1));
-            times_tanh_slope(d_h.storage_mut::<f32>(), &pass.exps[l - 1]);
-            g_t = d_h;
+            // through the weights (d_h = g w^T), then the tanh: d tanh(z) / dz = 4 e / (e + 1)^2, e = exp(2z)
+            let (w, _) = self.layer(l);
+            let mut w_t = vec![0.0f32; n_in * n_out];
+            for (i, w_row) in w.chunks_exact(n_out).enumerate() {
+                for (j, &x) in w_row.iter().enumerate() {
+                    w_t[j * n_in + i] = x;
+                }
+            }
+            let mut d_h = vec![0.0f32; rows * n_in];
+            let g_rows = Strided {
+                data: &g,
+                row: n_out,
+                term: 1,
+            };
+            matmul::accumulate(rows, n_in, n_out, g_rows, &w_t, n_in, &mut d_h);
+            times_tanh_slope(&mut d_h, &pass.exps[l - 1]);
+            g = d_h;
         }
         grad
     }

@@ -1,13 +1,13 @@
 //! All tensor code of the trainer: the MLPs (policy, and value unless it is an output of the policy net), their
-//! plain-`f32` forward pass used at rollout time, the PPO loss and its gradient (written out, with matrix products
-//! on burn's flex CPU backend: [`backprop`]; burn's autodiff traces the same loss in the tests: `autodiff`), and
-//! Adam.
+//! plain-`f32` forward pass used at rollout time, the PPO loss and its gradient (written out: [`backprop`], its matrix
+//! products [`matmul`]'s; burn's autodiff traces the same loss in the tests: `autodiff`), and Adam.
 //!
 //! Parameters live in one flat `Vec<f32>` (policy layers then value layers, if any; per layer the weight matrix
 //! row-major `[inputs][outputs]`, then the bias). The gradient comes back as a vector of the same layout, so
 //! checkpoints are plain numbers and Adam is a loop over slices.
 
 mod backprop;
+mod matmul;
 mod simd;
 
 #[cfg(test)]
@@ -19,6 +19,7 @@ mod autodiff;
 /// With a separate value net, the policy's and the value's gradients are computed side by side on the rayon pool
 /// (they share no parameter).
 pub use backprop::loss_and_grad;
+pub use matmul::kernel_name as matrix_kernel_name;
 
 use serde::{Deserialize, Serialize};
 

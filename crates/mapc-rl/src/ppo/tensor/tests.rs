@@ -487,3 +487,75 @@ fn adams_moments_never_go_subnormal() {
     assert_eq!((a.m[1], a.v[1]), (0.0, 0.0));
     assert!(a.m[2] < 0.0 && a.v[2] > 0.0);
 }
+
+/// Random operands of `matmul::accumulate`: `a` read both as rows (`a(i, t) = a[i * terms + t]`) and as columns
+/// (`a(i, t) = a[t * rows + i]`), and a `c` of random starting values.
+fn product_case(rows: usize, cols: usize, terms: usize, rng: &mut Rng) -> [Vec<f32>; 3] {
+    let mut draw = |n: usize| (0..n).map(|_| rng.normal() as f32).collect::<Vec<f32>>();
+    [draw(rows * terms), draw(terms * cols), draw(rows * cols)]
+}
+
+#[test]
+fn every_matrix_kernel_gives_the_same_bits_and_the_exact_products_within_rounding() {
+    let mut rng = Rng::new(11);
+    // the paper's layer sizes, the value's single output, and block edges (4 rows; 16 and 8 lanes, 4 vectors)
+    let sizes = [
+        1, 2, 3, 4, 5, 7, 8, 9, 15, 16, 17, 25, 31, 32, 33, 50, 63, 64, 65, 100, 129,
+    ];
+    for case in 0..300 {
+        let pick = |k: usize| sizes[(case * 7 + k * 13) % sizes.len()];
+        let (rows, cols, terms) = (pick(1), pick(2 + case % 5), pick(3 + case % 3));
+        let [a, b, c0] = product_case(rows, cols, terms, &mut rng);
+        for (row, term) in [(terms, 1), (1, rows)] {
+            let a = matmul::Strided {
+                data: &a,
+                row,
+                term,
+            };
+            let mut plain = c0.clone();
+            matmul::accumulate_plain(rows, cols, terms, a, &b, cols, &mut plain);
+            let mut dispatched = c0.clone();
+            matmul::accumulate(rows, cols, terms, a, &b, cols, &mut dispatched);
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+            assert_eq!(bits(&plain), bits(&dispatched), "{rows}x{cols}x{terms}");
+            #[cfg(target_arch = "x86_64")]
+            for (name, has) in [
+                (
+                    "avx2",
+                    is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
+                ),
+                ("avx512", is_x86_feature_detected!("avx512f")),
+            ] {
+                if !has {
+                    continue;
+                }
+                let mut wide = c0.clone();
+                // SAFETY: the CPU has the kernel's features; the sizes are the ones `accumulate` checks.
+                unsafe {
+                    match name {
+                        "avx2" => {
+                            matmul::x86::accumulate_avx2(rows, cols, terms, a, &b, cols, &mut wide)
+                        }
+                        _ => matmul::x86::accumulate_avx512(
+                            rows, cols, terms, a, &b, cols, &mut wide,
+                        ),
+                    }
+                }
+                assert_eq!(bits(&plain), bits(&wide), "{name} {rows}x{cols}x{terms}");
+            }
+            for i in 0..rows {
+                for j in 0..cols {
+                    let exact: f64 = c0[i * cols + j] as f64
+                        + (0..terms)
+                            .map(|t| a.data[i * row + t * term] as f64 * b[t * cols + j] as f64)
+                            .sum::<f64>();
+                    let got = plain[i * cols + j] as f64;
+                    assert!(
+                        (got - exact).abs() <= 1e-5 * (1.0 + terms as f64),
+                        "{rows}x{cols}x{terms} ({i}, {j}): {got} against {exact}"
+                    );
+                }
+            }
+        }
+    }
+}

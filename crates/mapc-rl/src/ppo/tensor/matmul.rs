@@ -1,0 +1,259 @@
+//! The update's matrix products, for its shapes: a few hundred rows at most, 1 to a few hundred columns. Each
+//! output element is one fused multiply-add per term, the terms taken in order, so the AVX-512, the AVX2 and the
+//! plain copy give the same bits on every machine (a test checks it).
+//!
+//! Why not gemm (through burn's flex backend): at these sizes its packing, dispatch and tensor allocations cost
+//! about as much as its arithmetic, and its stable build has no AVX-512 kernels (docs/perf.md, "The update's
+//! matrix products").
+
+/// One operand of [`accumulate`]: element (i, t) at `data[i * row + t * term]`.
+#[derive(Clone, Copy)]
+pub(super) struct Strided<'a> {
+    pub data: &'a [f32],
+    pub row: usize,
+    pub term: usize,
+}
+
+/// `c[i][j] = fma(a(i, t), b[t][j], c[i][j])` for t = 0, 1, ... `terms - 1` in order: `c` is `rows × cols`
+/// row-major and holds the starting values (a bias, or zeros); `b` is `terms × cols` with rows `b_row` apart.
+pub(super) fn accumulate(
+    rows: usize,
+    cols: usize,
+    terms: usize,
+    a: Strided,
+    b: &[f32],
+    b_row: usize,
+    c: &mut [f32],
+) {
+    if rows == 0 || cols == 0 || terms == 0 {
+        return;
+    }
+    let last_a = (rows - 1) * a.row + (terms - 1) * a.term;
+    assert!(last_a < a.data.len(), "a is too short for {rows} x {terms}");
+    assert!(
+        (terms - 1) * b_row + cols <= b.len(),
+        "b is too short for {terms} x {cols}"
+    );
+    assert!(rows * cols <= c.len(), "c is too short for {rows} x {cols}");
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F; the operands' sizes are checked above.
+            return unsafe { x86::accumulate_avx512(rows, cols, terms, a, b, b_row, c) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU has AVX2 and FMA; the operands' sizes are checked above.
+            return unsafe { x86::accumulate_avx2(rows, cols, terms, a, b, b_row, c) };
+        }
+    }
+    accumulate_plain(rows, cols, terms, a, b, b_row, c)
+}
+
+/// [`accumulate`] one element at a time (`mul_add` is a correctly rounded fused multiply-add everywhere).
+pub(super) fn accumulate_plain(
+    rows: usize,
+    cols: usize,
+    terms: usize,
+    a: Strided,
+    b: &[f32],
+    b_row: usize,
+    c: &mut [f32],
+) {
+    for i in 0..rows {
+        let out = &mut c[i * cols..][..cols];
+        for t in 0..terms {
+            let x = a.data[i * a.row + t * a.term];
+            for (o, &y) in out.iter_mut().zip(&b[t * b_row..][..cols]) {
+                *o = x.mul_add(y, *o);
+            }
+        }
+    }
+}
+
+/// Which kernel [`accumulate`] takes on this CPU, for `mapc bench`.
+pub fn kernel_name() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            return "AVX-512";
+        }
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            return "AVX2+FMA";
+        }
+    }
+    "scalar fused multiply-add"
+}
+
+/// Register blocks: four rows of `c` by up to four vectors of columns stay in registers while the terms stream
+/// past; each term loads the block's columns of `b` once and broadcasts one element of `a` per row.
+#[cfg(target_arch = "x86_64")]
+pub(super) mod x86 {
+    use super::Strided;
+    use std::arch::x86_64::*;
+
+    const ROWS: usize = 4;
+
+    macro_rules! driver {
+        ($name:ident, $block:ident, $feature:literal, $lanes:expr) => {
+            #[target_feature(enable = $feature)]
+            pub(in super::super) unsafe fn $name(
+                rows: usize,
+                cols: usize,
+                terms: usize,
+                a: Strided,
+                b: &[f32],
+                b_row: usize,
+                c: &mut [f32],
+            ) {
+                let mut i = 0;
+                while i < rows {
+                    let r = (rows - i).min(ROWS);
+                    let mut j = 0;
+                    while j < cols {
+                        let width = (cols - j).min(4 * $lanes);
+                        let vectors = width.div_ceil($lanes);
+                        // SAFETY: rows i..i + r and columns j..j + width lie within the checked sizes.
+                        unsafe {
+                            match (r, vectors) {
+                                (4, 4) => $block::<4, 4>(i, j, width, cols, terms, a, b, b_row, c),
+                                (4, 3) => $block::<4, 3>(i, j, width, cols, terms, a, b, b_row, c),
+                                (4, 2) => $block::<4, 2>(i, j, width, cols, terms, a, b, b_row, c),
+                                (4, _) => $block::<4, 1>(i, j, width, cols, terms, a, b, b_row, c),
+                                (3, 4) => $block::<3, 4>(i, j, width, cols, terms, a, b, b_row, c),
+                                (3, 3) => $block::<3, 3>(i, j, width, cols, terms, a, b, b_row, c),
+                                (3, 2) => $block::<3, 2>(i, j, width, cols, terms, a, b, b_row, c),
+                                (3, _) => $block::<3, 1>(i, j, width, cols, terms, a, b, b_row, c),
+                                (2, 4) => $block::<2, 4>(i, j, width, cols, terms, a, b, b_row, c),
+                                (2, 3) => $block::<2, 3>(i, j, width, cols, terms, a, b, b_row, c),
+                                (2, 2) => $block::<2, 2>(i, j, width, cols, terms, a, b, b_row, c),
+                                (2, _) => $block::<2, 1>(i, j, width, cols, terms, a, b, b_row, c),
+                                (_, 4) => $block::<1, 4>(i, j, width, cols, terms, a, b, b_row, c),
+                                (_, 3) => $block::<1, 3>(i, j, width, cols, terms, a, b, b_row, c),
+                                (_, 2) => $block::<1, 2>(i, j, width, cols, terms, a, b, b_row, c),
+                                (_, _) => $block::<1, 1>(i, j, width, cols, terms, a, b, b_row, c),
+                            }
+                        }
+                        j += width;
+                    }
+                    i += r;
+                }
+            }
+        };
+    }
+
+    driver!(accumulate_avx512, block_avx512, "avx512f", 16);
+    driver!(accumulate_avx2, block_avx2, "avx2,fma", 8);
+
+    /// Rows `i0..i0 + R` by columns `j0..j0 + width` of `c`, `width` in (16 (V - 1), 16 V]: every vector full
+    /// but the last, which is masked.
+    #[target_feature(enable = "avx512f")]
+    #[allow(clippy::too_many_arguments)]
+    unsafe fn block_avx512<const R: usize, const V: usize>(
+        i0: usize,
+        j0: usize,
+        width: usize,
+        cols: usize,
+        terms: usize,
+        a: Strided,
+        b: &[f32],
+        b_row: usize,
+        c: &mut [f32],
+    ) {
+        let tail: __mmask16 = ((1u32 << (width - 16 * (V - 1))) - 1) as u16;
+        let mask = |v: usize| if v + 1 == V { tail } else { 0xffff };
+        let c_at = |r: usize, v: usize| (i0 + r) * cols + j0 + 16 * v;
+        let mut acc = [[_mm512_setzero_ps(); V]; R];
+        // SAFETY (all pointer reads and writes below): each vector starts inside its row of `c` or `b`, and its
+        // lanes past the row's `width` columns are masked off, so never read or written.
+        unsafe {
+            for (r, row) in acc.iter_mut().enumerate() {
+                for (v, x) in row.iter_mut().enumerate() {
+                    *x = _mm512_maskz_loadu_ps(mask(v), c.as_ptr().add(c_at(r, v)));
+                }
+            }
+            let a_ptr = a.data.as_ptr();
+            for t in 0..terms {
+                let b_ptr = b.as_ptr().add(t * b_row + j0);
+                let mut bv = [_mm512_setzero_ps(); V];
+                for (v, x) in bv.iter_mut().enumerate() {
+                    *x = _mm512_maskz_loadu_ps(mask(v), b_ptr.add(16 * v));
+                }
+                for (r, row) in acc.iter_mut().enumerate() {
+                    let x = _mm512_set1_ps(*a_ptr.add((i0 + r) * a.row + t * a.term));
+                    for (y, &w) in row.iter_mut().zip(&bv) {
+                        *y = _mm512_fmadd_ps(x, w, *y);
+                    }
+                }
+            }
+            for (r, row) in acc.iter().enumerate() {
+                for (v, &x) in row.iter().enumerate() {
+                    _mm512_mask_storeu_ps(c.as_mut_ptr().add(c_at(r, v)), mask(v), x);
+                }
+            }
+        }
+    }
+
+    /// [`block_avx512`] with 8 lanes a vector.
+    #[target_feature(enable = "avx2,fma")]
+    #[allow(clippy::too_many_arguments)]
+    unsafe fn block_avx2<const R: usize, const V: usize>(
+        i0: usize,
+        j0: usize,
+        width: usize,
+        cols: usize,
+        terms: usize,
+        a: Strided,
+        b: &[f32],
+        b_row: usize,
+        c: &mut [f32],
+    ) {
+        let tail_lanes = (width - 8 * (V - 1)) as i32;
+        let tail = _mm256_cmpgt_epi32(
+            _mm256_set1_epi32(tail_lanes),
+            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+        );
+        let c_at = |r: usize, v: usize| (i0 + r) * cols + j0 + 8 * v;
+        let mut acc = [[_mm256_setzero_ps(); V]; R];
+        // SAFETY: as in `block_avx512`; the last vector's lanes past `width` are masked off.
+        unsafe {
+            let load = |p: *const f32, v: usize| {
+                if v + 1 == V {
+                    _mm256_maskload_ps(p, tail)
+                } else {
+                    _mm256_loadu_ps(p)
+                }
+            };
+            for (r, row) in acc.iter_mut().enumerate() {
+                for (v, x) in row.iter_mut().enumerate() {
+                    *x = load(c.as_ptr().add(c_at(r, v)), v);
+                }
+            }
+            let a_ptr = a.data.as_ptr();
+            for t in 0..terms {
+                let b_ptr = b.as_ptr().add(t * b_row + j0);
+                let mut bv = [_mm256_setzero_ps(); V];
+                for (v, x) in bv.iter_mut().enumerate() {
+                    *x = load(b_ptr.add(8 * v), v);
+                }
+                for (r, row) in acc.iter_mut().enumerate() {
+                    let x = _mm256_set1_ps(*a_ptr.add((i0 + r) * a.row + t * a.term));
+                    for (y, &w) in row.iter_mut().zip(&bv) {
+                        *y = _mm256_fmadd_ps(x, w, *y);
+                    }
+                }
+            }
+            for (r, row) in acc.iter().enumerate() {
+                for (v, &x) in row.iter().enumerate() {
+                    let p = c.as_mut_ptr().add(c_at(r, v));
+                    if v + 1 == V {
+                        _mm256_maskstore_ps(p, tail, x);
+                    } else {
+                        _mm256_storeu_ps(p, x);
+                    }
+                }
+            }
+        }
+    }
+}
