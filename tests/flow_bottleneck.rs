@@ -1,5 +1,7 @@
 //! Flow's bottleneck benchmark (scenarios/flow_bottleneck.toml on maps/flow_bottleneck.net.xml, netconvert's build
-//! of Flow's network): the humans' capacity drop, and its export to SUMO keeping the zippers' right of way.
+//! of Flow's network, and the built-in `flow_bottleneck` on mapc's generator of the same network): the humans'
+//! capacity drop, lane changing off as Flow's benchmarks drive, and the export to SUMO keeping the zippers' right
+//! of way.
 
 mod common;
 use common::*;
@@ -48,4 +50,61 @@ fn the_humans_lose_capacity_at_the_zippers() {
     // 2 300 veh/h enter; the one lane after the second zipper passes far fewer (about 1 840)
     assert!(inflow > 2250.0, "{inflow}");
     assert!(outflow < 0.9 * inflow && outflow > 1500.0, "{outflow}");
+}
+
+/// A run's report without what names the scenario or times the run.
+fn figures(args: &[&str]) -> serde_json::Value {
+    let mut j = mapc_json(args);
+    let o = j.as_object_mut().unwrap();
+    for k in ["scenario", "wall_s"] {
+        o.remove(k);
+    }
+    j
+}
+
+#[test]
+fn the_built_in_bottleneck_generates_the_network_netconvert_builds_from_flows_parameters() {
+    // every figure of every seed, humans and AVs, the same on the generated network as on netconvert's
+    for extra in [&[][..], &["--av-share", "0.1"][..]] {
+        let run = |scenario: &str| {
+            let mut args = vec!["sim", scenario, "--seeds", "3", "--json"];
+            args.extend_from_slice(extra);
+            figures(&args)
+        };
+        assert_eq!(run("flow_bottleneck"), run(SCENARIO), "{extra:?}");
+    }
+    // Flow's parameters at scaling 2: eight lanes, merged pairwise twice
+    let dir = scratch_dir("flow-bottleneck-scaled");
+    let scaled = dir.join("scaled.toml");
+    let text = std::fs::read_to_string(SCENARIO)
+        .unwrap()
+        .replace(
+            "map = \"../maps/flow_bottleneck.net.xml\"",
+            "flow_bottleneck = { scaling = 2 }",
+        )
+        .replace("vehs_per_hour = 2300.0", "vehs_per_hour = 4600.0");
+    std::fs::write(&scaled, text).unwrap();
+    let j = mapc_json(&["scenario", "show", scaled.to_str().unwrap(), "--json"]);
+    // roads: 8 x 100 + 8 x 310 + 8 x 120 + 4 x 240 + 2 x 135 (each road at a zipper 20 m shorter);
+    // internal lanes: 16 x 0.1 + 8 x 40.06 + 4 x 40.03
+    let total = j["network"]["total_lane_length_m"].as_f64().unwrap();
+    assert!((total - 5952.2).abs() < 0.05, "{total}");
+    let out = run_mapc(&["sim", scaled.to_str().unwrap(), "--seeds", "1", "--json"]);
+    assert_success(&out);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn with_lane_changing_off_as_flows_benchmarks_the_humans_keep_their_lanes_and_still_lose_capacity()
+{
+    let j = mapc_json(&[
+        "sim",
+        "scenarios/flow_bottleneck_lc_off.toml",
+        "--seeds",
+        "4",
+        "--json",
+    ]);
+    assert_eq!(j["lane_changes"]["mean"].as_f64(), Some(0.0), "{j}");
+    let outflow = j["outflow"]["mean"].as_f64().unwrap();
+    assert!(outflow > 1500.0 && outflow < 1950.0, "{outflow}");
 }

@@ -181,3 +181,54 @@ fn a_map_that_is_not_a_network_is_refused() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_users_ramp_meter_is_exported_with_the_program_mapc_runs() {
+    // ramp_metering_1x3's meter runs the additional file's program `rl` (5 s green, 5 s red), not the net's
+    let dir = export_for_sumo(
+        "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg",
+        "sumo-export-light",
+        &[],
+    );
+    let net = std::fs::read_to_string(dir.join("1ramp_1x3.net.xml")).unwrap();
+    let at = net
+        .find("<tlLogic id=\"ramp_meter\"")
+        .expect("the meter's program");
+    let logic = &net[at..at + net[at..].find("</tlLogic>").unwrap()];
+    assert!(
+        logic.contains("type=\"static\" programID=\"rl\""),
+        "{logic}"
+    );
+    let phases: Vec<&str> = logic
+        .lines()
+        .skip(1)
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    assert_eq!(
+        phases,
+        [
+            "<phase duration=\"5.00\" state=\"G\"/>",
+            "<phase duration=\"5.00\" state=\"r\"/>"
+        ]
+    );
+    assert!(net.contains("<junction id=\"ramp_meter\" type=\"traffic_light\""));
+    // the ramp's link is the light's link 0, its state the light's
+    assert!(
+        net.contains("from=\"on_ramp\" to=\"passage_area\" fromLane=\"0\" toLane=\"0\" via=\":ramp_meter_0_0\" tl=\"ramp_meter\" linkIndex=\"0\""),
+        "the ramp's link is not under the light"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    // a program named `off` (SUMO's name for a light switched off) goes as a static program of another name
+    let dir = export_for_sumo(
+        "scenarios/flow_bottleneck_metered.toml",
+        "sumo-export-light-off",
+        &[],
+    );
+    let net = std::fs::read_to_string(dir.join("flow_bottleneck_metered.net.xml")).unwrap();
+    assert!(
+        net.contains("<tlLogic id=\"3\" type=\"static\" programID=\"always_green\""),
+        "no program for light 3"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -75,7 +75,7 @@ pub enum ScenarioError {
     #[error(transparent)]
     Sumo(#[from] sumo::SumoError),
     #[error(
-        "no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge, two_lane_merge, lane_drop)"
+        "no scenario file `{0}` and no built-in scenario of that name (built-in: simple_merge, two_lane_merge, lane_drop, flow_bottleneck)"
     )]
     Unknown(String),
 }
@@ -209,11 +209,51 @@ impl Scenario {
         }
     }
 
+    /// Flow's bottleneck benchmark at scaling 1 on its generated network: `scenarios/flow_bottleneck.toml`, whose
+    /// network is netconvert's build of the same parameters (a test checks that both run the same). Flow's humans
+    /// (its IDM defaults) enter on a random lane at 10 m/s, 2300 veh/h; the outflow is counted over the last 500 s
+    /// of a 750 s run; AVs given by `--av-share` are controlled anywhere on the network.
+    pub fn flow_bottleneck() -> Scenario {
+        let base = Scenario::simple_merge();
+        Scenario {
+            name: generator::FLOW_BOTTLENECK.to_string(),
+            description: "Flow's bottleneck benchmark (4 -> 2 -> 1 lanes at two zippers), humans at 2300 veh/h."
+                .to_string(),
+            warmup_steps: 500,
+            horizon_steps: 1000,
+            network: NetworkSpec::FlowBottleneck(FlowBottleneckParams::default()),
+            vehicle_types: base
+                .vehicle_types
+                .into_iter()
+                .filter(|(name, _)| name == "human")
+                .collect(),
+            flows: vec![Flow {
+                id: "inflow".to_string(),
+                from: "1".to_string(),
+                to: Some("5".to_string()),
+                vehs_per_hour: 2300.0,
+                vehicle_type: "human".to_string(),
+                depart_speed_mps: 10.0,
+                depart_lane: Some("random".to_string()),
+                ..Flow::default()
+            }],
+            initial_vehicles: None,
+            control: Some(Control {
+                n_av: 5,
+                region: vec![],
+                window: None,
+                windows: vec![],
+            }),
+            ..base
+        }
+    }
+
     pub fn builtin(name: &str) -> Option<Scenario> {
         match name {
             generator::SIMPLE_MERGE => Some(Scenario::simple_merge()),
             generator::TWO_LANE_MERGE => Some(Scenario::two_lane_merge()),
             generator::LANE_DROP => Some(Scenario::lane_drop()),
+            generator::FLOW_BOTTLENECK => Some(Scenario::flow_bottleneck()),
             _ => None,
         }
     }

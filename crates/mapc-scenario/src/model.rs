@@ -115,6 +115,8 @@ pub enum NetworkSpec {
     SimpleMerge(SimpleMergeParams),
     /// mapc's lane-drop bottleneck generator (`[network.lane_drop]`).
     LaneDrop(LaneDropParams),
+    /// Flow's bottleneck benchmark network (`[network.flow_bottleneck]`).
+    FlowBottleneck(FlowBottleneckParams),
     /// A saved lane graph (`network.graph = "x.graph.json"`).
     Graph(PathBuf),
     /// A map imported on the fly (`network.map = "maps/x.net.xml"`).
@@ -183,6 +185,39 @@ impl Default for LaneDropParams {
             lanes_before: 3,
             lanes_after: 2,
             speed_limit_mps: 30.0,
+            through_internal_m: 0.10,
+        }
+    }
+}
+
+/// Flow's bottleneck (its `BottleneckNetwork`): five roads in a line with 4s, 4s, 4s, 2s and s lanes (s the
+/// scaling); at the end of the third and of the fourth road each pair of lanes merges into one at a zipper. The
+/// lengths are Flow's edge lengths. netconvert builds the zippers with a radius, which takes that much off each
+/// road at a zipper, and joins the roads with internal lanes: their lengths default to netconvert 1.8's build
+/// (maps/flow_bottleneck/README.md), so the defaults give the network of `maps/flow_bottleneck.net.xml`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FlowBottleneckParams {
+    pub scaling: u8,
+    /// The five roads' lengths before netconvert shortens them at the zippers.
+    pub lengths_m: [f64; 5],
+    pub speed_limit_mps: f64,
+    /// What a zipper takes off each road it joins.
+    pub junction_radius_m: f64,
+    /// Internal lanes at the first and at the second zipper.
+    pub zipper_internal_m: [f64; 2],
+    /// Internal lanes at the two straight joints before the zippers.
+    pub through_internal_m: f64,
+}
+
+impl Default for FlowBottleneckParams {
+    fn default() -> Self {
+        FlowBottleneckParams {
+            scaling: 1,
+            lengths_m: [100.0, 310.0, 140.0, 280.0, 155.0],
+            speed_limit_mps: 23.0,
+            junction_radius_m: 20.0,
+            zipper_internal_m: [40.06, 40.03],
             through_internal_m: 0.10,
         }
     }

@@ -106,6 +106,12 @@ impl ResolvedScenario {
                     message,
                 })?
             }
+            NetworkSpec::FlowBottleneck(p) => {
+                generator::flow_bottleneck(p).map_err(|message| ScenarioError::Network {
+                    path: path.clone(),
+                    message,
+                })?
+            }
             NetworkSpec::Graph(g) => {
                 LaneGraph::load(&base_dir.join(g)).map_err(|source| ScenarioError::Graph {
                     path: path.clone(),

@@ -99,6 +99,8 @@ pub(crate) fn junction(
             "type",
             if links.is_empty() {
                 "dead_end"
+            } else if links.iter().any(|l| l.connection.signal.is_some()) {
+                "traffic_light"
             } else if links
                 .iter()
                 .any(|l| l.connection.right_of_way == RightOfWay::Zipper)

@@ -7,7 +7,7 @@
 use crate::junctions::{Link, junction, links_by_junction};
 use crate::names::{SumoNames, road_index};
 use crate::xml::{element, num, shape, start};
-use mapc_graph::{Connection, LaneGraph, Projection, RightOfWay, Road};
+use mapc_graph::{Connection, LaneGraph, Projection, RightOfWay, Road, TrafficLight};
 use mapc_sim::network::MIN_VIA_LENGTH_M;
 use std::collections::BTreeMap;
 
@@ -35,6 +35,9 @@ pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
     for (i, road) in graph.roads.iter().enumerate() {
         edge(&mut out, graph, names, i, road);
     }
+    for light in &graph.lights {
+        traffic_light(&mut out, light);
+    }
     for ji in 0..graph.junctions.len() {
         junction(
             &mut out,
@@ -48,23 +51,25 @@ pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
         for l in list {
             let c = l.connection;
             let (from, to) = (road_index(graph, c.from_road), road_index(graph, c.to_road));
-            element(
-                &mut out,
-                4,
-                "connection",
-                &[
-                    ("from", names.edges[from].clone()),
-                    ("to", names.edges[to].clone()),
-                    ("fromLane", c.from_lane.to_string()),
-                    ("toLane", c.to_lane.to_string()),
-                    ("via", format!("{}_0", l.internal_edge)),
-                    (
-                        "dir",
-                        direction(&graph.roads[from], &graph.roads[to]).into(),
-                    ),
-                    ("state", state(c).into()),
-                ],
-            );
+            let mut attrs = vec![
+                ("from", names.edges[from].clone()),
+                ("to", names.edges[to].clone()),
+                ("fromLane", c.from_lane.to_string()),
+                ("toLane", c.to_lane.to_string()),
+                ("via", format!("{}_0", l.internal_edge)),
+            ];
+            if let Some(s) = &c.signal {
+                attrs.push(("tl", s.light.clone()));
+                attrs.push(("linkIndex", s.index.to_string()));
+            }
+            attrs.push((
+                "dir",
+                direction(&graph.roads[from], &graph.roads[to]).into(),
+            ));
+            // a link under a light is `O` in netconvert's nets: its state is the light's
+            let link_state = if c.signal.is_some() { "O" } else { state(c) };
+            attrs.push(("state", link_state.into()));
+            element(&mut out, 4, "connection", &attrs);
         }
     }
     for list in links.values() {
@@ -88,6 +93,43 @@ pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
     }
     out.push_str("</net>\n");
     out
+}
+
+/// A fixed-time light's program as SUMO's `tlLogic` (its id, program and offset as mapc read them, so that SUMO
+/// runs the program mapc runs; a scenario's `light_programs` have replaced the net's).
+fn traffic_light(out: &mut String, light: &TrafficLight) {
+    start(
+        out,
+        4,
+        "tlLogic",
+        &[
+            ("id", light.id.clone()),
+            ("type", "static".into()),
+            // SUMO keeps the program name `off` for a light switched off (no program to load): mapc's
+            // always-green program of that name goes as a static one
+            (
+                "programID",
+                if light.program == "off" {
+                    "always_green".to_string()
+                } else {
+                    light.program.clone()
+                },
+            ),
+            ("offset", num(light.offset_s, 2)),
+        ],
+    );
+    for p in &light.phases {
+        element(
+            out,
+            8,
+            "phase",
+            &[
+                ("duration", num(p.duration_s, 2)),
+                ("state", p.state.clone()),
+            ],
+        );
+    }
+    out.push_str("    </tlLogic>\n");
 }
 
 pub(crate) fn state(c: &Connection) -> &'static str {

@@ -8,6 +8,9 @@ use mapc_graph::{
     RightOfWay, Road, RoadId, Source, SourceFormat,
 };
 
+mod flow_bottleneck;
+pub use flow_bottleneck::{FLOW_BOTTLENECK, flow_bottleneck};
+
 pub const SIMPLE_MERGE: &str = "simple_merge";
 /// Road names of the Simple Merge, as in the original code (and its SUMO net), so SUMO-style ids find them.
 pub const MAIN_ENTRY: &str = "inflow_highway";
