@@ -195,6 +195,68 @@ fn sumo_checks_help_sets_nothing_up() {
     assert!(!venv.exists(), "a virtual environment was made for --help");
 }
 
+/// sumo_check's ALINEA (tools/sumo_check/alinea.py) follows mapc's law on a hand-worked case, run with the
+/// standard library against a stand-in for TraCI: loops reading 30 % occupancy with a 20 % set-point and
+/// K_R = 70 take the rate from 1 800 to 1 800 + 70 (20 - 30) = 1 100 veh/h after the first 2 s interval, then to
+/// 400; the light then runs 2 s green and 3600 / 1100 - 2 s red.
+#[test]
+fn sumo_checks_alinea_follows_the_law_mapc_runs() {
+    let script = r#"
+import sys
+sys.path.insert(0, sys.argv[1])
+from alinea import Alinea
+
+class Light:
+    class Logic:
+        def __init__(self, program, kind, index, phases):
+            self.phases = phases
+    class Phase:
+        def __init__(self, duration, state):
+            self.duration, self.state = duration, state
+    def __init__(self):
+        self.programs = []
+    def getRedYellowGreenState(self, light):
+        return "GG"
+    def setProgramLogic(self, light, logic):
+        self.programs.append([(p.duration, p.state) for p in logic.phases])
+    def setProgram(self, light, name):
+        pass
+    def setPhase(self, light, index):
+        pass
+
+class Loops:
+    def getLastStepOccupancy(self, loop):
+        return 30.0
+
+class Conn:
+    trafficlight, inductionloop = Light(), Loops()
+
+conn = Conn()
+cfg = dict(light="m", detectors=["a", "b"], periods={"a": 2.0, "b": 2.0}, setpoint=0.2, gain_veh_h=70.0,
+           green_s=2.0, min_rate_veh_h=200.0, max_rate_veh_h=1800.0)
+meter = Alinea(conn, cfg, 0.5)
+for _ in range(8):
+    meter.after_step()
+print(meter.rates)
+print(conn.trafficlight.programs[1])
+"#;
+    let out = std::process::Command::new("python3")
+        .args(["-c", script])
+        .arg(root().join("tools/sumo_check"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines[0], "[1100.0, 400.0]");
+    // the program after the first interval: 1 100 veh/h, a cycle of 3600 / 1100 s
+    assert_eq!(lines[1], "[(2.0, 'GG'), (1.272727272727273, 'rr')]");
+}
+
 #[test]
 fn the_help_says_what_simplify_and_export_do() {
     let out = run_mapc(&["--help"]);

@@ -6,7 +6,8 @@ in the network is sampled before each step (steps with mean 0 skipped); departur
 step; a lane change is a vehicle's lane index changing on the same edge from one horizon step to the next; the
 flow past each of mapc's measurement points and past the corridor's end is counted as mapc counts it (`Passages`).
 With a policy, the controlled AVs are chosen and observed before each step and their accelerations are
-applied as Flow did: next speed max(v + a dt, 0) through slowDown, capped by SUMO's safe speed (speed mode 9)."""
+applied as Flow did: next speed max(v + a dt, 0) through slowDown, capped by SUMO's safe speed (speed mode 9).
+With ALINEA (`alinea.py`), the meter acts after every step from the first, as mapc's does."""
 import os
 
 SPEED_MODE = 9
@@ -24,7 +25,7 @@ SUMO_REASONS = (("strategic", "strategic"), ("cooperative", "cooperative"), ("sp
                 ("keepRight", "keep_right"))
 
 
-def run_episode(traci, manifest, export_dir, seed, policy=None, label="sumo_check"):
+def run_episode(traci, manifest, export_dir, seed, policy=None, label="sumo_check", alinea=None):
     import subprocess
     import tempfile
 
@@ -36,7 +37,7 @@ def run_episode(traci, manifest, export_dir, seed, policy=None, label="sumo_chec
                 stdout=subprocess.DEVNULL)
     conn = traci.getConnection(label)
     try:
-        result = _episode(conn, tc, manifest, policy)
+        result = _episode(conn, tc, manifest, policy, alinea)
     finally:
         conn.close()
     start_s = (manifest["setup_steps"] + manifest["warmup_steps"]) * manifest["step_s"]
@@ -66,9 +67,18 @@ def lane_change_reasons(path, start_s):
     return counts, total
 
 
-def _episode(conn, tc, manifest, policy):
+def _episode(conn, tc, manifest, policy, alinea_cfg=None):
     V, S = conn.vehicle, conn.simulation
     step_s = manifest["step_s"]
+    meter = None
+    if alinea_cfg is not None:
+        from alinea import Alinea
+        meter = Alinea(conn, alinea_cfg, step_s)
+
+    def step():
+        conn.simulationStep()
+        if meter is not None:
+            meter.after_step()
     S.subscribe([tc.VAR_DEPARTED_VEHICLES_IDS, tc.VAR_ARRIVED_VEHICLES_IDS])
     av_types = set(manifest["av_types"])
     region = set(manifest["control_edges"]) | set(manifest.get("control_internal_edges", []))
@@ -91,10 +101,10 @@ def _episode(conn, tc, manifest, policy):
             entry[v] = len(entry)
 
     for _ in range(manifest["setup_steps"]):
-        conn.simulationStep()
+        step()
         on_departed(S.getSubscriptionResults()[tc.VAR_DEPARTED_VEHICLES_IDS])
     for _ in range(manifest["warmup_steps"]):
-        conn.simulationStep()
+        step()
         on_departed(S.getSubscriptionResults()[tc.VAR_DEPARTED_VEHICLES_IDS])
 
     from policy import ControlQueue
@@ -119,7 +129,7 @@ def _episode(conn, tc, manifest, policy):
                 speeds.append(m)
         if policy is not None:
             controlled_steps += _act(V, policy, queue, state, tc, region, is_av, entry, min_gap, step_s)
-        conn.simulationStep()
+        step()
         res = S.getSubscriptionResults()
         dep = res[tc.VAR_DEPARTED_VEHICLES_IDS]
         arr = res[tc.VAR_ARRIVED_VEHICLES_IDS]
@@ -133,7 +143,8 @@ def _episode(conn, tc, manifest, policy):
                 speed=sum(speeds) / len(speeds) if speeds else 0.0, arrived=arrived, departed=departed,
                 lane_changes=lane_changes, lane_changes_per_veh=lane_changes / departed if departed else 0.0,
                 controlled_av_steps=controlled_steps, end_flow=3600.0 * points.end / horizon_s,
-                merge_flows=[3600.0 * c / horizon_s for c in points.counts])
+                merge_flows=[3600.0 * c / horizon_s for c in points.counts],
+                meter_rates=meter.rates if meter is not None else [])
 
 
 class Passages:

@@ -6,6 +6,8 @@
                                                            beside each simulator's humans
   sumo_check.py scenario X.sumocfg [--seeds 0-19]          a SUMO user's scenario as it is, in SUMO 1.8 and in
                                                            mapc (`mapc sim X.sumocfg`)
+  sumo_check.py alinea SCENARIO [--seeds ..] [--alinea-*]  ALINEA metering the scenario's light in mapc and in
+                                                           SUMO (through TraCI), beside each simulator's humans
 
 SCENARIO is what `mapc export` takes (a scenario file or a built-in name); the scenario is exported with
 `mapc export SCENARIO --sumo WORK/export` first. Figures: mean ± 95 % CI (Student t) over the seeds, Welch t.
@@ -95,25 +97,25 @@ def reused_sumo_runs(path, digest, seeds):
 
 
 def _one(job):
-    export_dir, manifest, seed, policy_path = job
+    export_dir, manifest, seed, policy_path, alinea = job
     import traci
     from episode import run_episode
     from policy import Policy
     policy = Policy(policy_path) if policy_path else None
-    label = "s%d_%d_%s" % (os.getpid(), seed, "p" if policy_path else "h")
+    label = "s%d_%d_%s" % (os.getpid(), seed, "p" if policy_path else "a" if alinea else "h")
     # traci prints its connection retries on stdout, where the table goes.
     with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):
-        r = run_episode(traci, manifest, export_dir, seed, policy, label=label)
+        r = run_episode(traci, manifest, export_dir, seed, policy, label=label, alinea=alinea)
     r["seed"] = seed
     return r
 
 
-def run_sumo(export_dir, manifest, seeds, policy_path, jobs):
+def run_sumo(export_dir, manifest, seeds, policy_path, jobs, alinea=None):
     t0 = time.time()
     with multiprocessing.Pool(jobs) as pool:
-        runs = pool.map(_one, [(export_dir, manifest, s, policy_path) for s in seeds], chunksize=1)
-    print("  SUMO %s: %d seeds in %.0f s" % ("policy" if policy_path else "humans", len(seeds), time.time() - t0),
-          file=sys.stderr)
+        runs = pool.map(_one, [(export_dir, manifest, s, policy_path, alinea) for s in seeds], chunksize=1)
+    what = "policy" if policy_path else "ALINEA" if alinea else "humans"
+    print("  SUMO %s: %d seeds in %.0f s" % (what, len(seeds), time.time() - t0), file=sys.stderr)
     return runs
 
 
@@ -185,7 +187,9 @@ def summary_of_mapc(block, n, points):
     if runs is None:
         for key in [LANE_CHANGES] + [k for k, _ in points]:
             out[key] = dict(mean=nan, ci95=nan, std=nan, n=0)
-        end = (block.get("end_flow") or {}).get("flow")
+        # a policy's `mapc eval` has {"flow": summary}; a controller's block has the summary itself
+        end = block.get("end_flow") or {}
+        end = end if "mean" in end else end.get("flow")
         if end and "end_flow" in out:
             out["end_flow"] = dict(mean=end["mean"], ci95=end["ci95"], std=stats.sd_from_ci(end["ci95"], n), n=n)
         return out
@@ -231,7 +235,7 @@ def print_table(columns, comparisons, points=()):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=["baseline", "policy", "scenario", "curve"])
+    ap.add_argument("mode", choices=["baseline", "policy", "scenario", "curve", "alinea"])
     ap.add_argument("scenario")
     ap.add_argument("--policy", help="a centralized mapc policy file (policies/*.json)")
     ap.add_argument("--seeds", default="0-99", help="SUMO seeds and as many mapc seeds from 0 (default 0-99)")
@@ -249,6 +253,8 @@ def main():
     ap.add_argument("--svg", help="curve: draw both curves into this file")
     ap.add_argument("--av-share", help="baseline/policy: this share of each flow's vehicles are AVs, as mapc's "
                                        "--av-share gives them (export, humans and policy alike)")
+    for name in ("light", "detectors", "setpoint", "gain", "green"):
+        ap.add_argument("--alinea-" + name, help="alinea: as `mapc eval --alinea-%s`" % name)
     a = ap.parse_args()
     if a.mode == "scenario":
         import scenario
@@ -296,7 +302,11 @@ def compare(a, mapc, seeds, work):
     result = dict(scenario=a.scenario, seeds=a.seeds, export_sha256=digest, mapc_humans=mapc_h,
                   sumo_humans=sumo_h, sumo_human_runs=sumo_h_runs)
     print("%s, %d seeds, SUMO %s" % (a.scenario, n, manifest["sumo_version"]))
-    if a.mode == "baseline":
+    if a.mode == "alinea":
+        import alinea_check
+        alinea_check.compare(a, mapc, seeds, export_dir, manifest, points, mapc_h, sumo_h, result,
+                             sys.modules[__name__])
+    elif a.mode == "baseline":
         print_table([("mapc humans", mapc_h), ("SUMO humans", sumo_h)],
                     [("mapc vs SUMO", mapc_h, sumo_h)], points)
     else:

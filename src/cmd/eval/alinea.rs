@@ -86,7 +86,8 @@ pub fn run(
         let out = serde_json::json!({
             "scenario": scenario, "seeds": seeds.len(), "controller": "alinea",
             "light": light, "detectors": detectors, "setpoint": cfg.setpoint, "gain_veh_h": cfg.gain_veh_h,
-            "green_s": cfg.green_s, "mean_rate_veh_h": mean_rate,
+            "green_s": cfg.green_s, "min_rate_veh_h": cfg.min_rate_veh_h, "max_rate_veh_h": cfg.max_rate_veh_h,
+            "mean_rate_veh_h": mean_rate,
             "humans": h, "alinea": a, "wall_s": start.elapsed().as_secs_f64(),
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
