@@ -113,6 +113,48 @@ fn a_simple_merge_replay_is_self_contained_small_and_shows_the_simulators_figure
         summary["panes"][0]["vehicle_steps"]
     );
 
+    // two traces play side by side (a policy's beside ALINEA's, say): each its own pane, in the order given
+    let other = dir.join("seed4.csv");
+    assert_success(&mapc(&[
+        "sim",
+        "--scenario",
+        "simple_merge",
+        "--seeds",
+        "1",
+        "--first-seed",
+        "4",
+        "--trace",
+        s(&other),
+    ]));
+    let two = json_of(&mapc(&[
+        "view",
+        "simple_merge",
+        "--trace",
+        s(&trace),
+        "--trace",
+        s(&other),
+        "-o",
+        s(&dir.join("two.html")),
+        "--json",
+    ]));
+    assert_eq!(two["panes"].as_array().unwrap().len(), 2);
+    assert_eq!(pane(&two, 0), pane(&replayed, 0));
+    assert_ne!(pane(&two, 1), pane(&replayed, 0));
+    let three = mapc(&[
+        "view",
+        "simple_merge",
+        "--trace",
+        s(&trace),
+        "--trace",
+        s(&other),
+        "--trace",
+        s(&other),
+        "-o",
+        s(&dir.join("three.html")),
+    ]);
+    assert_eq!(three.status.code(), Some(2));
+    assert!(!dir.join("three.html").exists());
+
     // a run larger than the page holds keeps every k-th step, and says so; its last frame is the run's
     let steps = summary["panes"][0]["vehicle_steps"].as_u64().unwrap();
     let small = json_of(&mapc(&[

@@ -22,9 +22,10 @@ pub struct Args {
     /// Two panes on the same seed, in sync: the humans and the policy.
     #[arg(long, requires = "policy")]
     pub compare: bool,
-    /// Play this trace (`mapc sim --trace`, `mapc eval --trace`) of the scenario instead of running one.
-    #[arg(long, conflicts_with_all = ["policy", "compare"])]
-    pub trace: Option<PathBuf>,
+    /// Play this trace (`mapc sim --trace`, `mapc eval --trace`) of the scenario instead of running one; given
+    /// twice, the two side by side in sync (a policy's run beside ALINEA's, say).
+    #[arg(long, conflicts_with_all = ["policy", "compare"], num_args = 1, action = clap::ArgAction::Append)]
+    pub trace: Vec<PathBuf>,
     /// The seed to play.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -55,7 +56,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         let graph = super::common::load_map(&args.target)?;
         anyhow::ensure!(
-            args.policy.is_none() && args.trace.is_none(),
+            args.policy.is_none() && args.trace.is_empty(),
             "{} is a map, not a scenario: --policy and --trace need a scenario (make one with `mapc window`)",
             args.target
         );
@@ -145,17 +146,26 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
         horizon_steps: spec.horizon_steps,
     };
     let seed = args.seed;
-    if let Some(path) = &args.trace {
-        let file = mapc_graph::input::open(path)
-            .with_context(|| format!("reading the trace {}", path.display()))?;
-        let label = format!("trace {}", path.display());
-        page.replays.push(Replay::read(
-            path,
-            Box::new(std::io::BufReader::new(file)),
-            clock,
-            &label,
-        )?);
-        page.subtitle = format!("{}; {label}", resolved.origin);
+    if !args.trace.is_empty() {
+        anyhow::ensure!(
+            args.trace.len() <= 2,
+            "--trace given {} times: a page plays one trace, or two side by side",
+            args.trace.len()
+        );
+        let mut labels = Vec::new();
+        for path in &args.trace {
+            let file = mapc_graph::input::open(path)
+                .with_context(|| format!("reading the trace {}", path.display()))?;
+            let label = format!("trace {}", path.display());
+            page.replays.push(Replay::read(
+                path,
+                Box::new(std::io::BufReader::new(file)),
+                clock,
+                &label,
+            )?);
+            labels.push(label);
+        }
+        page.subtitle = format!("{}; {}", resolved.origin, labels.join(" beside "));
         return Ok(page);
     }
     match &args.policy {
