@@ -146,114 +146,95 @@ pub(super) mod x86 {
     driver!(accumulate_avx512, block_avx512, "avx512f", 16);
     driver!(accumulate_avx2, block_avx2, "avx2,fma", 8);
 
-    /// Rows `i0..i0 + R` by columns `j0..j0 + width` of `c`, `width` in (16 (V - 1), 16 V]: every vector full
-    /// but the last, which is masked.
-    #[target_feature(enable = "avx512f")]
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn block_avx512<const R: usize, const V: usize>(
-        i0: usize,
-        j0: usize,
-        width: usize,
-        cols: usize,
-        terms: usize,
-        a: Strided,
-        b: &[f32],
-        b_row: usize,
-        c: &mut [f32],
-    ) {
-        let tail: __mmask16 = ((1u32 << (width - 16 * (V - 1))) - 1) as u16;
-        let mask = |v: usize| if v + 1 == V { tail } else { 0xffff };
-        let c_at = |r: usize, v: usize| (i0 + r) * cols + j0 + 16 * v;
-        let mut acc = [[_mm512_setzero_ps(); V]; R];
-        // SAFETY (all pointer reads and writes below): each vector starts inside its row of `c` or `b`, and its
-        // lanes past the row's `width` columns are masked off, so never read or written.
-        unsafe {
-            for (r, row) in acc.iter_mut().enumerate() {
-                for (v, x) in row.iter_mut().enumerate() {
-                    *x = _mm512_maskz_loadu_ps(mask(v), c.as_ptr().add(c_at(r, v)));
-                }
-            }
-            let a_ptr = a.data.as_ptr();
-            for t in 0..terms {
-                let b_ptr = b.as_ptr().add(t * b_row + j0);
-                let mut bv = [_mm512_setzero_ps(); V];
-                for (v, x) in bv.iter_mut().enumerate() {
-                    *x = _mm512_maskz_loadu_ps(mask(v), b_ptr.add(16 * v));
-                }
-                for (r, row) in acc.iter_mut().enumerate() {
-                    let x = _mm512_set1_ps(*a_ptr.add((i0 + r) * a.row + t * a.term));
-                    for (y, &w) in row.iter_mut().zip(&bv) {
-                        *y = _mm512_fmadd_ps(x, w, *y);
+    /// `fn NAME<R, V>`: rows `i0..i0 + R` by columns `j0..j0 + width` of `c`, with `width` in
+    /// (LANES (V - 1), LANES V], for one instruction set: its vector type, lanes, intrinsics, and the mask of the
+    /// last vector, whose lanes past `width` are never read or written (every other vector is full).
+    macro_rules! block {
+        (
+            $name:ident, $feature:literal, $vector:ty, $lanes:literal,
+            zero: $zero:ident, splat: $splat:ident, fma: $fma:ident, load: $load:ident, store: $store:ident,
+            tail($tail_lanes:ident) = $tail:expr,
+            load_tail($lp:ident) = $load_tail:expr,
+            store_tail($sp:ident, $sx:ident) = $store_tail:expr $(,)?
+        ) => {
+            #[target_feature(enable = $feature)]
+            #[allow(clippy::too_many_arguments)]
+            unsafe fn $name<const R: usize, const V: usize>(
+                i0: usize,
+                j0: usize,
+                width: usize,
+                cols: usize,
+                terms: usize,
+                a: Strided,
+                b: &[f32],
+                b_row: usize,
+                c: &mut [f32],
+            ) {
+                let $tail_lanes = width - $lanes * (V - 1);
+                let tail = $tail;
+                let c_at = |r: usize, v: usize| (i0 + r) * cols + j0 + $lanes * v;
+                let mut acc: [[$vector; V]; R] = [[$zero(); V]; R];
+                // SAFETY (every pointer read and write below): each vector starts inside its row of `c` or `b`,
+                // and the last one's lanes past the row's `width` columns are masked off.
+                unsafe {
+                    let load = |$lp: *const f32, v: usize| {
+                        if v + 1 == V {
+                            $load_tail(tail)
+                        } else {
+                            $load($lp)
+                        }
+                    };
+                    for (r, row) in acc.iter_mut().enumerate() {
+                        for (v, x) in row.iter_mut().enumerate() {
+                            *x = load(c.as_ptr().add(c_at(r, v)), v);
+                        }
+                    }
+                    let a_ptr = a.data.as_ptr();
+                    for t in 0..terms {
+                        let b_ptr = b.as_ptr().add(t * b_row + j0);
+                        let mut bv: [$vector; V] = [$zero(); V];
+                        for (v, x) in bv.iter_mut().enumerate() {
+                            *x = load(b_ptr.add($lanes * v), v);
+                        }
+                        for (r, row) in acc.iter_mut().enumerate() {
+                            let x = $splat(*a_ptr.add((i0 + r) * a.row + t * a.term));
+                            for (y, &w) in row.iter_mut().zip(&bv) {
+                                *y = $fma(x, w, *y);
+                            }
+                        }
+                    }
+                    for (r, row) in acc.iter().enumerate() {
+                        for (v, &$sx) in row.iter().enumerate() {
+                            let $sp = c.as_mut_ptr().add(c_at(r, v));
+                            if v + 1 == V {
+                                $store_tail(tail);
+                            } else {
+                                $store($sp, $sx);
+                            }
+                        }
                     }
                 }
             }
-            for (r, row) in acc.iter().enumerate() {
-                for (v, &x) in row.iter().enumerate() {
-                    _mm512_mask_storeu_ps(c.as_mut_ptr().add(c_at(r, v)), mask(v), x);
-                }
-            }
-        }
+        };
     }
 
-    /// [`block_avx512`] with 8 lanes a vector.
-    #[target_feature(enable = "avx2,fma")]
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn block_avx2<const R: usize, const V: usize>(
-        i0: usize,
-        j0: usize,
-        width: usize,
-        cols: usize,
-        terms: usize,
-        a: Strided,
-        b: &[f32],
-        b_row: usize,
-        c: &mut [f32],
-    ) {
-        let tail_lanes = (width - 8 * (V - 1)) as i32;
-        let tail = _mm256_cmpgt_epi32(
-            _mm256_set1_epi32(tail_lanes),
+    block!(
+        block_avx512, "avx512f", __m512, 16,
+        zero: _mm512_setzero_ps, splat: _mm512_set1_ps, fma: _mm512_fmadd_ps,
+        load: _mm512_loadu_ps, store: _mm512_storeu_ps,
+        tail(lanes) = ((1u32 << lanes) - 1) as __mmask16,
+        load_tail(p) = |mask| _mm512_maskz_loadu_ps(mask, p),
+        store_tail(p, x) = |mask| _mm512_mask_storeu_ps(p, mask, x),
+    );
+    block!(
+        block_avx2, "avx2,fma", __m256, 8,
+        zero: _mm256_setzero_ps, splat: _mm256_set1_ps, fma: _mm256_fmadd_ps,
+        load: _mm256_loadu_ps, store: _mm256_storeu_ps,
+        tail(lanes) = _mm256_cmpgt_epi32(
+            _mm256_set1_epi32(lanes as i32),
             _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
-        );
-        let c_at = |r: usize, v: usize| (i0 + r) * cols + j0 + 8 * v;
-        let mut acc = [[_mm256_setzero_ps(); V]; R];
-        // SAFETY: as in `block_avx512`; the last vector's lanes past `width` are masked off.
-        unsafe {
-            let load = |p: *const f32, v: usize| {
-                if v + 1 == V {
-                    _mm256_maskload_ps(p, tail)
-                } else {
-                    _mm256_loadu_ps(p)
-                }
-            };
-            for (r, row) in acc.iter_mut().enumerate() {
-                for (v, x) in row.iter_mut().enumerate() {
-                    *x = load(c.as_ptr().add(c_at(r, v)), v);
-                }
-            }
-            let a_ptr = a.data.as_ptr();
-            for t in 0..terms {
-                let b_ptr = b.as_ptr().add(t * b_row + j0);
-                let mut bv = [_mm256_setzero_ps(); V];
-                for (v, x) in bv.iter_mut().enumerate() {
-                    *x = load(b_ptr.add(8 * v), v);
-                }
-                for (r, row) in acc.iter_mut().enumerate() {
-                    let x = _mm256_set1_ps(*a_ptr.add((i0 + r) * a.row + t * a.term));
-                    for (y, &w) in row.iter_mut().zip(&bv) {
-                        *y = _mm256_fmadd_ps(x, w, *y);
-                    }
-                }
-            }
-            for (r, row) in acc.iter().enumerate() {
-                for (v, &x) in row.iter().enumerate() {
-                    let p = c.as_mut_ptr().add(c_at(r, v));
-                    if v + 1 == V {
-                        _mm256_maskstore_ps(p, tail, x);
-                    } else {
-                        _mm256_storeu_ps(p, x);
-                    }
-                }
-            }
-        }
-    }
+        ),
+        load_tail(p) = |mask| _mm256_maskload_ps(p, mask),
+        store_tail(p, x) = |mask| _mm256_maskstore_ps(p, mask, x),
+    );
 }
