@@ -108,3 +108,35 @@ fn with_lane_changing_off_as_flows_benchmarks_the_humans_keep_their_lanes_and_st
     let outflow = j["outflow"]["mean"].as_f64().unwrap();
     assert!(outflow > 1500.0 && outflow < 1950.0, "{outflow}");
 }
+
+#[test]
+fn a_bad_generator_parameter_is_refused_naming_its_key() {
+    let dir = scratch_dir("flow-bottleneck-bad");
+    let text = std::fs::read_to_string(SCENARIO).unwrap();
+    for (network, needle) in [
+        (
+            "flow_bottleneck = { scaling = 0 }",
+            "network.flow_bottleneck.scaling must be 1 to 16, not 0",
+        ),
+        (
+            "flow_bottleneck = { speed_limit_mps = 1e308 }",
+            "network.flow_bottleneck.speed_limit_mps: 1e308 is outside",
+        ),
+        (
+            "flow_bottleneck = { junction_radius_m = 200.0 }",
+            "lengths_m[2] = 140 leaves no road between zippers of radius 200",
+        ),
+    ] {
+        let path = dir.join("bad.toml");
+        std::fs::write(
+            &path,
+            text.replace("map = \"../maps/flow_bottleneck.net.xml\"", network),
+        )
+        .unwrap();
+        let out = run_mapc(&["sim", path.to_str().unwrap(), "--seeds", "1"]);
+        assert_eq!(out.status.code(), Some(2), "{network}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{network}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -145,6 +145,25 @@ pub fn check_scenario(s: &Scenario) -> Result<(), Refusal> {
         check(key("lanes_before"), p.lanes_before as f64, LANES)?;
         check(key("lanes_after"), p.lanes_after as f64, LANES)?;
     }
+    if let crate::NetworkSpec::FlowBottleneck(p) = &s.network {
+        let key = |f: &str| format!("network.flow_bottleneck.{f}");
+        for (i, &l) in p.lengths_m.iter().enumerate() {
+            check(key(&format!("lengths_m[{i}]")), l, ROAD_LENGTH_M)?;
+        }
+        for (i, &l) in p.zipper_internal_m.iter().enumerate() {
+            check(
+                key(&format!("zipper_internal_m[{i}]")),
+                l,
+                INTERNAL_LENGTH_M,
+            )?;
+        }
+        check(
+            key("through_internal_m"),
+            p.through_internal_m,
+            INTERNAL_LENGTH_M,
+        )?;
+        check(key("speed_limit_mps"), p.speed_limit_mps, DRIVING_SPEED_MPS)?;
+    }
     for (name, t) in &s.vehicle_types {
         let key = |f: &str| format!("vehicle_types.{name}.{f}");
         for (f, v, range) in [
