@@ -35,19 +35,39 @@ pub(super) fn accumulate(
         "b is too short for {terms} x {cols}"
     );
     assert!(rows * cols <= c.len(), "c is too short for {rows} x {cols}");
+    match kernel() {
+        // SAFETY: the CPU has AVX-512F ([`kernel`]); the operands' sizes are checked above.
+        #[cfg(target_arch = "x86_64")]
+        Kernel::Avx512 => unsafe { x86::accumulate_avx512(rows, cols, terms, a, b, b_row, c) },
+        // SAFETY: the CPU has AVX2 and FMA ([`kernel`]); the operands' sizes are checked above.
+        #[cfg(target_arch = "x86_64")]
+        Kernel::Avx2 => unsafe { x86::accumulate_avx2(rows, cols, terms, a, b, b_row, c) },
+        _ => accumulate_plain(rows, cols, terms, a, b, b_row, c),
+    }
+}
+
+/// The copies of [`accumulate`].
+#[derive(Clone, Copy)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+enum Kernel {
+    Avx512,
+    Avx2,
+    Plain,
+}
+
+/// The widest copy this CPU runs.
+fn kernel() -> Kernel {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512F; the operands' sizes are checked above.
-            return unsafe { x86::accumulate_avx512(rows, cols, terms, a, b, b_row, c) };
+        use std::arch::is_x86_feature_detected as has;
+        if has!("avx512f") {
+            return Kernel::Avx512;
         }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the CPU has AVX2 and FMA; the operands' sizes are checked above.
-            return unsafe { x86::accumulate_avx2(rows, cols, terms, a, b, b_row, c) };
+        if has!("avx2") && has!("fma") {
+            return Kernel::Avx2;
         }
     }
-    accumulate_plain(rows, cols, terms, a, b, b_row, c)
+    Kernel::Plain
 }
 
 /// [`accumulate`] one element at a time (`mul_add` is a correctly rounded fused multiply-add everywhere).
@@ -73,17 +93,11 @@ pub(super) fn accumulate_plain(
 
 /// Which kernel [`accumulate`] takes on this CPU, for `mapc bench`.
 pub fn kernel_name() -> &'static str {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            return "AVX-512";
-        }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            return "AVX2+FMA";
-        }
+    match kernel() {
+        Kernel::Avx512 => "AVX-512",
+        Kernel::Avx2 => "AVX2+FMA",
+        Kernel::Plain => "scalar fused multiply-add",
     }
-    "scalar fused multiply-add"
 }
 
 /// Register blocks: four rows of `c` by up to four vectors of columns stay in registers while the terms stream
