@@ -546,3 +546,39 @@ fn a_distributed_policy_trains_and_drives_on_a_sumo_users_scenario_with_its_lane
     assert_ne!(e["speed"], e["baseline"]["speed"], "no AV was driven: {e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_sumo_vehicle_keeps_its_id_in_the_trip_info_and_a_flows_are_numbered() {
+    // eccles: 1 000 `<vehicle>`s; SUMO names each by its id (`m60-m62_161`), a flow's vehicles `flow.N`
+    let dir = scratch_dir("sumo-vehicle-ids");
+    let trips = dir.join("trips.xml");
+    assert_success(&run_mapc(&[
+        "sim",
+        "scenarios/sumo/eccles_interchange/interchangeSim.cfg",
+        "--seeds",
+        "1",
+        "--tripinfo-output",
+        trips.to_str().unwrap(),
+    ]));
+    let text = std::fs::read_to_string(&trips).unwrap();
+    assert!(
+        text.contains("<tripinfo id=\"m60-m62_161\" "),
+        "no vehicle named by its id"
+    );
+    assert!(!text.contains("id=\"m60-m62_161.0\""));
+    let routes = dir.join("ramp.xml");
+    assert_success(&run_mapc(&[
+        "sim",
+        "scenarios/sumo/ramp_game/ramp.sumocfg",
+        "--seeds",
+        "1",
+        "--tripinfo-output",
+        routes.to_str().unwrap(),
+    ]));
+    let text = std::fs::read_to_string(&routes).unwrap();
+    assert!(
+        text.contains("<tripinfo id=\"highway1.0\" "),
+        "a flow's first vehicle"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

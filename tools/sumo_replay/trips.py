@@ -45,9 +45,6 @@ def main():
     ap.add_argument("--show", type=int, default=12, help="groups to print (default 12)")
     a = ap.parse_args()
     (m, nm), (s, ns) = durations(a.mapc), durations(a.sumo)
-    # a SUMO `vehicle` runs in mapc as a flow of one, which mapc's outputs name `ID.0`
-    for v in [v for v in m if v not in s and v.endswith(".0") and v[:-2] in s]:
-        m[v[:-2]] = m.pop(v)
     both = sorted(set(m) & set(s))
     groups = collections.defaultdict(lambda: [0, 0.0, 0.0])
     for v in both:

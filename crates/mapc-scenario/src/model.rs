@@ -453,6 +453,10 @@ pub struct Flow {
     /// one) or `desired` (the desired speed, or wait).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depart_speed: Option<String>,
+    /// A SUMO `<vehicle>` or `<trip>`: its one vehicle is named by the flow's id in SUMO's outputs, where a
+    /// flow's vehicles are `ID.N`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub vehicle: bool,
 }
 
 /// Vehicles on the network at t = 0, evenly spaced along the network's roads.

@@ -95,6 +95,8 @@ pub struct FlowSpec {
     /// A mix of types, as (type index, cumulative weight up to 1): each vehicle's type is drawn; empty: always
     /// `vehicle_type`.
     pub type_mix: Vec<(usize, f64)>,
+    /// One named vehicle (a SUMO `<vehicle>` or `<trip>`): SUMO's outputs call it `id`, not `id.0`.
+    pub single_vehicle: bool,
 }
 
 pub use mapc_scenario::DepartLane;

@@ -64,9 +64,11 @@ impl SumoOutputs {
         }
     }
 
-    /// SUMO's name of a vehicle: `flow.N`, or `veh.ID` for one that came from no flow.
+    /// SUMO's name of a vehicle: `flow.N`, the id of a `<vehicle>` or `<trip>`, or `veh.ID` for one that came
+    /// from no flow.
     fn vehicle_name(sim: &Simulation, id: VehicleId) -> String {
         match sim.vehicle_origin(id) {
+            Some((f, _)) if sim.spec().flows[f].single_vehicle => sim.spec().flows[f].id.clone(),
             Some((f, n)) => format!("{}.{n}", sim.spec().flows[f].id),
             None => format!("veh.{id}"),
         }

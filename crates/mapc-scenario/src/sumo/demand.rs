@@ -608,6 +608,7 @@ impl<'a> Demand<'a> {
             };
             flow.begin_s = depart;
             flow.number = Some(1);
+            flow.vehicle = true;
             last = depart;
         }
         Ok((Some(flow), last))

@@ -138,6 +138,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             },
             begin_s: f.begin_s,
             end_s: f.end_s.unwrap_or(f64::INFINITY),
+            single_vehicle: f.vehicle && f.number == Some(1),
             depart_lane: match &f.depart_lane {
                 None => DepartLane::First,
                 Some(text) => DepartLane::parse(text)
