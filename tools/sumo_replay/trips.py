@@ -8,7 +8,9 @@ lanes), the groups ordered by how much of the whole difference they hold.
       mapc sim CFG --seeds 1 --first-seed $s --tripinfo-output MAPC_DIR/$s.xml
       sumo -c CFG --seed $s --tripinfo-output SUMO_DIR/$s.xml --xml-validation never
     done
-    # eccles_interchange's configuration also writes its vehicle routes: add --vehroute-output /tmp/routes.xml
+    # a configuration that names outputs of its own writes them beside it: redirect them (eccles_interchange:
+    # --vehroute-output /tmp/routes.xml; ramp_game: --netstate-dump /tmp/n.xml, and its additional file's
+    # tlsstate output, by running a copy of its folder)
     python3 tools/sumo_replay/trips.py MAPC_DIR SUMO_DIR [--show 12]
 
 Standard library only; SUMO is a reference, never needed by mapc.
