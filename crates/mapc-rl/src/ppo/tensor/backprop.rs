@@ -7,7 +7,7 @@
 //! graph and replaying it cost three times the arithmetic (docs/perf.md, "The gradient written out"). The autodiff version
 //! stays as the reference the tests compare this one with ([`super::autodiff`]).
 
-use super::matmul::{self, Strided};
+use super::matmul::{self, Product};
 use super::{
     Architecture, LN_2PI, LOG_STD_MAX, LOG_STD_MIN, LossCoeffs, LossStats, Minibatch, Model,
     TANH_INPUT_BOUND,
@@ -22,7 +22,7 @@ pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs) -> (LossStat
     let policy = || {
         let net = Mlp::new(pp, arch.policy_sizes());
         let pass = net.forward(obs());
-        let (terms, mut d_out) = policy_terms(pass.out(), arch, mb, c);
+        let (terms, mut d_out) = policy_terms(&pass.out, arch, mb, c);
         let value_loss = arch.shared_value.then(|| {
             let outs = net.outputs();
             let value = pass.out_column(2 * arch.act_dim);
@@ -40,7 +40,7 @@ pub fn loss_and_grad(model: &Model, mb: &Minibatch, c: &LossCoeffs) -> (LossStat
         }
         let net = Mlp::new(vp, arch.value_sizes());
         let pass = net.forward(obs());
-        let (loss, d_value) = value_term(pass.out(), mb, c);
+        let (loss, d_value) = value_term(&pass.out, mb, c);
         Some((loss, net.backward(&pass, d_value)))
     };
     let ((terms, shared_loss, mut grad), separate) = if arch.shared_value {
@@ -161,10 +161,6 @@ struct Pass {
 }
 
 impl Pass {
-    fn out(&self) -> &[f32] {
-        &self.out
-    }
-
     /// Column `k` of the output (the shared value's, for one).
     fn out_column(&self, k: usize) -> Vec<f32> {
         self.out
@@ -220,12 +216,16 @@ impl<'a> Mlp<'a> {
             for _ in 0..rows {
                 z.extend_from_slice(bias);
             }
-            let h_rows = Strided {
-                data: &h,
-                row: n_in,
-                term: 1,
+            let product = Product {
+                rows,
+                cols: n_out,
+                terms: n_in,
+                a: &h,
+                a_row: n_in,
+                a_term: 1,
+                b: w,
             };
-            matmul::accumulate(rows, n_out, n_in, h_rows, w, n_out, &mut z);
+            matmul::accumulate(product, &mut z);
             inputs.push(h);
             if l + 1 < layers {
                 let mut e = vec![0.0f32; z.len()];
@@ -254,12 +254,16 @@ impl<'a> Mlp<'a> {
             let w_off = self.weight_offset(l);
             let (d_w, d_b) = grad[w_off..][..n_in * n_out + n_out].split_at_mut(n_in * n_out);
             // d_w = input^T g: term t is row t of both
-            let input_columns = Strided {
-                data: &pass.inputs[l],
-                row: 1,
-                term: n_in,
+            let product = Product {
+                rows: n_in,
+                cols: n_out,
+                terms: rows,
+                a: &pass.inputs[l],
+                a_row: 1,
+                a_term: n_in,
+                b: &g,
             };
-            matmul::accumulate(n_in, n_out, rows, input_columns, &g, n_out, d_w);
+            matmul::accumulate(product, d_w);
             for row in g.chunks_exact(n_out) {
                 for (d, &x) in d_b.iter_mut().zip(row) {
                     *d += x;
@@ -277,12 +281,16 @@ impl<'a> Mlp<'a> {
                 }
             }
             let mut d_h = vec![0.0f32; rows * n_in];
-            let g_rows = Strided {
-                data: &g,
-                row: n_out,
-                term: 1,
+            let product = Product {
+                rows,
+                cols: n_in,
+                terms: n_out,
+                a: &g,
+                a_row: n_out,
+                a_term: 1,
+                b: &w_t,
             };
-            matmul::accumulate(rows, n_in, n_out, g_rows, &w_t, n_in, &mut d_h);
+            matmul::accumulate(product, &mut d_h);
             times_tanh_slope(&mut d_h, &pass.exps[l - 1]);
             g = d_h;
         }

@@ -6,43 +6,52 @@
 //! about as much as its arithmetic, and its stable build has no AVX-512 kernels (docs/perf.md, "The update's
 //! matrix products").
 
-/// One operand of [`accumulate`]: element (i, t) at `data[i * row + t * term]`.
+/// The operands of `c += a b`: `a` is `rows × terms`, element (i, t) at `a[i * a_row + t * a_term]` (a transposed
+/// matrix is other strides), `b` is `terms × cols` row-major.
 #[derive(Clone, Copy)]
-pub(super) struct Strided<'a> {
-    pub data: &'a [f32],
-    pub row: usize,
-    pub term: usize,
+pub(super) struct Product<'a> {
+    pub rows: usize,
+    pub cols: usize,
+    pub terms: usize,
+    pub a: &'a [f32],
+    pub a_row: usize,
+    pub a_term: usize,
+    pub b: &'a [f32],
+}
+
+impl Product<'_> {
+    #[inline(always)]
+    fn a_at(&self, i: usize, t: usize) -> usize {
+        i * self.a_row + t * self.a_term
+    }
 }
 
 /// `c[i][j] = fma(a(i, t), b[t][j], c[i][j])` for t = 0, 1, ... `terms - 1` in order: `c` is `rows × cols`
-/// row-major and holds the starting values (a bias, or zeros); `b` is `terms × cols` with rows `b_row` apart.
-pub(super) fn accumulate(
-    rows: usize,
-    cols: usize,
-    terms: usize,
-    a: Strided,
-    b: &[f32],
-    b_row: usize,
-    c: &mut [f32],
-) {
+/// row-major and holds the starting values (a bias, or zeros).
+pub(super) fn accumulate(p: Product, c: &mut [f32]) {
+    let Product {
+        rows, cols, terms, ..
+    } = p;
     if rows == 0 || cols == 0 || terms == 0 {
         return;
     }
-    let last_a = (rows - 1) * a.row + (terms - 1) * a.term;
-    assert!(last_a < a.data.len(), "a is too short for {rows} x {terms}");
     assert!(
-        (terms - 1) * b_row + cols <= b.len(),
+        p.a_at(rows - 1, terms - 1) < p.a.len(),
+        "a is too short for {rows} x {terms}"
+    );
+    assert!(
+        terms * cols <= p.b.len(),
         "b is too short for {terms} x {cols}"
     );
     assert!(rows * cols <= c.len(), "c is too short for {rows} x {cols}");
     match kernel() {
         // SAFETY: the CPU has AVX-512F ([`kernel`]); the operands' sizes are checked above.
         #[cfg(target_arch = "x86_64")]
-        Kernel::Avx512 => unsafe { x86::accumulate_avx512(rows, cols, terms, a, b, b_row, c) },
+        Kernel::Avx512 => unsafe { x86::accumulate_avx512(p, c) },
         // SAFETY: the CPU has AVX2 and FMA ([`kernel`]); the operands' sizes are checked above.
         #[cfg(target_arch = "x86_64")]
-        Kernel::Avx2 => unsafe { x86::accumulate_avx2(rows, cols, terms, a, b, b_row, c) },
-        _ => accumulate_plain(rows, cols, terms, a, b, b_row, c),
+        Kernel::Avx2 => unsafe { x86::accumulate_avx2(p, c) },
+        _ => accumulate_plain(p, c),
     }
 }
 
@@ -71,20 +80,12 @@ fn kernel() -> Kernel {
 }
 
 /// [`accumulate`] one element at a time (`mul_add` is a correctly rounded fused multiply-add everywhere).
-pub(super) fn accumulate_plain(
-    rows: usize,
-    cols: usize,
-    terms: usize,
-    a: Strided,
-    b: &[f32],
-    b_row: usize,
-    c: &mut [f32],
-) {
-    for i in 0..rows {
-        let out = &mut c[i * cols..][..cols];
-        for t in 0..terms {
-            let x = a.data[i * a.row + t * a.term];
-            for (o, &y) in out.iter_mut().zip(&b[t * b_row..][..cols]) {
+pub(super) fn accumulate_plain(p: Product, c: &mut [f32]) {
+    for i in 0..p.rows {
+        let out = &mut c[i * p.cols..][..p.cols];
+        for t in 0..p.terms {
+            let x = p.a[p.a_at(i, t)];
+            for (o, &y) in out.iter_mut().zip(&p.b[t * p.cols..][..p.cols]) {
                 *o = x.mul_add(y, *o);
             }
         }
@@ -104,7 +105,7 @@ pub fn kernel_name() -> &'static str {
 /// past; each term loads the block's columns of `b` once and broadcasts one element of `a` per row.
 #[cfg(target_arch = "x86_64")]
 pub(super) mod x86 {
-    use super::Strided;
+    use super::Product;
     use std::arch::x86_64::*;
 
     const ROWS: usize = 4;
@@ -112,15 +113,8 @@ pub(super) mod x86 {
     macro_rules! driver {
         ($name:ident, $block:ident, $feature:literal, $lanes:expr) => {
             #[target_feature(enable = $feature)]
-            pub(in super::super) unsafe fn $name(
-                rows: usize,
-                cols: usize,
-                terms: usize,
-                a: Strided,
-                b: &[f32],
-                b_row: usize,
-                c: &mut [f32],
-            ) {
+            pub(in super::super) unsafe fn $name(p: Product, c: &mut [f32]) {
+                let (rows, cols) = (p.rows, p.cols);
                 let mut i = 0;
                 while i < rows {
                     let r = (rows - i).min(ROWS);
@@ -131,22 +125,22 @@ pub(super) mod x86 {
                         // SAFETY: rows i..i + r and columns j..j + width lie within the checked sizes.
                         unsafe {
                             match (r, vectors) {
-                                (4, 4) => $block::<4, 4>(i, j, width, cols, terms, a, b, b_row, c),
-                                (4, 3) => $block::<4, 3>(i, j, width, cols, terms, a, b, b_row, c),
-                                (4, 2) => $block::<4, 2>(i, j, width, cols, terms, a, b, b_row, c),
-                                (4, _) => $block::<4, 1>(i, j, width, cols, terms, a, b, b_row, c),
-                                (3, 4) => $block::<3, 4>(i, j, width, cols, terms, a, b, b_row, c),
-                                (3, 3) => $block::<3, 3>(i, j, width, cols, terms, a, b, b_row, c),
-                                (3, 2) => $block::<3, 2>(i, j, width, cols, terms, a, b, b_row, c),
-                                (3, _) => $block::<3, 1>(i, j, width, cols, terms, a, b, b_row, c),
-                                (2, 4) => $block::<2, 4>(i, j, width, cols, terms, a, b, b_row, c),
-                                (2, 3) => $block::<2, 3>(i, j, width, cols, terms, a, b, b_row, c),
-                                (2, 2) => $block::<2, 2>(i, j, width, cols, terms, a, b, b_row, c),
-                                (2, _) => $block::<2, 1>(i, j, width, cols, terms, a, b, b_row, c),
-                                (_, 4) => $block::<1, 4>(i, j, width, cols, terms, a, b, b_row, c),
-                                (_, 3) => $block::<1, 3>(i, j, width, cols, terms, a, b, b_row, c),
-                                (_, 2) => $block::<1, 2>(i, j, width, cols, terms, a, b, b_row, c),
-                                (_, _) => $block::<1, 1>(i, j, width, cols, terms, a, b, b_row, c),
+                                (4, 4) => $block::<4, 4>(i, j, width, p, c),
+                                (4, 3) => $block::<4, 3>(i, j, width, p, c),
+                                (4, 2) => $block::<4, 2>(i, j, width, p, c),
+                                (4, _) => $block::<4, 1>(i, j, width, p, c),
+                                (3, 4) => $block::<3, 4>(i, j, width, p, c),
+                                (3, 3) => $block::<3, 3>(i, j, width, p, c),
+                                (3, 2) => $block::<3, 2>(i, j, width, p, c),
+                                (3, _) => $block::<3, 1>(i, j, width, p, c),
+                                (2, 4) => $block::<2, 4>(i, j, width, p, c),
+                                (2, 3) => $block::<2, 3>(i, j, width, p, c),
+                                (2, 2) => $block::<2, 2>(i, j, width, p, c),
+                                (2, _) => $block::<2, 1>(i, j, width, p, c),
+                                (_, 4) => $block::<1, 4>(i, j, width, p, c),
+                                (_, 3) => $block::<1, 3>(i, j, width, p, c),
+                                (_, 2) => $block::<1, 2>(i, j, width, p, c),
+                                (_, _) => $block::<1, 1>(i, j, width, p, c),
                             }
                         }
                         j += width;
@@ -172,18 +166,14 @@ pub(super) mod x86 {
             store_tail($sp:ident, $sx:ident) = $store_tail:expr $(,)?
         ) => {
             #[target_feature(enable = $feature)]
-            #[allow(clippy::too_many_arguments)]
             unsafe fn $name<const R: usize, const V: usize>(
                 i0: usize,
                 j0: usize,
                 width: usize,
-                cols: usize,
-                terms: usize,
-                a: Strided,
-                b: &[f32],
-                b_row: usize,
+                p: Product,
                 c: &mut [f32],
             ) {
+                let cols = p.cols;
                 let $tail_lanes = width - $lanes * (V - 1);
                 let tail = $tail;
                 let c_at = |r: usize, v: usize| (i0 + r) * cols + j0 + $lanes * v;
@@ -203,15 +193,15 @@ pub(super) mod x86 {
                             *x = load(c.as_ptr().add(c_at(r, v)), v);
                         }
                     }
-                    let a_ptr = a.data.as_ptr();
-                    for t in 0..terms {
-                        let b_ptr = b.as_ptr().add(t * b_row + j0);
+                    let a_ptr = p.a.as_ptr();
+                    for t in 0..p.terms {
+                        let b_ptr = p.b.as_ptr().add(t * cols + j0);
                         let mut bv: [$vector; V] = [$zero(); V];
                         for (v, x) in bv.iter_mut().enumerate() {
                             *x = load(b_ptr.add($lanes * v), v);
                         }
                         for (r, row) in acc.iter_mut().enumerate() {
-                            let x = $splat(*a_ptr.add((i0 + r) * a.row + t * a.term));
+                            let x = $splat(*a_ptr.add(p.a_at(i0 + r, t)));
                             for (y, &w) in row.iter_mut().zip(&bv) {
                                 *y = $fma(x, w, *y);
                             }

@@ -235,31 +235,17 @@ impl Model {
 
     /// Policy mean, log-std and value for one observation, in plain `f32` (one row: no tensor library in the way).
     pub fn infer(&self, obs: &[f32], scratch: &mut Scratch) -> PolicyOutput {
-        let a = self.arch.act_dim;
-        let vp = &self.params[self.arch.policy_len()..];
-        let Scratch {
-            a: buf,
-            b: vbuf,
-            c: out,
-        } = scratch;
-        self.policy_forward(obs, buf, out);
-        let mean = out[..a].to_vec();
-        let log_std = out[a..2 * a]
-            .iter()
-            .map(|x| x.clamp(LOG_STD_MIN, LOG_STD_MAX))
-            .collect();
-        if self.arch.shared_value {
-            return PolicyOutput {
-                mean,
-                log_std,
-                value: out[2 * a],
-            };
-        }
-        mlp_forward(vp, self.arch.obs_dim, &self.arch.hidden, 1, obs, buf, vbuf);
+        let ActionDist { mean, log_std } = self.action_dist(obs, scratch);
+        let value = if self.arch.shared_value {
+            // the policy net's own last output, still in the scratch
+            scratch.c[2 * self.arch.act_dim]
+        } else {
+            self.value_net(obs, &mut scratch.a, &mut scratch.b)
+        };
         PolicyOutput {
             mean,
             log_std,
-            value: vbuf[0],
+            value,
         }
     }
 
@@ -277,6 +263,13 @@ impl Model {
         }
     }
 
+    /// The separate value net's forward pass for one observation.
+    fn value_net(&self, obs: &[f32], buf: &mut Vec<f32>, out: &mut Vec<f32>) -> f32 {
+        let vp = &self.params[self.arch.policy_len()..];
+        mlp_forward(vp, self.arch.obs_dim, &self.arch.hidden, 1, obs, buf, out);
+        out[0]
+    }
+
     /// Value estimates of many observations (`obs`: row-major, `obs_dim` each) in one batched forward pass, as
     /// the update computes them (within about 1e-6 of [`Model::value`]'s).
     pub fn values(&self, obs: &[f32]) -> Vec<f32> {
@@ -290,9 +283,7 @@ impl Model {
             self.policy_forward(obs, buf, out);
             return out[2 * self.arch.act_dim];
         }
-        let vp = &self.params[self.arch.policy_len()..];
-        mlp_forward(vp, self.arch.obs_dim, &self.arch.hidden, 1, obs, buf, out);
-        out[0]
+        self.value_net(obs, buf, out)
     }
 }
 

@@ -507,15 +507,19 @@ fn every_matrix_kernel_gives_the_same_bits_and_the_exact_products_within_roundin
         let (rows, cols, terms) = (pick(1), pick(2 + case % 5), pick(3 + case % 3));
         let [a, b, c0] = product_case(rows, cols, terms, &mut rng);
         for (row, term) in [(terms, 1), (1, rows)] {
-            let a = matmul::Strided {
-                data: &a,
-                row,
-                term,
+            let product = matmul::Product {
+                rows,
+                cols,
+                terms,
+                a: &a,
+                a_row: row,
+                a_term: term,
+                b: &b,
             };
             let mut plain = c0.clone();
-            matmul::accumulate_plain(rows, cols, terms, a, &b, cols, &mut plain);
+            matmul::accumulate_plain(product, &mut plain);
             let mut dispatched = c0.clone();
-            matmul::accumulate(rows, cols, terms, a, &b, cols, &mut dispatched);
+            matmul::accumulate(product, &mut dispatched);
             let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
             assert_eq!(bits(&plain), bits(&dispatched), "{rows}x{cols}x{terms}");
             #[cfg(target_arch = "x86_64")]
@@ -533,12 +537,8 @@ fn every_matrix_kernel_gives_the_same_bits_and_the_exact_products_within_roundin
                 // SAFETY: the CPU has the kernel's features; the sizes are the ones `accumulate` checks.
                 unsafe {
                     match name {
-                        "avx2" => {
-                            matmul::x86::accumulate_avx2(rows, cols, terms, a, &b, cols, &mut wide)
-                        }
-                        _ => matmul::x86::accumulate_avx512(
-                            rows, cols, terms, a, &b, cols, &mut wide,
-                        ),
+                        "avx2" => matmul::x86::accumulate_avx2(product, &mut wide),
+                        _ => matmul::x86::accumulate_avx512(product, &mut wide),
                     }
                 }
                 assert_eq!(bits(&plain), bits(&wide), "{name} {rows}x{cols}x{terms}");
@@ -547,7 +547,7 @@ fn every_matrix_kernel_gives_the_same_bits_and_the_exact_products_within_roundin
                 for j in 0..cols {
                     let exact: f64 = c0[i * cols + j] as f64
                         + (0..terms)
-                            .map(|t| a.data[i * row + t * term] as f64 * b[t * cols + j] as f64)
+                            .map(|t| a[i * row + t * term] as f64 * b[t * cols + j] as f64)
                             .sum::<f64>();
                     let got = plain[i * cols + j] as f64;
                     assert!(
