@@ -4,12 +4,15 @@ mod common;
 
 use common::{fresh_path, mapc_command};
 
-/// The last JSON document the pipeline prints is the evaluation against the human baseline, on `seeds` seeds,
-/// with both outflows plausible.
+/// The last JSON document the pipeline prints (before the time-space diagram's and the replay's lines) is the
+/// evaluation against the human baseline, on `seeds` seeds, with both outflows plausible.
 fn assert_the_evaluation_ran(stdout: &str, seeds: u64) {
     let start = stdout.rfind("\n{\n").map_or(0, |i| i + 1);
-    let eval: serde_json::Value =
-        serde_json::from_str(&stdout[start..]).expect("eval JSON at the end");
+    let eval: serde_json::Value = serde_json::Deserializer::from_str(&stdout[start..])
+        .into_iter()
+        .next()
+        .expect("a JSON document")
+        .expect("eval JSON last");
     assert_eq!(eval["seeds"], seeds);
     let policy = eval["outflow"]["mean"].as_f64().unwrap();
     let human = eval["baseline"]["outflow"]["mean"].as_f64().unwrap();
@@ -38,6 +41,7 @@ fn pipeline_runs_every_stage_on_the_real_map() {
         "i696_window.graph.json",
         "i696_window.png",
         "i696_window_human_trace.csv",
+        "i696_window_policy_trace.csv",
         "i696_window_timespace.png",
         "i696_window_replay.html",
     ] {
@@ -109,6 +113,7 @@ fn pipeline_on_another_map_takes_the_default_corridor() {
         "rongwu.corridor.graph.json",
         "rongwu_window.toml",
         "rongwu_window_human_trace.csv",
+        "rongwu_window_policy_trace.csv",
         "rongwu_window_timespace.png",
         "rongwu_window_replay.html",
     ] {
@@ -157,6 +162,7 @@ fn pipeline_keeps_the_lanes_end_to_end() {
         "i696_lanes_window.graph.json",
         "i696_lanes_window.png",
         "i696_lanes_window_human_trace.csv",
+        "i696_lanes_window_policy_trace.csv",
         "i696_lanes_window_timespace.png",
         "i696_lanes_window_replay.html",
     ] {
@@ -183,4 +189,72 @@ fn pipeline_keeps_the_lanes_end_to_end() {
     assert!(changed > 50, "{changed} vehicles changed lanes on a road");
     assert_the_evaluation_ran(&stdout, 2);
     std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// `mapc eval --human-trace`: the humans' first seed written from the baseline's own run, the same rows a run of
+/// its own writes; a policy whose rule leaves every window to the humans gets that same run as its trace; and the
+/// report is the one `eval` gives without traces.
+#[test]
+fn eval_writes_the_humans_trace_from_its_own_baseline_run() {
+    let dir = fresh_path("eval-human-trace");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (humans, policy, alone) = (
+        dir.join("humans.csv"),
+        dir.join("policy.csv"),
+        dir.join("alone.csv"),
+    );
+    // two lanes: the policy's rule (one lane on every road) leaves the window to the humans
+    let eval = |extra: &[&std::ffi::OsStr]| {
+        let out = mapc_command()
+            .args([
+                "eval",
+                "--policy",
+                "policies/merge_robust_congested.json",
+                "--scenario",
+                "scenarios/two_lane_merge_jam_av.toml",
+                "--seeds",
+                "2",
+                "--json",
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        common::assert_success(&out);
+        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["wall_s"] = serde_json::Value::Null;
+        v
+    };
+    let traced = eval(&[
+        "--trace".as_ref(),
+        policy.as_os_str(),
+        "--human-trace".as_ref(),
+        humans.as_os_str(),
+    ]);
+    assert!(
+        !traced["withheld"].as_array().unwrap().is_empty(),
+        "{traced}"
+    );
+    assert_eq!(traced, eval(&[]));
+    let rows = std::fs::read_to_string(&humans).unwrap();
+    assert!(rows.lines().count() > 1000, "{} rows", rows.lines().count());
+    assert_eq!(std::fs::read(&policy).unwrap(), rows.as_bytes());
+    // the trace of a run of its own (the policy's, without a baseline to take it from): the same rows
+    let out = mapc_command()
+        .args([
+            "eval",
+            "--policy",
+            "policies/merge_robust_congested.json",
+            "--scenario",
+            "scenarios/two_lane_merge_jam_av.toml",
+            "--seeds",
+            "1",
+            "--no-baseline",
+            "--trace",
+        ])
+        .arg(&alone)
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    assert_eq!(std::fs::read(&alone).unwrap(), rows.as_bytes());
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -380,3 +380,42 @@ fn bad_input_is_one_message_with_exit_code_2_and_no_page() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A policy whose rule leaves every window to the humans drives their run: `--compare` shows that one run in both
+/// panes (run once), with the figures `mapc eval` gives for the seed.
+#[test]
+fn compare_with_a_withheld_policy_shows_the_humans_run_in_both_panes() {
+    let dir = scratch_dir("view-withheld");
+    let page = dir.join("withheld.html");
+    let args = [
+        "--policy",
+        "policies/merge_robust_congested.json",
+        "--scenario",
+        "scenarios/two_lane_merge_jam_av.toml",
+    ];
+    let summary = json_of(&mapc(&[
+        "view",
+        "scenarios/two_lane_merge_jam_av.toml",
+        args[0],
+        args[1],
+        "--compare",
+        "--json",
+        "-o",
+        s(&page),
+    ]));
+    let panes = summary["panes"].as_array().unwrap();
+    assert_eq!(panes.len(), 2);
+    assert!(panes[1]["label"].as_str().unwrap().starts_with("policy "));
+    for k in ["frames", "vehicles", "vehicle_steps"] {
+        assert_eq!(panes[0][k], panes[1][k], "{k}");
+    }
+    assert_eq!(pane(&summary, 0), pane(&summary, 1));
+    let eval = json_of(&mapc(&[
+        "eval", args[0], args[1], args[2], args[3], "--seeds", "1", "--json",
+    ]));
+    assert!(!eval["withheld"].as_array().unwrap().is_empty(), "{eval}");
+    assert_eq!(
+        pane(&summary, 1).0,
+        eval["outflow"]["mean"].as_f64().unwrap()
+    );
+}

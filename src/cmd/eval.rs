@@ -6,7 +6,7 @@ use anyhow::Context;
 use clap::Args as ClapArgs;
 use mapc_rl::Checkpoint;
 use mapc_rl::checkpoint::policy_file;
-use mapc_rl::eval::{EvalRequest, FigureSet, evaluate};
+use mapc_rl::eval::{EvalRequest, FigureSet, evaluate, evaluate_traced};
 use mapc_rl::rollout::ActionMode;
 
 mod alinea;
@@ -53,6 +53,11 @@ pub struct Args {
     /// them with `mapc plot timespace`).
     #[arg(long)]
     pub trace: Option<PathBuf>,
+    /// Write the humans' run of the first seed as CSV too (the columns of `mapc sim --trace`): the baseline's own
+    /// run, so it costs no run of its own; with `--trace`, a policy whose rule leaves every window to the humans
+    /// drives that same run, and its trace is a copy.
+    #[arg(long, value_name = "PATH")]
+    pub human_trace: Option<PathBuf>,
     /// Where the policy drives, overriding its own rule: `everywhere`, or `main-road-yields` (only windows whose
     /// merge makes the main road yield, the Simple Merge's regime, or for a distributed policy only AVs whose next
     /// merge is one; the others are left to the humans), or `main-road-yields-congested` (of those, only merges
@@ -97,7 +102,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         ActionMode::Mean
     };
-    let (report, driver, deployment) = evaluate(&EvalRequest {
+    let req = EvalRequest {
         ck: &ck,
         policy_file: &file,
         scenario: &args.scenario,
@@ -106,14 +111,31 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seeds: &seeds,
         mode,
         baseline: !args.no_baseline,
-    })
-    .with_context(|| format!("evaluating {}", file.display()))?;
-    if let Some(path) = &args.trace {
-        // one seed under the policy, every step's vehicles, written atomically
-        super::common::write_trace_file(path, |w| {
-            driver.trace_deployed(&ck, &sc.spec, &deployment, seeds[0], mode, w)?;
-            Ok(())
-        })?;
+    };
+    let context = || format!("evaluating {}", file.display());
+    let (report, driver, deployment) = match &args.human_trace {
+        Some(path) => {
+            let mut evaluated = None;
+            super::common::write_trace_file(path, |w| {
+                evaluated = Some(evaluate_traced(&req, Some(w)).with_context(context)?);
+                Ok(())
+            })?;
+            evaluated.expect("written only once evaluated")
+        }
+        None => evaluate(&req).with_context(context)?,
+    };
+    let policy_is_humans = deployment.spec.is_none();
+    match (&args.trace, &args.human_trace) {
+        // the rule leaves every window to the humans: the policy's run of the first seed is theirs
+        (Some(path), Some(humans)) if policy_is_humans => copy_trace(humans, path)?,
+        (Some(path), _) => {
+            // one seed under the policy, every step's vehicles, written atomically
+            super::common::write_trace_file(path, |w| {
+                driver.trace_deployed(&ck, &sc.spec, &deployment, seeds[0], mode, w)?;
+                Ok(())
+            })?;
+        }
+        (None, _) => {}
     }
     let figs = FigureSet {
         outflow: report.outflow,
@@ -188,11 +210,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             );
         }
     }
-    if let Some(p) = &args.trace {
+    if let Some(p) = &args.human_trace {
         println!(
-            "  trace of seed {} under the policy written to {}",
+            "  trace of seed {} of the humans written to {}",
             seeds[0],
             p.display()
+        );
+    }
+    if let Some(p) = &args.trace {
+        println!(
+            "  trace of seed {} under the policy written to {}{}",
+            seeds[0],
+            p.display(),
+            if policy_is_humans {
+                " (the humans' run: the policy drives no AV)"
+            } else {
+                ""
+            }
         );
     }
     // one seed: means only, no interval and no test
@@ -257,4 +291,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A trace file copied to `to`, atomically.
+fn copy_trace(from: &std::path::Path, to: &std::path::Path) -> anyhow::Result<()> {
+    let mut source = std::fs::File::open(from)
+        .with_context(|| format!("reading the trace {}", from.display()))?;
+    mapc_graph::write_atomically_with(to, |w| std::io::copy(&mut source, w).map(|_| ()))
+        .with_context(|| format!("writing the trace {}", to.display()))
 }

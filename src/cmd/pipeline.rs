@@ -1,6 +1,7 @@
 //! `mapc pipeline`: the whole job on a real map, as the sequence of `mapc` commands a user would type. Each
-//! command is printed before it runs, so the output doubles as a tutorial. The evaluation comes last, so its
-//! table ends the output.
+//! command is printed before it runs, so the output doubles as a tutorial. Each seed runs once: the evaluation's
+//! runs of the first seed write the humans' and the policy's traces, which the time-space diagram and the replay
+//! then draw (with `--json`, the evaluation's report is the last JSON document printed).
 //!
 //! The paper's corridor and merge (`--via`, `--junction`) belong to the shipped I-696 map: they are the defaults
 //! only where the imported map has those roads and that junction. On any other map the corridor is `mapc
@@ -83,6 +84,9 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
+    // the steps ask for the humans' runs of the same seeds (the window's regime, the deployment rule's, the
+    // evaluation's baseline): each is run once
+    mapc_sim::keep_runs();
     let out = &args.output;
     // a map that cannot be read fails before anything is written
     std::fs::metadata(&args.map).map_err(|e| anyhow::anyhow!("{}: {e}", args.map.display()))?;
@@ -98,7 +102,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let corridor = file(format!("{stem}.corridor.graph.json"));
     let window = file(format!("{stem}_window.toml"));
-    let trace = file(format!("{stem}_window_human_trace.csv"));
+    let human_trace = file(format!("{stem}_window_human_trace.csv"));
+    let policy_trace = file(format!("{stem}_window_policy_trace.csv"));
     let map = path_text(&args.map);
 
     let mut first_steps: Vec<Vec<String>> = vec![
@@ -195,19 +200,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => auto_seeds(&window)?,
     }
     .to_string();
+    // the evaluation's own runs of the first seed are the traces the plot and the replay draw: each seed runs
+    // once in the job
     steps.push(cmd(&[
-        "sim",
+        "eval",
+        "--policy",
+        &policy,
         "--scenario",
         &window,
         "--seeds",
-        "1",
+        &seeds,
         "--trace",
-        &trace,
+        &policy_trace,
+        "--human-trace",
+        &human_trace,
     ]));
     let mut plot = cmd(&[
         "plot",
         "timespace",
-        &trace,
+        &human_trace,
         "-o",
         &file(format!("{stem}_window_timespace.png")),
     ]);
@@ -218,20 +229,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     steps.push(cmd(&[
         "view",
         &window,
-        "--policy",
-        &policy,
-        "--compare",
+        "--trace",
+        &human_trace,
+        "--trace",
+        &policy_trace,
         "-o",
         &file(format!("{stem}_window_replay.html")),
-    ]));
-    steps.push(cmd(&[
-        "eval",
-        "--policy",
-        &policy,
-        "--scenario",
-        &window,
-        "--seeds",
-        &seeds,
     ]));
     run_steps(&mut steps, args.json)?;
     eprintln!(
@@ -250,7 +253,8 @@ fn is_paper_map(g: &mapc_graph::LaneGraph) -> bool {
 /// Runs `steps` in order (with `--json` where a step prints a report), leaving `steps` empty.
 fn run_steps(steps: &mut Vec<Vec<String>>, json: bool) -> anyhow::Result<()> {
     for mut s in steps.drain(..) {
-        if json && !matches!(s[0].as_str(), "render" | "plot") {
+        // the evaluation's report stays the last JSON document printed
+        if json && !matches!(s[0].as_str(), "render" | "plot" | "view") {
             s.push("--json".to_string());
         }
         run_step(&s)?;

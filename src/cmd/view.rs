@@ -189,40 +189,49 @@ fn scenario_page(args: &Args) -> anyhow::Result<ViewPage> {
                 PolicyDriver::for_scenario(&ck, &file, &args.target, Some(n_av.unwrap_or(5)))?;
             // worked out once: the `measured` rule runs its calibration for it
             let deployment = mapc_rl::eval::deployed_spec(&ck, &driver, &spec)?;
-            // the humans' run of --compare beside the policy's
-            let (humans, policy_run) = rayon::join(
-                || args.compare.then(|| human_replay(&spec, seed, clock)),
-                || {
-                    let mut measured = None;
-                    trace(|w| {
-                        measured = Some(driver.trace_deployed(
-                            &ck,
-                            &spec,
-                            &deployment,
-                            seed,
-                            ActionMode::Mean,
-                            w,
-                        )?);
-                        Ok(())
-                    })
-                    .map(|rows| (rows, measured))
-                },
-            );
-            if let Some(humans) = humans {
-                page.replays.push(humans?);
-            }
-            let (rows, measured) =
-                policy_run.with_context(|| format!("running {} on seed {seed}", file.display()))?;
             let label = format!("policy {}, seed {seed}", file.display());
-            let mut replay = read(rows, clock, &label)?;
-            if let Some(m) = measured {
-                replay.totals = RunTotals {
-                    outflow_veh_h: m.outflow,
-                    inflow_veh_h: m.inflow,
-                    avg_speed_mps: m.speed,
-                };
+            if deployment.spec.is_none() {
+                // the rule leaves every AV to the humans: the policy's run is theirs, run once for both panes
+                let humans = human_replay(&spec, seed, clock)?;
+                if args.compare {
+                    page.replays.push(humans.clone());
+                }
+                page.replays.push(Replay { label, ..humans });
+            } else {
+                // the humans' run of --compare beside the policy's
+                let (humans, policy_run) = rayon::join(
+                    || args.compare.then(|| human_replay(&spec, seed, clock)),
+                    || {
+                        let mut measured = None;
+                        trace(|w| {
+                            measured = Some(driver.trace_deployed(
+                                &ck,
+                                &spec,
+                                &deployment,
+                                seed,
+                                ActionMode::Mean,
+                                w,
+                            )?);
+                            Ok(())
+                        })
+                        .map(|rows| (rows, measured))
+                    },
+                );
+                if let Some(humans) = humans {
+                    page.replays.push(humans?);
+                }
+                let (rows, measured) = policy_run
+                    .with_context(|| format!("running {} on seed {seed}", file.display()))?;
+                let mut replay = read(rows, clock, &label)?;
+                if let Some(m) = measured {
+                    replay.totals = RunTotals {
+                        outflow_veh_h: m.outflow,
+                        inflow_veh_h: m.inflow,
+                        avg_speed_mps: m.speed,
+                    };
+                }
+                page.replays.push(replay);
             }
-            page.replays.push(replay);
             // where the policy's deployment rule leaves the AVs to drive as humans, the page says so
             let withheld: Vec<String> = deployment
                 .withheld

@@ -222,6 +222,16 @@ pub struct EvalRequest<'a> {
 /// returns how the policy drove and where, for a trace of the same episodes (the `measured` rule's calibration
 /// is not run again).
 pub fn evaluate(req: &EvalRequest) -> Result<(EvalReport, PolicyDriver, Deployment), RlError> {
+    evaluate_traced(req, None)
+}
+
+/// [`evaluate`], the humans' run of the first seed also written as trace rows to `human_trace` (no header): that
+/// run is the baseline's own, so the trace costs no run of its own. Asked without a baseline, the trace is still
+/// written, from a run of its own.
+pub fn evaluate_traced(
+    req: &EvalRequest,
+    human_trace: Option<&mut (dyn std::io::Write + Send)>,
+) -> Result<(EvalReport, PolicyDriver, Deployment), RlError> {
     let EvalRequest {
         ck,
         policy_file,
@@ -236,10 +246,15 @@ pub fn evaluate(req: &EvalRequest) -> Result<(EvalReport, PolicyDriver, Deployme
     let driver =
         PolicyDriver::for_scenario(ck, policy_file, scenario, Some(scenario_n_av.unwrap_or(5)))?;
     let deployment = deployed_spec(ck, &driver, spec)?;
-    let human = if baseline {
-        Some(run_human(spec, seeds)?)
-    } else {
-        None
+    let human = match (baseline, human_trace) {
+        (true, trace) => Some(run_human_traced(spec, seeds, trace)?),
+        (false, Some(out)) => {
+            if let Some(&first) = seeds.first() {
+                trace_human(spec, first, &mut { out })?;
+            }
+            None
+        }
+        (false, None) => None,
     };
     let runs = match (&deployment.spec, &human) {
         // the rule leaves every AV to the humans: the policy's runs are the baseline's, not run twice
@@ -280,11 +295,7 @@ pub fn evaluate(req: &EvalRequest) -> Result<(EvalReport, PolicyDriver, Deployme
 
 /// The all-human version of a spec: every AV type drives like the humans (its `controlled` flag off).
 pub fn human_spec(spec: &SimSpec) -> SimSpec {
-    let mut s = spec.clone();
-    for t in &mut s.vehicle_types {
-        t.controlled = false;
-    }
-    s
+    spec.all_human()
 }
 
 /// How a checkpoint's policy drives a scenario: the `N_AV` FIFO-controlled AVs of a centralized policy, or every
@@ -527,8 +538,31 @@ fn write_sim_rows(
 
 /// The human baseline on the same seeds.
 pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, RlError> {
-    mapc_sim::run_baseline_spec(&human_spec(spec), seeds)
-        .map_err(|e| crate::env::scenario_error(spec, e))
+    run_human_traced(spec, seeds, None)
+}
+
+/// [`run_human`], the first seed's run also written as trace rows to `trace` (no header) beside the others' runs.
+pub fn run_human_traced(
+    spec: &SimSpec,
+    seeds: &[u64],
+    trace: Option<&mut (dyn std::io::Write + Send)>,
+) -> Result<Vec<RunMetrics>, RlError> {
+    let (Some(mut out), Some((&first, rest))) = (trace, seeds.split_first()) else {
+        return mapc_sim::run_baseline_spec(&human_spec(spec), seeds)
+            .map_err(|e| crate::env::scenario_error(spec, e));
+    };
+    let humans = human_spec(spec);
+    let (first, rest) = rayon::join(
+        || mapc_sim::trace_run(&humans, first, &mut out),
+        || mapc_sim::run_baseline_spec(&humans, rest),
+    );
+    let first = first.map_err(|e| RlError::Io {
+        path: "trace".into(),
+        source: e,
+    })?;
+    let mut runs = vec![first.metrics];
+    runs.extend(rest.map_err(|e| crate::env::scenario_error(spec, e))?);
+    Ok(runs)
 }
 
 /// One measured flow (veh/h): the policy's, the humans' on the same seeds, and the Welch test of the difference.

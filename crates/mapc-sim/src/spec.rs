@@ -197,6 +197,16 @@ pub struct ControlWindowSpec {
 }
 
 impl SimSpec {
+    /// The all-human version: every AV type drives like the humans (its `controlled` flag off; an AV with no
+    /// policy otherwise drives as a human too, but is never teleported).
+    pub fn all_human(&self) -> SimSpec {
+        let mut s = self.clone();
+        for t in &mut s.vehicle_types {
+            t.controlled = false;
+        }
+        s
+    }
+
     /// The measured merges' names, in the order of [`crate::RunMetrics::merge_flows_veh_h`].
     pub fn measure_names(&self) -> Vec<String> {
         self.measure_points.iter().map(|p| p.name.clone()).collect()

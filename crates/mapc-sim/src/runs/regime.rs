@@ -3,6 +3,7 @@
 //! grows. A policy trained on the Simple Merge (the ramp major, the main road congested by its yielding) is only
 //! worth transferring to a merge in a similar regime; this tells the user which one a scenario is in.
 
+use super::kept::{self, KeptRun};
 use crate::error::SimError;
 use crate::measure::metrics::{EntrySummary, RunMetrics};
 use crate::measure::points::MeasurePoint;
@@ -185,13 +186,40 @@ struct Acc {
     steps: u64,
 }
 
-/// Runs the humans (controlled vehicles drive as humans) over `seeds` in parallel and observes every measured
-/// merge of `spec` after the warm-up.
+/// What the regime report observed of one run: per measure point and approach, the sums; the vehicles still
+/// waiting to enter at the end.
+#[derive(Clone)]
+pub(crate) struct Observation {
+    acc: Vec<Vec<Acc>>,
+    waiting: usize,
+}
+
+/// Runs the humans over `seeds` in parallel (every AV drives as a human: [`SimSpec::all_human`]) and observes
+/// every measured merge of `spec` after the warm-up. Runs kept ([`super::kept`]) are not run again.
 pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimError> {
+    let humans = spec.all_human();
+    let key = kept::key(&humans);
     let runs: Vec<(Vec<Vec<Acc>>, usize, RunMetrics)> = seeds
         .par_iter()
-        .map(|&seed| observe(spec, seed))
-        .collect::<Result<_, _>>()?;
+        .map(|&seed| {
+            let (seen, metrics) = match kept::get(key.as_deref(), seed, true) {
+                Some(KeptRun {
+                    metrics,
+                    regime: Some(seen),
+                }) => (seen, metrics),
+                _ => {
+                    let (seen, metrics) = observe(spec, &humans, seed)?;
+                    let run = KeptRun {
+                        metrics: metrics.clone(),
+                        regime: Some(seen.clone()),
+                    };
+                    kept::put(key.as_deref(), seed, run);
+                    (seen, metrics)
+                }
+            };
+            Ok((seen.acc, seen.waiting, metrics))
+        })
+        .collect::<Result<_, SimError>>()?;
     let sim = Simulation::from_spec(spec.clone(), 0)?;
     let shape = approaches(&sim);
     let humans: Vec<_> = spec
@@ -363,9 +391,14 @@ fn approaches(sim: &Simulation) -> Vec<Vec<(RoadId, u32, bool)>> {
         .collect()
 }
 
-/// One seed: per measure point and approach, the sums; the vehicles still waiting at the end; the run's figures.
-fn observe(spec: &SimSpec, seed: u64) -> Result<(Vec<Vec<Acc>>, usize, RunMetrics), SimError> {
-    let mut sim = Simulation::from_spec(spec.clone(), seed)?;
+/// One seed of `humans` (`spec` with every AV a human), observed; `spec` tells which vehicles are AVs, whose
+/// speeds the report leaves out.
+fn observe(
+    spec: &SimSpec,
+    humans: &SimSpec,
+    seed: u64,
+) -> Result<(Observation, RunMetrics), SimError> {
+    let mut sim = Simulation::from_spec(humans.clone(), seed)?;
     let shape = approaches(&sim);
     let mut acc: Vec<Vec<Acc>> = shape
         .iter()
@@ -421,7 +454,11 @@ fn observe(spec: &SimSpec, seed: u64) -> Result<(Vec<Vec<Acc>>, usize, RunMetric
         }
         sim.step()?;
     }
-    Ok((acc, sim.waiting_to_enter(), sim.metrics()))
+    let seen = Observation {
+        acc,
+        waiting: sim.waiting_to_enter(),
+    };
+    Ok((seen, sim.metrics()))
 }
 
 /// The queue from the merge back: vehicles (distance to the merge, speed, length), nearest first, slower than

@@ -1,5 +1,6 @@
 //! From a resolved scenario to a [`SimSpec`], and the scenario-level entry points.
 
+use super::kept::{self, KeptRun};
 use crate::demand::placement::{check_initial_spacing, initial_placement};
 use crate::error::SimError;
 use crate::measure::metrics::RunMetrics;
@@ -254,13 +255,23 @@ pub fn run_baseline(rs: &ResolvedScenario, seeds: &[u64]) -> Result<Vec<RunMetri
     run_baseline_spec(&spec_from_scenario(rs)?, seeds)
 }
 
-/// Run every seed to the horizon in parallel (rayon's current pool); results in seed order.
+/// Run every seed to the horizon in parallel (rayon's current pool); results in seed order. Runs kept
+/// ([`super::kept`]) are not run again.
 pub fn run_baseline_spec(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, SimError> {
+    let key = kept::key(spec);
     seeds
         .par_iter()
         .map(|&seed| {
-            let mut sim = Simulation::from_spec(spec.clone(), seed)?;
-            sim.run()
+            if let Some(run) = kept::get(key.as_deref(), seed, false) {
+                return Ok(run.metrics);
+            }
+            let metrics = Simulation::from_spec(spec.clone(), seed)?.run()?;
+            let run = KeptRun {
+                metrics: metrics.clone(),
+                regime: None,
+            };
+            kept::put(key.as_deref(), seed, run);
+            Ok(metrics)
         })
         .collect()
 }

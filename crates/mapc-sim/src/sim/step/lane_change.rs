@@ -465,25 +465,37 @@ impl Simulation {
         let v = &mut self.veh[id as usize];
         v.lane = target;
         v.route = new_route;
+        v.route_pos = Self::route_pos_after_change(rp);
     }
 
-    /// The route of a vehicle of type `vtype` on `route` that changes to `target` at lane `rp` of it: the same
-    /// lanes before, the path from `target` after.
+    /// The route of a vehicle of type `vtype` on `route` that changes to `target` at lane `rp` of it: the lane
+    /// before (the connection it came by, so that the lane it drove before stays known), then the path from
+    /// `target`. The lanes before those are left out, so that vehicles changing to one lane share the route
+    /// whatever their past: a route that kept every vehicle's past was one per vehicle, and its reads in every
+    /// step missed the cache.
     fn route_after_change(&mut self, route: u32, rp: usize, target: LaneIdx, vtype: u16) -> u32 {
         let r = &self.routes[route as usize];
         let k = r.road_k[rp] as usize;
-        let roads: Vec<usize> = r.roads.clone();
-        let mut lanes: Vec<LaneIdx> = r.lanes.0[..rp].to_vec();
+        let from = rp.saturating_sub(1);
+        let roads: Vec<usize> = r.roads[r.road_k[from] as usize..].to_vec();
+        let mut lanes: Vec<LaneIdx> = r.lanes.0[from..rp].to_vec();
+        let old_roads = r.roads.len();
         // the path on from the new lane: at each road the link a vehicle of this type entering it would take
-        let best_at: Vec<u32> = (k..roads.len().saturating_sub(1))
+        let best_at: Vec<u32> = (k..old_roads.saturating_sub(1))
             .map(|j| self.best_lanes_at(route, j, vtype))
             .collect();
         let store = &self.best_cache.store;
-        let (rest, dead_end) = self.net.lane_path(target, &roads[k..], |j, i| {
+        let r = &self.routes[route as usize];
+        let (rest, dead_end) = self.net.lane_path(target, &r.roads[k..], |j, i| {
             store[best_at[j] as usize][i].next_link
         });
         lanes.extend(rest);
         self.add_lane_route(lanes, roads, dead_end)
+    }
+
+    /// Where a vehicle is on the route [`Self::route_after_change`] gives for a change at lane `rp` of its route.
+    fn route_pos_after_change(rp: usize) -> u32 {
+        rp.min(1) as u32
     }
 
     /// `o` as the model sees it, at `gap`.

@@ -1,0 +1,57 @@
+//! Human runs kept for a job's later steps (`mapc_sim::keep_runs`, which `mapc pipeline` turns on): a kept run
+//! gives the bits a new run gives, the regime report's runs serve the baseline's, and only asked for are runs
+//! kept. A test binary of its own: keeping is for the whole process.
+
+use mapc_scenario::ResolvedScenario;
+use mapc_sim::{Simulation, merge_regimes, run_baseline_spec, spec_from_scenario};
+
+#[test]
+fn kept_runs_give_the_bits_of_new_runs_and_are_not_run_again() {
+    // congested, with AVs (which the humans' runs drive as humans)
+    let rs = ResolvedScenario::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/two_lane_merge_jam_av.toml"
+    ))
+    .unwrap();
+    let spec = spec_from_scenario(&rs).unwrap();
+    assert!(spec.vehicle_types.iter().any(|t| t.controlled));
+    let humans = spec.all_human();
+    let seeds = [0, 1, 2];
+    let new_run = |seed| {
+        let m = Simulation::from_spec(humans.clone(), seed)
+            .unwrap()
+            .run()
+            .unwrap();
+        format!("{m:?}")
+    };
+    let new_runs: Vec<String> = seeds.iter().map(|&s| new_run(s)).collect();
+    let regime =
+        |seeds: &[u64]| serde_json::to_string(&merge_regimes(&spec, seeds).unwrap()).unwrap();
+    let new_regime = regime(&seeds[..2]);
+    // not kept unless asked
+    regime(&seeds[..2]);
+    assert_eq!(mapc_sim::runs_reused(), 0);
+
+    mapc_sim::keep_runs();
+    assert_eq!(regime(&seeds[..2]), new_regime);
+    assert_eq!(mapc_sim::runs_reused(), 0);
+    // the report again: both its runs kept
+    assert_eq!(regime(&seeds[..2]), new_regime);
+    assert_eq!(mapc_sim::runs_reused(), 2);
+    // the baseline: seeds 0 and 1 are the report's runs, seed 2 is new
+    let baseline: Vec<String> = run_baseline_spec(&humans, &seeds)
+        .unwrap()
+        .iter()
+        .map(|m| format!("{m:?}"))
+        .collect();
+    assert_eq!(baseline, new_runs);
+    assert_eq!(mapc_sim::runs_reused(), 4);
+    // a run the report did not observe is observed anew, and gives the same report as before
+    assert_eq!(regime(&seeds[1..]), regime(&seeds[1..]));
+    assert_eq!(mapc_sim::runs_reused(), 4 + 1 + 2);
+    // another spec is another key: nothing reused
+    let mut other = humans.clone();
+    other.horizon_steps -= 1;
+    run_baseline_spec(&other, &seeds[..1]).unwrap();
+    assert_eq!(mapc_sim::runs_reused(), 7);
+}
