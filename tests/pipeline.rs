@@ -204,7 +204,7 @@ fn eval_writes_the_humans_trace_from_its_own_baseline_run() {
         dir.join("alone.csv"),
     );
     // two lanes: the policy's rule (one lane on every road) leaves the window to the humans
-    let eval = |extra: &[&std::ffi::OsStr]| {
+    let eval = |seeds: &str, extra: &[&std::ffi::OsStr]| {
         let out = mapc_command()
             .args([
                 "eval",
@@ -212,9 +212,9 @@ fn eval_writes_the_humans_trace_from_its_own_baseline_run() {
                 "policies/merge_robust_congested.json",
                 "--scenario",
                 "scenarios/two_lane_merge_jam_av.toml",
-                "--seeds",
-                "2",
                 "--json",
+                "--seeds",
+                seeds,
             ])
             .args(extra)
             .output()
@@ -224,37 +224,32 @@ fn eval_writes_the_humans_trace_from_its_own_baseline_run() {
         v["wall_s"] = serde_json::Value::Null;
         v
     };
-    let traced = eval(&[
-        "--trace".as_ref(),
-        policy.as_os_str(),
-        "--human-trace".as_ref(),
-        humans.as_os_str(),
-    ]);
+    let traced = eval(
+        "2",
+        &[
+            "--trace".as_ref(),
+            policy.as_os_str(),
+            "--human-trace".as_ref(),
+            humans.as_os_str(),
+        ],
+    );
     assert!(
         !traced["withheld"].as_array().unwrap().is_empty(),
         "{traced}"
     );
-    assert_eq!(traced, eval(&[]));
+    assert_eq!(traced, eval("2", &[]));
     let rows = std::fs::read_to_string(&humans).unwrap();
     assert!(rows.lines().count() > 1000, "{} rows", rows.lines().count());
     assert_eq!(std::fs::read(&policy).unwrap(), rows.as_bytes());
     // the trace of a run of its own (the policy's, without a baseline to take it from): the same rows
-    let out = mapc_command()
-        .args([
-            "eval",
-            "--policy",
-            "policies/merge_robust_congested.json",
-            "--scenario",
-            "scenarios/two_lane_merge_jam_av.toml",
-            "--seeds",
-            "1",
-            "--no-baseline",
-            "--trace",
-        ])
-        .arg(&alone)
-        .output()
-        .unwrap();
-    common::assert_success(&out);
+    eval(
+        "1",
+        &[
+            "--no-baseline".as_ref(),
+            "--trace".as_ref(),
+            alone.as_os_str(),
+        ],
+    );
     assert_eq!(std::fs::read(&alone).unwrap(), rows.as_bytes());
     std::fs::remove_dir_all(&dir).unwrap();
 }
