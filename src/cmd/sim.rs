@@ -53,10 +53,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let seeds = args.runs.seeds();
     let pool = super::common::thread_pool(args.runs.threads)?;
+    // the merges' regime from a few of the same seeds, first: an observed pass of the humans, whose runs are
+    // kept, and are the baseline's own where no vehicle type is an AV (then the two specs are one)
+    mapc_sim::keep_runs();
+    let regime_seeds = &seeds[..seeds.len().min(REGIME_SEEDS)];
+    let regime = pool
+        .install(|| mapc_sim::merge_regimes(&spec, regime_seeds))
+        .with_context(|| format!("scenario `{}`: the merges' regime", rs.origin))?;
     let progress = progress_bar(seeds.len() as u64, args.json);
     let start = std::time::Instant::now();
+    let kept = mapc_sim::KeptRuns::of(&spec);
     let run_seed = |seed: u64| -> anyhow::Result<RunMetrics> {
-        let m = Simulation::from_spec(spec.clone(), seed)?.run()?;
+        // (only the regime's seeds can be kept: the others are not, so a long run keeps no figures)
+        let m = if regime_seeds.contains(&seed) {
+            kept.run(seed)?
+        } else {
+            Simulation::from_spec(spec.clone(), seed)?.run()?
+        };
         progress.inc(1);
         Ok(m)
     };
@@ -97,9 +110,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     progress.finish_and_clear();
     let wall_s = start.elapsed().as_secs_f64();
     let s = BaselineReport::of(&rs.origin, args.runs.first_seed, runs, wall_s, &spec);
-    // the merges' regime from a few of the same seeds (a second, observed pass: the baseline stays unobserved)
-    let regime = mapc_sim::merge_regimes(&spec, &seeds[..seeds.len().min(REGIME_SEEDS)])
-        .with_context(|| format!("scenario `{}`: the merges' regime", rs.origin))?;
     if args.json {
         let mut json = serde_json::to_value(&s)?;
         json["horizon_fit"] = serde_json::to_value(&fit)?;

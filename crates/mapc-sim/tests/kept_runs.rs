@@ -54,4 +54,11 @@ fn kept_runs_give_the_bits_of_new_runs_and_are_not_run_again() {
     other.horizon_steps -= 1;
     run_baseline_spec(&other, &seeds[..1]).unwrap();
     assert_eq!(mapc_sim::runs_reused(), 7);
+    // a spec with no AV is its own humans' spec (`mapc sim` takes the regime's runs as its own then)
+    let kept = mapc_sim::KeptRuns::of(&humans);
+    assert_eq!(format!("{:?}", kept.run(2).unwrap()), new_runs[2]);
+    assert_eq!(mapc_sim::runs_reused(), 8);
+    // an AV is exempt from teleports outside the humans' runs: its spec is another key
+    mapc_sim::KeptRuns::of(&spec).run(2).unwrap();
+    assert_eq!(mapc_sim::runs_reused(), 8);
 }

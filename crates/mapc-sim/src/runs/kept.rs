@@ -6,7 +6,9 @@
 //! Off unless asked: a long training or evaluation would otherwise keep every run it made.
 
 use super::regime::Observation;
+use crate::error::SimError;
 use crate::measure::metrics::RunMetrics;
+use crate::sim::Simulation;
 use crate::spec::SimSpec;
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -80,5 +82,34 @@ pub(crate) fn put(key: Option<&str>, seed: u64, run: KeptRun) {
         None => {
             runs.insert(seed, run);
         }
+    }
+}
+
+/// A spec's runs through the store: a seed's kept run when there is one, else a new run, kept while runs are kept.
+pub struct KeptRuns<'a> {
+    spec: &'a SimSpec,
+    key: Option<String>,
+}
+
+impl<'a> KeptRuns<'a> {
+    pub fn of(spec: &'a SimSpec) -> KeptRuns<'a> {
+        KeptRuns {
+            spec,
+            key: key(spec),
+        }
+    }
+
+    /// The run of `seed` to the horizon: its figures.
+    pub fn run(&self, seed: u64) -> Result<RunMetrics, SimError> {
+        if let Some(run) = get(self.key.as_deref(), seed, false) {
+            return Ok(run.metrics);
+        }
+        let metrics = Simulation::from_spec(self.spec.clone(), seed)?.run()?;
+        let run = KeptRun {
+            metrics: metrics.clone(),
+            regime: None,
+        };
+        put(self.key.as_deref(), seed, run);
+        Ok(metrics)
     }
 }

@@ -1,6 +1,6 @@
 //! From a resolved scenario to a [`SimSpec`], and the scenario-level entry points.
 
-use super::kept::{self, KeptRun};
+use super::kept::KeptRuns;
 use crate::demand::placement::{check_initial_spacing, initial_placement};
 use crate::error::SimError;
 use crate::measure::metrics::RunMetrics;
@@ -258,20 +258,6 @@ pub fn run_baseline(rs: &ResolvedScenario, seeds: &[u64]) -> Result<Vec<RunMetri
 /// Run every seed to the horizon in parallel (rayon's current pool); results in seed order. Runs kept
 /// ([`super::kept`]) are not run again.
 pub fn run_baseline_spec(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, SimError> {
-    let key = kept::key(spec);
-    seeds
-        .par_iter()
-        .map(|&seed| {
-            if let Some(run) = kept::get(key.as_deref(), seed, false) {
-                return Ok(run.metrics);
-            }
-            let metrics = Simulation::from_spec(spec.clone(), seed)?.run()?;
-            let run = KeptRun {
-                metrics: metrics.clone(),
-                regime: None,
-            };
-            kept::put(key.as_deref(), seed, run);
-            Ok(metrics)
-        })
-        .collect()
+    let runs = KeptRuns::of(spec);
+    seeds.par_iter().map(|&seed| runs.run(seed)).collect()
 }
