@@ -5,7 +5,7 @@
 //!
 //! Off unless asked: a long training or evaluation would otherwise keep every run it made.
 
-use super::regime::Observation;
+use super::observed::Observation;
 use crate::error::SimError;
 use crate::measure::metrics::RunMetrics;
 use crate::sim::Simulation;

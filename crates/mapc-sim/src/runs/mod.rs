@@ -4,6 +4,7 @@
 
 pub mod alinea;
 pub mod kept;
+mod observed;
 pub mod regime;
 pub mod replay;
 pub mod scenario;

@@ -4,6 +4,7 @@
 //! worth transferring to a merge in a similar regime; this tells the user which one a scenario is in.
 
 use super::kept::{self, KeptRun};
+use super::observed::{Acc, Observation};
 use crate::error::SimError;
 use crate::measure::metrics::{EntrySummary, RunMetrics};
 use crate::measure::points::MeasurePoint;
@@ -174,24 +175,6 @@ fn role(a: &ApproachRegime) -> &'static str {
     } else {
         "merging road"
     }
-}
-
-/// Per approach, sums over measured steps.
-#[derive(Clone, Default)]
-struct Acc {
-    speed_sum: f64,
-    speed_n: u64,
-    queue_sum: f64,
-    queue_max: f64,
-    steps: u64,
-}
-
-/// What the regime report observed of one run: per measure point and approach, the sums; the vehicles still
-/// waiting to enter at the end.
-#[derive(Clone)]
-pub(crate) struct Observation {
-    acc: Vec<Vec<Acc>>,
-    waiting: usize,
 }
 
 /// Runs the humans over `seeds` in parallel (every AV drives as a human: [`SimSpec::all_human`]) and observes
