@@ -245,12 +245,8 @@ print(conn.trafficlight.programs[1])
         .arg(root().join("tools/sumo_check"))
         .output()
         .unwrap();
+    common::assert_success(&out);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let lines: Vec<&str> = stdout.lines().collect();
     assert_eq!(lines[0], "[1100.0, 400.0]");
     // the program after the first interval: 1 100 veh/h, a cycle of 3600 / 1100 s

@@ -18,6 +18,22 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// `mapc sim` of the Simple Merge's seed `seed`, its trace written to `trace`: its report.
+fn simple_merge_trace(seed: u64, trace: &Path) -> Value {
+    json_of(&mapc(&[
+        "sim",
+        "--scenario",
+        "simple_merge",
+        "--seeds",
+        "1",
+        "--first-seed",
+        &seed.to_string(),
+        "--trace",
+        s(trace),
+        "--json",
+    ]))
+}
+
 /// The page's figures at its last frame, as `mapc view --json` reports them.
 fn pane(summary: &Value, i: usize) -> (f64, f64, f64) {
     let p = &summary["panes"][i];
@@ -43,18 +59,7 @@ fn a_simple_merge_replay_is_self_contained_small_and_shows_the_simulators_figure
     ]));
     // the same seed run by `mapc sim`, its trace kept
     let trace = dir.join("seed3.csv");
-    let sim = json_of(&mapc(&[
-        "sim",
-        "--scenario",
-        "simple_merge",
-        "--seeds",
-        "1",
-        "--first-seed",
-        "3",
-        "--trace",
-        s(&trace),
-        "--json",
-    ]));
+    let sim = simple_merge_trace(3, &trace);
     let run = &sim["runs"][0];
     let (outflow, inflow, speed) = pane(&summary, 0);
     // the page keeps f32; the trace rounds speeds to the centimetre per second
@@ -115,17 +120,7 @@ fn a_simple_merge_replay_is_self_contained_small_and_shows_the_simulators_figure
 
     // two traces play side by side (a policy's beside ALINEA's, say): each its own pane, in the order given
     let other = dir.join("seed4.csv");
-    assert_success(&mapc(&[
-        "sim",
-        "--scenario",
-        "simple_merge",
-        "--seeds",
-        "1",
-        "--first-seed",
-        "4",
-        "--trace",
-        s(&other),
-    ]));
+    simple_merge_trace(4, &other);
     let two = json_of(&mapc(&[
         "view",
         "simple_merge",

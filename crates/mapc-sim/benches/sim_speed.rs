@@ -64,10 +64,13 @@ fn main() {
         // a fingerprint of the results, to compare builds bit for bit
         let mut fp = 0xcbf2_9ce4_8422_2325u64;
         for seed in 0..seeds {
-            let m = Simulation::from_spec(spec.clone(), seed)
-                .unwrap()
-                .run()
-                .unwrap();
+            let mut sim = Simulation::from_spec(spec.clone(), seed).unwrap();
+            let m = sim.run().unwrap();
+            let (routes, lanes) = sim.routes_held();
+            println!(
+                "{}: seed {seed}: {routes} routes held at the end, {lanes} route lanes",
+                rs.origin
+            );
             for x in [
                 m.outflow_veh_h,
                 m.inflow_veh_h,

@@ -1,6 +1,6 @@
-//! Human runs kept for a job's later steps (`mapc_sim::keep_runs`, which `mapc pipeline` turns on): a kept run
-//! gives the bits a new run gives, the regime report's runs serve the baseline's, and only asked for are runs
-//! kept. A test binary of its own: keeping is for the whole process.
+//! The regime report's human runs kept for a job's later steps (`mapc_sim::keep_runs`, which `mapc pipeline`
+//! turns on): a kept run gives the bits a new run gives, the report's runs serve the baseline's, and runs are kept
+//! only when asked and only by the report. A test binary of its own: keeping is for the whole process.
 
 use mapc_scenario::ResolvedScenario;
 use mapc_sim::{Simulation, merge_regimes, run_baseline_spec, spec_from_scenario};
@@ -45,6 +45,10 @@ fn kept_runs_give_the_bits_of_new_runs_and_are_not_run_again() {
         .map(|m| format!("{m:?}"))
         .collect();
     assert_eq!(baseline, new_runs);
+    assert_eq!(mapc_sim::runs_reused(), 4);
+    // the baseline's own runs are not kept
+    run_baseline_spec(&humans, &[5]).unwrap();
+    run_baseline_spec(&humans, &[5]).unwrap();
     assert_eq!(mapc_sim::runs_reused(), 4);
     // a run the report did not observe is observed anew, and gives the same report as before
     assert_eq!(regime(&seeds[1..]), regime(&seeds[1..]));

@@ -2,7 +2,7 @@
 //! (maps/flow_bottleneck/README.md): nodes on a straight line, roads named as Flow's edges ("1" to "5"), straight
 //! joints at nodes 2 and 3, zippers at nodes 4 and 5 where lanes 2i and 2i+1 go on as lane i.
 
-use super::{generated_graph, uniform_lanes};
+use super::{generated_graph, positive, uniform_lanes};
 use crate::model::FlowBottleneckParams;
 use crate::ranges::show;
 use mapc_graph::{Connection, JunctionId, LaneGraph, Provenance, RightOfWay, Road, RoadId};
@@ -12,21 +12,14 @@ pub const FLOW_BOTTLENECK: &str = "flow_bottleneck";
 
 pub fn flow_bottleneck(p: &FlowBottleneckParams) -> Result<LaneGraph, String> {
     let key = |name: &str| format!("network.{FLOW_BOTTLENECK}.{name}");
-    let positive = |name: String, v: f64| {
-        if v.is_finite() && v > 0.0 {
-            Ok(())
-        } else {
-            Err(format!("{name} must be a positive number, not {}", show(v)))
-        }
-    };
     for (i, &l) in p.lengths_m.iter().enumerate() {
-        positive(format!("{}[{i}]", key("lengths_m")), l)?;
+        positive(&format!("{}[{i}]", key("lengths_m")), l)?;
     }
     for (i, &l) in p.zipper_internal_m.iter().enumerate() {
-        positive(format!("{}[{i}]", key("zipper_internal_m")), l)?;
+        positive(&format!("{}[{i}]", key("zipper_internal_m")), l)?;
     }
-    positive(key("speed_limit_mps"), p.speed_limit_mps)?;
-    positive(key("through_internal_m"), p.through_internal_m)?;
+    positive(&key("speed_limit_mps"), p.speed_limit_mps)?;
+    positive(&key("through_internal_m"), p.through_internal_m)?;
     let r = p.junction_radius_m;
     if !(r.is_finite() && r >= 0.0) {
         return Err(format!(

@@ -29,6 +29,15 @@ pub const LANE_DROP: &str = "lane_drop";
 pub const LANE_DROP_UPSTREAM: &str = "upstream";
 pub const LANE_DROP_DOWNSTREAM: &str = "downstream";
 
+/// The parameter `key` must be a finite positive number.
+fn positive(key: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{key} must be a positive number, not {}", show(v)))
+    }
+}
+
 pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     for (name, v) in [
         ("inflow_edge_m", p.inflow_edge_m),
@@ -37,12 +46,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
         ("post_merge_m", p.post_merge_m),
         ("speed_limit_mps", p.speed_limit_mps),
     ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(format!(
-                "network.simple_merge.{name} must be a positive number, not {}",
-                show(v)
-            ));
-        }
+        positive(&format!("network.simple_merge.{name}"), v)?;
     }
     for (name, v) in [
         ("main_internal_m", p.main_internal_m),
@@ -281,12 +285,7 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
         ("downstream_m", p.downstream_m),
         ("speed_limit_mps", p.speed_limit_mps),
     ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(format!(
-                "network.lane_drop.{name} must be a positive number, not {}",
-                show(v)
-            ));
-        }
+        positive(&format!("network.lane_drop.{name}"), v)?;
     }
     if p.lanes_after == 0 || p.lanes_after > p.lanes_before {
         return Err(format!(

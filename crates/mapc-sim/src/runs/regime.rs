@@ -185,22 +185,16 @@ pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimE
     let runs: Vec<(Vec<Vec<Acc>>, usize, RunMetrics)> = seeds
         .par_iter()
         .map(|&seed| {
-            let (seen, metrics) = match kept::get(key.as_deref(), seed, true) {
-                Some(KeptRun {
-                    metrics,
-                    regime: Some(seen),
-                }) => (seen, metrics),
-                _ => {
-                    let (seen, metrics) = observe(spec, &humans, seed)?;
-                    let run = KeptRun {
-                        metrics: metrics.clone(),
-                        regime: Some(seen.clone()),
-                    };
-                    kept::put(key.as_deref(), seed, run);
-                    (seen, metrics)
+            let run = match kept::get(key.as_deref(), seed) {
+                Some(run) => run,
+                None => {
+                    let (regime, metrics) = observe(spec, &humans, seed)?;
+                    let run = KeptRun { metrics, regime };
+                    kept::put(key.as_deref(), seed, run.clone());
+                    run
                 }
             };
-            Ok((seen.acc, seen.waiting, metrics))
+            Ok((run.regime.acc, run.regime.waiting, run.metrics))
         })
         .collect::<Result<_, SimError>>()?;
     let sim = Simulation::from_spec(spec.clone(), 0)?;

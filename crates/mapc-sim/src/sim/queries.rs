@@ -211,6 +211,13 @@ impl Simulation {
             .is_some_and(|v| v.status == VehicleStatus::Active && self.in_region[v.lane as usize])
     }
 
+    /// The routes the run has made so far (departures, lane changes, teleports) and their lanes in all: what the
+    /// routes hold in memory.
+    pub fn routes_held(&self) -> (usize, usize) {
+        let lanes = self.routes.iter().map(|r| r.lanes.len()).sum();
+        (self.routes.len(), lanes)
+    }
+
     /// Distance travelled along the route so far and the route's total length.
     pub fn route_progress(&self, id: VehicleId) -> Option<(f64, f64)> {
         let v = self.veh.get(id as usize)?;

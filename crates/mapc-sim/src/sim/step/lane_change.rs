@@ -476,7 +476,7 @@ impl Simulation {
     fn route_after_change(&mut self, route: u32, rp: usize, target: LaneIdx, vtype: u16) -> u32 {
         let r = &self.routes[route as usize];
         let k = r.road_k[rp] as usize;
-        let from = rp.saturating_sub(1);
+        let from = rp - Self::route_pos_after_change(rp) as usize;
         let roads: Vec<usize> = r.roads[r.road_k[from] as usize..].to_vec();
         let mut lanes: Vec<LaneIdx> = r.lanes.0[from..rp].to_vec();
         let old_roads = r.roads.len();
@@ -493,7 +493,8 @@ impl Simulation {
         self.add_lane_route(lanes, roads, dead_end)
     }
 
-    /// Where a vehicle is on the route [`Self::route_after_change`] gives for a change at lane `rp` of its route.
+    /// Where a vehicle is on the route [`Self::route_after_change`] gives for a change at lane `rp` of its route:
+    /// on its second lane, after the lane before, unless it changes on its route's first lane.
     fn route_pos_after_change(rp: usize) -> u32 {
         rp.min(1) as u32
     }
