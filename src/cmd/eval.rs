@@ -55,7 +55,8 @@ pub struct Args {
     pub trace: Option<PathBuf>,
     /// Write the humans' run of the first seed as CSV too (the columns of `mapc sim --trace`): the baseline's own
     /// run, so it costs no run of its own; with `--trace`, a policy whose rule leaves every window to the humans
-    /// drives that same run, and its trace is a copy.
+    /// drives that same run, and its trace is a copy (then, in `mapc pipeline`, the first seed that no earlier step
+    /// ran: the report names it).
     #[arg(long, value_name = "PATH")]
     pub human_trace: Option<PathBuf>,
     /// Where the policy drives, overriding its own rule: `everywhere`, or `main-road-yields` (only windows whose
@@ -113,7 +114,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         baseline: !args.no_baseline,
     };
     let context = || format!("evaluating {}", file.display());
-    let (report, driver, deployment) = match &args.human_trace {
+    let (report, driver, deployment, traced_seed) = match &args.human_trace {
         Some(path) => {
             let mut evaluated = None;
             super::common::write_trace_file(path, |w| {
@@ -122,16 +123,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             })?;
             evaluated.expect("written only once evaluated")
         }
-        None => evaluate(&req).with_context(context)?,
+        None => {
+            let (report, driver, deployment) = evaluate(&req).with_context(context)?;
+            (report, driver, deployment, seeds[0])
+        }
     };
     let policy_is_humans = deployment.spec.is_none();
     match (&args.trace, &args.human_trace) {
-        // the rule leaves every window to the humans: the policy's run of the first seed is theirs
+        // the rule leaves every window to the humans: the policy's run of the traced seed is theirs
         (Some(path), Some(humans)) if policy_is_humans => copy_trace(humans, path)?,
         (Some(path), _) => {
             // one seed under the policy, every step's vehicles, written atomically
             super::common::write_trace_file(path, |w| {
-                driver.trace_deployed(&ck, &sc.spec, &deployment, seeds[0], mode, w)?;
+                driver.trace_deployed(&ck, &sc.spec, &deployment, traced_seed, mode, w)?;
                 Ok(())
             })?;
         }
@@ -213,14 +217,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(p) = &args.human_trace {
         println!(
             "  trace of seed {} of the humans written to {}",
-            seeds[0],
+            traced_seed,
             p.display()
         );
     }
     if let Some(p) = &args.trace {
         println!(
             "  trace of seed {} under the policy written to {}{}",
-            seeds[0],
+            traced_seed,
             p.display(),
             if policy_is_humans {
                 " (the humans' run: the policy drives no AV)"

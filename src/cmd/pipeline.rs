@@ -87,6 +87,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // the steps ask for the humans' runs of the same seeds (the window's regime, the deployment rule's, the
     // evaluation's baseline): each is run once
     mapc_sim::keep_runs();
+    // the evaluation runs at least these seeds: the window's regime report may run some beside its own
+    let eval_seeds = args.seeds.unwrap_or(FEWEST_AUTO_SEEDS);
+    mapc_sim::will_run(&(0..eval_seeds).collect::<Vec<u64>>());
     let out = &args.output;
     // a map that cannot be read fails before anything is written
     std::fs::metadata(&args.map).map_err(|e| anyhow::anyhow!("{}: {e}", args.map.display()))?;

@@ -56,6 +56,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // the merges' regime from a few of the same seeds, first: an observed pass of the humans, whose runs are
     // kept, and are the baseline's own where no vehicle type is an AV (then the two specs are one)
     mapc_sim::keep_runs();
+    // the seeds run below without the trace or SUMO's outputs: the regime's runs may start some of them
+    let sumo_outputs = args.tripinfo_output.is_some()
+        || args.summary_output.is_some()
+        || args.detector_output.is_some();
+    let first_writes = args.trace.is_some() || sumo_outputs;
+    // (the regime's runs are the humans': the seeds' own runs where no type is an AV)
+    if spec.vehicle_types.iter().all(|t| !t.controlled) {
+        mapc_sim::will_run(&seeds[usize::from(first_writes)..]);
+    }
     let regime_seeds = &seeds[..seeds.len().min(REGIME_SEEDS)];
     let regime = pool
         .install(|| mapc_sim::merge_regimes(&spec, regime_seeds))
@@ -64,20 +73,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let kept = mapc_sim::KeptRuns::of(&spec);
     let run_seed = |seed: u64| -> anyhow::Result<RunMetrics> {
-        // (only the regime's seeds can be kept: the others are not, so a long run keeps no figures)
-        let m = if regime_seeds.contains(&seed) {
-            kept.run(seed)?
-        } else {
-            Simulation::from_spec(spec.clone(), seed)?.run()?
-        };
+        // (only the regime's runs are kept, its seeds and the few it ran beside them: a long run keeps no figures)
+        let m = kept.run(seed)?;
         progress.inc(1);
         Ok(m)
     };
     // the first seed's run writes the trace or SUMO's outputs (one run, not a second one for them), beside the
     // others
-    let sumo_outputs = args.tripinfo_output.is_some()
-        || args.summary_output.is_some()
-        || args.detector_output.is_some();
     let detector_files: Vec<Option<String>> = rs.detectors.iter().map(|d| d.file.clone()).collect();
     let (first, rest) = pool.install(|| {
         rayon::join(

@@ -222,16 +222,18 @@ pub struct EvalRequest<'a> {
 /// returns how the policy drove and where, for a trace of the same episodes (the `measured` rule's calibration
 /// is not run again).
 pub fn evaluate(req: &EvalRequest) -> Result<(EvalReport, PolicyDriver, Deployment), RlError> {
-    evaluate_traced(req, None)
+    evaluate_traced(req, None).map(|(report, driver, deployment, _)| (report, driver, deployment))
 }
 
-/// [`evaluate`], the humans' run of the first seed also written as trace rows to `human_trace` (no header): that
-/// run is the baseline's own, so the trace costs no run of its own. Asked without a baseline, the trace is still
-/// written, from a run of its own.
+/// [`evaluate`], a humans' run also written as trace rows to `human_trace` (no header), and its seed returned:
+/// that run is the baseline's own, so the trace costs no run of its own. The first seed's, unless the rule
+/// leaves every AV to the humans (then the policy's runs are theirs, and any seed shows both): then the first
+/// seed whose run is not kept from an earlier step of the job ([`mapc_sim::KeptRuns`]), so that no seed runs
+/// twice. Asked without a baseline, the first seed's trace is written from a run of its own.
 pub fn evaluate_traced(
     req: &EvalRequest,
     human_trace: Option<&mut (dyn std::io::Write + Send)>,
-) -> Result<(EvalReport, PolicyDriver, Deployment), RlError> {
+) -> Result<(EvalReport, PolicyDriver, Deployment, u64), RlError> {
     let EvalRequest {
         ck,
         policy_file,
@@ -246,8 +248,17 @@ pub fn evaluate_traced(
     let driver =
         PolicyDriver::for_scenario(ck, policy_file, scenario, Some(scenario_n_av.unwrap_or(5)))?;
     let deployment = deployed_spec(ck, &driver, spec)?;
+    let traced = match (&deployment.spec, baseline) {
+        (None, true) => {
+            let humans = human_spec(spec);
+            let kept = mapc_sim::KeptRuns::of(&humans);
+            seeds.iter().position(|&s| !kept.is_kept(s)).unwrap_or(0)
+        }
+        _ => 0,
+    };
+    let traced_seed = seeds.get(traced).copied().unwrap_or(0);
     let human = match (baseline, human_trace) {
-        (true, trace) => Some(run_human_traced(spec, seeds, trace)?),
+        (true, trace) => Some(run_human_traced(spec, seeds, traced, trace)?),
         (false, Some(out)) => {
             if let Some(&first) = seeds.first() {
                 trace_human(spec, first, &mut { out })?;
@@ -290,7 +301,7 @@ pub fn evaluate_traced(
         deploy: ck.spec.deploy,
         withheld: deployment.withheld.clone(),
     };
-    Ok((report, driver, deployment))
+    Ok((report, driver, deployment, traced_seed))
 }
 
 /// The all-human version of a spec: every AV type drives like the humans (its `controlled` flag off).
@@ -538,30 +549,38 @@ fn write_sim_rows(
 
 /// The human baseline on the same seeds.
 pub fn run_human(spec: &SimSpec, seeds: &[u64]) -> Result<Vec<RunMetrics>, RlError> {
-    run_human_traced(spec, seeds, None)
+    run_human_traced(spec, seeds, 0, None)
 }
 
-/// [`run_human`], the first seed's run also written as trace rows to `trace` (no header) beside the others' runs.
+/// [`run_human`], the run of `seeds[traced]` also written as trace rows to `trace` (no header) beside the others'
+/// runs.
 pub fn run_human_traced(
     spec: &SimSpec,
     seeds: &[u64],
+    traced: usize,
     trace: Option<&mut (dyn std::io::Write + Send)>,
 ) -> Result<Vec<RunMetrics>, RlError> {
-    let (Some(mut out), Some((&first, rest))) = (trace, seeds.split_first()) else {
-        return mapc_sim::run_baseline_spec(&human_spec(spec), seeds)
+    let humans = human_spec(spec);
+    let (Some(mut out), Some(&seed)) = (trace, seeds.get(traced)) else {
+        return mapc_sim::run_baseline_spec(&humans, seeds)
             .map_err(|e| crate::env::scenario_error(spec, e));
     };
-    let humans = human_spec(spec);
+    let rest: Vec<u64> = seeds
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != traced)
+        .map(|(_, &s)| s)
+        .collect();
     let (first, rest) = rayon::join(
-        || mapc_sim::trace_run(&humans, first, &mut out),
-        || mapc_sim::run_baseline_spec(&humans, rest),
+        || mapc_sim::trace_run(&humans, seed, &mut out),
+        || mapc_sim::run_baseline_spec(&humans, &rest),
     );
     let first = first.map_err(|e| RlError::Io {
         path: "trace".into(),
         source: e,
     })?;
-    let mut runs = vec![first.metrics];
-    runs.extend(rest.map_err(|e| crate::env::scenario_error(spec, e))?);
+    let mut runs = rest.map_err(|e| crate::env::scenario_error(spec, e))?;
+    runs.insert(traced, first.metrics);
     Ok(runs)
 }
 

@@ -93,7 +93,7 @@ pub use measure::points::{MeasurePoint, Passage};
 pub use models::cf::idm::IdmParams;
 pub use network::Network;
 pub use runs::alinea::{Alinea, AlineaConfig, run_with_alinea, trace_with_alinea};
-pub use runs::kept::{KeptRuns, keep_runs, runs_reused};
+pub use runs::kept::{KeptRuns, keep_runs, runs_reused, will_run};
 pub use runs::regime::{
     Congestion, MergePriority, MergeRegime, REGIME_SEEDS, RegimeReport, merge_priorities,
     merge_regimes,

@@ -28,6 +28,7 @@ fn kept_runs_give_the_bits_of_new_runs_and_are_not_run_again() {
     let regime =
         |seeds: &[u64]| serde_json::to_string(&merge_regimes(&spec, seeds).unwrap()).unwrap();
     let new_regime = regime(&seeds[..2]);
+    let later_regime = regime(&[3, 4, 5]);
     // not kept unless asked
     regime(&seeds[..2]);
     assert_eq!(mapc_sim::runs_reused(), 0);
@@ -65,4 +66,18 @@ fn kept_runs_give_the_bits_of_new_runs_and_are_not_run_again() {
     // an AV is exempt from teleports outside the humans' runs: its spec is another key
     mapc_sim::KeptRuns::of(&spec).run(2).unwrap();
     assert_eq!(mapc_sim::runs_reused(), 8);
+
+    // the job's later seeds fill the report's last round: on two threads, three new seeds leave one idle, which
+    // runs the first later seed neither kept nor the report's (6); it is kept, and the report is unchanged
+    mapc_sim::will_run(&[0, 3, 6, 7]);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    assert_eq!(pool.install(|| regime(&[3, 4, 5])), later_regime);
+    assert_eq!(mapc_sim::runs_reused(), 8);
+    assert!(kept.is_kept(6) && !kept.is_kept(7));
+    assert_eq!(format!("{:?}", kept.run(6).unwrap()), new_run(6));
+    assert_eq!(mapc_sim::runs_reused(), 9);
+    // a report whose runs fill their rounds runs nothing more
+    mapc_sim::will_run(&[8, 9]);
+    pool.install(|| regime(&[10, 11]));
+    assert!(!kept.is_kept(8));
 }

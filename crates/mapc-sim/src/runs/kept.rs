@@ -40,6 +40,41 @@ pub fn keep_runs() {
     store().get_or_insert_with(HashMap::new);
 }
 
+/// The seeds the job will run of the scenarios it keeps runs of, in its order (set by [`will_run`]).
+static LATER: Mutex<Vec<u64>> = Mutex::new(Vec::new());
+
+/// Tells the store which seeds the job will run later (the evaluation's, `mapc sim`'s): a regime report whose own
+/// seeds leave threads idle in their last round runs the first of these there, and keeps them. The job then runs
+/// the same number of runs in fewer rounds.
+pub fn will_run(seeds: &[u64]) {
+    *LATER.lock().unwrap_or_else(|e| e.into_inner()) = seeds.to_vec();
+}
+
+/// Seeds of [`will_run`] to run beside `seeds` under `key`: as many as fill the last round of `threads`, none kept
+/// yet and none among `seeds` (none while runs are not kept).
+pub(crate) fn fill_round(key: Option<&str>, seeds: &[u64], threads: usize) -> Vec<u64> {
+    let Some(key) = key else { return Vec::new() };
+    let threads = threads.max(1);
+    let new = seeds.iter().filter(|&&s| !is_kept(key, s)).count();
+    let idle = (threads - new % threads) % threads;
+    if new == 0 || idle == 0 {
+        return Vec::new();
+    }
+    let later = LATER.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    later
+        .into_iter()
+        .filter(|s| !seeds.contains(s) && !is_kept(key, *s))
+        .take(idle)
+        .collect()
+}
+
+fn is_kept(key: &str, seed: u64) -> bool {
+    store()
+        .as_ref()
+        .and_then(|s| s.get(key))
+        .is_some_and(|runs| runs.contains_key(&seed))
+}
+
 /// How many runs were taken from the store instead of run again, so far in this process.
 pub fn runs_reused() -> u64 {
     REUSED.load(Ordering::Relaxed)
@@ -85,6 +120,11 @@ impl<'a> KeptRuns<'a> {
             spec,
             key: key(spec),
         }
+    }
+
+    /// Whether `seed`'s run is kept (its [`Self::run`] runs nothing).
+    pub fn is_kept(&self, seed: u64) -> bool {
+        self.key.as_deref().is_some_and(|k| is_kept(k, seed))
     }
 
     /// The run of `seed` to the horizon: its figures.

@@ -182,7 +182,10 @@ fn role(a: &ApproachRegime) -> &'static str {
 pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimError> {
     let humans = spec.all_human();
     let key = kept::key(&humans);
-    let runs: Vec<(Vec<Vec<Acc>>, usize, RunMetrics)> = seeds
+    // the job's later seeds on threads the report's own runs leave idle: kept, not reported
+    let extra = kept::fill_round(key.as_deref(), seeds, rayon::current_num_threads());
+    let all: Vec<u64> = seeds.iter().chain(&extra).copied().collect();
+    let mut runs: Vec<(Vec<Vec<Acc>>, usize, RunMetrics)> = all
         .par_iter()
         .map(|&seed| {
             let run = match kept::get(key.as_deref(), seed) {
@@ -197,6 +200,7 @@ pub fn merge_regimes(spec: &SimSpec, seeds: &[u64]) -> Result<RegimeReport, SimE
             Ok((run.regime.acc, run.regime.waiting, run.metrics))
         })
         .collect::<Result<_, SimError>>()?;
+    runs.truncate(seeds.len());
     let sim = Simulation::from_spec(spec.clone(), 0)?;
     let shape = approaches(&sim);
     let humans: Vec<_> = spec
@@ -381,41 +385,39 @@ fn observe(
         .iter()
         .map(|a| vec![Acc::default(); a.len()])
         .collect();
-    // per approach road: (point, approach index)
-    let mut slot = std::collections::HashMap::new();
+    // per lane of an approach road: (point, approach index)
+    let net = sim.network();
+    let mut slot: Vec<Option<(usize, usize)>> = vec![None; net.lanes.len()];
     for (p, roads) in shape.iter().enumerate() {
         for (a, &(road, _, _)) in roads.iter().enumerate() {
-            slot.insert(road, (p, a));
+            let r = net.road_ids.iter().position(|&id| id == road);
+            for &l in r.map_or(&[][..], |r| &net.road_lanes[r]) {
+                slot[l as usize] = Some((p, a));
+            }
         }
     }
-    let controlled: Vec<bool> = spec.vehicle_types.iter().map(|t| t.controlled).collect();
-    let all_controlled = controlled.iter().all(|&c| c);
+    // by the run's type index (the types of `humans` are `spec`'s, in its order)
+    let human_type: Vec<bool> = spec.vehicle_types.iter().map(|t| !t.controlled).collect();
+    let all_controlled = !human_type.iter().any(|&h| h);
     // per approach, this step's (distance to the merge, speed, length) of vehicles on it
     let mut seen: Vec<Vec<Vec<(f64, f64, f64)>>> =
         shape.iter().map(|a| vec![Vec::new(); a.len()]).collect();
     while !sim.is_done() {
         if !sim.in_warmup() {
             seen.iter_mut().flatten().for_each(Vec::clear);
-            for id in sim.active_ids() {
-                let Some(v) = sim.vehicle(id) else { continue };
-                if v.in_junction {
-                    continue;
-                }
-                let Some(&(p, a)) = slot.get(&v.road) else {
+            for (lane, ids) in sim.lanes_in_order() {
+                let Some((p, a)) = slot[lane as usize] else {
                     continue;
                 };
-                let lane = shape[p][a].1;
-                let dist = sim.network().lanes[lane as usize].length - v.pos_m;
-                seen[p][a].push((dist, v.speed, v.length));
-                let human = all_controlled
-                    || !spec
-                        .vehicle_types
-                        .iter()
-                        .position(|t| t.name == v.vehicle_type)
-                        .is_some_and(|t| controlled[t]);
-                if human && dist <= NEAR_MERGE_M {
-                    acc[p][a].speed_sum += v.speed;
-                    acc[p][a].speed_n += 1;
+                let end = sim.network().lanes[shape[p][a].1 as usize].length;
+                for &id in ids {
+                    let (pos, speed, length, vtype) = sim.vehicle_motion(id);
+                    let dist = end - pos;
+                    seen[p][a].push((dist, speed, length));
+                    if (all_controlled || human_type[vtype]) && dist <= NEAR_MERGE_M {
+                        acc[p][a].speed_sum += speed;
+                        acc[p][a].speed_n += 1;
+                    }
                 }
             }
             for (p, roads) in seen.iter_mut().enumerate() {

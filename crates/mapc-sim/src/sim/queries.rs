@@ -90,6 +90,20 @@ impl Simulation {
             .flat_map(move |&l| self.lane_veh[l as usize].iter().copied())
     }
 
+    /// Each lane's vehicles in [`Self::active_ids`]' order, lane by lane, for observers inside the crate that
+    /// read only some lanes (no view built, no lookup per vehicle).
+    pub(crate) fn lanes_in_order(&self) -> impl Iterator<Item = (LaneIdx, &[VehicleId])> + '_ {
+        self.lane_order
+            .iter()
+            .map(move |&l| (l, self.lane_veh[l as usize].as_slice()))
+    }
+
+    /// A vehicle's (position on its lane, speed, length, type index), for [`Self::lanes_in_order`]'s readers.
+    pub(crate) fn vehicle_motion(&self, id: VehicleId) -> (f64, f64, f64, usize) {
+        let v = &self.veh[id as usize];
+        (v.pos, v.speed, v.length, v.vtype as usize)
+    }
+
     /// Number of vehicles in the network.
     pub fn active_count(&self) -> usize {
         self.lane_veh.iter().map(|q| q.len()).sum()
