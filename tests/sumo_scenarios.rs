@@ -582,3 +582,48 @@ fn a_sumo_vehicle_keeps_its_id_in_the_trip_info_and_a_flows_are_numbered() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_vehicle_departs_at_the_first_step_at_or_after_its_time_as_sumo_stamps_it() {
+    // eccles (steps of 1 s): `m62-m60-b_788` asks for 1.09 s. SUMO 1.8's clock reads 0 at its first step, which
+    // inserts what is due by 0; this vehicle enters in the step that begins at 2 s, and its trip info says so
+    // (depart 2.00, a delay of 0.91 s), as SUMO 1.8 writes it
+    let dir = scratch_dir("sumo-clock");
+    let trips = dir.join("trips.xml");
+    assert_success(&run_mapc(&[
+        "sim",
+        "scenarios/sumo/eccles_interchange/interchangeSim.cfg",
+        "--seeds",
+        "1",
+        "--tripinfo-output",
+        trips.to_str().unwrap(),
+    ]));
+    let text = std::fs::read_to_string(&trips).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.contains("<tripinfo id=\"m62-m60-b_788\" "))
+        .expect("the vehicle's trip");
+    assert!(
+        line.contains(" depart=\"2.00\" ") && line.contains(" departDelay=\"0.91\" "),
+        "{line}"
+    );
+    // every arrival at its lane's end, as SUMO reports it (not where the last step took the vehicle)
+    let net = std::fs::read_to_string("scenarios/sumo/eccles_interchange/interchange.net.xml").unwrap();
+    for line in text.lines().filter(|l| l.contains("<tripinfo ")) {
+        let attr = |name: &str| {
+            let at = line.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+            line[at..].split('"').next().unwrap().to_string()
+        };
+        let lane = attr("arrivalLane");
+        let decl = net
+            .find(&format!("<lane id=\"{lane}\" "))
+            .unwrap_or_else(|| panic!("{lane} not in the network"));
+        let length = net[decl..].split("length=\"").nth(1).unwrap().split('"').next().unwrap();
+        assert_eq!(
+            attr("arrivalPos").parse::<f64>().unwrap(),
+            length.parse::<f64>().unwrap(),
+            "{line}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

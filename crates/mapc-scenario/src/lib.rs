@@ -122,6 +122,7 @@ impl Scenario {
             control: Some(Control { n_av: 5, region: vec![], window: None, windows: vec![] }),
             measure: None,
             queue_excess_demand: false,
+            sumo_clock: false,
             light_programs: Vec::new(),
             detectors: Vec::new(),
         }

@@ -50,6 +50,10 @@ pub struct Scenario {
     /// scenario).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub queue_excess_demand: bool,
+    /// The clock reads 0 at the first step, as SUMO's does at its `begin` (a SUMO user's scenario); otherwise it
+    /// starts two steps in, as Flow's rollouts did (the paper's scenarios). Departures are timed on it.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub sumo_clock: bool,
     /// Fixed-time programs that replace the network's of the same lights (SUMO runs the last program loaded).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub light_programs: Vec<mapc_graph::TrafficLight>,

@@ -21,6 +21,8 @@ const HALTING_SPEED: f64 = 0.1;
 #[derive(Clone, Debug, Default)]
 struct Trip {
     depart: f64,
+    /// Seconds between the departure its flow or `<vehicle>` asked for and its insertion.
+    depart_delay: f64,
     depart_lane: String,
     depart_pos: f64,
     depart_speed: f64,
@@ -74,18 +76,33 @@ impl SumoOutputs {
         }
     }
 
+    /// When a vehicle was due to depart: its `<vehicle>`'s time, or its flow's departure of its number; `None`
+    /// for a flow by probability (its vehicles are drawn step by step).
+    fn due_s(sim: &Simulation, id: VehicleId) -> Option<f64> {
+        let (f, n) = sim.vehicle_origin(id)?;
+        let flow = &sim.spec().flows[f];
+        match () {
+            _ if flow.single_vehicle || n == 0 => Some(flow.begin_s),
+            _ if flow.probability.is_some() || flow.vehs_per_hour <= 0.0 => None,
+            _ => Some(flow.begin_s + n as f64 * 3600.0 / flow.vehs_per_hour),
+        }
+    }
+
     /// Take in the step `sim` just made.
     pub fn observe(&mut self, sim: &Simulation) {
         let g = &sim.spec().graph;
         let now = sim.time_s() - self.begin_s;
         let dt = sim.step_s();
+        // SUMO stamps what happens in a step with the step's begin: insertions and arrivals, as its summary
+        let stamp = now - dt;
         for &id in sim.departed_last_step() {
             let v = sim.vehicle(id).expect("a vehicle that just departed");
             self.inserted += 1;
             self.trips.insert(
                 id,
                 Trip {
-                    depart: v.depart_s - self.begin_s,
+                    depart: stamp,
+                    depart_delay: Self::due_s(sim, id).map_or(0.0, |due| (stamp - due).max(0.0)),
                     depart_lane: lane_name(g, v.road, v.lane_index),
                     depart_pos: v.pos_m,
                     depart_speed: v.speed,
@@ -125,7 +142,13 @@ impl SumoOutputs {
                 continue;
             };
             let v = sim.vehicle(id).expect("a vehicle that just arrived");
-            let duration = now - t.depart;
+            // SUMO reports the position the vehicle is to arrive at (the lane's end: mapc takes no other), not
+            // where the last step took it
+            let arrival_pos = g
+                .road(v.road)
+                .and_then(|r| r.lanes.get(v.lane_index as usize))
+                .map_or(v.pos_m, |l| l.length_m);
+            let duration = stamp - t.depart;
             self.arrived += 1;
             self.travel_sum += duration;
             if let Some(out) = &mut self.tripinfo {
@@ -133,15 +156,16 @@ impl SumoOutputs {
                 let _ = writeln!(
                     out,
                     "    <tripinfo id=\"{name}\" depart=\"{:.2}\" departLane=\"{}\" departPos=\"{:.2}\" departSpeed=\"{:.2}\" \
-                     departDelay=\"0.00\" arrival=\"{now:.2}\" arrivalLane=\"{}\" arrivalPos=\"{:.2}\" arrivalSpeed=\"{:.2}\" \
+                     departDelay=\"{:.2}\" arrival=\"{stamp:.2}\" arrivalLane=\"{}\" arrivalPos=\"{:.2}\" arrivalSpeed=\"{:.2}\" \
                      duration=\"{duration:.2}\" routeLength=\"{:.2}\" waitingTime=\"{:.2}\" waitingCount=\"{}\" stopTime=\"0.00\" \
                      timeLoss=\"{:.2}\" rerouteNo=\"0\" devices=\"tripinfo_{name}\" vType=\"{}\" speedFactor=\"{:.2}\" vaporized=\"\"/>",
                     t.depart,
                     xml_escape(&t.depart_lane),
                     t.depart_pos,
                     t.depart_speed,
+                    t.depart_delay,
                     xml_escape(&lane_name(g, v.road, v.lane_index)),
-                    v.pos_m,
+                    arrival_pos,
                     v.speed,
                     v.distance_m,
                     t.waiting_s,

@@ -154,6 +154,7 @@ pub fn scenario(
         control: None,
         measure: None,
         queue_excess_demand: true,
+        sumo_clock: true,
         light_programs: lights,
         detectors: std::mem::take(&mut d.detectors),
     })

@@ -531,6 +531,7 @@ fn corridor_scenario(
         control: Some(control),
         measure: None,
         queue_excess_demand: s.queue_excess_demand,
+        sumo_clock: s.sumo_clock,
         light_programs: s.light_programs.clone(),
         // a window keeps its own roads only: detectors named on the source network are not carried
         detectors: Vec::new(),

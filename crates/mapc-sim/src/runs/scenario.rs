@@ -20,7 +20,8 @@ const EMERGENCY_DECEL: f64 = 9.0;
 /// Krauss' dawdling when a type does not give it (SUMO 1.8's default).
 const KRAUSS_SIGMA: f64 = 0.5;
 /// The original rollouts ran two steps (start, and the reset that inserts the initial vehicles) before the
-/// horizon; the clock at step 0 is two steps in.
+/// horizon; the clock at step 0 is two steps in, except in a SUMO user's scenario (`sumo_clock`), where it is 0
+/// as SUMO's at its begin: its first step inserts the departures due at 0, as SUMO's does.
 const SETUP_STEPS: f64 = 2.0;
 
 /// The scenario's induction loops on its roads.
@@ -203,7 +204,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
         step_s,
         horizon_steps: sc.horizon_steps as u64,
         warmup_steps: sc.warmup_steps as u64,
-        start_time_s: SETUP_STEPS * step_s,
+        start_time_s: if sc.sumo_clock { 0.0 } else { SETUP_STEPS * step_s },
         control_region: if rs.region_roads.is_empty() {
             None
         } else {
