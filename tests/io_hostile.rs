@@ -253,3 +253,55 @@ fn a_killed_writers_temporary_is_removed_by_the_next_write() {
     );
     assert_eq!(names_in(&dir), vec!["x.graph.json"]);
 }
+
+#[test]
+fn an_output_that_cannot_be_written_is_refused_before_the_run() {
+    // 100 000 seeds would run for hours: the refusal must come first, naming the file
+    let dir = scratch_dir("unwritable-outputs");
+    let folder = dir.join("taken.csv");
+    std::fs::create_dir(&folder).unwrap();
+    let file = dir.join("plain.txt");
+    std::fs::write(&file, "").unwrap();
+    let under_file = file.join("trips.xml");
+    refused(
+        &[
+            "sim",
+            "scenarios/simple_merge.toml",
+            "--seeds",
+            "100000",
+            "--trace",
+            s(&folder),
+        ],
+        &["taken.csv", "is a directory"],
+    );
+    refused(
+        &[
+            "sim",
+            "scenarios/sumo/highway_ramp/highway-ramp.sumocfg",
+            "--seeds",
+            "100000",
+            "--tripinfo-output",
+            s(&under_file),
+        ],
+        &["plain.txt/trips.xml"],
+    );
+    for flag in ["--trace", "--human-trace"] {
+        refused(
+            &[
+                "eval",
+                "--policy",
+                "policies/simple_merge_outflow.json",
+                "--scenario",
+                "scenarios/simple_merge.toml",
+                "--seeds",
+                "100000",
+                flag,
+                s(&folder),
+            ],
+            &["taken.csv", "is a directory"],
+        );
+    }
+    // nothing left beside them
+    assert_eq!(names_in(&dir), vec!["plain.txt", "taken.csv"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -608,7 +608,8 @@ fn a_vehicle_departs_at_the_first_step_at_or_after_its_time_as_sumo_stamps_it() 
         "{line}"
     );
     // every arrival at its lane's end, as SUMO reports it (not where the last step took the vehicle)
-    let net = std::fs::read_to_string("scenarios/sumo/eccles_interchange/interchange.net.xml").unwrap();
+    let net =
+        std::fs::read_to_string("scenarios/sumo/eccles_interchange/interchange.net.xml").unwrap();
     for line in text.lines().filter(|l| l.contains("<tripinfo ")) {
         let attr = |name: &str| {
             let at = line.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
@@ -618,7 +619,13 @@ fn a_vehicle_departs_at_the_first_step_at_or_after_its_time_as_sumo_stamps_it() 
         let decl = net
             .find(&format!("<lane id=\"{lane}\" "))
             .unwrap_or_else(|| panic!("{lane} not in the network"));
-        let length = net[decl..].split("length=\"").nth(1).unwrap().split('"').next().unwrap();
+        let length = net[decl..]
+            .split("length=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
         assert_eq!(
             attr("arrivalPos").parse::<f64>().unwrap(),
             length.parse::<f64>().unwrap(),

@@ -173,6 +173,15 @@ pub fn write_trace(
     Ok((traced.metrics, traced.note))
 }
 
+/// Refuses now, naming the file, an output that a long run could not write at its end (a folder that cannot be
+/// made, a read-only place, a directory), so that the run is not lost to it.
+pub fn check_outputs<'a>(paths: impl IntoIterator<Item = Option<&'a Path>>) -> anyhow::Result<()> {
+    for path in paths.into_iter().flatten() {
+        mapc_graph::check_writable(path).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
 /// Writes a trace CSV (header, then the rows `body` writes) atomically (`mapc_graph::write_atomically_with`), so
 /// an interrupted or failed run leaves neither half a trace under the final name nor a temporary file.
 pub fn write_trace_file(

@@ -73,6 +73,7 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     super::common::set_global_threads(args.runs.threads);
+    super::common::check_outputs([args.trace.as_deref(), args.human_trace.as_deref()])?;
     if let Some(Controller::Alinea) = args.controller {
         let sc = super::common::load_run_scenario_with(&args.scenario, &args.avs)?;
         return alinea::run(

@@ -42,6 +42,11 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    super::common::check_outputs([
+        args.trace.as_deref(),
+        args.tripinfo_output.as_deref(),
+        args.summary_output.as_deref(),
+    ])?;
     let rs = args.avs.apply(super::common::load_scenario_or_sumo(
         args.input.as_deref().unwrap_or(&args.scenario),
         &args.sumo,

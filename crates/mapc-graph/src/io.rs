@@ -41,6 +41,20 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     write_atomically_with(path, |w| w.write_all(bytes))
 }
 
+/// Whether [`write_atomically`] can write `path` (its folder made or there, a temporary created beside it and
+/// removed, the path no directory): asked before a long run, so that the run does not end in a refusal that
+/// loses it. Creates the folder, as the write would.
+pub fn check_writable(path: &Path) -> std::io::Result<()> {
+    if path.is_dir() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "is a directory",
+        ));
+    }
+    let tmp = written_temporary(path, |_| Ok(()))?;
+    std::fs::remove_file(tmp)
+}
+
 /// [`write_atomically`] for output written piece by piece (traces): `body` writes into a buffered temporary file
 /// beside `path`, which is renamed into place only when `body` and the flush succeed; on any error it is removed,
 /// so neither a half file under the final name nor a stray temporary is left.
@@ -385,7 +399,8 @@ mod tests {
     #[test]
     fn a_graph_that_breaks_what_the_importers_guarantee_is_refused_naming_the_element() {
         use serde_json::json;
-        let cases: [(&str, Box<dyn Fn(&mut serde_json::Value)>); 6] = [
+        type Break = Box<dyn Fn(&mut serde_json::Value)>;
+        let cases: [(&str, Break); 6] = [
             (
                 "road R2 names missing junction J9",
                 Box::new(|v| v["roads"][2]["to"] = json!("J9")),

@@ -31,7 +31,9 @@ pub mod validate;
 pub use filekind::MapcFile;
 pub use ids::{JunctionId, RoadId};
 pub use index::RoadIndex;
-pub use io::{GraphFileError, write_all_atomically, write_atomically, write_atomically_with};
+pub use io::{
+    GraphFileError, check_writable, write_all_atomically, write_atomically, write_atomically_with,
+};
 pub use lookup::LookupError;
 pub use model::*;
 pub use projection::Projection;

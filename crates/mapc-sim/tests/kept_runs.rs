@@ -70,7 +70,10 @@ fn kept_runs_give_the_bits_of_new_runs_and_are_not_run_again() {
     // the job's later seeds fill the report's last round: on two threads, three new seeds leave one idle, which
     // runs the first later seed neither kept nor the report's (6); it is kept, and the report is unchanged
     mapc_sim::will_run(&[0, 3, 6, 7]);
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
     assert_eq!(pool.install(|| regime(&[3, 4, 5])), later_regime);
     assert_eq!(mapc_sim::runs_reused(), 8);
     assert!(kept.is_kept(6) && !kept.is_kept(7));

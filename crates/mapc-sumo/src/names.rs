@@ -58,6 +58,14 @@ fn pick<'a>(items: impl Iterator<Item = (String, &'a Provenance)>) -> Vec<String
         .collect()
 }
 
+/// The index in `graph.roads` of road `id` (roads are sorted by id; the ids come from the graph itself).
+pub(crate) fn road_index(graph: &LaneGraph, id: mapc_graph::RoadId) -> usize {
+    graph
+        .roads
+        .binary_search_by_key(&id, |r| r.id)
+        .expect("a connection names a road of its graph")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -76,12 +84,4 @@ mod tests {
         );
         assert_eq!(names, ["left", "R1", "R2", "R3", "R4"]);
     }
-}
-
-/// The index in `graph.roads` of road `id` (roads are sorted by id; the ids come from the graph itself).
-pub(crate) fn road_index(graph: &LaneGraph, id: mapc_graph::RoadId) -> usize {
-    graph
-        .roads
-        .binary_search_by_key(&id, |r| r.id)
-        .expect("a connection names a road of its graph")
 }

@@ -204,7 +204,11 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
         step_s,
         horizon_steps: sc.horizon_steps as u64,
         warmup_steps: sc.warmup_steps as u64,
-        start_time_s: if sc.sumo_clock { 0.0 } else { SETUP_STEPS * step_s },
+        start_time_s: if sc.sumo_clock {
+            0.0
+        } else {
+            SETUP_STEPS * step_s
+        },
         control_region: if rs.region_roads.is_empty() {
             None
         } else {
