@@ -3,7 +3,7 @@
 
 use anyhow::Context;
 use mapc_rl::Checkpoint;
-use mapc_rl::eval::{PolicyDriver, human_spec};
+use mapc_rl::eval::PolicyDriver;
 use mapc_rl::rollout::ActionMode;
 use mapc_scenario::ResolvedScenario;
 use mapc_sim::{SimSpec, TRACE_HEADER, spec_from_scenario};
@@ -307,7 +307,7 @@ fn windows(resolved: &ResolvedScenario) -> Vec<WindowMark> {
 
 fn human_replay(spec: &SimSpec, seed: u64, clock: Clock) -> anyhow::Result<Replay> {
     simulated_replay(
-        &human_spec(spec),
+        &spec.all_human(),
         seed,
         clock,
         &format!("humans only, seed {seed}"),

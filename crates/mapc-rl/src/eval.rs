@@ -195,7 +195,7 @@ fn trace_human(
     seed: u64,
     out: &mut impl std::io::Write,
 ) -> Result<EpisodeMetrics, RlError> {
-    let run = mapc_sim::trace_run(&human_spec(spec), seed, out).map_err(|e| RlError::Io {
+    let run = mapc_sim::trace_run(&spec.all_human(), seed, out).map_err(|e| RlError::Io {
         path: "trace".into(),
         source: e,
     })?;
@@ -250,7 +250,7 @@ pub fn evaluate_traced(
     let deployment = deployed_spec(ck, &driver, spec)?;
     let traced = match (&deployment.spec, baseline) {
         (None, true) => {
-            let humans = human_spec(spec);
+            let humans = spec.all_human();
             let kept = mapc_sim::KeptRuns::of(&humans);
             seeds.iter().position(|&s| !kept.is_kept(s)).unwrap_or(0)
         }
@@ -302,11 +302,6 @@ pub fn evaluate_traced(
         withheld: deployment.withheld.clone(),
     };
     Ok((report, driver, deployment, traced_seed))
-}
-
-/// The all-human version of a spec: every AV type drives like the humans (its `controlled` flag off).
-pub fn human_spec(spec: &SimSpec) -> SimSpec {
-    spec.all_human()
 }
 
 /// How a checkpoint's policy drives a scenario: the `N_AV` FIFO-controlled AVs of a centralized policy, or every
@@ -560,7 +555,7 @@ pub fn run_human_traced(
     traced: usize,
     trace: Option<&mut (dyn std::io::Write + Send)>,
 ) -> Result<Vec<RunMetrics>, RlError> {
-    let humans = human_spec(spec);
+    let humans = spec.all_human();
     let (Some(mut out), Some(&seed)) = (trace, seeds.get(traced)) else {
         return mapc_sim::run_baseline_spec(&humans, seeds)
             .map_err(|e| crate::env::scenario_error(spec, e));

@@ -60,9 +60,8 @@ fn every_window_left_to_the_humans_reports_the_humans_measurement() {
         let spec = timed(spec.clone(), warmup, horizon);
         let report = eval(&spec, &seeds);
         assert_eq!(report.withheld.len(), 2, "{:?}", report.withheld);
-        let humans = mapc_sim::Summary::of(
-            &mapc_sim::run_baseline_spec(&human_spec(&spec), &seeds).unwrap(),
-        );
+        let humans =
+            mapc_sim::Summary::of(&mapc_sim::run_baseline_spec(&spec.all_human(), &seeds).unwrap());
         let merges = report.merges.as_ref().unwrap();
         assert_eq!(merges.len(), humans.merge_flows.len());
         for (m, h) in merges.iter().zip(&humans.merge_flows) {

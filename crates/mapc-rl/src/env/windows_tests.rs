@@ -238,7 +238,7 @@ fn an_episode_runs_the_warm_up_and_the_whole_horizon() {
     let mut spec = spec_of(load("scenarios/i696_3merge.toml"));
     spec.warmup_steps = 400;
     spec.horizon_steps = 600;
-    let humans = mapc_sim::Simulation::from_spec(crate::eval::human_spec(&spec), 2)
+    let humans = mapc_sim::Simulation::from_spec(spec.all_human(), 2)
         .unwrap()
         .run()
         .unwrap();
