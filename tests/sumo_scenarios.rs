@@ -550,37 +550,37 @@ fn a_distributed_policy_trains_and_drives_on_a_sumo_users_scenario_with_its_lane
 #[test]
 fn a_sumo_vehicle_keeps_its_id_in_the_trip_info_and_a_flows_are_numbered() {
     // eccles: 1 000 `<vehicle>`s; SUMO names each by its id (`m60-m62_161`), a flow's vehicles `flow.N`
-    let dir = scratch_dir("sumo-vehicle-ids");
+    let text = trip_info("scenarios/sumo/eccles_interchange/interchangeSim.cfg");
+    assert!(
+        text.contains("<tripinfo id=\"m60-m62_161\" "),
+        "no vehicle named by its id"
+    );
+    assert!(!text.contains("id=\"m60-m62_161.0\""));
+    let text = trip_info("scenarios/sumo/ramp_game/ramp.sumocfg");
+    assert!(
+        text.contains("<tripinfo id=\"highway1.0\" "),
+        "a flow's first vehicle"
+    );
+}
+
+/// The trip-info file of seed 0 of a scenario.
+fn trip_info(scenario: &str) -> String {
+    // a folder per call: the tests run at once
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = scratch_dir(&format!("sumo-trip-info-{call}"));
     let trips = dir.join("trips.xml");
     assert_success(&run_mapc(&[
         "sim",
-        "scenarios/sumo/eccles_interchange/interchangeSim.cfg",
+        scenario,
         "--seeds",
         "1",
         "--tripinfo-output",
         trips.to_str().unwrap(),
     ]));
     let text = std::fs::read_to_string(&trips).unwrap();
-    assert!(
-        text.contains("<tripinfo id=\"m60-m62_161\" "),
-        "no vehicle named by its id"
-    );
-    assert!(!text.contains("id=\"m60-m62_161.0\""));
-    let routes = dir.join("ramp.xml");
-    assert_success(&run_mapc(&[
-        "sim",
-        "scenarios/sumo/ramp_game/ramp.sumocfg",
-        "--seeds",
-        "1",
-        "--tripinfo-output",
-        routes.to_str().unwrap(),
-    ]));
-    let text = std::fs::read_to_string(&routes).unwrap();
-    assert!(
-        text.contains("<tripinfo id=\"highway1.0\" "),
-        "a flow's first vehicle"
-    );
     let _ = std::fs::remove_dir_all(&dir);
+    text
 }
 
 #[test]
@@ -588,17 +588,7 @@ fn a_vehicle_departs_at_the_first_step_at_or_after_its_time_as_sumo_stamps_it() 
     // eccles (steps of 1 s): `m62-m60-b_788` asks for 1.09 s. SUMO 1.8's clock reads 0 at its first step, which
     // inserts what is due by 0; this vehicle enters in the step that begins at 2 s, and its trip info says so
     // (depart 2.00, a delay of 0.91 s), as SUMO 1.8 writes it
-    let dir = scratch_dir("sumo-clock");
-    let trips = dir.join("trips.xml");
-    assert_success(&run_mapc(&[
-        "sim",
-        "scenarios/sumo/eccles_interchange/interchangeSim.cfg",
-        "--seeds",
-        "1",
-        "--tripinfo-output",
-        trips.to_str().unwrap(),
-    ]));
-    let text = std::fs::read_to_string(&trips).unwrap();
+    let text = trip_info("scenarios/sumo/eccles_interchange/interchangeSim.cfg");
     let line = text
         .lines()
         .find(|l| l.contains("<tripinfo id=\"m62-m60-b_788\" "))
@@ -632,5 +622,4 @@ fn a_vehicle_departs_at_the_first_step_at_or_after_its_time_as_sumo_stamps_it() 
             "{line}"
         );
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
