@@ -82,8 +82,10 @@ impl SumoOutputs {
         let (f, n) = sim.vehicle_origin(id)?;
         let flow = &sim.spec().flows[f];
         match () {
-            _ if flow.single_vehicle || n == 0 => Some(flow.begin_s),
+            _ if flow.single_vehicle => Some(flow.begin_s),
             _ if flow.probability.is_some() || flow.vehs_per_hour <= 0.0 => None,
+            // the first without the product, as the insertion times it
+            _ if n == 0 => Some(flow.begin_s),
             _ => Some(flow.begin_s + n as f64 * 3600.0 / flow.vehs_per_hour),
         }
     }
