@@ -21,9 +21,9 @@ const fn closed(lo: f64, hi: f64, unit: &'static str) -> Range {
 
 /// Simulation step (SUMO's smallest is 1 ms; the simulator takes at most 10 s).
 pub const STEP_S: Range = closed(0.001, 10.0, "s");
-/// When a flow begins and ends: within the longest run a scenario may ask for.
-/// 0 turns teleports off.
+/// SUMO's time to teleport; 0 turns teleports off.
 pub const TIME_TO_TELEPORT_S: Range = closed(0.0, MAX_SIMULATED_S, "s");
+/// When a flow begins and ends: within the longest run a scenario may ask for.
 pub const FLOW_TIME_S: Range = closed(0.0, MAX_SIMULATED_S, "s");
 /// Any speed: departure, initial, limits (540 km/h).
 pub const SPEED_MPS: Range = closed(0.0, 150.0, "m/s");
