@@ -4,8 +4,10 @@
 //! first (a lane change, an arrival, a teleport) only adds to the occupancy. The times a front and a back pass
 //! the point are interpolated inside the step as SUMO's Euler update does (distance over the new speed).
 //!
-//! The simulator reports, after each step, what the vehicles on a detector's lane did ([`Seen`]); this module
-//! keeps the records and makes the intervals ([`DetectorInterval`]).
+//! The simulator reports, after each step's moves and before its lane changes (SUMO's loops see the moves as
+//! they are made, and the lane changes come after), what the vehicles on a detector's lane did ([`Seen`]): a
+//! vehicle that passes a loop and changes lanes in the same step has passed it; one changed onto the lane over
+//! the point is on it from then. This module keeps the records and makes the intervals ([`DetectorInterval`]).
 
 use crate::ids::VehicleId;
 use crate::network::LaneIdx;
@@ -180,7 +182,8 @@ impl Detectors {
                     since,
                     Passage {
                         entry_s: o.entry_s,
-                        leave_s: t + dt,
+                        // a lane change is made after the last step's moves, which ended at `t`
+                        leave_s: if changed_lane { t } else { t + dt },
                         length: s.length,
                         passed: false,
                     },
@@ -206,13 +209,14 @@ impl Detectors {
         // those on the lane it does not track: a front that passed the point in the step, or a vehicle put
         // over it (inserted, changed lanes, teleported there)
         for s in on_lane {
-            if s.pos < p || still.iter().any(|o| o.id == s.id) {
+            if s.pos < p || was_on.iter().any(|o| o.id == s.id) {
                 continue;
             }
             let front_before = s.pos - s.speed * dt;
             let entry_s = if front_before < p {
                 t + passing_time(p - front_before, s.speed, dt)
-            } else if s.pos - s.length < p {
+            } else if front_before - s.length < p {
+                // put over it since the last step (a lane change onto it)
                 t
             } else {
                 continue;
@@ -422,8 +426,22 @@ mod tests {
         d.close(4.0);
         let i = &d.intervals()[0];
         assert_eq!((i.vehicles_passed, i.vehicles_entered), (0, 1));
-        // over the point from 0 s (front from 50 to 52 at 2 m/s: 0 s into the step) to the step's end, 2 s
-        assert!((i.occupancy_pct - 2.0 / 4.0 * 100.0).abs() < 1e-9, "{i:?}");
+        // over the point from 0 s (front from 50 to 52 at 2 m/s: 0 s into the step) to the end of the step whose
+        // lane changes took it off (the loops see a step's moves before its lane changes, as SUMO's): 1 s
+        assert!((i.occupancy_pct - 1.0 / 4.0 * 100.0).abs() < 1e-9, "{i:?}");
         assert_eq!(i.mean_speed, -1.0);
+    }
+
+    #[test]
+    fn a_vehicle_changed_onto_the_lane_over_the_point_passes_it() {
+        let mut d = Detectors::new(&[spec(10.0)], &[(3, 1)], 0.0);
+        d.observe(0, 0.0, 1.0, &[], &[]);
+        // changed onto the lane after the last moves with its front at 54 m and its back at 49 m, then moved 2 m:
+        // its back passes 50 m in this step, and it is counted once
+        d.observe(0, 1.0, 1.0, &[seen(56.0, 2.0, 56.0)], &[]);
+        d.observe(0, 2.0, 1.0, &[seen(58.0, 2.0, 58.0)], &[]);
+        d.close(4.0);
+        let i = &d.intervals()[0];
+        assert_eq!((i.vehicles_passed, i.vehicles_entered), (1, 1), "{i:?}");
     }
 }

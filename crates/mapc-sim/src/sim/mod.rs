@@ -483,11 +483,13 @@ impl Simulation {
         self.plans = plans;
         self.execute_moves();
         self.teleport_stuck();
-        if self.net.multi_lane {
-            self.change_lanes();
-        }
+        // the loops see the moves before the lane changes, as SUMO's see them while vehicles move: a vehicle
+        // that passes a loop and changes lanes in the same step has passed it
         if !self.detectors.is_empty() {
             self.observe_detectors();
+        }
+        if self.net.multi_lane {
+            self.change_lanes();
         }
         self.time_s += self.spec.step_s;
         self.step += 1;
