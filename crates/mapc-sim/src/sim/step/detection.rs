@@ -1,5 +1,6 @@
-//! The induction loops' view of a step ([`crate::measure::detectors`]): after the moves and the lane changes,
-//! each detector is shown the vehicles on its lane and the ones it was tracking, wherever they went.
+//! The induction loops' view of a step ([`crate::measure::detectors`]): after the moves and before the lane
+//! changes (SUMO's loops see the moves while they are made), each detector is shown the vehicles on its lane and
+//! the ones it was tracking, wherever they went.
 
 use super::*;
 use crate::measure::detectors::Seen;
