@@ -50,7 +50,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Write the first seed's trajectories under the policy (or the controller) as CSV (the columns of `mapc sim --trace`; draw
-    /// them with `mapc plot timespace`).
+    /// them with `mapc plot timespace`); with `--human-trace`, of the seed that file is of.
     #[arg(long)]
     pub trace: Option<PathBuf>,
     /// Write the humans' run of the first seed as CSV too (the columns of `mapc sim --trace`): the baseline's own

@@ -1,6 +1,6 @@
 //! `mapc pipeline`: the whole job on a real map, as the sequence of `mapc` commands a user would type. Each
 //! command is printed before it runs, so the output doubles as a tutorial. Each seed runs once: the evaluation's
-//! runs of the first seed write the humans' and the policy's traces, which the time-space diagram and the replay
+//! own runs of one seed write the humans' and the policy's traces, which the time-space diagram and the replay
 //! then draw (with `--json`, the evaluation's report is the last JSON document printed).
 //!
 //! The paper's corridor and merge (`--via`, `--junction`) belong to the shipped I-696 map: they are the defaults
@@ -203,8 +203,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => auto_seeds(&window)?,
     }
     .to_string();
-    // the evaluation's own runs of the first seed are the traces the plot and the replay draw: each seed runs
-    // once in the job
+    // the evaluation's own runs of one seed (the first, or the first no earlier step ran where the policy leaves
+    // every window to the humans) are the traces the plot and the replay draw: each seed runs once in the job
     steps.push(cmd(&[
         "eval",
         "--policy",

@@ -99,6 +99,23 @@ pub struct FlowSpec {
     pub single_vehicle: bool,
 }
 
+impl FlowSpec {
+    /// When departure `n` of a periodic flow is due: `begin_s`, then one period apart (the first without the
+    /// product, so that a period too long to be a number departs once); `None` for a flow by probability, whose
+    /// vehicles are drawn step by step, or one without a rate.
+    #[inline]
+    pub fn departure_s(&self, n: u64) -> Option<f64> {
+        if self.probability.is_some() || self.vehs_per_hour <= 0.0 {
+            return None;
+        }
+        Some(if n == 0 {
+            self.begin_s
+        } else {
+            self.begin_s + n as f64 * (3600.0 / self.vehs_per_hour)
+        })
+    }
+}
+
 pub use mapc_scenario::DepartLane;
 
 /// Where a flow's vehicles are inserted on their entry lane (SUMO's `departPos`).

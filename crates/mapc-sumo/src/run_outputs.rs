@@ -76,18 +76,11 @@ impl SumoOutputs {
         }
     }
 
-    /// When a vehicle was due to depart: its `<vehicle>`'s time, or its flow's departure of its number; `None`
-    /// for a flow by probability (its vehicles are drawn step by step).
+    /// When a vehicle was due to depart (its `<vehicle>`'s time, or its flow's departure of its number); `None`
+    /// for a flow by probability, whose vehicles are drawn step by step.
     fn due_s(sim: &Simulation, id: VehicleId) -> Option<f64> {
         let (f, n) = sim.vehicle_origin(id)?;
-        let flow = &sim.spec().flows[f];
-        match () {
-            _ if flow.single_vehicle => Some(flow.begin_s),
-            _ if flow.probability.is_some() || flow.vehs_per_hour <= 0.0 => None,
-            // the first without the product, as the insertion times it
-            _ if n == 0 => Some(flow.begin_s),
-            _ => Some(flow.begin_s + n as f64 * 3600.0 / flow.vehs_per_hour),
-        }
+        sim.spec().flows[f].departure_s(u64::from(n))
     }
 
     /// Take in the step `sim` just made.

@@ -27,22 +27,15 @@ impl Simulation {
                 continue;
             }
             // the scalars only: the flow's lists (via, type mix) stay where they are
-            let (vehs_per_hour, begin_s, end_s, number) =
-                (flow.vehs_per_hour, flow.begin_s, flow.end_s, flow.number);
-            if vehs_per_hour <= 0.0 {
-                continue;
-            }
-            // Departure n is at begin + n * period. `validate` keeps begin within the longest run and the period
-            // at least one step, so each departure time is a distinct sane number and this loop makes at most a
-            // few departures per step (a begin of -1e308 once made `depart` stand still: a run without end).
-            let period = 3600.0 / vehs_per_hour;
+            let (end_s, number) = (flow.end_s, flow.number);
+            // Departure n is due at `FlowSpec::departure_s(n)`. `validate` keeps begin within the longest run and
+            // the period at least one step, so each departure time is a distinct sane number and this loop makes
+            // at most a few departures per step (a begin of -1e308 once made `depart` stand still: a run without
+            // end).
             loop {
                 let n = self.flow_next[f];
-                // the first departure without the product: a period too long to be a number departs once
-                let depart = if n == 0 {
-                    begin_s
-                } else {
-                    begin_s + n as f64 * period
+                let Some(depart) = self.spec.flows[f].departure_s(n) else {
+                    break;
                 };
                 if !(depart <= now + 1e-9) || depart >= end_s || number.is_some_and(|m| n >= m) {
                     break;
