@@ -44,6 +44,10 @@ pub use crate::demand::vehicle_table::VehicleId;
 
 /// How far the stop point lies before a minor link's stop line (SUMO's POSITION_EPS).
 const POSITION_EPS: f64 = 0.1;
+/// How far before the stop line a vehicle stops at a red or yellow light (SUMO's `DIST_TO_STOPLINE_EXPECT_PRIORITY`:
+/// it will have the right of way, so it need not stop at the line; on a metered ramp the first vehicle then
+/// stands about a metre back and often misses the first step of green).
+const LIGHT_STOP_OFFSET_M: f64 = 1.0;
 
 /// Where merging connections start to conflict, as a share of the shorter one's length before its end
 /// (netconvert's internal lanes come within a lane width of each other about a third of the way from the end).

@@ -205,10 +205,9 @@ impl Simulation {
         false
     }
 
-    /// The insertion with the front at `at` and the highest speed up to `upper` that passes the check (SUMO's
-    /// adaptable speed).
+    /// The insertion with the front at `at` and the speed adapted from `upper` (SUMO's adaptable speed).
     fn try_insert_adapted(&mut self, id: VehicleId, at: f64, upper: f64) -> bool {
-        match self.highest_allowed_speed(id, Some(at), upper, true) {
+        match self.adapted_insertion_speed(id, Some(at), upper) {
             Some(speed) => {
                 self.veh[id as usize].depart_speed = speed;
                 self.place_on_entry(id, Some(at), true);
@@ -218,35 +217,100 @@ impl Simulation {
         }
     }
 
-    /// `upper` when the insertion check passes at it; else, with `lower`, the highest speed below it that passes
-    /// (bisected to 1/256 of it), if standing does. Leaves the vehicle's depart speed at the last speed tried.
-    fn highest_allowed_speed(
-        &mut self,
-        id: VehicleId,
-        at: Option<f64>,
-        upper: f64,
-        lower: bool,
-    ) -> Option<f64> {
-        let allowed_at = |sim: &mut Simulation, speed: f64| {
-            sim.veh[id as usize].depart_speed = speed;
-            sim.insertion_allowed_at(id, at)
-        };
-        if allowed_at(self, upper) {
-            return Some(upper);
-        }
-        if !(lower && allowed_at(self, 0.0)) {
-            return None;
-        }
-        let (mut lo, mut hi) = (0.0, upper);
-        for _ in 0..8 {
-            let mid = 0.5 * (lo + hi);
-            if allowed_at(self, mid) {
-                lo = mid;
+    /// SUMO 1.8's insertion check with an adaptable speed (`MSLane::isInsertionSuccess` with `patchSpeed`: a depart
+    /// speed `max`, and free insertion): from `upper`, the speed is lowered to what each constraint within its
+    /// braking distance allows (the next lanes' leaders and limits, a stop before a minor link), then to the
+    /// insertion follow speed behind the leader on the lane; the vehicle behind must then have its secure gap at
+    /// that speed. `None` where a leader overlaps the place or the follower is too close. The follower is checked
+    /// at the adapted speed only: a check at a standstill, the most demanding for it, refused insertions SUMO
+    /// makes (on a three-lane entry with random positions, 1.29 vehicles a second entered against SUMO's 1.47).
+    fn adapted_insertion_speed(&self, id: VehicleId, at: Option<f64>, upper: f64) -> Option<f64> {
+        let v = &self.veh[id as usize];
+        let p = &self.types[v.vtype as usize];
+        let route = &self.routes[v.route as usize];
+        let lane = route.lanes[0];
+        let lane_len = self.lane_at(lane as usize).length;
+        let pos = at.unwrap_or((v.length + POSITION_EPS).fmin(lane_len));
+        let des = self.desired_speed(v, lane);
+        let mut speed = upper;
+        let reach = |speed: f64| p.brake_gap(speed, p.decel, p.tau) + p.min_gap;
+        let mut dist = reach(speed);
+        // SUMO's `checkFailure` with `patchSpeed`: a lower speed is taken, with its braking distance
+        let lowered = |speed: f64, dist: f64, nspeed: f64| {
+            if nspeed < speed {
+                (nspeed, reach(nspeed))
             } else {
-                hi = mid;
+                (speed, dist)
+            }
+        };
+        // the lanes ahead within the braking distance
+        let mut seen = lane_len - pos;
+        let mut k = 0;
+        while seen < dist && k + 1 < route.lanes.len() {
+            let next = route.lanes[k + 1];
+            if let LaneKind::Via(link) = self.lane_at(next as usize).kind
+                && !self.link_at(link as usize).major
+            {
+                (speed, dist) = lowered(speed, dist, p.stop_speed(seen, speed, des));
+                break;
+            }
+            if let Some(&o) = self.lane_veh[next as usize].last() {
+                let ov = &self.veh[o as usize];
+                let gap = seen + ov.pos - ov.length - p.min_gap;
+                if gap < 0.0 {
+                    return None;
+                }
+                (speed, dist) = lowered(
+                    speed,
+                    dist,
+                    p.insertion_follow_speed(speed, gap, ov.speed, des),
+                );
+            }
+            let limit = self.desired_speed(v, next);
+            (speed, dist) = lowered(speed, dist, p.free_speed(speed, seen, limit, des));
+            seen += self.lane_at(next as usize).length;
+            k += 1;
+        }
+        // the leader on the lane: the nearest vehicle ahead of the place, else the tail of one that has just left
+        // the lane onto a connection
+        let q = &self.lane_veh[lane as usize];
+        let ahead = match at {
+            Some(_) => q.iter().rev().find(|&&o| self.veh[o as usize].pos >= pos),
+            None => q.last(),
+        };
+        let mut leaders: Vec<(f64, f64)> = Vec::new();
+        if let Some(&o) = ahead {
+            let ov = &self.veh[o as usize];
+            leaders.push((ov.pos - ov.length - pos - p.min_gap, ov.speed));
+        } else {
+            for &lk in &self.lane_at(lane as usize).out_links {
+                let via = self.link_at(lk as usize).via_lane;
+                if let Some(&o) = self.lane_veh[via as usize].last() {
+                    let ov = &self.veh[o as usize];
+                    leaders.push((lane_len - pos + ov.pos - ov.length - p.min_gap, ov.speed));
+                }
             }
         }
-        Some(lo)
+        for (gap, leader_speed) in leaders {
+            if gap < 0.0 {
+                return None;
+            }
+            (speed, dist) = lowered(
+                speed,
+                dist,
+                p.insertion_follow_speed(speed, gap, leader_speed, des),
+            );
+        }
+        // the vehicle behind needs its secure gap at the adapted speed
+        if let Some(&f) = q.iter().find(|&&o| self.veh[o as usize].pos < pos) {
+            let fv = &self.veh[f as usize];
+            let fp = &self.types[fv.vtype as usize];
+            let gap = pos - v.length - fv.pos - fp.min_gap;
+            if gap < fp.secure_gap(fv.speed, speed) {
+                return None;
+            }
+        }
+        (speed >= 0.0).then_some(speed)
     }
 
     /// The insertion check and, where it passes, the insertion: the front at `at` on the entry lane, or at its
@@ -264,14 +328,20 @@ impl Simulation {
     }
 
     /// SUMO's `departSpeed="desired"`: at the vehicle's desired speed on its first lane, or not now; with
-    /// `lower` (`"max"`), the highest speed up to it that passes the insertion check (bisected to 1/256 of it).
-    /// The vehicle keeps its rule for a later try.
-    fn try_insert_at_desired(&mut self, id: VehicleId, at: Option<f64>, lower: bool) -> bool {
+    /// `adapt` (`"max"`), that speed lowered as SUMO adapts it ([`Self::adapted_insertion_speed`]). The vehicle
+    /// keeps its rule for a later try.
+    fn try_insert_at_desired(&mut self, id: VehicleId, at: Option<f64>, adapt: bool) -> bool {
         let v = &self.veh[id as usize];
         let rule = v.depart_speed;
         let lane = self.routes[v.route as usize].lanes[0];
         let desired = self.desired_speed(v, lane);
-        match self.highest_allowed_speed(id, at, desired, lower) {
+        let speed = if adapt {
+            self.adapted_insertion_speed(id, at, desired)
+        } else {
+            self.veh[id as usize].depart_speed = desired;
+            self.insertion_allowed_at(id, at).then_some(desired)
+        };
+        match speed {
             Some(s) => {
                 self.veh[id as usize].depart_speed = s;
                 self.place_on_entry(id, at, true);
@@ -385,3 +455,7 @@ impl Simulation {
         true
     }
 }
+
+#[cfg(test)]
+#[path = "insertion_tests.rs"]
+mod tests;

@@ -54,7 +54,7 @@ impl Simulation {
                     if matches!(signal, Some(SignalState::Red | SignalState::Yellow)) {
                         if signal == Some(SignalState::Red) || can_brake {
                             let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
-                                it.stop_dist,
+                                (it.dist - LIGHT_STOP_OFFSET_M).fmax(0.0),
                                 v.speed,
                                 it.desired_speed,
                             ));

@@ -1,0 +1,124 @@
+//! Insertion with an adaptable speed (`departSpeed="max"`) as SUMO 1.8's `MSLane::isInsertionSuccess` with
+//! `patchSpeed`: the speed is lowered for the leader first, and the follower is checked at that speed.
+
+use super::*;
+use crate::models::cf::CarFollowModel;
+use crate::runs::scenario::spec_from_scenario;
+
+/// The lane drop with one flow from its upstream road, departing at the highest speed the check allows.
+fn sim_with_max_depart_speed() -> Simulation {
+    let rs = mapc_scenario::ResolvedScenario::load("lane_drop").expect("built-in scenario");
+    let mut spec = spec_from_scenario(&rs).expect("simulator spec");
+    spec.flows.truncate(1);
+    spec.flows[0].depart_speed = DEPART_SPEED_MAX;
+    Simulation::from_spec(spec, 0).unwrap()
+}
+
+/// A vehicle of type 0 on lane 0 of the entry road, placed with its front at `pos` driving at `speed`.
+fn driving(sim: &mut Simulation, pos: f64, speed: f64) -> VehicleId {
+    let from = sim.spec.flows[0].from;
+    let r = sim.add_route(from, &[], None, Some(0)).unwrap();
+    let id = sim.create_vehicle(0, r, speed);
+    let l = sim.routes[r as usize].lanes[0];
+    sim.place(id, l, pos, speed, false).unwrap();
+    id
+}
+
+/// A vehicle of type 0 waiting to enter lane 0 of the entry road at the highest speed allowed.
+fn waiting(sim: &mut Simulation) -> VehicleId {
+    let from = sim.spec.flows[0].from;
+    let r = sim.add_route(from, &[], None, Some(0)).unwrap();
+    sim.create_vehicle(0, r, DEPART_SPEED_MAX)
+}
+
+/// The place `at` of a vehicle waiting to enter behind a leader 20 m ahead at 5 m/s, with the speed SUMO adapts
+/// its insertion to (the insertion follow speed from the desired speed), and the gaps a follower at
+/// `FOLLOWER_SPEED` needs behind it at that speed and standing still.
+struct Case {
+    sim: Simulation,
+    id: VehicleId,
+    at: f64,
+    expected: f64,
+    gap_adapted: f64,
+    gap_standing: f64,
+}
+
+const FOLLOWER_SPEED: f64 = 15.0;
+
+fn behind_a_slow_leader() -> Case {
+    let mut sim = sim_with_max_depart_speed();
+    let at = 250.0;
+    let id = waiting(&mut sim);
+    let p = sim.types[0];
+    let length = sim.veh[id as usize].length;
+    driving(&mut sim, at + 20.0 + p.min_gap + length, 5.0);
+    let lane = sim.routes[sim.veh[id as usize].route as usize].lanes[0];
+    let des = sim.desired_speed(&sim.veh[id as usize], lane);
+    let expected = p.insertion_follow_speed(des, 20.0, 5.0, des);
+    assert!(
+        expected > 0.0 && expected < des,
+        "the leader lowers the speed"
+    );
+    let gap_adapted = p.secure_gap(FOLLOWER_SPEED, expected);
+    let gap_standing = p.secure_gap(FOLLOWER_SPEED, 0.0);
+    assert!(0.0 < gap_adapted && gap_adapted < gap_standing);
+    Case {
+        sim,
+        id,
+        at,
+        expected,
+        gap_adapted,
+        gap_standing,
+    }
+}
+
+/// Puts the follower at `gap` (bumper to bumper less its min gap) behind the place.
+fn follower_at(c: &mut Case, gap: f64) {
+    let (length, min_gap) = (c.sim.veh[c.id as usize].length, c.sim.types[0].min_gap);
+    driving(&mut c.sim, c.at - length - min_gap - gap, FOLLOWER_SPEED);
+}
+
+#[test]
+fn a_max_speed_vehicle_enters_at_its_leaders_speed_when_the_follower_is_safe_at_that_speed() {
+    let mut c = behind_a_slow_leader();
+    // safe behind a vehicle at the adapted speed, not behind a standing one: a check at a standstill refused
+    // this insertion, where SUMO makes it
+    let gap = 0.5 * (c.gap_adapted + c.gap_standing);
+    follower_at(&mut c, gap);
+    let (id, at) = (c.id, c.at);
+    let lane = c.sim.routes[c.sim.veh[id as usize].route as usize].lanes[0];
+    let des = c.sim.desired_speed(&c.sim.veh[id as usize], lane);
+    assert_eq!(
+        c.sim.adapted_insertion_speed(id, Some(at), des),
+        Some(c.expected)
+    );
+    assert!(c.sim.try_insert_at(id, Some(at)));
+    assert_eq!(c.sim.veh[id as usize].speed, c.expected);
+    assert_eq!(c.sim.veh[id as usize].pos, at);
+}
+
+#[test]
+fn a_max_speed_vehicle_is_refused_where_the_follower_is_not_safe_at_the_adapted_speed() {
+    let mut c = behind_a_slow_leader();
+    let gap = 0.5 * c.gap_adapted;
+    follower_at(&mut c, gap);
+    let (id, at) = (c.id, c.at);
+    let lane = c.sim.routes[c.sim.veh[id as usize].route as usize].lanes[0];
+    let des = c.sim.desired_speed(&c.sim.veh[id as usize], lane);
+    assert_eq!(c.sim.adapted_insertion_speed(id, Some(at), des), None);
+    assert!(!c.sim.try_insert_at(id, Some(at)));
+    assert_eq!(
+        c.sim.veh[id as usize].depart_speed, DEPART_SPEED_MAX,
+        "the rule stays for a later try"
+    );
+}
+
+#[test]
+fn a_max_speed_vehicle_overlapping_its_leader_is_refused() {
+    let mut sim = sim_with_max_depart_speed();
+    driving(&mut sim, 253.0, 15.0);
+    let id = waiting(&mut sim);
+    let lane = sim.routes[sim.veh[id as usize].route as usize].lanes[0];
+    let des = sim.desired_speed(&sim.veh[id as usize], lane);
+    assert_eq!(sim.adapted_insertion_speed(id, Some(250.0), des), None);
+}
