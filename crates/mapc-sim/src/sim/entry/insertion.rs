@@ -228,9 +228,7 @@ impl Simulation {
         let v = &self.veh[id as usize];
         let p = &self.types[v.vtype as usize];
         let route = &self.routes[v.route as usize];
-        let lane = route.lanes[0];
-        let lane_len = self.lane_at(lane as usize).length;
-        let pos = at.unwrap_or((v.length + POSITION_EPS).fmin(lane_len));
+        let (lane, lane_len, pos) = self.entry_place(id, at);
         let des = self.desired_speed(v, lane);
         let mut speed = upper;
         let reach = |speed: f64| p.brake_gap(speed, p.decel, p.tau) + p.min_gap;
@@ -302,15 +300,28 @@ impl Simulation {
             );
         }
         // the vehicle behind needs its secure gap at the adapted speed
-        if let Some(&f) = q.iter().find(|&&o| self.veh[o as usize].pos < pos) {
-            let fv = &self.veh[f as usize];
-            let fp = &self.types[fv.vtype as usize];
-            let gap = pos - v.length - fv.pos - fp.min_gap;
-            if gap < fp.secure_gap(fv.speed, speed) {
-                return None;
-            }
-        }
-        (speed >= 0.0).then_some(speed)
+        (self.follower_allows(lane, pos, v.length, speed) && speed >= 0.0).then_some(speed)
+    }
+
+    /// The entry lane of `id`'s route, its length, and where the front is put: at `at`, or one length in.
+    fn entry_place(&self, id: VehicleId, at: Option<f64>) -> (LaneIdx, f64, f64) {
+        let v = &self.veh[id as usize];
+        let lane = self.routes[v.route as usize].lanes[0];
+        let lane_len = self.lane_at(lane as usize).length;
+        (lane, lane_len, at.unwrap_or((v.length + POSITION_EPS).fmin(lane_len)))
+    }
+
+    /// Whether the vehicle behind the place `pos` on `lane`, if any, keeps its secure gap behind a vehicle of
+    /// `length` put there driving at `speed`.
+    fn follower_allows(&self, lane: LaneIdx, pos: f64, length: f64, speed: f64) -> bool {
+        let q = &self.lane_veh[lane as usize];
+        let Some(&f) = q.iter().find(|&&o| self.veh[o as usize].pos < pos) else {
+            return true;
+        };
+        let fv = &self.veh[f as usize];
+        let fp = &self.types[fv.vtype as usize];
+        let gap = pos - length - fv.pos - fp.min_gap;
+        gap >= 0.0 && gap >= fp.secure_gap(fv.speed, speed)
     }
 
     /// The insertion check and, where it passes, the insertion: the front at `at` on the entry lane, or at its
@@ -381,20 +392,10 @@ impl Simulation {
         let v = &self.veh[id as usize];
         let p = &self.types[v.vtype as usize];
         let route = &self.routes[v.route as usize];
-        let lane = route.lanes[0];
-        let lane_len = self.lane_at(lane as usize).length;
-        let pos = at.unwrap_or((v.length + POSITION_EPS).fmin(lane_len));
-        if at.is_some() {
-            // the vehicle behind on the lane needs its secure gap to the inserted one
-            let q = &self.lane_veh[lane as usize];
-            if let Some(&f) = q.iter().find(|&&o| self.veh[o as usize].pos < pos) {
-                let fv = &self.veh[f as usize];
-                let fp = &self.types[fv.vtype as usize];
-                let gap = pos - v.length - fv.pos - fp.min_gap;
-                if gap < 0.0 || gap < fp.secure_gap(fv.speed, v.depart_speed.fmax(0.0)) {
-                    return false;
-                }
-            }
+        let (lane, lane_len, pos) = self.entry_place(id, at);
+        // away from the lane's start, the vehicle behind needs its secure gap to the inserted one
+        if at.is_some() && !self.follower_allows(lane, pos, v.length, v.depart_speed.fmax(0.0)) {
+            return false;
         }
         let speed = v.depart_speed;
         let des = self.desired_speed(v, lane);
