@@ -177,6 +177,40 @@ fn sumo_outputs_have_sumos_elements_and_attributes() {
     assert_eq!(summary.matches("<step ").count(), 16_000);
 }
 
+/// A trace asked beside SUMO's outputs: all of them are written, from the first seed's one run (the trip-info used
+/// to be left out, without a word, whenever `--trace` was given).
+#[test]
+fn a_trace_and_sumos_outputs_are_written_together_from_the_same_run() {
+    let dir = scratch_dir("trace-and-outputs");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let sim = |extra: &[&str]| {
+        let mut args = vec!["sim", HIGHWAY_RAMP, "--seeds", "2"];
+        args.extend_from_slice(extra);
+        assert_success(&run_mapc(&args));
+    };
+    sim(&[
+        "--trace",
+        &path("both.csv"),
+        "--tripinfo-output",
+        &path("both_trip.xml"),
+        "--summary-output",
+        &path("both_summary.xml"),
+    ]);
+    sim(&["--trace", &path("trace.csv")]);
+    sim(&[
+        "--tripinfo-output",
+        &path("trip.xml"),
+        "--summary-output",
+        &path("summary.xml"),
+    ]);
+    let read = |name: &str| {
+        std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name} not written: {e}"))
+    };
+    assert_eq!(read("both.csv"), read("trace.csv"));
+    assert_eq!(read("both_trip.xml"), read("trip.xml"));
+    assert_eq!(read("both_summary.xml"), read("summary.xml"));
+}
+
 #[test]
 fn a_configuration_named_cfg_is_known_by_its_root_element() {
     // eccles_interchange: `interchangeSim.cfg`, 1 000 vehicles each with its own route on an OSM interchange

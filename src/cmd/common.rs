@@ -5,7 +5,7 @@ use anyhow::Context;
 use mapc_graph::LaneGraph;
 use mapc_scenario::ResolvedScenario;
 use mapc_scenario::transform::SimplifyOptions;
-use mapc_sim::{RunMetrics, SimSpec, TRACE_HEADER};
+use mapc_sim::TRACE_HEADER;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -154,23 +154,6 @@ pub fn print_regime_lines(seeds: usize, lines: &[String]) {
     for line in lines {
         println!("    {line}");
     }
-}
-
-/// Run one seed and write every step's vehicles, atomically.
-/// Writes the trace of `seed` to `path`; returns the run's metrics and what the trace's bound left out, if
-/// anything.
-pub fn write_trace(
-    spec: &SimSpec,
-    seed: u64,
-    path: &Path,
-) -> anyhow::Result<(RunMetrics, Option<String>)> {
-    let mut traced = None;
-    write_trace_file(path, |w| {
-        traced = Some(mapc_sim::trace_run(spec, seed, w)?);
-        Ok(())
-    })?;
-    let traced = traced.expect("the trace's run ends or fails");
-    Ok((traced.metrics, traced.note))
 }
 
 /// Refuses now, naming the file, an output that a long run could not write at its end (a folder that cannot be

@@ -1,7 +1,7 @@
 //! `mapc sim`: the all-human baseline of a scenario over many seeds (in parallel), with mean and 95% confidence
 //! interval per metric, and optionally a trajectory trace of the first seed.
 
-use super::common::{DEFAULT_SCENARIO, REGIME_SEEDS, print_regime_lines, write_trace};
+use super::common::{DEFAULT_SCENARIO, REGIME_SEEDS, print_regime_lines, write_trace_file};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use mapc_sim::{BaselineReport, MeanCi, RunMetrics, Simulation, spec_from_scenario};
@@ -88,21 +88,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let detector_files: Vec<Option<String>> = rs.detectors.iter().map(|d| d.file.clone()).collect();
     let (first, rest) = pool.install(|| {
         rayon::join(
-            || match &args.trace {
-                None if sumo_outputs => {
-                    let m = write_sumo_outputs(&spec, seeds[0], &args, &detector_files)?;
-                    progress.inc(1);
-                    Ok(m)
+            || {
+                if !first_writes {
+                    return run_seed(seeds[0]);
                 }
-                Some(path) => {
-                    let (m, note) = write_trace(&spec, seeds[0], path)?;
-                    if let Some(note) = note {
-                        eprintln!("note: {}: {note}", path.display());
-                    }
-                    progress.inc(1);
-                    Ok(m)
-                }
-                None => run_seed(seeds[0]),
+                let m = write_first_run(&spec, seeds[0], &args, &detector_files)?;
+                progress.inc(1);
+                Ok(m)
             },
             || {
                 seeds[1..]
@@ -200,30 +192,60 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
     pb
 }
 
-/// Run `seed` once, watching it for SUMO's trip-info and summary files, and write them (each atomically).
-fn write_sumo_outputs(
+/// Run `seed` once and write from that one run whatever was asked of it: the trace, SUMO's trip-info and summary
+/// files, the loops' files (each atomically).
+fn write_first_run(
     spec: &mapc_sim::SimSpec,
     seed: u64,
     args: &Args,
     detector_files: &[Option<String>],
 ) -> anyhow::Result<RunMetrics> {
     let mut sim = Simulation::from_spec(spec.clone(), seed)?;
-    let mut out = mapc_sumo::run_outputs::SumoOutputs::new(
-        &mut sim,
-        args.tripinfo_output.is_some(),
-        args.summary_output.is_some(),
-    );
-    while !sim.is_done() {
-        sim.step()?;
-        out.observe(&sim);
+    let mut out = (args.tripinfo_output.is_some() || args.summary_output.is_some()).then(|| {
+        mapc_sumo::run_outputs::SumoOutputs::new(
+            &mut sim,
+            args.tripinfo_output.is_some(),
+            args.summary_output.is_some(),
+        )
+    });
+    // each frame of the run: the trace's, if any, after the outputs have seen the step
+    let mut run = |sim: &mut Simulation,
+                   frame: &mut dyn FnMut(&Simulation) -> std::io::Result<()>|
+     -> anyhow::Result<()> {
+        frame(sim)?;
+        while !sim.is_done() {
+            sim.step()?;
+            if let Some(out) = &mut out {
+                out.observe(sim);
+            }
+            frame(sim)?;
+        }
+        Ok(())
+    };
+    match &args.trace {
+        Some(path) => {
+            let mut note = None;
+            write_trace_file(path, |w| {
+                let mut budget = mapc_sim::TraceBudget::new(spec);
+                run(&mut sim, &mut |s| budget.write_frame(s, w))?;
+                note = budget.note();
+                Ok(())
+            })?;
+            if let Some(note) = note {
+                eprintln!("note: {}: {note}", path.display());
+            }
+        }
+        None => run(&mut sim, &mut |_| Ok(()))?,
     }
-    for (path, text) in [
-        (&args.tripinfo_output, out.tripinfo_xml()),
-        (&args.summary_output, out.summary_xml()),
-    ] {
-        if let (Some(path), Some(text)) = (path, text) {
-            mapc_graph::write_atomically(path, text.as_bytes())
-                .with_context(|| format!("writing {}", path.display()))?;
+    if let Some(out) = &out {
+        for (path, text) in [
+            (&args.tripinfo_output, out.tripinfo_xml()),
+            (&args.summary_output, out.summary_xml()),
+        ] {
+            if let (Some(path), Some(text)) = (path, text) {
+                mapc_graph::write_atomically(path, text.as_bytes())
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
         }
     }
     if let Some(dir) = &args.detector_output {

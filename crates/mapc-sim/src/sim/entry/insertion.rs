@@ -308,7 +308,11 @@ impl Simulation {
         let v = &self.veh[id as usize];
         let lane = self.routes[v.route as usize].lanes[0];
         let lane_len = self.lane_at(lane as usize).length;
-        (lane, lane_len, at.unwrap_or((v.length + POSITION_EPS).fmin(lane_len)))
+        (
+            lane,
+            lane_len,
+            at.unwrap_or((v.length + POSITION_EPS).fmin(lane_len)),
+        )
     }
 
     /// Whether the vehicle behind the place `pos` on `lane`, if any, keeps its secure gap behind a vehicle of
