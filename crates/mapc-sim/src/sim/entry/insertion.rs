@@ -276,20 +276,21 @@ impl Simulation {
             Some(_) => q.iter().rev().find(|&&o| self.veh[o as usize].pos >= pos),
             None => q.last(),
         };
-        let mut leaders: Vec<(f64, f64)> = Vec::new();
-        if let Some(&o) = ahead {
+        let on_lane = ahead.map(|&o| {
             let ov = &self.veh[o as usize];
-            leaders.push((ov.pos - ov.length - pos - p.min_gap, ov.speed));
-        } else {
-            for &lk in &self.lane_at(lane as usize).out_links {
+            (ov.pos - ov.length - pos - p.min_gap, ov.speed)
+        });
+        let tails = self
+            .lane_at(lane as usize)
+            .out_links
+            .iter()
+            .filter(|_| on_lane.is_none())
+            .filter_map(|&lk| {
                 let via = self.link_at(lk as usize).via_lane;
-                if let Some(&o) = self.lane_veh[via as usize].last() {
-                    let ov = &self.veh[o as usize];
-                    leaders.push((lane_len - pos + ov.pos - ov.length - p.min_gap, ov.speed));
-                }
-            }
-        }
-        for (gap, leader_speed) in leaders {
+                let ov = &self.veh[*self.lane_veh[via as usize].last()? as usize];
+                Some((lane_len - pos + ov.pos - ov.length - p.min_gap, ov.speed))
+            });
+        for (gap, leader_speed) in on_lane.into_iter().chain(tails) {
             if gap < 0.0 {
                 return None;
             }
