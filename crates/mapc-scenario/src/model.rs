@@ -453,8 +453,8 @@ pub struct Flow {
     /// the start).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depart_pos: Option<String>,
-    /// SUMO's `departSpeed` rules instead of `depart_speed_mps`: `max` (the highest safe speed up to the desired
-    /// one) or `desired` (the desired speed, or wait).
+    /// SUMO's `departSpeed` rules instead of `depart_speed_mps`: `max` (the desired speed, lowered as SUMO lowers
+    /// it for the road ahead) or `desired` (the desired speed, or wait).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depart_speed: Option<String>,
     /// A SUMO `<vehicle>` or `<trip>`: its one vehicle is named by the flow's id in SUMO's outputs, where a

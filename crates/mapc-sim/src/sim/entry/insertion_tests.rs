@@ -5,7 +5,7 @@ use super::*;
 use crate::models::cf::CarFollowModel;
 use crate::runs::scenario::spec_from_scenario;
 
-/// The lane drop with one flow from its upstream road, departing at the highest speed the check allows.
+/// The lane drop with one flow from its upstream road, departing at the speed `max` (adapted to the road ahead).
 fn sim_with_max_depart_speed() -> Simulation {
     let rs = mapc_scenario::ResolvedScenario::load("lane_drop").expect("built-in scenario");
     let mut spec = spec_from_scenario(&rs).expect("simulator spec");
@@ -121,4 +121,46 @@ fn a_max_speed_vehicle_overlapping_its_leader_is_refused() {
     let lane = sim.routes[sim.veh[id as usize].route as usize].lanes[0];
     let des = sim.desired_speed(&sim.veh[id as usize], lane);
     assert_eq!(sim.adapted_insertion_speed(id, Some(250.0), des), None);
+}
+
+/// Krauss, on ramp_metering_1x3's ramp: a vehicle put 3 m before the meter's line (a major link, its state `O`)
+/// with a standing leader 10 m into the road past the meter. The leader lies beyond the ramp, within the braking
+/// distance, so the speed is that leader's insertion follow speed, as SUMO's look-ahead along the next lanes
+/// gives it; without the leader the vehicle enters at its desired speed (the next lanes' limits are the ramp's).
+#[test]
+fn a_max_speed_vehicle_slows_for_a_leader_on_the_road_ahead() {
+    let cfg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
+    );
+    let rs = mapc_scenario::ResolvedScenario::load(cfg).unwrap();
+    let ramp = rs.graph.find_roads("on_ramp").unwrap()[0];
+    let passage = rs.graph.find_roads("passage_area").unwrap()[0];
+    let spec = spec_from_scenario(&rs).unwrap();
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    let r = sim.add_route(ramp, &[], None, Some(0)).unwrap();
+    let id = sim.create_vehicle(0, r, DEPART_SPEED_MAX);
+    let lane = sim.routes[r as usize].lanes[0];
+    let lane_len = sim.net.lanes[lane as usize].length;
+    let at = lane_len - 3.0;
+    let p = sim.types[0];
+    assert!(matches!(p.kind, crate::models::cf::CfKind::Krauss(_)));
+    let des = sim.desired_speed(&sim.veh[id as usize], lane);
+    assert_eq!(sim.adapted_insertion_speed(id, Some(at), des), Some(des));
+    // the leader, standing with its front 10 m into the road past the meter
+    let lr = sim.add_route(passage, &[], None, Some(0)).unwrap();
+    let leader = sim.create_vehicle(0, lr, 0.0);
+    let leader_lane = sim.routes[lr as usize].lanes[0];
+    sim.place(leader, leader_lane, 10.0, 0.0, false).unwrap();
+    let via = sim.routes[r as usize].lanes[1];
+    assert_eq!(sim.routes[r as usize].lanes[2], leader_lane);
+    let gap = 3.0 + sim.net.lanes[via as usize].length + 10.0
+        - sim.veh[leader as usize].length
+        - p.min_gap;
+    let expected = p.insertion_follow_speed(des, gap, 0.0, des);
+    assert!(expected < 0.5 * des, "{expected} of {des}");
+    assert_eq!(
+        sim.adapted_insertion_speed(id, Some(at), des),
+        Some(expected)
+    );
 }
