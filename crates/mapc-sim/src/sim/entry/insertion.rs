@@ -377,11 +377,8 @@ impl Simulation {
 
     /// Inserts a vehicle with its front at `at` on its route's first lane, or at its start.
     fn place_on_entry(&mut self, id: VehicleId, at: Option<f64>, counted: bool) {
-        let v = &self.veh[id as usize];
-        let lane = self.routes[v.route as usize].lanes[0];
-        let lane_len = self.lane_at(lane as usize).length;
-        let pos = at.unwrap_or((v.length + POSITION_EPS).fmin(lane_len));
-        let speed = v.depart_speed;
+        let (lane, _, pos) = self.entry_place(id, at);
+        let speed = self.veh[id as usize].depart_speed;
         let _ = self.place(id, lane, pos, speed, counted);
     }
 
