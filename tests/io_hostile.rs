@@ -285,6 +285,18 @@ fn an_output_that_cannot_be_written_is_refused_before_the_run() {
         ],
         &["plain.txt/trips.xml"],
     );
+    // the loops' folder named where a file stands
+    refused(
+        &[
+            "sim",
+            "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg",
+            "--seeds",
+            "100000",
+            "--detector-output",
+            s(&file),
+        ],
+        &["plain.txt"],
+    );
     for flag in ["--trace", "--human-trace"] {
         refused(
             &[

@@ -47,6 +47,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.tripinfo_output.as_deref(),
         args.summary_output.as_deref(),
     ])?;
+    // the loops' folder too, made now as its files' writes would make it
+    if let Some(dir) = &args.detector_output {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let rs = args.avs.apply(super::common::load_scenario_or_sumo(
         args.input.as_deref().unwrap_or(&args.scenario),
         &args.sumo,
@@ -208,34 +212,30 @@ fn write_first_run(
             args.summary_output.is_some(),
         )
     });
-    // each frame of the run: the trace's, if any, after the outputs have seen the step
-    let mut run = |sim: &mut Simulation,
-                   frame: &mut dyn FnMut(&Simulation) -> std::io::Result<()>|
-     -> anyhow::Result<()> {
-        frame(sim)?;
-        while !sim.is_done() {
-            sim.step()?;
-            if let Some(out) = &mut out {
-                out.observe(sim);
-            }
-            frame(sim)?;
-        }
-        Ok(())
-    };
     match &args.trace {
         Some(path) => {
             let mut note = None;
             write_trace_file(path, |w| {
-                let mut budget = mapc_sim::TraceBudget::new(spec);
-                run(&mut sim, &mut |s| budget.write_frame(s, w))?;
-                note = budget.note();
+                note = mapc_sim::trace_sim(&mut sim, w, |s| {
+                    if let Some(out) = &mut out {
+                        out.observe(s);
+                    }
+                    Ok(())
+                })?;
                 Ok(())
             })?;
             if let Some(note) = note {
                 eprintln!("note: {}: {note}", path.display());
             }
         }
-        None => run(&mut sim, &mut |_| Ok(()))?,
+        None => {
+            while !sim.is_done() {
+                sim.step()?;
+                if let Some(out) = &mut out {
+                    out.observe(&sim);
+                }
+            }
+        }
     }
     if let Some(out) = &out {
         for (path, text) in [

@@ -73,16 +73,22 @@ fn run_baseline_spec_fingerprints(spec: &mapc_sim::SimSpec, seeds: &[u64]) -> Ve
         .collect()
 }
 
-/// scenarios/sumo/ramp_metering_1x3: its flows depart with `departLane="best"`, `departPos="random"` and
-/// `departSpeed="max"` on a three-lane entry road, and its on-ramp has a G 5 s / r 5 s meter.
-#[test]
-fn random_places_best_lanes_and_a_meter_as_sumo_reads_them() {
+/// scenarios/sumo/ramp_metering_1x3, and its on-ramp's road.
+fn ramp_metering() -> (ResolvedScenario, mapc_graph::RoadId) {
     let cfg = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
     );
     let rs = ResolvedScenario::load(cfg).unwrap();
     let ramp = rs.graph.find_roads("on_ramp").unwrap()[0];
+    (rs, ramp)
+}
+
+/// scenarios/sumo/ramp_metering_1x3: its flows depart with `departLane="best"`, `departPos="random"` and
+/// `departSpeed="max"` on a three-lane entry road, and its on-ramp has a G 5 s / r 5 s meter.
+#[test]
+fn random_places_best_lanes_and_a_meter_as_sumo_reads_them() {
+    let (rs, ramp) = ramp_metering();
     let mut spec = spec_from_scenario(&rs).unwrap();
     spec.horizon_steps = 300;
     let start = spec.start_time_s;
@@ -139,12 +145,7 @@ fn random_places_best_lanes_and_a_meter_as_sumo_reads_them() {
 /// stand 0.1 m back and passed more vehicles on each green.
 #[test]
 fn a_queue_at_a_red_light_stands_a_metre_before_the_line() {
-    let cfg = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
-    );
-    let rs = ResolvedScenario::load(cfg).unwrap();
-    let ramp = rs.graph.find_roads("on_ramp").unwrap()[0];
+    let (rs, ramp) = ramp_metering();
     let ramp_length = rs.graph.road(ramp).unwrap().length_m;
     let mut spec = spec_from_scenario(&rs).unwrap();
     spec.horizon_steps = 1200;

@@ -120,19 +120,32 @@ pub fn trace_run_with(
     seed: u64,
     out: &mut impl std::io::Write,
     start: impl FnOnce(&mut Simulation) -> Result<(), SimError>,
-    mut after_step: impl FnMut(&mut Simulation) -> Result<(), SimError>,
+    after_step: impl FnMut(&mut Simulation) -> Result<(), SimError>,
 ) -> std::io::Result<TracedRun> {
     let mut sim = Simulation::from_spec(spec.clone(), seed).map_err(std::io::Error::other)?;
-    let mut budget = TraceBudget::new(spec);
     start(&mut sim).map_err(std::io::Error::other)?;
-    budget.write_frame(&sim, out)?;
-    while !sim.is_done() {
-        sim.step().map_err(std::io::Error::other)?;
-        after_step(&mut sim).map_err(std::io::Error::other)?;
-        budget.write_frame(&sim, out)?;
-    }
+    let note = trace_sim(&mut sim, out, after_step)?;
     Ok(TracedRun {
         metrics: sim.metrics(),
-        note: budget.note(),
+        note,
     })
+}
+
+/// Runs `sim` from where it stands to its horizon, writing its frames as [`trace_run`] does and calling
+/// `after_step` after every step (before that step's frame: what it watches or sets is in the frame); returns what
+/// the trace left out. For a caller that keeps the simulation (to read it at the end, or to watch it for other
+/// outputs).
+pub fn trace_sim(
+    sim: &mut Simulation,
+    out: &mut impl std::io::Write,
+    mut after_step: impl FnMut(&mut Simulation) -> Result<(), SimError>,
+) -> std::io::Result<Option<String>> {
+    let mut budget = TraceBudget::new(sim.spec());
+    budget.write_frame(sim, out)?;
+    while !sim.is_done() {
+        sim.step().map_err(std::io::Error::other)?;
+        after_step(sim).map_err(std::io::Error::other)?;
+        budget.write_frame(sim, out)?;
+    }
+    Ok(budget.note())
 }

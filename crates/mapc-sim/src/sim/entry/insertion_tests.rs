@@ -24,11 +24,17 @@ fn driving(sim: &mut Simulation, pos: f64, speed: f64) -> VehicleId {
     id
 }
 
-/// A vehicle of type 0 waiting to enter lane 0 of the entry road at the highest speed allowed.
+/// A vehicle of type 0 waiting to enter lane 0 of the entry road at the speed `max`.
 fn waiting(sim: &mut Simulation) -> VehicleId {
     let from = sim.spec.flows[0].from;
     let r = sim.add_route(from, &[], None, Some(0)).unwrap();
     sim.create_vehicle(0, r, DEPART_SPEED_MAX)
+}
+
+/// A waiting vehicle's desired speed on its entry lane, where its adapted speed starts.
+fn desired(sim: &Simulation, id: VehicleId) -> f64 {
+    let (lane, _, _) = sim.entry_place(id, None);
+    sim.desired_speed(&sim.veh[id as usize], lane)
 }
 
 /// The place `at` of a vehicle waiting to enter behind a leader 20 m ahead at 5 m/s, with the speed SUMO adapts
@@ -52,8 +58,7 @@ fn behind_a_slow_leader() -> Case {
     let p = sim.types[0];
     let length = sim.veh[id as usize].length;
     driving(&mut sim, at + 20.0 + p.min_gap + length, 5.0);
-    let lane = sim.routes[sim.veh[id as usize].route as usize].lanes[0];
-    let des = sim.desired_speed(&sim.veh[id as usize], lane);
+    let des = desired(&sim, id);
     let expected = p.insertion_follow_speed(des, 20.0, 5.0, des);
     assert!(
         expected > 0.0 && expected < des,
@@ -86,8 +91,7 @@ fn a_max_speed_vehicle_enters_at_its_leaders_speed_when_the_follower_is_safe_at_
     let gap = 0.5 * (c.gap_adapted + c.gap_standing);
     follower_at(&mut c, gap);
     let (id, at) = (c.id, c.at);
-    let lane = c.sim.routes[c.sim.veh[id as usize].route as usize].lanes[0];
-    let des = c.sim.desired_speed(&c.sim.veh[id as usize], lane);
+    let des = desired(&c.sim, id);
     assert_eq!(
         c.sim.adapted_insertion_speed(id, Some(at), des),
         Some(c.expected)
@@ -103,8 +107,7 @@ fn a_max_speed_vehicle_is_refused_where_the_follower_is_not_safe_at_the_adapted_
     let gap = 0.5 * c.gap_adapted;
     follower_at(&mut c, gap);
     let (id, at) = (c.id, c.at);
-    let lane = c.sim.routes[c.sim.veh[id as usize].route as usize].lanes[0];
-    let des = c.sim.desired_speed(&c.sim.veh[id as usize], lane);
+    let des = desired(&c.sim, id);
     assert_eq!(c.sim.adapted_insertion_speed(id, Some(at), des), None);
     assert!(!c.sim.try_insert_at(id, Some(at)));
     assert_eq!(
@@ -118,8 +121,7 @@ fn a_max_speed_vehicle_overlapping_its_leader_is_refused() {
     let mut sim = sim_with_max_depart_speed();
     driving(&mut sim, 253.0, 15.0);
     let id = waiting(&mut sim);
-    let lane = sim.routes[sim.veh[id as usize].route as usize].lanes[0];
-    let des = sim.desired_speed(&sim.veh[id as usize], lane);
+    let des = desired(&sim, id);
     assert_eq!(sim.adapted_insertion_speed(id, Some(250.0), des), None);
 }
 

@@ -26,7 +26,9 @@ pub(in crate::sim) struct LinkItem {
     pub(in crate::sim) link: LinkIdx,
     pub(in crate::sim) dist: f64,
     pub(in crate::sim) v_link_pass: f64,
-    /// Where the vehicle would stop for this link (the speed to do so is computed only when it must wait).
+    /// Where the vehicle would stop for this link if it must yield (the speed to do so is computed only when it
+    /// must wait). At a red or yellow light the stop point is a metre further back (`LIGHT_STOP_OFFSET_M`), taken
+    /// in the move, where the light's state is known.
     pub(in crate::sim) stop_dist: f64,
     pub(in crate::sim) desired_speed: f64,
     pub(in crate::sim) arrival_time: f64,
