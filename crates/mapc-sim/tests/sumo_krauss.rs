@@ -141,8 +141,8 @@ fn random_places_best_lanes_and_a_meter_as_sumo_reads_them() {
 
 /// At a red light a driver stops a metre before the line, as SUMO's (`DIST_TO_STOPLINE_EXPECT_PRIORITY`): it will
 /// have the right of way, so it need not stand at the line. On ramp_metering_1x3's meter SUMO 1.8's first queued
-/// driver stood 1.06 m back on average at the end of red (seed 0, 110 cycles of its FCD output); mapc's used to
-/// stand 0.1 m back and passed more vehicles on each green.
+/// driver stood 0.98 m back on average at the end of red (seed 0, 110 cycles: `tools/sumo_replay/roads.py
+/// stop-line`, docs/sumo_scenarios.md); mapc's used to stand 0.04 m back and passed more vehicles on each green.
 #[test]
 fn a_queue_at_a_red_light_stands_a_metre_before_the_line() {
     let (rs, ramp) = ramp_metering();
