@@ -122,17 +122,53 @@ def run_mapc(mapc, cfg, n, skip):
     return runs, d
 
 
+def inputs_digest(cfg, end):
+    """SHA-256 over what SUMO's runs depend on: the configuration, the files it names (net, route and additional
+    files; names and bytes) and the end time asked, so that runs recorded for the same digest and seeds can be
+    reused (--sumo-runs) while only mapc changes."""
+    import hashlib
+    folder = os.path.dirname(os.path.abspath(cfg))
+    named = [os.path.abspath(cfg)]
+    for e in ET.parse(cfg).getroot().iter():
+        if e.tag in ("net-file", "route-files", "additional-files") and e.get("value"):
+            named += [os.path.join(folder, v.strip()) for v in e.get("value").split(",") if v.strip()]
+    h = hashlib.sha256(repr(end).encode() + b"\0")
+    for path in named:
+        h.update(os.path.relpath(path, folder).encode() + b"\0")
+        with open(path, "rb") as f:
+            h.update(f.read() + b"\0")
+    return h.hexdigest()
+
+
+def reused_runs(path, digest, seeds):
+    """SUMO's runs from an earlier --json of the same inputs and seeds; refused when either differs."""
+    with open(path) as f:
+        old = json.load(f)
+    if old.get("inputs_sha256") != digest:
+        sys.exit("sumo_check: %s was recorded for other SUMO inputs or another --end; run SUMO again" % path)
+    runs = old["sumo_runs"]
+    if [r["seed"] for r in runs] != list(seeds):
+        sys.exit("sumo_check: %s has SUMO runs for other seeds" % path)
+    print("  SUMO: %d seeds reused from %s (same inputs)" % (len(runs), path), file=sys.stderr)
+    return runs
+
+
 def compare(a, mapc, seeds):
     cfg = a.scenario
     t0 = time.time()
     mapc_runs, mapc_d = run_mapc(mapc, cfg, len(seeds), a.skip_unsupported)
     mapc_s = time.time() - t0
     end = a.end
+    digest = inputs_digest(cfg, end)
     t0 = time.time()
-    sumo_runs = run_sumo(cfg, seeds, end, [], a.jobs)
+    if a.sumo_runs:
+        sumo_runs = reused_runs(a.sumo_runs, digest, seeds)
+    else:
+        sumo_runs = run_sumo(cfg, seeds, end, [], a.jobs)
     sumo_s = time.time() - t0
     rows = []
-    print("%s, %d seeds (mapc %.1f s, SUMO %.1f s wall on %d processes)" % (cfg, len(seeds), mapc_s, sumo_s, a.jobs))
+    print("%s, %d seeds (mapc %.1f s, SUMO %.1f s wall on %d processes%s)" % (
+        cfg, len(seeds), mapc_s, sumo_s, a.jobs, ", reused" if a.sumo_runs else ""))
     print("  %-20s %22s %22s %9s %7s  %s" % ("", "mapc", "SUMO 1.8", "diff", "goal", ""))
     detectors = sorted(k for k in mapc_runs[0] if k.startswith("det:") and all(k in r for r in sumo_runs))
     for key, goal in list(GOALS) + [(k, DETECTOR_GOAL) for k in detectors]:
@@ -145,5 +181,6 @@ def compare(a, mapc, seeds):
             LABELS.get(key, "flow at " + key[4:]), mm, mci, sm, sci, 100 * diff, 100 * goal, "ok" if ok else "MISSED"))
     if a.json_out:
         with open(a.json_out, "w") as f:
-            json.dump(dict(scenario=cfg, seeds=a.seeds, rows=rows, mapc_runs=mapc_runs, sumo_runs=sumo_runs), f,
+            json.dump(dict(scenario=cfg, seeds=a.seeds, inputs_sha256=digest, rows=rows, mapc_runs=mapc_runs,
+                           sumo_runs=sumo_runs), f,
                       indent=1)

@@ -243,8 +243,8 @@ def main():
     ap.add_argument("--work", default=None, help="folder for the export (default: a temporary one)")
     ap.add_argument("--jobs", type=int, default=os.cpu_count(), help="SUMO processes at once")
     ap.add_argument("--json", dest="json_out", help="also write every run and summary here")
-    ap.add_argument("--sumo-runs", help="baseline: reuse SUMO's runs from an earlier --json of the same export "
-                                        "and seeds instead of running SUMO")
+    ap.add_argument("--sumo-runs", help="baseline, scenario: reuse SUMO's runs from an earlier --json of the same "
+                                        "export (inputs) and seeds instead of running SUMO")
     ap.add_argument("--skip-unsupported", action="store_true",
                     help="scenario: mapc drops what it does not simulate (SUMO still runs it)")
     ap.add_argument("--end", type=float, help="scenario: end time for SUMO where the configuration has none")

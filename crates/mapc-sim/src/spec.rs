@@ -183,6 +183,9 @@ pub struct SimSpec {
     /// A lane's front vehicle that has stood still longer than this is teleported (SUMO's `--time-to-teleport`;
     /// 0: never).
     pub time_to_teleport_s: f64,
+    /// A vehicle may change lanes while its back is still inside the junction behind (SUMO 1.8's rule, a SUMO
+    /// user's scenario); `false`: it waits until its back has left (mapc's own scenarios).
+    pub lane_change_from_junction: bool,
     /// Induction loops: points that count passing vehicles and their occupancy over intervals.
     pub detectors: Vec<DetectorSpec>,
 }

@@ -532,6 +532,7 @@ fn corridor_scenario(
         measure: None,
         queue_excess_demand: s.queue_excess_demand,
         sumo_clock: s.sumo_clock,
+        lane_change_from_junction: s.lane_change_from_junction,
         light_programs: s.light_programs.clone(),
         // a window keeps its own roads only: detectors named on the source network are not carried
         detectors: Vec::new(),

@@ -281,3 +281,65 @@ fn the_free_flow_time_of_a_dead_end_route_covers_the_whole_route() {
     assert_eq!(free, at_limits(&whole));
     assert!(free > at_limits(&route.lanes) + 1.0, "{free}");
 }
+
+/// Lane changes made while the changer's back was still inside the junction behind, over the first `steps` steps
+/// of seed 0 of the shipped ramp_metering_1x3 (collision check on), with SUMO 1.8's rule on or off.
+fn changes_with_back_in_junction(from_junction: bool, steps: usize) -> (usize, u64) {
+    let cfg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
+    );
+    let rs = mapc_scenario::ResolvedScenario::load(cfg).expect("shipped SUMO scenario");
+    assert!(
+        rs.scenario.lane_change_from_junction,
+        "a SUMO user's scenario"
+    );
+    let mut spec = spec_from_scenario(&rs).expect("simulator spec");
+    spec.lane_change_from_junction = from_junction;
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    sim.set_invariant_checks(true);
+    let mut last_lane = std::collections::HashMap::new();
+    let mut early = 0;
+    for _ in 0..steps {
+        sim.step().unwrap();
+        for q in sim.lane_veh.iter() {
+            for &id in q.iter() {
+                let v = &sim.veh[id as usize];
+                let road = |l: LaneIdx| match sim.net.lanes[l as usize].kind {
+                    LaneKind::Road(r) => Some(r),
+                    _ => None,
+                };
+                if let Some(&before) = last_lane.get(&id) {
+                    // the lane it was on, or the one its junction connection leads to (a vehicle may enter a road
+                    // and change lanes in the same step)
+                    let before = match sim.net.lanes[before as usize].kind {
+                        LaneKind::Via(link) => sim.net.links[link as usize].to_lane,
+                        _ => before,
+                    };
+                    let side_step =
+                        before != v.lane && road(before).is_some() && road(before) == road(v.lane);
+                    if side_step && v.pos < v.length {
+                        early += 1;
+                    }
+                }
+                last_lane.insert(id, v.lane);
+            }
+        }
+    }
+    (early, sim.metrics().lane_changes)
+}
+
+#[test]
+fn a_vehicle_leaves_its_lane_with_its_back_in_the_junction_only_under_sumos_rule() {
+    // the metered ramp's vehicles come slowly onto the acceleration lane through a junction and must leave it:
+    // under SUMO 1.8's rule (a SUMO user's scenario) some change while their back is still in the junction; with
+    // mapc's own scenarios' rule they stay on the lane until the back is out
+    let (early_sumo, changes_sumo) = changes_with_back_in_junction(true, 900);
+    let (early_own, changes_own) = changes_with_back_in_junction(false, 900);
+    assert_eq!(early_own, 0);
+    assert!(
+        early_sumo > 0,
+        "no change with the back in the junction ({changes_sumo} changes, {changes_own} without the rule)"
+    );
+    assert!(changes_sumo > 0 && changes_own > 0);
+}

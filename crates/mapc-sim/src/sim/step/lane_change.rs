@@ -328,8 +328,9 @@ impl Simulation {
         );
         let l = self.lane_at(lane as usize);
         let (l_right, l_left) = (l.right, l.left);
-        // a vehicle whose back is still in the junction behind stays on its lane
-        let may_change = v.pos >= v.length;
+        // SUMO lets a vehicle whose back is still in the junction behind change lanes; mapc's own scenarios were
+        // measured with it staying on its lane until its back has left
+        let may_change = self.spec.lane_change_from_junction || v.pos >= v.length;
         let side_lane = |n: Option<LaneIdx>| n.filter(|_| may_change);
         let (last, first) = blocked[index];
         // built in place, each neighbour written where the model reads it: moved between locals, the copies of
