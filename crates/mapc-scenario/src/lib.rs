@@ -123,7 +123,7 @@ impl Scenario {
             measure: None,
             queue_excess_demand: false,
             sumo_clock: false,
-            lane_change_from_junction: false,
+            sumo_junction_lane_changes: false,
             light_programs: Vec::new(),
             detectors: Vec::new(),
         }

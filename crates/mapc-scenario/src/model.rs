@@ -58,7 +58,7 @@ pub struct Scenario {
     /// user's scenario); otherwise it waits until its back has left, the rule mapc's own scenarios were measured
     /// with (their figures in docs/).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub lane_change_from_junction: bool,
+    pub sumo_junction_lane_changes: bool,
     /// Fixed-time programs that replace the network's of the same lights (SUMO runs the last program loaded).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub light_programs: Vec<mapc_graph::TrafficLight>,

@@ -185,7 +185,7 @@ pub struct SimSpec {
     pub time_to_teleport_s: f64,
     /// A vehicle may change lanes while its back is still inside the junction behind (SUMO 1.8's rule, a SUMO
     /// user's scenario); `false`: it waits until its back has left (mapc's own scenarios).
-    pub lane_change_from_junction: bool,
+    pub sumo_junction_lane_changes: bool,
     /// Induction loops: points that count passing vehicles and their occupancy over intervals.
     pub detectors: Vec<DetectorSpec>,
 }

@@ -155,7 +155,7 @@ pub fn scenario(
         measure: None,
         queue_excess_demand: true,
         sumo_clock: true,
-        lane_change_from_junction: true,
+        sumo_junction_lane_changes: true,
         light_programs: lights,
         detectors: std::mem::take(&mut d.detectors),
     })

@@ -48,6 +48,9 @@ pub struct SimLane {
     pub left: Option<LaneIdx>,
     /// Links ending on this road lane (for followers behind its start).
     pub in_links: Vec<LinkIdx>,
+    /// For a via lane: another connection runs beside it from its road to the same road. SUMO builds such
+    /// connections as one internal edge of several lanes, which has a lane changer.
+    pub beside_another: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -208,6 +211,20 @@ impl Network {
                 }),
             });
             seen.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), link_idx);
+        }
+        let road_of = |lanes: &[SimLane], l: LaneIdx| match lanes[l as usize].kind {
+            LaneKind::Road(r) => r,
+            LaneKind::Via(_) => usize::MAX,
+        };
+        let mut between: HashMap<(usize, usize), usize> = HashMap::new();
+        for k in &links {
+            *between
+                .entry((road_of(&lanes, k.from_lane), road_of(&lanes, k.to_lane)))
+                .or_default() += 1;
+        }
+        for k in &links {
+            let n = between[&(road_of(&lanes, k.from_lane), road_of(&lanes, k.to_lane))];
+            lanes[k.via_lane as usize].beside_another = n > 1;
         }
         for i in 0..links.len() {
             let foes: Vec<LinkIdx> = (0..links.len())
@@ -509,6 +526,7 @@ fn road_sim_lane(road: usize, index: u8, length: f64, speed_limit: f64) -> SimLa
         right: None,
         left: None,
         in_links: Vec::new(),
+        beside_another: false,
     }
 }
 

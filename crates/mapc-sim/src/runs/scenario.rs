@@ -197,7 +197,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
     Ok(SimSpec {
         detectors: detector_specs(rs, &names)?,
         time_to_teleport_s: sc.time_to_teleport_s.unwrap_or(0.0),
-        lane_change_from_junction: sc.lane_change_from_junction,
+        sumo_junction_lane_changes: sc.sumo_junction_lane_changes,
         graph: rs.graph.clone(),
         vehicle_types,
         flows,

@@ -291,11 +291,11 @@ fn changes_with_back_in_junction(from_junction: bool, steps: usize) -> (usize, u
     );
     let rs = mapc_scenario::ResolvedScenario::load(cfg).expect("shipped SUMO scenario");
     assert!(
-        rs.scenario.lane_change_from_junction,
+        rs.scenario.sumo_junction_lane_changes,
         "a SUMO user's scenario"
     );
     let mut spec = spec_from_scenario(&rs).expect("simulator spec");
-    spec.lane_change_from_junction = from_junction;
+    spec.sumo_junction_lane_changes = from_junction;
     let mut sim = Simulation::from_spec(spec, 0).unwrap();
     sim.set_invariant_checks(true);
     let mut last_lane = std::collections::HashMap::new();
@@ -342,4 +342,63 @@ fn a_vehicle_leaves_its_lane_with_its_back_in_the_junction_only_under_sumos_rule
         "no change with the back in the junction ({changes_sumo} changes, {changes_own} without the rule)"
     );
     assert!(changes_sumo > 0 && changes_own > 0);
+}
+
+#[test]
+fn connections_side_by_side_between_two_roads_are_marked_and_keep_the_lane_change_memory_under_sumos_rules()
+ {
+    let cfg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
+    );
+    let rs = mapc_scenario::ResolvedScenario::load(cfg).expect("shipped SUMO scenario");
+    let spec = spec_from_scenario(&rs).expect("simulator spec");
+    let net = Network::from_graph(&spec.graph).unwrap();
+    let via_between = |from: &str, to: &str| -> Vec<LaneIdx> {
+        let (f, t) = (road(&net, &spec.graph, from), road(&net, &spec.graph, to));
+        net.links
+            .iter()
+            .filter(|k| {
+                net.lanes[k.from_lane as usize].kind == LaneKind::Road(f)
+                    && net.lanes[k.to_lane as usize].kind == LaneKind::Road(t)
+            })
+            .map(|k| k.via_lane)
+            .collect()
+    };
+    // SUMO's internal edges at the merge: :merge_beginning_1 (three lanes from the main road), :merge_beginning_0
+    // (one, from the ramp)
+    let main = via_between("main_road", "acceleration_area");
+    let ramp = via_between("passage_area", "acceleration_area");
+    assert_eq!((main.len(), ramp.len()), (3, 1));
+    assert!(main.iter().all(|&l| net.lanes[l as usize].beside_another));
+    assert!(!net.lanes[ramp[0] as usize].beside_another);
+
+    // a vehicle's speed-gain wish on one of those connections: kept under SUMO's rules, cleared otherwise (as on
+    // a connection alone)
+    let kept = |sumo_rules: bool, via: LaneIdx| {
+        let mut spec = spec.clone();
+        spec.sumo_junction_lane_changes = sumo_rules;
+        let mut sim = Simulation::from_spec(spec, 0).unwrap();
+        while sim.lane_veh.iter().all(|q| q.is_empty()) {
+            sim.step().unwrap();
+        }
+        let id = sim.active_ids().next().unwrap();
+        let vtype = sim.veh[id as usize].vtype as usize;
+        sim.veh[id as usize]
+            .lc
+            .get_or_insert_default()
+            .mem
+            .speed_gain_probability = 0.5;
+        let speed = sim.veh[id as usize].speed;
+        sim.patch_lc_speed(id, speed, vtype, via, speed, 0.0, speed, speed + 1.0);
+        sim.veh[id as usize]
+            .lc
+            .as_ref()
+            .unwrap()
+            .mem
+            .speed_gain_probability
+    };
+    assert_eq!(kept(true, main[0]), 0.5);
+    assert_eq!(kept(false, main[0]), 0.0);
+    assert_eq!(kept(true, ramp[0]), 0.0);
 }

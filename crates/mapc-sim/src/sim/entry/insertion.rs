@@ -145,7 +145,8 @@ impl Simulation {
     }
 
     /// SUMO 1.8's `freeInsertion` with the speed adapted (the front at the lane's start behind the last vehicle,
-    /// else the first gap, upstream first, that leaves both the leader's and the follower's secure gaps).
+    /// at about the speed of the lane's first vehicle; else the first gap, upstream first, that leaves both the
+    /// leader's and the follower's secure gaps).
     fn try_insert_free(&mut self, id: VehicleId) -> bool {
         let v = &self.veh[id as usize];
         let p = &self.types[v.vtype as usize];
@@ -166,7 +167,10 @@ impl Simulation {
             })
             .collect();
         let mut candidates: Vec<(f64, f64)> = Vec::new();
-        match on_lane.first() {
+        // "behind the last one" is judged, as in SUMO 1.8, by the lane's first vehicle, the farthest downstream
+        // (`getFirstFullVehicle`, kept there on purpose): its back must leave the secure gap at its speed, and the
+        // speed tried is the follow speed at that gap, about its speed
+        match on_lane.last() {
             None => candidates.push((0.0, top)),
             Some(&(pos, len, speed, _)) => {
                 let needed = p.secure_gap(speed, speed) + min_gap;

@@ -166,3 +166,31 @@ fn a_max_speed_vehicle_slows_for_a_leader_on_the_road_ahead() {
         Some(expected)
     );
 }
+
+#[test]
+fn a_free_insertion_behind_the_last_vehicle_takes_about_the_speed_of_the_lanes_first() {
+    // SUMO 1.8's freeInsertion judges "behind the last one" by the lane's first vehicle (`getFirstFullVehicle`):
+    // a fast last vehicle 150 m in, a slow first one 400 m in; the new vehicle enters at the lane's start at about
+    // the slow one's speed, not the fast one's
+    let mut sim = sim_with_max_depart_speed();
+    let len = sim.lane_at(sim.routes[0].lanes[0] as usize).length;
+    assert!(len > 420.0, "the entry road is long enough: {len}");
+    driving(&mut sim, 400.0, 5.0);
+    driving(&mut sim, 150.0, 25.0);
+    let id = waiting(&mut sim);
+    sim.veh[id as usize].depart_pos = DepartPos::Free;
+    assert!(sim.try_insert(id));
+    let v = &sim.veh[id as usize];
+    assert_eq!(v.pos, 0.0);
+    let p = sim.types[0];
+    let expected = p
+        .insertion_follow_speed(
+            desired(&sim, id),
+            p.secure_gap(5.0, 5.0) + p.min_gap,
+            5.0,
+            0.0,
+        )
+        .fmin(desired(&sim, id));
+    assert!(v.speed < 8.0, "entered at {} m/s", v.speed);
+    assert_eq!(v.speed, expected);
+}

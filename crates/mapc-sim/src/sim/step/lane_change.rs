@@ -90,7 +90,9 @@ impl Simulation {
     /// LC2013's `patch_speed` for a vehicle's next speed between `min` and `max` (`wanted`: the car-following
     /// speed). A lane with no neighbour (a one-lane road, or a junction connection: the SUMO export writes each as
     /// an internal edge of one lane) has no lane changer in SUMO, whose `patchSpeed` then clears the memory as
-    /// after a change: the speed-gain and keep-right wishes do not survive a junction.
+    /// after a change: the speed-gain and keep-right wishes do not survive a junction. In a SUMO user's network
+    /// the connections that run side by side between two roads form one internal edge of several lanes, which has
+    /// a lane changer: under SUMO's rules there the memory survives.
     #[allow(clippy::too_many_arguments)]
     pub(in crate::sim) fn patch_lc_speed(
         &mut self,
@@ -104,7 +106,9 @@ impl Simulation {
         max: f64,
     ) -> f64 {
         let l = self.lane_at(lane as usize);
-        let has_lane_changer = l.left.is_some() || l.right.is_some();
+        let has_lane_changer = l.left.is_some()
+            || l.right.is_some()
+            || (l.beside_another && self.spec.sumo_junction_lane_changes);
         let Some(rec) = self.veh[id as usize].lc.as_deref_mut() else {
             return wanted;
         };
@@ -330,7 +334,7 @@ impl Simulation {
         let (l_right, l_left) = (l.right, l.left);
         // SUMO lets a vehicle whose back is still in the junction behind change lanes; mapc's own scenarios were
         // measured with it staying on its lane until its back has left
-        let may_change = self.spec.lane_change_from_junction || v.pos >= v.length;
+        let may_change = self.spec.sumo_junction_lane_changes || v.pos >= v.length;
         let side_lane = |n: Option<LaneIdx>| n.filter(|_| may_change);
         let (last, first) = blocked[index];
         // built in place, each neighbour written where the model reads it: moved between locals, the copies of
