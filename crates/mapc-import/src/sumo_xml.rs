@@ -66,6 +66,7 @@ fn parse(bytes: &[u8], path: &Path, roots: &[&str], what: &str) -> Result<SumoEl
     // the open elements, outermost first; the root at 0
     let mut stack: Vec<SumoElement> = Vec::new();
     let mut done: Option<SumoElement> = None;
+    let mut lines = LineCounter::default();
     loop {
         match xml.next()? {
             Item::Eof => break,
@@ -90,7 +91,7 @@ fn parse(bytes: &[u8], path: &Path, roots: &[&str], what: &str) -> Result<SumoEl
                         ),
                     ));
                 }
-                let (line, column) = line_and_column(bytes, at);
+                let (line, column) = lines.at(bytes, at);
                 let e = SumoElement {
                     name,
                     attrs: kv,
@@ -123,9 +124,45 @@ fn parse(bytes: &[u8], path: &Path, roots: &[&str], what: &str) -> Result<SumoEl
     done.ok_or_else(|| ParseError::new(0, None, "no XML element in the file"))
 }
 
+/// Lines and columns of byte offsets met in increasing order, counted from the last one: a file's every element
+/// names its place, and counting from the file's start each time made reading quadratic in its length (a 190 KB
+/// network took 0.3 s).
+#[derive(Default)]
+struct LineCounter {
+    offset: usize,
+    line: usize,
+    line_start: usize,
+}
+
+impl LineCounter {
+    fn at(&mut self, text: &[u8], byte: u64) -> (usize, usize) {
+        let end = (byte as usize).min(text.len());
+        if end < self.offset {
+            return line_and_column(text, byte);
+        }
+        for (i, &b) in text[self.offset..end].iter().enumerate() {
+            if b == b'\n' {
+                self.line += 1;
+                self.line_start = self.offset + i + 1;
+            }
+        }
+        self.offset = end;
+        (self.line + 1, end - self.line_start + 1)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lines_counted_from_the_last_place_match_lines_counted_from_the_start() {
+        let text = b"<a>\n  <b/>\r\n\n<c x=\"1\"/>\n</a>\n";
+        let mut lines = LineCounter::default();
+        for at in [0u64, 2, 3, 6, 9, 10, 12, 13, 20, 5, 40] {
+            assert_eq!(lines.at(text, at), line_and_column(text, at), "byte {at}");
+        }
+    }
 
     fn read(text: &str) -> Result<SumoElement, String> {
         let dir = std::env::temp_dir().join(format!("mapc_sumo_xml_{}", std::process::id()));

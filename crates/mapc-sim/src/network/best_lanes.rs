@@ -56,6 +56,21 @@ struct Q {
     continuation: Vec<LaneIdx>,
 }
 
+/// The links onwards of each lane's best lanes, by the roads the look-ahead examined and the brake distance's bits:
+/// a network's routes share most of them (a thousand vehicles with their own routes through one interchange), and
+/// each costs a backward pass over its look-ahead. Filled as routes are built; the same for any order of them.
+#[derive(Debug, Default)]
+pub struct BestLinksMemo(std::sync::Mutex<BestLinksMap>);
+
+type BestLinksMap = std::collections::HashMap<(Vec<usize>, u64), Vec<Option<LinkIdx>>>;
+
+impl Clone for BestLinksMemo {
+    fn clone(&self) -> Self {
+        let map = self.0.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        BestLinksMemo(std::sync::Mutex::new(map))
+    }
+}
+
 impl Network {
     /// How many roads of `roads` (the current one first) the look-ahead examines for a vehicle whose brake
     /// distance at its highest speed, plus its min gap, is `max_brake_dist` (m).
@@ -263,8 +278,24 @@ impl Network {
         roads: &[usize],
         max_brake_dist: f64,
     ) -> (Vec<LaneIdx>, bool) {
+        let mut memo = self
+            .best_links_memo
+            .0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
         self.lane_path(start, roads, |k, i| {
-            self.best_lanes(&roads[k..], max_brake_dist)[i].next_link
+            // the best lanes of a road depend on the roads its look-ahead examines and the one after them (whether
+            // the last examined lanes continue): routes that share them share the links
+            let n = self.look_ahead_roads(&roads[k..], max_brake_dist);
+            let window = &roads[k..(k + n + 1).min(roads.len())];
+            let key = (window.to_vec(), max_brake_dist.to_bits());
+            let links = memo.entry(key).or_insert_with(|| {
+                self.best_lanes(window, max_brake_dist)
+                    .iter()
+                    .map(|b| b.next_link)
+                    .collect()
+            });
+            links.get(i).copied().flatten()
         })
     }
 }

@@ -87,6 +87,8 @@ pub struct Network {
     pub road_labels: Vec<String>,
     /// The graph's fixed-time traffic lights ([`signals`]).
     pub lights: Vec<mapc_graph::TrafficLight>,
+    /// Best lanes' links already computed ([`Network::best_lane_path`]).
+    pub best_links_memo: best_lanes::BestLinksMemo,
 }
 
 impl Network {
@@ -247,6 +249,7 @@ impl Network {
             lane_names,
             road_labels,
             lights: g.lights.clone(),
+            best_links_memo: Default::default(),
         };
         net.compute_downstream()?;
         Ok(net)
