@@ -9,35 +9,60 @@ use std::collections::BTreeMap;
 /// Half the side of the square drawn as a junction's shape (SUMO only draws it).
 const JUNCTION_HALF_SIDE_M: f64 = 1.5;
 
-/// Which junction link each connection is, and its internal lane's id.
+/// Which junction link each connection is, and its internal lane: lane `internal_lane` of edge `internal_edge`.
 pub(crate) struct Link<'a> {
     pub connection: &'a Connection,
     pub index: usize,
     pub internal_edge: String,
+    pub internal_lane: usize,
+}
+
+impl Link<'_> {
+    /// The id of its internal lane (the connection's `via`).
+    pub fn via(&self) -> String {
+        format!("{}_{}", self.internal_edge, self.internal_lane)
+    }
+}
+
+/// How connections become internal edges.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InternalEdges {
+    /// One internal edge of one lane per connection: SUMO's LC2013 then clears its memory in every junction, as
+    /// mapc's own scenarios drive.
+    PerConnection,
+    /// The connections from one road to the next side by side, as one internal edge of as many lanes (netconvert's
+    /// networks, a SUMO user's scenario): SUMO keeps the memory there.
+    SideBySide,
 }
 
 /// Every internal edge: its id and the roads it joins.
 pub fn internal_edges(
     graph: &LaneGraph,
     names: &SumoNames,
+    grouping: InternalEdges,
 ) -> Vec<(String, mapc_graph::RoadId, mapc_graph::RoadId)> {
-    links_by_junction(graph, names)
+    let mut out: Vec<(String, mapc_graph::RoadId, mapc_graph::RoadId)> = Vec::new();
+    for l in links_by_junction(graph, names, grouping)
         .into_values()
         .flatten()
-        .map(|l| {
-            (
+    {
+        if out.last().is_none_or(|(id, _, _)| *id != l.internal_edge) {
+            out.push((
                 l.internal_edge,
                 l.connection.from_road,
                 l.connection.to_road,
-            )
-        })
-        .collect()
+            ));
+        }
+    }
+    out
 }
 
 /// SUMO numbers a junction's links by incoming lane (`incLanes` order), then as the connections are listed.
+/// Internal edges are named after the link of their first lane (`:J_k`), their lanes numbered from the right.
 pub(crate) fn links_by_junction<'a>(
     graph: &'a LaneGraph,
     names: &SumoNames,
+    grouping: InternalEdges,
 ) -> BTreeMap<usize, Vec<Link<'a>>> {
     let mut by: BTreeMap<usize, Vec<&Connection>> = BTreeMap::new();
     for c in &graph.connections {
@@ -50,13 +75,29 @@ pub(crate) fn links_by_junction<'a>(
     by.into_iter()
         .map(|(ji, mut list)| {
             list.sort_by_key(|c| (c.from_road, c.from_lane, c.to_road, c.to_lane));
+            // per (from road, to road): the first link's index and the lanes given so far
+            let mut edges: BTreeMap<(mapc_graph::RoadId, mapc_graph::RoadId), (usize, usize)> =
+                BTreeMap::new();
             let links = list
                 .into_iter()
                 .enumerate()
-                .map(|(index, connection)| Link {
-                    connection,
-                    index,
-                    internal_edge: format!(":{}_{index}", names.junctions[ji]),
+                .map(|(index, connection)| {
+                    let (first, lane) = match grouping {
+                        InternalEdges::PerConnection => (index, 0),
+                        InternalEdges::SideBySide => {
+                            let e = edges
+                                .entry((connection.from_road, connection.to_road))
+                                .or_insert((index, 0));
+                            e.1 += 1;
+                            (e.0, e.1 - 1)
+                        }
+                    };
+                    Link {
+                        connection,
+                        index,
+                        internal_edge: format!(":{}_{first}", names.junctions[ji]),
+                        internal_lane: lane,
+                    }
                 })
                 .collect();
             (ji, links)
@@ -80,10 +121,7 @@ pub(crate) fn junction(
             (0..graph.roads[i].lanes.len()).map(move |k| format!("{}_{k}", names.edges[i]))
         })
         .collect();
-    let int_lanes: Vec<String> = links
-        .iter()
-        .map(|l| format!("{}_0", l.internal_edge))
-        .collect();
+    let int_lanes: Vec<String> = links.iter().map(Link::via).collect();
     let [x, y] = j.pos;
     let h = JUNCTION_HALF_SIDE_M;
     let square = [

@@ -1,9 +1,11 @@
 //! # mapc-sumo: mapc's networks and scenarios as SUMO 1.8 inputs
 //!
 //! Glossary:
-//! - **net** (`NAME.net.xml`): SUMO's compiled network: edges (mapc's roads) with lanes, internal edges (one per
-//!   mapc connection, its length driven inside the junction), junctions with request tables (who yields to whom),
-//!   and connections. Written directly, not through netconvert, so lane lengths are mapc's.
+//! - **net** (`NAME.net.xml`): SUMO's compiled network: edges (mapc's roads) with lanes, internal edges (an
+//!   internal lane per mapc connection, its length driven inside the junction: one edge per connection, or, in a
+//!   SUMO user's scenario, one per pair of roads with its connections side by side, as netconvert builds them),
+//!   junctions with request tables (who yields to whom), and connections. Written directly, not through
+//!   netconvert, so lane lengths are mapc's.
 //! - **routes** (`NAME.rou.xml`): vehicle types (`vType`, IDM), flows (`vehsPerHour`, `departSpeed`) each with its
 //!   route, and the initial vehicles.
 //! - **sumocfg** (`NAME.sumocfg`): what `sumo -c` runs: the files, the step, the paper's options.
@@ -169,7 +171,10 @@ pub fn export_network(
         end_edge: None,
     };
     let files = vec![
-        (net_file, net::net_xml(graph, &names)),
+        (
+            net_file,
+            net::net_xml(graph, &names, net::InternalEdges::PerConnection),
+        ),
         (format!("{stem}.mapc.json"), to_json(&manifest)),
     ];
     write(dir, files, graph, 0, 0)
@@ -187,6 +192,13 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
     let graph = &spec.graph;
     let names = SumoNames::of(graph);
     let sc = &rs.scenario;
+    // the internal edges on which SUMO drives as mapc does: a SUMO user's scenario keeps LC2013's memory across
+    // side-by-side connections, mapc's own scenarios clear it in every junction
+    let grouping = if spec.sumo_junction_lane_changes {
+        net::InternalEdges::SideBySide
+    } else {
+        net::InternalEdges::PerConnection
+    };
     let stem = stem(&sc.name);
     let (net_file, routes_file, config_file) = (
         format!("{stem}.net.xml"),
@@ -234,7 +246,7 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
             .iter()
             .map(|r| edges[&r.to_string()].clone())
             .collect(),
-        control_internal_edges: net::internal_edges(graph, &names)
+        control_internal_edges: net::internal_edges(graph, &names, grouping)
             .into_iter()
             .filter(|(_, from, to)| rs.region_roads.contains(from) && rs.region_roads.contains(to))
             .map(|(id, _, _)| id)
@@ -252,7 +264,7 @@ pub fn export_scenario(rs: &ResolvedScenario, dir: &Path) -> Result<ExportSummar
     let detectors = demand::detectors_xml(&spec, &names, &format!("{stem}.e1.xml"));
     let additional_file = detectors.as_ref().map(|_| format!("{stem}.add.xml"));
     let mut files = vec![
-        (net_file.clone(), net::net_xml(graph, &names)),
+        (net_file.clone(), net::net_xml(graph, &names, grouping)),
         (routes_file.clone(), routes),
         (
             config_file,

@@ -4,6 +4,7 @@
 //! which a minor link yields to every major link into the same lane: mapc's model of right of way, where the only
 //! conflicts are merges (`junctions.rs`).
 
+pub use crate::junctions::InternalEdges;
 use crate::junctions::{Link, junction, links_by_junction};
 use crate::names::{SumoNames, road_index};
 use crate::xml::{element, num, shape, start};
@@ -16,7 +17,7 @@ pub use crate::junctions::internal_edges;
 /// Decimals of lengths: a millimetre's tenth, so that a round trip keeps them far inside 0.1 m.
 const LENGTH_DECIMALS: usize = 4;
 /// The net.xml text of `graph`.
-pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
+pub fn net_xml(graph: &LaneGraph, names: &SumoNames, grouping: InternalEdges) -> String {
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\n");
     out.push_str("<!-- written by `mapc export` for SUMO 1.8: lane lengths are mapc's -->\n\n");
     start(
@@ -30,7 +31,7 @@ pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
         ],
     );
     location(&mut out, graph);
-    let links = links_by_junction(graph, names);
+    let links = links_by_junction(graph, names, grouping);
     write_internal_edges(&mut out, graph, &links);
     for (i, road) in graph.roads.iter().enumerate() {
         edge(&mut out, graph, names, i, road);
@@ -56,7 +57,7 @@ pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
                 ("to", names.edges[to].clone()),
                 ("fromLane", c.from_lane.to_string()),
                 ("toLane", c.to_lane.to_string()),
-                ("via", format!("{}_0", l.internal_edge)),
+                ("via", l.via()),
             ];
             if let Some(s) = &c.signal {
                 attrs.push(("tl", s.light.clone()));
@@ -83,7 +84,7 @@ pub fn net_xml(graph: &LaneGraph, names: &SumoNames) -> String {
                 &[
                     ("from", l.internal_edge.clone()),
                     ("to", names.edges[to].clone()),
-                    ("fromLane", "0".into()),
+                    ("fromLane", l.internal_lane.to_string()),
                     ("toLane", c.to_lane.to_string()),
                     ("dir", "s".into()),
                     ("state", "M".into()),
@@ -208,42 +209,50 @@ fn location(out: &mut String, graph: &LaneGraph) {
 
 fn write_internal_edges(out: &mut String, graph: &LaneGraph, links: &BTreeMap<usize, Vec<Link>>) {
     for list in links.values() {
+        // each internal edge once, where its first lane's link comes, its lanes from the right
+        let mut edges: Vec<(&str, Vec<&Link>)> = Vec::new();
         for l in list {
-            let c = l.connection;
-            let from = &graph.roads[road_index(graph, c.from_road)];
-            let to = &graph.roads[road_index(graph, c.to_road)];
-            let speed = c
-                .via_speed_mps
-                .filter(|s| *s > 0.0)
-                .unwrap_or(from.speed_mps().min(to.speed_mps()));
-            let a = *lane_shape(from, c.from_lane as usize)
-                .last()
-                .expect("a shape has points");
-            let b = lane_shape(to, c.to_lane as usize)[0];
+            match edges.iter_mut().find(|(id, _)| *id == l.internal_edge) {
+                Some((_, lanes)) => lanes.push(l),
+                None => edges.push((&l.internal_edge, vec![l])),
+            }
+        }
+        for (id, mut lanes) in edges {
+            lanes.sort_by_key(|l| l.internal_lane);
             start(
                 out,
                 4,
                 "edge",
-                &[
-                    ("id", l.internal_edge.clone()),
-                    ("function", "internal".into()),
-                ],
+                &[("id", id.to_string()), ("function", "internal".into())],
             );
-            element(
-                out,
-                8,
-                "lane",
-                &[
-                    ("id", format!("{}_0", l.internal_edge)),
-                    ("index", "0".into()),
-                    ("speed", num(speed, 2)),
-                    (
-                        "length",
-                        num(c.via_length_m.max(MIN_VIA_LENGTH_M), LENGTH_DECIMALS),
-                    ),
-                    ("shape", shape(&[a, b])),
-                ],
-            );
+            for l in lanes {
+                let c = l.connection;
+                let from = &graph.roads[road_index(graph, c.from_road)];
+                let to = &graph.roads[road_index(graph, c.to_road)];
+                let speed = c
+                    .via_speed_mps
+                    .filter(|s| *s > 0.0)
+                    .unwrap_or(from.speed_mps().min(to.speed_mps()));
+                let a = *lane_shape(from, c.from_lane as usize)
+                    .last()
+                    .expect("a shape has points");
+                let b = lane_shape(to, c.to_lane as usize)[0];
+                element(
+                    out,
+                    8,
+                    "lane",
+                    &[
+                        ("id", l.via()),
+                        ("index", l.internal_lane.to_string()),
+                        ("speed", num(speed, 2)),
+                        (
+                            "length",
+                            num(c.via_length_m.max(MIN_VIA_LENGTH_M), LENGTH_DECIMALS),
+                        ),
+                        ("shape", shape(&[a, b])),
+                    ],
+                );
+            }
             out.push_str("    </edge>\n");
         }
     }

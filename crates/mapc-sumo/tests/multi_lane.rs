@@ -235,3 +235,85 @@ fn lane_drop_exports_the_ending_lane_without_a_connection_and_its_measurement_po
     assert_eq!(manifest["measure_points"], serde_json::json!([]));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_sumo_users_side_by_side_connections_export_as_one_internal_edge_and_mapcs_own_one_per_connection()
+ {
+    // ramp_metering_1x3: the main road's three lanes go on through one internal edge of three lanes, as in the
+    // user's network (`:merge_beginning_1`), so that SUMO keeps LC2013's memory there as mapc does under SUMO's
+    // rules; the ramp's one connection has an edge of its own
+    let cfg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
+    );
+    let rs = ResolvedScenario::load(cfg).unwrap();
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mapc-sumo-side-by-side-{}", std::process::id()));
+    let summary = mapc_sumo::export_scenario(&rs, &dir).unwrap();
+    let net_file = summary
+        .files
+        .iter()
+        .find(|f| f.ends_with(".net.xml"))
+        .unwrap();
+    let net = elements(&dir.join(net_file));
+    let mut internal_lanes: HashMap<String, Vec<String>> = HashMap::new();
+    let mut current = String::new();
+    for (name, a) in &net {
+        match name.as_str() {
+            "edge" => current = a.get("function").map_or(String::new(), |_| a["id"].clone()),
+            "lane" if !current.is_empty() => internal_lanes
+                .entry(current.clone())
+                .or_default()
+                .push(a["index"].clone()),
+            _ => {}
+        }
+    }
+    let vias: Vec<&HashMap<String, String>> = net
+        .iter()
+        .filter(|(n, a)| {
+            n == "connection" && a["from"] == "main_road" && a["to"] == "acceleration_area"
+        })
+        .map(|(_, a)| a)
+        .collect();
+    assert_eq!(vias.len(), 3);
+    let edge = vias[0]["via"].rsplit_once('_').unwrap().0.to_string();
+    assert!(
+        vias.iter()
+            .all(|a| a["via"].starts_with(&format!("{edge}_")))
+    );
+    assert_eq!(internal_lanes[&edge], ["0", "1", "2"]);
+    // each lane of it goes on to the lane its connection names
+    for a in &vias {
+        let lane = a["via"].rsplit_once('_').unwrap().1;
+        assert!(net.iter().any(|(n, b)| n == "connection"
+            && b["from"] == edge
+            && b["fromLane"] == lane
+            && b["toLane"] == a["toLane"]));
+    }
+    let ramp: Vec<_> = net
+        .iter()
+        .filter(|(n, a)| n == "connection" && a["from"] == "passage_area")
+        .collect();
+    assert_eq!(ramp.len(), 1);
+    let ramp_edge = ramp[0].1["via"].rsplit_once('_').unwrap().0;
+    assert_eq!(internal_lanes[ramp_edge], ["0"]);
+
+    // mapc's own two-lane merge: one internal edge of one lane per connection
+    let rs = ResolvedScenario::load("two_lane_merge").unwrap();
+    let dir = dir.join("own");
+    mapc_sumo::export_scenario(&rs, &dir).unwrap();
+    let net = elements(&dir.join("two_lane_merge.net.xml"));
+    let mut lanes_per_internal: HashMap<String, usize> = HashMap::new();
+    let mut current = String::new();
+    for (name, a) in &net {
+        match name.as_str() {
+            "edge" => current = a.get("function").map_or(String::new(), |_| a["id"].clone()),
+            "lane" if !current.is_empty() => {
+                *lanes_per_internal.entry(current.clone()).or_default() += 1
+            }
+            _ => {}
+        }
+    }
+    assert!(!lanes_per_internal.is_empty());
+    assert!(lanes_per_internal.values().all(|&n| n == 1));
+}
