@@ -20,6 +20,7 @@ import tempfile
 import time
 import xml.etree.ElementTree as ET
 
+import recorded
 import stats
 
 GOALS = (("inserted", 0.01), ("arrived", 0.01), ("duration", 0.03), ("speed", 0.05), ("lane_changes_per_veh", 0.20))
@@ -140,19 +141,6 @@ def inputs_digest(cfg, end):
     return h.hexdigest()
 
 
-def reused_runs(path, digest, seeds):
-    """SUMO's runs from an earlier --json of the same inputs and seeds; refused when either differs."""
-    with open(path) as f:
-        old = json.load(f)
-    if old.get("inputs_sha256") != digest:
-        sys.exit("sumo_check: %s was recorded for other SUMO inputs or another --end; run SUMO again" % path)
-    runs = old["sumo_runs"]
-    if [r["seed"] for r in runs] != list(seeds):
-        sys.exit("sumo_check: %s has SUMO runs for other seeds" % path)
-    print("  SUMO: %d seeds reused from %s (same inputs)" % (len(runs), path), file=sys.stderr)
-    return runs
-
-
 def compare(a, mapc, seeds):
     cfg = a.scenario
     t0 = time.time()
@@ -162,7 +150,8 @@ def compare(a, mapc, seeds):
     digest = inputs_digest(cfg, end)
     t0 = time.time()
     if a.sumo_runs:
-        sumo_runs = reused_runs(a.sumo_runs, digest, seeds)
+        sumo_runs = recorded.reuse(a.sumo_runs, "inputs_sha256", digest, "sumo_runs", seeds,
+                                   "inputs and --end")
     else:
         sumo_runs = run_sumo(cfg, seeds, end, [], a.jobs)
     sumo_s = time.time() - t0

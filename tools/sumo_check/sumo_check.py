@@ -25,6 +25,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+import recorded  # noqa: E402
 import stats  # noqa: E402
 
 METRICS = (("outflow", "outflow veh/h"), ("inflow", "inflow veh/h"), ("speed", "avg speed m/s"),
@@ -80,20 +81,6 @@ def export_digest(out_dir):
         with open(os.path.join(out_dir, name), "rb") as f:
             h.update(f.read() + b"\0")
     return h.hexdigest()
-
-
-def reused_sumo_runs(path, digest, seeds):
-    """SUMO's human runs from an earlier --json of the same export and seeds (a mapc-only change re-compared
-    without running SUMO again); refused when the export or the seeds differ."""
-    with open(path) as f:
-        old = json.load(f)
-    if old.get("export_sha256") != digest:
-        sys.exit("sumo_check: %s was recorded for another export (SUMO inputs differ); run SUMO again" % path)
-    runs = old["sumo_human_runs"]
-    if [r["seed"] for r in runs] != list(seeds):
-        sys.exit("sumo_check: %s has SUMO runs for other seeds" % path)
-    print("  SUMO humans: %d seeds reused from %s (same export)" % (len(runs), path), file=sys.stderr)
-    return runs
 
 
 def _one(job):
@@ -295,7 +282,7 @@ def compare(a, mapc, seeds, work):
     mapc_h = summary_of_mapc(mapc_h, n, points)
     digest = export_digest(export_dir)
     if a.sumo_runs:
-        sumo_h_runs = reused_sumo_runs(a.sumo_runs, digest, seeds)
+        sumo_h_runs = recorded.reuse(a.sumo_runs, "export_sha256", digest, "sumo_human_runs", seeds, "export")
     else:
         sumo_h_runs = run_sumo(export_dir, manifest, seeds, None, a.jobs)
     sumo_h = summary_of_runs(sumo_h_runs, points)
