@@ -3,6 +3,7 @@
 //! (`lane_choice.rs`).
 
 use super::*;
+use crate::network::signals::{self, SignalState};
 use crate::spec::{DEPART_SPEED_MAX, DepartPos};
 
 impl Simulation {
@@ -245,16 +246,23 @@ impl Simulation {
                 (speed, dist)
             }
         };
-        // the lanes ahead within the braking distance
+        // the lanes ahead within the braking distance; a link the vehicle may not pass now (a minor one, or a
+        // light other than green with priority: SUMO's `!opened() || !havePriority()`) is stopped at
+        let light_time = self.time_s - self.spec.step_s - self.spec.start_time_s;
         let mut seen = lane_len - pos;
         let mut k = 0;
         while seen < dist && k + 1 < route.lanes.len() {
             let next = route.lanes[k + 1];
-            if let LaneKind::Via(link) = self.lane_at(next as usize).kind
-                && !self.link_at(link as usize).major
-            {
-                (speed, dist) = lowered(speed, dist, p.stop_speed(seen, speed, des));
-                break;
+            if let LaneKind::Via(link) = self.lane_at(next as usize).kind {
+                let lk = self.link_at(link as usize);
+                let stopped_by_light = lk.signal.is_some_and(|(light, index)| {
+                    signals::state_at(&self.net.lights[light as usize], index, light_time)
+                        != SignalState::Green
+                });
+                if !lk.major || stopped_by_light {
+                    (speed, dist) = lowered(speed, dist, p.stop_speed(seen, speed, des));
+                    break;
+                }
             }
             if let Some(&o) = self.lane_veh[next as usize].last() {
                 let ov = &self.veh[o as usize];

@@ -140,6 +140,8 @@ fn a_max_speed_vehicle_slows_for_a_leader_on_the_road_ahead() {
     let passage = rs.graph.find_roads("passage_area").unwrap()[0];
     let spec = spec_from_scenario(&rs).unwrap();
     let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    // the meter green: an insertion at the end of the first step reads the light at the run's begin
+    sim.time_s = sim.spec.start_time_s + sim.spec.step_s;
     let r = sim.add_route(ramp, &[], None, Some(0)).unwrap();
     let id = sim.create_vehicle(0, r, DEPART_SPEED_MAX);
     let lane = sim.routes[r as usize].lanes[0];
@@ -193,4 +195,46 @@ fn a_free_insertion_behind_the_last_vehicle_takes_about_the_speed_of_the_lanes_f
         .fmin(desired(&sim, id));
     assert!(v.speed < 8.0, "entered at {} m/s", v.speed);
     assert_eq!(v.speed, expected);
+}
+
+#[test]
+fn a_max_speed_vehicle_entering_before_a_light_that_is_not_green_can_stop_at_its_line() {
+    // scenarios/sumo/ramp_metering_1x3's meter (G 5 s, r 5 s from the run's begin): a ramp vehicle put 15 m before
+    // the line enters at a speed from which it stops there while the light is red (SUMO's isInsertionSuccess
+    // stops at a link that is not opened), and faster while it is green
+    let cfg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
+    );
+    let rs = mapc_scenario::ResolvedScenario::load(cfg).expect("shipped SUMO scenario");
+    let ramp = rs.graph.find_roads("on_ramp").unwrap()[0];
+    let spec = spec_from_scenario(&rs).expect("simulator spec");
+    let entered_at = |green: bool| {
+        let mut sim = Simulation::from_spec(spec.clone(), 0).unwrap();
+        // after a step, the light's clock of the step just run is time - step
+        sim.step().unwrap();
+        while ((sim.time_s - sim.spec.step_s - sim.spec.start_time_s).rem_euclid(10.0) < 5.0)
+            != green
+        {
+            sim.step().unwrap();
+        }
+        let r = sim.add_route(ramp, &[], None, Some(0)).unwrap();
+        let id = sim.create_vehicle(0, r, DEPART_SPEED_MAX);
+        let lane = sim.routes[r as usize].lanes[0];
+        let len = sim.lane_at(lane as usize).length;
+        sim.lane_veh[lane as usize].clear();
+        assert!(sim.try_insert_at(id, Some(len - 15.0)));
+        let p = sim.types[0];
+        (
+            sim.veh[id as usize].speed,
+            p.stop_speed(15.0, desired(&sim, id), desired(&sim, id)),
+        )
+    };
+    let (on_red, stop) = entered_at(false);
+    let (on_green, _) = entered_at(true);
+    assert!(
+        on_red <= stop + 1e-9,
+        "{on_red} against a stop speed of {stop}"
+    );
+    assert!(on_green > on_red + 1.0, "green {on_green}, red {on_red}");
 }
