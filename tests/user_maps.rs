@@ -304,3 +304,131 @@ fn several_windows_report_their_timing_and_regime_as_one_window_does() {
     assert!(String::from_utf8_lossy(&text.stdout).contains("regime (3 seeds)"));
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// tools/sumo_replay/roads.py, standard library only, on a hand-made FCD and trace of one vehicle each: SUMO's
+/// drives 3 s on edge `a` (changing to lane 1 at 25 m) and 2 s on `b`; mapc's trace, stamped a step later, 2 s on
+/// `a` (road R1) and 3 s on `b` (R2), named through the graph's provenance.
+#[test]
+fn sumo_replays_roads_counts_vehicle_seconds_per_road_and_where_a_lane_is_left() {
+    let dir = scratch_dir("roads_py");
+    std::fs::write(
+        dir.join("g.json"),
+        r#"{"roads": [{"id": "R1", "provenance": {"sumo_ids": ["a"]}}, {"id": "R2", "provenance": {"sumo_ids": ["b"]}}]}"#,
+    )
+    .unwrap();
+    let mut fcd = String::from("<fcd-export>\n");
+    for (t, lane, pos) in [
+        (0, "a_0", 5),
+        (1, "a_0", 15),
+        (2, "a_1", 25),
+        (3, "b_0", 5),
+        (4, "b_0", 15),
+    ] {
+        fcd += &format!(
+            "<timestep time=\"{t}.00\"><vehicle id=\"v\" lane=\"{lane}\" pos=\"{pos}.00\" speed=\"10.00\"/></timestep>\n"
+        );
+    }
+    fcd += "</fcd-export>\n";
+    std::fs::write(dir.join("fcd.xml"), fcd).unwrap();
+    let mut trace = String::from(
+        "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled,lane\n",
+    );
+    for (t, road, pos) in [
+        (1, "R1", 5),
+        (2, "R1", 15),
+        (3, "R2", 5),
+        (4, "R2", 15),
+        (5, "R2", 25),
+    ] {
+        trace += &format!("{t}.00,1,car,{road},{pos}.000,,10.000,false,0\n");
+    }
+    std::fs::write(dir.join("trace.csv"), trace).unwrap();
+    let roads = |args: &[&str]| {
+        let out = std::process::Command::new("python3")
+            .arg(root().join("tools/sumo_replay/roads.py"))
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        common::assert_success(&out);
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let time = roads(&["time", "g.json", "fcd.xml", "trace.csv"]);
+    let row = |edge: &str| -> Vec<String> {
+        time.lines()
+            .find(|l| l.split_whitespace().next() == Some(edge))
+            .unwrap_or_else(|| panic!("no row for {edge}: {time}"))
+            .split_whitespace()
+            .map(str::to_string)
+            .collect()
+    };
+    assert!(time.contains("vehicle-seconds: SUMO 5, mapc 5"), "{time}");
+    assert_eq!(row("a")[1..3], ["3", "2"]);
+    assert_eq!(row("b")[1..3], ["2", "3"]);
+    let leave = roads(&[
+        "leave",
+        "g.json",
+        "fcd.xml",
+        "trace.csv",
+        "a",
+        "--lane",
+        "0",
+        "--from",
+        "a",
+    ]);
+    assert!(
+        leave.contains("SUMO: 1 vehicles leave lane 0 of a; per 20 m from its start: 0, 1, 0"),
+        "{leave}"
+    );
+    assert!(
+        leave.contains("mapc: 0 vehicles leave lane 0 of a"),
+        "{leave}"
+    );
+}
+
+/// sumo_check's `--sumo-runs` (tools/sumo_check/recorded.py) gives back the recorded runs only for the same SUMO
+/// inputs and seeds, and stops with a message otherwise.
+#[test]
+fn sumo_checks_recorded_runs_are_reused_only_for_the_same_inputs_and_seeds() {
+    let dir = scratch_dir("recorded_runs");
+    let json = dir.join("runs.json");
+    std::fs::write(
+        &json,
+        r#"{"inputs_sha256": "abc", "sumo_runs": [{"seed": 0, "speed": 10.5}, {"seed": 1, "speed": 11.0}]}"#,
+    )
+    .unwrap();
+    let script = r#"
+import sys
+sys.path.insert(0, sys.argv[1])
+import recorded
+path = sys.argv[2]
+print(recorded.reuse(path, "inputs_sha256", "abc", "sumo_runs", [0, 1], "inputs"))
+for digest, seeds in (("abd", [0, 1]), ("abc", [0, 2])):
+    try:
+        recorded.reuse(path, "inputs_sha256", digest, "sumo_runs", seeds, "inputs")
+        print("reused")
+    except SystemExit as e:
+        print("refused:", e)
+"#;
+    let out = std::process::Command::new("python3")
+        .args(["-c", script])
+        .arg(root().join("tools/sumo_check"))
+        .arg(&json)
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(
+        lines[0],
+        "[{'seed': 0, 'speed': 10.5}, {'seed': 1, 'speed': 11.0}]"
+    );
+    assert!(
+        lines[1].starts_with("refused:") && lines[1].contains("other SUMO inputs"),
+        "{stdout}"
+    );
+    assert!(
+        lines[2].starts_with("refused:") && lines[2].contains("other seeds"),
+        "{stdout}"
+    );
+}
