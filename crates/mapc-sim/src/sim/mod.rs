@@ -521,4 +521,16 @@ impl Simulation {
         // SAFETY: link indices are created by `Network::from_graph` and never exceed its links
         unsafe { self.net.links.get_unchecked(i) }
     }
+
+    /// What the light over `link` says at `light_time` seconds after the run's begin; `None` for a link without
+    /// one. The moves read it at the step's start, the insertions at its end, for the same step.
+    pub(super) fn signal_of(
+        &self,
+        link: &SimLink,
+        light_time: f64,
+    ) -> Option<crate::network::signals::SignalState> {
+        link.signal.map(|(light, index)| {
+            crate::network::signals::state_at(&self.net.lights[light as usize], index, light_time)
+        })
+    }
 }

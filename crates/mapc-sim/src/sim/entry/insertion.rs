@@ -3,7 +3,7 @@
 //! (`lane_choice.rs`).
 
 use super::*;
-use crate::network::signals::{self, SignalState};
+use crate::network::signals::SignalState;
 use crate::spec::{DEPART_SPEED_MAX, DepartPos};
 
 impl Simulation {
@@ -255,10 +255,9 @@ impl Simulation {
             let next = route.lanes[k + 1];
             if let LaneKind::Via(link) = self.lane_at(next as usize).kind {
                 let lk = self.link_at(link as usize);
-                let stopped_by_light = lk.signal.is_some_and(|(light, index)| {
-                    signals::state_at(&self.net.lights[light as usize], index, light_time)
-                        != SignalState::Green
-                });
+                let stopped_by_light = self
+                    .signal_of(lk, light_time)
+                    .is_some_and(|s| s != SignalState::Green);
                 if !lk.major || stopped_by_light {
                     (speed, dist) = lowered(speed, dist, p.stop_speed(seen, speed, des));
                     break;

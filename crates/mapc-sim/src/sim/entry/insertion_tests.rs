@@ -222,6 +222,8 @@ fn a_max_speed_vehicle_entering_before_a_light_that_is_not_green_can_stop_at_its
         let id = sim.create_vehicle(0, r, DEPART_SPEED_MAX);
         let lane = sim.routes[r as usize].lanes[0];
         let len = sim.lane_at(lane as usize).length;
+        // the ramp's own vehicles out of the lane's queue, so that only the light constrains the insertion (the
+        // simulation is not stepped again)
         sim.lane_veh[lane as usize].clear();
         assert!(sim.try_insert_at(id, Some(len - 15.0)));
         let p = sim.types[0];

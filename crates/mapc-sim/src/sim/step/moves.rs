@@ -2,7 +2,7 @@
 //! into a leader, then the passage onto the next lane of the route and arrivals.
 
 use super::*;
-use crate::network::signals::{self, SignalState};
+use crate::network::signals::SignalState;
 
 /// Below this speed a vehicle counts as halting (its waiting time grows).
 pub(in crate::sim) const HALTING_SPEED: f64 = 0.1;
@@ -33,9 +33,7 @@ impl Simulation {
                 let mut v_safe = plan.v_safe;
                 for it in &plan.items[..plan.n_items as usize] {
                     let lk = self.link_at(it.link as usize);
-                    let signal = lk.signal.map(|(light, index)| {
-                        signals::state_at(&self.net.lights[light as usize], index, light_time)
-                    });
+                    let signal = self.signal_of(lk, light_time);
                     if signal == Some(SignalState::Green)
                         || (signal.is_none() && lk.major && !lk.zipper)
                     {
