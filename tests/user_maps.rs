@@ -384,10 +384,36 @@ fn sumo_replays_roads_counts_vehicle_seconds_per_road_and_where_a_lane_is_left()
         leave.contains("mapc: 0 vehicles leave lane 0 of a"),
         "{leave}"
     );
+    // per 20 m and lane of `a`: both at 10 m/s on lane 0 in the first 20 m (two samples each), SUMO's alone on
+    // lane 1 past 20 m; and each vehicle first seen on lane 0 of `a`, 5 m in
+    let speeds = roads(&[
+        "speeds",
+        "g.json",
+        "fcd.xml",
+        "trace.csv",
+        "a",
+        "--bucket",
+        "20",
+    ]);
+    assert!(
+        speeds.contains("     0  L0  10.0/ 10.0 (2/2)  L1     -/    - (0/0)"),
+        "{speeds}"
+    );
+    assert!(
+        speeds.contains("    20  L0     -/    - (0/0)  L1     -/ 10.0 (0/1)"),
+        "{speeds}"
+    );
+    let inserted = roads(&["inserted", "g.json", "fcd.xml", "trace.csv", "a"]);
+    assert!(inserted.contains("SUMO: per lane of a"), "{inserted}");
+    assert_eq!(
+        inserted.matches("L0 1 at 5.0, 10.00").count(),
+        2,
+        "{inserted}"
+    );
 }
 
 /// sumo_check's `--sumo-runs` (tools/sumo_check/recorded.py) gives back the recorded runs only for the same SUMO
-/// inputs and seeds, and stops with a message otherwise.
+/// inputs and seeds, and stops with a message otherwise; `--split-trip` counts the runs on each side of a trip time.
 #[test]
 fn sumo_checks_recorded_runs_are_reused_only_for_the_same_inputs_and_seeds() {
     let dir = scratch_dir("recorded_runs");
@@ -409,6 +435,8 @@ for digest, seeds in (("abd", [0, 1]), ("abc", [0, 2])):
         print("reused")
     except SystemExit as e:
         print("refused:", e)
+import scenario
+scenario.print_split(75, [("mapc", [{"duration": 70.0}, {"duration": 80.0}, {"duration": 90.0}])])
 "#;
     let out = std::process::Command::new("python3")
         .args(["-c", script])
@@ -430,5 +458,10 @@ for digest, seeds in (("abd", [0, 1]), ("abc", [0, 2])):
     assert!(
         lines[2].starts_with("refused:") && lines[2].contains("other seeds"),
         "{stdout}"
+    );
+    // `--split-trip 75`: one run at most 75 s, two above, with their means
+    assert_eq!(
+        lines[4].split_whitespace().collect::<Vec<_>>().join(" "),
+        "mapc 1 runs, 70.0 s / 2 runs, 85.0 s"
     );
 }

@@ -141,6 +141,17 @@ def inputs_digest(cfg, end):
     return h.hexdigest()
 
 
+def print_split(limit, sims):
+    """Runs that broke down and runs that did not, told apart by their mean trip duration: how many of each and
+    their mean trip, per simulator (a scenario at the edge of breakdown differs in how often, or in how much)."""
+    print("  runs by mean trip duration, at most / above %g s:" % limit)
+    for name, runs in sims:
+        low = [r["duration"] for r in runs if r["duration"] <= limit]
+        high = [r["duration"] for r in runs if r["duration"] > limit]
+        mean = lambda x: "%.1f s" % (sum(x) / len(x)) if x else "-"
+        print("    %-9s %4d runs, %s / %4d runs, %s" % (name, len(low), mean(low), len(high), mean(high)))
+
+
 def compare(a, mapc, seeds):
     cfg = a.scenario
     t0 = time.time()
@@ -168,6 +179,8 @@ def compare(a, mapc, seeds):
         rows.append(dict(metric=key, mapc=mm, mapc_ci=mci, sumo=sm, sumo_ci=sci, diff=diff, goal=goal, met=ok))
         print("  %-20s %14.3f ± %-6.3f %14.3f ± %-6.3f %+8.2f%% %6.0f%%  %s" % (
             LABELS.get(key, "flow at " + key[4:]), mm, mci, sm, sci, 100 * diff, 100 * goal, "ok" if ok else "MISSED"))
+    if a.split_trip is not None:
+        print_split(a.split_trip, (("mapc", mapc_runs), ("SUMO 1.8", sumo_runs)))
     if a.json_out:
         with open(a.json_out, "w") as f:
             json.dump(dict(scenario=cfg, seeds=a.seeds, inputs_sha256=digest, rows=rows, mapc_runs=mapc_runs,

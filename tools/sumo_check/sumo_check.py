@@ -235,6 +235,8 @@ def main():
     ap.add_argument("--skip-unsupported", action="store_true",
                     help="scenario: mapc drops what it does not simulate (SUMO still runs it)")
     ap.add_argument("--end", type=float, help="scenario: end time for SUMO where the configuration has none")
+    ap.add_argument("--split-trip", type=float, help="scenario: also count the runs whose mean trip duration is "
+                                                     "at most / above this many seconds (free / broken down)")
     ap.add_argument("--inflows", default="1000:3000:250",
                     help="curve: inflows LOW:HIGH:STEP in veh/h (every flow scaled to each)")
     ap.add_argument("--svg", help="curve: draw both curves into this file")

@@ -11,6 +11,8 @@ mapc's trace of the same configuration, mapc's roads named by their SUMO edges (
     python3 tools/sumo_replay/roads.py stop-line g.json fcd.xml trace.csv EDGE --cycle 10 --phase 9
     python3 tools/sumo_replay/roads.py entries g.json fcd.xml trace.csv EDGE --cycle 10
     python3 tools/sumo_replay/roads.py departures sumo_trips.xml mapc_trips.xml --lane-prefix entry_ --until 3600
+    python3 tools/sumo_replay/roads.py speeds g.json fcd.xml trace.csv EDGE1,EDGE2 --bucket 50
+    python3 tools/sumo_replay/roads.py inserted g.json fcd.xml trace.csv EDGE
 
 - `time`: per road, the vehicle-seconds spent on it and the vehicles seen on it, largest difference first.
 - `leave`: for the vehicles coming from FROM_EDGE, where (per 20 m of EDGE) they leave its lane `--lane`:
@@ -18,10 +20,14 @@ mapc's trace of the same configuration, mapc's roads named by their SUMO edges (
 - `stop-line`: at the steps whose time modulo `--cycle` is `--phase`, the distance to EDGE's end of the first
   vehicle on it if it stands (below 0.1 m/s): a queue at a light.
 - `entries`: how many vehicles first appear on EDGE, per second of the `--cycle` (a light's cycle).
+- `speeds`: per edge, position (per `--bucket` m) and lane, the mean speed in both.
+- `inserted`: per lane of EDGE, the vehicles first seen there (inserted, on an entry road), their mean place and
+  speed.
 - `departures`: per trip-info file, the vehicles that departed on lanes named `--lane-prefix...` before
   `--until`, and the mean departure delay of all of them.
 
-The runs' `--end` (or horizon) and `--begin` must match; with `--from-time` and `--to-time` only the steps in
+FCD and trace may each be several files, comma-separated (runs of several seeds, pooled; mapc's `sim --first-seed
+S --seeds 1 --trace` writes seed S's). The runs' `--end` (or horizon) and `--begin` must match; with `--from-time` and `--to-time` only the steps in
 between count.
 mapc's trace stamps a frame with the end of its step, SUMO's FCD with its begin: trace times are read one step
 earlier, so that both name a step alike. A trace thinned by its budget (one frame in k) gives vehicle-seconds
@@ -72,9 +78,20 @@ def trace_rows(path, edges, from_time, to_time):
 
 
 def both(a):
+    """SUMO's rows and mapc's; FCD and trace may each be several files, comma-separated (seeds pooled: each file's
+    vehicle ids get its index as a prefix)."""
     edges = sumo_edges(a.graph)
-    return (("SUMO", list(fcd_rows(a.fcd, a.from_time, a.to_time))),
-            ("mapc", list(trace_rows(a.trace, edges, a.from_time, a.to_time))))
+
+    def pooled(paths, read):
+        paths = paths.split(",")
+        rows = []
+        for k, path in enumerate(paths):
+            for t, v, *rest in read(path):
+                rows.append((t, v if len(paths) == 1 else "%d:%s" % (k, v), *rest))
+        return rows
+
+    return (("SUMO", pooled(a.fcd, lambda p: fcd_rows(p, a.from_time, a.to_time))),
+            ("mapc", pooled(a.trace, lambda p: trace_rows(p, edges, a.from_time, a.to_time))))
 
 
 def step_of(rows):
@@ -148,6 +165,47 @@ def cmd_entries(a):
             ", ".join("%d: %d" % (p, phases[p]) for p in sorted(phases))))
 
 
+def cmd_speeds(a):
+    edges = a.edges.split(",")
+    per = {}
+    for name, rows in both(a):
+        sums = collections.defaultdict(list)
+        for _, _, edge, lane, pos, speed in rows:
+            if edge in edges:
+                sums[(edge, int(pos // a.bucket), lane)].append(speed)
+        per[name] = sums
+    mean = lambda x: "%5.1f" % (sum(x) / len(x)) if x else "    -"
+    for e in edges:
+        keys = [k for d in per.values() for k in d if k[0] == e]
+        if not keys:
+            print("%s: no vehicle" % e)
+            continue
+        lanes = sorted({k[2] for k in keys})
+        print("%s, mean speed m/s per %g m and lane, mapc / SUMO (samples)" % (e, a.bucket))
+        for b in range(max(k[1] for k in keys) + 1):
+            cells = []
+            for lane in lanes:
+                m, s = per["mapc"].get((e, b, lane), []), per["SUMO"].get((e, b, lane), [])
+                cells.append("L%d %s/%s (%d/%d)" % (lane, mean(m), mean(s), len(m), len(s)))
+            print("%6.0f  %s" % (b * a.bucket, "  ".join(cells)))
+
+
+def cmd_inserted(a):
+    for name, rows in both(a):
+        first = {}
+        for t, v, edge, lane, pos, speed in sorted(rows, key=lambda r: r[0]):
+            if v not in first:
+                first[v] = (edge, lane, pos, speed)
+        by = collections.defaultdict(list)
+        for edge, lane, pos, speed in first.values():
+            if edge == a.edge:
+                by[lane].append((pos, speed))
+        print("%s: per lane of %s, vehicles first seen there, their mean place (m) and speed (m/s): %s" % (
+            name, a.edge, "; ".join("L%d %d at %.1f, %.2f" % (
+                lane, len(x), sum(p for p, _ in x) / len(x), sum(v for _, v in x) / len(x))
+                for lane, x in sorted(by.items()))))
+
+
 def cmd_departures(a):
     for path in a.tripinfo:
         d = [(float(e.get("depart")), float(e.get("departDelay")))
@@ -182,13 +240,17 @@ def main():
     p = runs(sub.add_parser("entries"))
     p.add_argument("edge")
     p.add_argument("--cycle", type=int, default=10)
+    p = runs(sub.add_parser("speeds"))
+    p.add_argument("edges", help="edges, comma-separated")
+    p.add_argument("--bucket", type=float, default=50.0, help="metres per row")
+    runs(sub.add_parser("inserted")).add_argument("edge")
     p = sub.add_parser("departures")
     p.add_argument("tripinfo", nargs="+")
     p.add_argument("--lane-prefix", default="")
     p.add_argument("--until", type=float, default=3600.0)
     a = ap.parse_args()
     {"time": cmd_time, "leave": cmd_leave, "stop-line": cmd_stop_line, "entries": cmd_entries,
-     "departures": cmd_departures}[a.cmd](a)
+     "speeds": cmd_speeds, "inserted": cmd_inserted, "departures": cmd_departures}[a.cmd](a)
 
 
 if __name__ == "__main__":
