@@ -429,3 +429,20 @@ fn a_types_lane_change_parameters_are_read() {
     );
     assert_eq!((lc.cooperative, lc.lookahead_left), (None, None));
 }
+
+#[test]
+fn a_route_of_one_edge_reads_as_a_flow_without_via_or_destination() {
+    // a route of a single edge once panicked on its empty middle
+    let routes = r#"<routes><vType id="car"/><route id="r" edges="M1"/>
+<flow id="f" type="car" route="r" begin="0" end="60" vehsPerHour="600"/>
+<vehicle id="v" type="car" depart="1"><route edges="M2"/></vehicle></routes>"#;
+    let dir = with_files("one_edge", &[("r.rou.xml", routes), ("s.sumocfg", CFG)]);
+    let r = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default()).unwrap();
+    let flows: Vec<_> = r
+        .scenario
+        .flows
+        .iter()
+        .map(|f| (f.from.as_str(), f.via.len(), f.to.as_deref()))
+        .collect();
+    assert_eq!(flows, [("M1", 0, None), ("M2", 0, None)]);
+}

@@ -15,6 +15,8 @@ pub(in crate::sim) mod moves;
 #[cfg(test)]
 mod overlap_tests;
 pub(in crate::sim) mod planning;
+#[cfg(test)]
+mod red_light_tests;
 pub(in crate::sim) mod side_lanes;
 #[cfg(test)]
 mod side_lanes_tests;

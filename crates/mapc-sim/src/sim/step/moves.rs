@@ -179,6 +179,7 @@ impl Simulation {
                 let mut rp = v.route_pos as usize;
                 // a fast vehicle (or a long step) may cross several short lanes in one step
                 let mut arrived = false;
+                let mut stopped_at_red = None;
                 loop {
                     let length = self.lane_at(r.lanes[rp] as usize).length;
                     if v_pos <= length {
@@ -187,6 +188,13 @@ impl Simulation {
                     if rp + 1 >= r.lanes.len() {
                         // past the end of a dead end's lane (an arrival ended the loop on entering a last lane
                         // that continues): it stops there and waits for a gap
+                        v_pos = length;
+                        break;
+                    }
+                    if self.red_between(r.lanes[rp], r.lanes[rp + 1], light_time) {
+                        // SUMO's emergency stop at the end of the lane: a vehicle whose move would take it past
+                        // a red light (it could not brake in time) stands at the stop line instead
+                        stopped_at_red = Some(v_pos - length);
                         v_pos = length;
                         break;
                     }
@@ -207,6 +215,11 @@ impl Simulation {
                 }
                 let new_lane = r.lanes[rp];
                 let v = &mut self.veh[id as usize];
+                if let Some(overshoot) = stopped_at_red {
+                    v.speed = 0.0;
+                    v.distance_m -= overshoot;
+                    self.metrics.distance_m -= overshoot;
+                }
                 v.pos = v_pos;
                 v.route_pos = rp as u32;
                 v.lane = new_lane;
@@ -219,6 +232,17 @@ impl Simulation {
                 q.insert(at, id);
             }
         }
+    }
+
+    /// Whether the link from lane `from` to lane `to` of a route (its via lane, or the next lane where it has
+    /// none) has a red light at `light_time`.
+    fn red_between(&self, from: LaneIdx, to: LaneIdx, light_time: f64) -> bool {
+        self.lane_at(from as usize).out_links.iter().any(|&k| {
+            let lk = self.link_at(k as usize);
+            lk.signal.is_some()
+                && (lk.via_lane == to || lk.to_lane == to)
+                && self.signal_of(lk, light_time) == Some(SignalState::Red)
+        })
     }
 
     pub(in crate::sim) fn arrive(&mut self, id: VehicleId) {

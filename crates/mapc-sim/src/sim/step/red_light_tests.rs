@@ -1,0 +1,45 @@
+//! A vehicle whose move would take it past a red light stands at the stop line (SUMO 1.8's emergency stop at the
+//! end of the lane in `MSVehicle::processLaneAdvances`).
+
+use super::*;
+use crate::runs::scenario::spec_from_scenario;
+
+/// Where a lone ramp vehicle of scenarios/sumo/ramp_metering_1x3 (meter G 5 s, r 5 s from the run's begin), put
+/// 4.88 m before the line at the ramp's limit of 13.89 m/s, is after one step that starts with the light red
+/// (`red`) or green: (its lane is still the ramp's, its place, its speed, the ramp's length).
+fn one_step_at_the_line(red: bool) -> (bool, f64, f64, f64) {
+    let cfg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
+    );
+    let rs = mapc_scenario::ResolvedScenario::load(cfg).expect("shipped SUMO scenario");
+    let ramp = rs.graph.find_roads("on_ramp").unwrap()[0];
+    let mut spec = spec_from_scenario(&rs).expect("simulator spec");
+    spec.flows.clear();
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    // the moves read the light at the step's start
+    while ((sim.time_s - sim.spec.start_time_s).rem_euclid(10.0) >= 5.0) != red {
+        sim.step().unwrap();
+    }
+    let r = sim.add_route(ramp, &[], None, Some(0)).unwrap();
+    let lane = sim.routes[r as usize].lanes[0];
+    let len = sim.lane_at(lane as usize).length;
+    let id = sim.create_vehicle(0, r, 13.89);
+    sim.place(id, lane, len - 4.88, 13.89, false).unwrap();
+    sim.step().unwrap();
+    let v = &sim.veh[id as usize];
+    (v.lane == lane, v.pos, v.speed, len)
+}
+
+#[test]
+fn a_vehicle_that_cannot_brake_before_a_red_light_stands_at_its_line() {
+    // braking as hard as it may (9 m/s^2) still takes it a centimetre past the line: SUMO stops it there
+    let (on_ramp, pos, speed, len) = one_step_at_the_line(true);
+    assert!(on_ramp, "the vehicle crossed the red light");
+    assert_eq!(pos, len);
+    assert_eq!(speed, 0.0);
+    // on green it drives on
+    let (on_ramp, _, speed, _) = one_step_at_the_line(false);
+    assert!(!on_ramp, "the vehicle stopped at a green light");
+    assert!(speed > 10.0, "{speed}");
+}
