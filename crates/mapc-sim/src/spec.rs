@@ -97,6 +97,9 @@ pub struct FlowSpec {
     pub type_mix: Vec<(usize, f64)>,
     /// One named vehicle (a SUMO `<vehicle>` or `<trip>`): SUMO's outputs call it `id`, not `id.0`.
     pub single_vehicle: bool,
+    /// Departures on SUMO's clock of whole milliseconds (a SUMO user's scenario): begin and period rounded to the
+    /// millisecond as SUMO 1.8 stores them (`TIME2STEPS`), departure `n` at their exact sum.
+    pub whole_ms: bool,
 }
 
 impl FlowSpec {
@@ -107,6 +110,10 @@ impl FlowSpec {
     pub fn departure_s(&self, n: u64) -> Option<f64> {
         if self.probability.is_some() || self.vehs_per_hour <= 0.0 {
             return None;
+        }
+        if self.whole_ms {
+            let ms = |s: f64| (s * 1000.0 + 0.5).floor();
+            return Some((ms(self.begin_s) + n as f64 * ms(3600.0 / self.vehs_per_hour)) / 1000.0);
         }
         Some(if n == 0 {
             self.begin_s
@@ -186,6 +193,9 @@ pub struct SimSpec {
     /// A vehicle may change lanes while its back is still inside the junction behind (SUMO 1.8's rule, a SUMO
     /// user's scenario); `false`: it waits until its back has left (mapc's own scenarios).
     pub sumo_junction_lane_changes: bool,
+    /// The vehicles due to enter are tried in SUMO 1.8's order (a SUMO user's scenario): one list by the time each
+    /// was due, whatever its entry (`MSInsertionControl::emitVehicles`); otherwise entry by entry.
+    pub sumo_insertion_order: bool,
     /// Induction loops: points that count passing vehicles and their occupancy over intervals.
     pub detectors: Vec<DetectorSpec>,
 }

@@ -42,10 +42,11 @@ fn the_krauss_run_is_pinned_bit_for_bit() {
     // user's clock started at 0 as SUMO's, not two steps in (the same run two steps earlier: travel times and
     // speeds differ in their last bits, as the clock's sums round differently); and when a vehicle whose back is
     // still in the junction behind could change lanes, as in SUMO 1.8; and when its lane-change memory survived
-    // the junctions whose connections run side by side
+    // the junctions whose connections run side by side; and when vehicles changed lanes on those connections, and
+    // departures came in SUMO's order on its millisecond clock
     let expected = [
-        "arrived 449 departed 456 travel 4040e5a15aa79c19 speed 4038618603c40dd0 lane changes 265",
-        "arrived 449 departed 456 travel 4040ef9ba70e3ce6 speed 403853144f8d275e lane changes 271",
+        "arrived 449 departed 456 travel 4040e5f8ee18d7b7 speed 403861aa42235e04 lane changes 264",
+        "arrived 449 departed 456 travel 4040ee2028238fc9 speed 403853edff181914 lane changes 273",
     ];
     assert_eq!(got, expected, "the Krauss run changed: {got:#?}");
 }

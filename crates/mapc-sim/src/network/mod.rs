@@ -89,6 +89,63 @@ pub struct Network {
     pub lights: Vec<mapc_graph::TrafficLight>,
     /// Best lanes' links already computed ([`Network::best_lane_path`]).
     pub best_links_memo: best_lanes::BestLinksMemo,
+    /// Via lanes side by side between two roads whose links all have priority, right to left: SUMO builds each
+    /// such group as one internal edge of several lanes and lets vehicles change lanes on it
+    /// (`MSEdge::allowsLaneChanging`). Used under SUMO's junction rules only.
+    pub via_groups: Vec<Vec<LaneIdx>>,
+    /// Per lane: for a via lane of `via_groups`, its place among them; `None` for every other lane.
+    pub via_beside: Vec<Option<ViaBeside>>,
+}
+
+/// A via lane's place in its group of [`Network::via_groups`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ViaBeside {
+    /// The index, on the road it leads to, of the lane it leads to: a vehicle on it reads that road's best lanes
+    /// there (SUMO's LC2013 on an internal lane reads its successor's entry).
+    pub index: u8,
+    /// The via lanes of the group to its right and to its left.
+    pub right: Option<LaneIdx>,
+    pub left: Option<LaneIdx>,
+}
+
+/// [`Network::via_groups`] and [`Network::via_beside`]: the links between the same two roads, by the index of the
+/// lane they leave; a group whose links lead to lanes that are not side by side, or where one link yields, allows
+/// no changing.
+fn side_by_side_groups(
+    lanes: &[SimLane],
+    links: &[SimLink],
+) -> (Vec<Vec<LaneIdx>>, Vec<Option<ViaBeside>>) {
+    let mut by_roads: std::collections::BTreeMap<(usize, usize), Vec<&SimLink>> =
+        Default::default();
+    for k in links {
+        if let (LaneKind::Road(a), LaneKind::Road(b)) =
+            (lanes[k.from_lane as usize].kind, lanes[k.to_lane as usize].kind)
+        {
+            by_roads.entry((a, b)).or_default().push(k);
+        }
+    }
+    let mut groups = Vec::new();
+    let mut beside = vec![None; lanes.len()];
+    for (_, mut ks) in by_roads {
+        if ks.len() < 2 || ks.iter().any(|k| !k.major) {
+            continue;
+        }
+        ks.sort_by_key(|k| (lanes[k.from_lane as usize].index, lanes[k.to_lane as usize].index));
+        let to_index = |k: &SimLink| lanes[k.to_lane as usize].index as usize;
+        if ks.windows(2).any(|w| to_index(w[1]) != to_index(w[0]) + 1) {
+            continue;
+        }
+        let group: Vec<LaneIdx> = ks.iter().map(|k| k.via_lane).collect();
+        for (i, k) in ks.iter().enumerate() {
+            beside[k.via_lane as usize] = Some(ViaBeside {
+                index: to_index(k) as u8,
+                right: i.checked_sub(1).map(|j| group[j]),
+                left: group.get(i + 1).copied(),
+            });
+        }
+        groups.push(group);
+    }
+    (groups, beside)
 }
 
 impl Network {
@@ -228,6 +285,7 @@ impl Network {
             let n = between[&(road_of(&lanes, k.from_lane), road_of(&lanes, k.to_lane))];
             lanes[k.via_lane as usize].beside_another = n > 1;
         }
+        let (via_groups, via_beside) = side_by_side_groups(&lanes, &links);
         for i in 0..links.len() {
             let foes: Vec<LinkIdx> = (0..links.len())
                 .filter(|&j| {
@@ -250,6 +308,8 @@ impl Network {
             road_labels,
             lights: g.lights.clone(),
             best_links_memo: Default::default(),
+            via_groups,
+            via_beside,
         };
         net.compute_downstream()?;
         Ok(net)

@@ -141,6 +141,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
             begin_s: f.begin_s,
             end_s: f.end_s.unwrap_or(f64::INFINITY),
             single_vehicle: f.vehicle && f.number == Some(1),
+            whole_ms: sc.sumo_clock,
             depart_lane: match &f.depart_lane {
                 None => DepartLane::First,
                 Some(text) => DepartLane::parse(text)
@@ -198,6 +199,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
         detectors: detector_specs(rs, &names)?,
         time_to_teleport_s: sc.time_to_teleport_s.unwrap_or(0.0),
         sumo_junction_lane_changes: sc.sumo_junction_lane_changes,
+        sumo_insertion_order: sc.sumo_clock,
         graph: rs.graph.clone(),
         vehicle_types,
         flows,

@@ -8,6 +8,8 @@ mod entry;
 mod lanes_tests;
 mod queries;
 mod step;
+#[cfg(test)]
+mod sumo_run_tests;
 mod table;
 #[cfg(test)]
 mod tests;

@@ -28,6 +28,8 @@ pub(super) struct Veh {
     pub(super) route_pos: u32,
     pub(super) waiting_s: f64,
     pub(super) depart_s: f64,
+    /// When it was due to enter (a flow's vehicle: its departure time; NaN for others).
+    pub(super) due_s: f64,
     pub(super) arrive_s: f64,
     /// Order of entering the network (0-based); `u64::MAX` while pending.
     pub(super) entry_order: u64,
@@ -158,6 +160,7 @@ impl Simulation {
             route_pos: 0,
             waiting_s: 0.0,
             depart_s: f64::NAN,
+            due_s: f64::NAN,
             arrive_s: f64::NAN,
             entry_order: u64::MAX,
             accel_cmd: f64::NAN,

@@ -48,6 +48,11 @@ impl Simulation {
         // memory; lanes chosen at insertion are tried after the fixed ones)
         let mut refused = std::mem::take(&mut self.refused_lanes);
         refused.clear();
+        if self.spec.sumo_insertion_order {
+            self.insert_in_due_order(&mut refused);
+            self.refused_lanes = refused;
+            return;
+        }
         for ei in 0..self.entry_lanes.len() {
             loop {
                 let id = match self.pending[ei].front_built() {
@@ -116,6 +121,10 @@ impl Simulation {
         };
         let id = self.create_vehicle(vt, self.flow_route[f], speed);
         self.veh[id as usize].depart_pos = self.spec.flows[f].depart_pos;
+        // a flow by probability departs in the step it is drawn in
+        self.veh[id as usize].due_s = self.spec.flows[f]
+            .departure_s(u64::from(self.flow_built[f]))
+            .unwrap_or(self.time_s - self.spec.step_s);
         if let Some(origins) = &mut self.origins {
             origins.insert(id, (f as u32, self.flow_built[f]));
         }

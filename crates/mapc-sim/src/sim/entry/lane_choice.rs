@@ -101,56 +101,125 @@ impl Simulation {
     /// Try to insert the vehicles waiting at road entry `re`, with the lanes already refused in this step.
     pub(in crate::sim) fn insert_at_road(&mut self, re: usize, refused: &mut Vec<LaneIdx>) {
         let mut i = 0;
-        loop {
-            let e = &self.road_entries[re];
-            if e.candidates.iter().all(|&k| refused.contains(&e.lanes[k])) {
-                // no later vehicle can enter (SUMO still draws a lane for each: mapc's numbers differ anyway)
+        while let Some(id) = self.road_entry_next(re, i, refused) {
+            if !self.road_entry_try(re, id, &mut i, refused) {
                 break;
             }
-            let q = &mut self.road_entries[re].queue;
-            let id = match q.built_at(i) {
-                Some(id) => id,
-                // every built vehicle before `i` was refused: the next counted one is built behind them and tries
-                // its own lane
-                None => match q.take_counted() {
-                    Some(f) => {
-                        let id = self.build_flow_vehicle(f);
-                        self.road_entries[re].queue.push_taken(id);
-                        id
-                    }
-                    None => break,
-                },
-            };
-            let k = self.choose_lane(re);
-            let lane = self.road_entries[re].lanes[k];
-            if refused.contains(&lane) {
-                // a free choice stays the same until a vehicle enters: every later one is refused too
-                if self.road_entries[re].mode != DepartLane::Random {
-                    break;
+        }
+    }
+
+    /// The vehicle road entry `re` tries next, at place `i` of its queue (every built vehicle before `i` was
+    /// refused in this step: the next counted one is built behind them and tries its own lane); `None` when no
+    /// later vehicle can enter in this step.
+    pub(in crate::sim) fn road_entry_next(
+        &mut self,
+        re: usize,
+        i: usize,
+        refused: &[LaneIdx],
+    ) -> Option<VehicleId> {
+        let e = &self.road_entries[re];
+        if e.candidates.iter().all(|&k| refused.contains(&e.lanes[k])) {
+            // no later vehicle can enter (SUMO still draws a lane for each: mapc's numbers differ anyway)
+            return None;
+        }
+        if let Some(id) = self.road_entries[re].queue.built_at(i) {
+            return Some(id);
+        }
+        let f = self.road_entries[re].queue.take_counted()?;
+        let id = self.build_flow_vehicle(f);
+        self.road_entries[re].queue.push_taken(id);
+        Some(id)
+    }
+
+    /// Tries vehicle `id`, at place `*i` of road entry `re`'s queue, on the lane the entry chooses for it (the
+    /// place moves past it when it stays); returns whether later vehicles of the entry may still try in this step.
+    pub(in crate::sim) fn road_entry_try(
+        &mut self,
+        re: usize,
+        id: VehicleId,
+        i: &mut usize,
+        refused: &mut Vec<LaneIdx>,
+    ) -> bool {
+        let k = self.choose_lane(re);
+        let lane = self.road_entries[re].lanes[k];
+        let random = self.road_entries[re].mode == DepartLane::Random;
+        if refused.contains(&lane) {
+            // a free choice stays the same until a vehicle enters: every later one is refused too
+            *i += 1;
+            return random;
+        }
+        // the vehicle's route is one of its flow's lane routes (flows over the same roads share them)
+        let current = self.veh[id as usize].route;
+        let route = self
+            .flow_lanes
+            .iter()
+            .flatten()
+            .find(|fl| fl.routes.contains(&current))
+            .expect("a vehicle waiting at a road entry has lane routes")
+            .routes[k];
+        self.set_route(id, route);
+        if self.try_insert(id) {
+            self.road_entries[re].queue.remove_built(*i);
+            true
+        } else {
+            refused.push(lane);
+            *i += 1;
+            random
+        }
+    }
+
+    /// Every entry's waiting vehicles tried in one list by the time each was due, earliest first (SUMO 1.8 tries
+    /// the vehicles refused before, then the newly due ones, each in departure order): an entry whose vehicle is
+    /// refused tries no more in this step, as entry by entry.
+    pub(in crate::sim) fn insert_in_due_order(&mut self, refused: &mut Vec<LaneIdx>) {
+        let (n_fixed, n_road) = (self.entry_lanes.len(), self.road_entries.len());
+        // per queue (fixed entries first, then road entries): whether it may still try, and its place
+        let mut open = vec![true; n_fixed + n_road];
+        let mut place = vec![0usize; n_road];
+        loop {
+            let mut next: Option<(f64, VehicleId, usize)> = None;
+            for q in 0..n_fixed + n_road {
+                if !open[q] {
+                    continue;
                 }
-                i += 1;
-                continue;
+                let id = if q < n_fixed {
+                    self.fixed_entry_next(q)
+                } else {
+                    self.road_entry_next(q - n_fixed, place[q - n_fixed], refused)
+                };
+                let Some(id) = id else {
+                    open[q] = false;
+                    continue;
+                };
+                let due = self.veh[id as usize].due_s;
+                if next.is_none_or(|(d, o, _)| due < d || (due == d && id < o)) {
+                    next = Some((due, id, q));
+                }
             }
-            // the vehicle's route is one of its flow's lane routes (flows over the same roads share them)
-            let current = self.veh[id as usize].route;
-            let route = self
-                .flow_lanes
-                .iter()
-                .flatten()
-                .find(|fl| fl.routes.contains(&current))
-                .expect("a vehicle waiting at a road entry has lane routes")
-                .routes[k];
-            self.set_route(id, route);
-            if self.try_insert(id) {
-                self.road_entries[re].queue.remove_built(i);
-            } else {
-                refused.push(lane);
-                if self.road_entries[re].mode != DepartLane::Random {
-                    break;
+            let Some((_, id, q)) = next else { break };
+            if q < n_fixed {
+                let lane = self.entry_lanes[q];
+                if !refused.contains(&lane) && self.try_insert(id) {
+                    self.pending[q].pop_built();
+                } else {
+                    refused.push(lane);
+                    open[q] = false;
                 }
-                i += 1;
+            } else if !self.road_entry_try(q - n_fixed, id, &mut place[q - n_fixed], refused) {
+                open[q] = false;
             }
         }
+    }
+
+    /// The vehicle at the front of fixed entry `ei`'s queue (a counted one is built now).
+    fn fixed_entry_next(&mut self, ei: usize) -> Option<VehicleId> {
+        if let Some(id) = self.pending[ei].front_built() {
+            return Some(id);
+        }
+        let f = self.pending[ei].take_counted()?;
+        let id = self.build_flow_vehicle(f);
+        self.pending[ei].push_taken(id);
+        Some(id)
     }
 }
 

@@ -162,49 +162,87 @@ impl Simulation {
         let mut scratch = std::mem::take(&mut self.lc_scratch);
         scratch.next_occupation.of = None;
         for r in 0..self.net.road_lanes.len() {
-            if self.net.road_lanes[r].len() < 2 {
+            let n = self.net.road_lanes[r].len();
+            if n < 2 {
                 continue;
             }
-            let LcScratch {
-                lanes,
-                cands,
-                dens,
-                visited,
-                blocked,
-                best_lanes,
-                next_occupation,
-            } = &mut scratch;
-            lanes.clear();
-            lanes.extend_from_slice(&self.net.road_lanes[r]);
-            // SUMO's findCandidate: the largest position first; the right lane first on a tie
-            cands.clear();
-            if !self.merge_two_lanes(lanes, cands) {
-                cands.extend(
-                    lanes
-                        .iter()
-                        .flat_map(|&l| self.lane_veh[l as usize].iter().copied()),
-                );
-                cands.sort_by(|&a, &b| self.candidate_order(a, b));
-            }
-            dens.clear();
-            dens.resize(lanes.len(), 0.0);
-            visited.clear();
-            visited.resize(lanes.len(), 0);
-            blocked.clear();
-            blocked.resize(lanes.len(), (None, None));
-            best_lanes.of = None;
-            for &id in cands.iter() {
-                let final_index =
-                    self.change_one(id, dens, visited, blocked, best_lanes, next_occupation);
-                visited[final_index] += 1;
-                dens[final_index] += self.brutto_length(id);
-                if best_lanes.of.is_some() {
-                    best_lanes.lanes[final_index].occupation =
-                        dens[final_index] + next_occupation.sums[final_index];
+            scratch.lanes.clear();
+            scratch.lanes.extend_from_slice(&self.net.road_lanes[r]);
+            self.change_on_lanes(&mut scratch, n);
+        }
+        // SUMO's junction rules: vehicles change lanes on junction connections that run side by side
+        if self.spec.sumo_junction_lane_changes {
+            for g in 0..self.net.via_groups.len() {
+                let group = &self.net.via_groups[g];
+                let to = self.lane_at(group[0] as usize).via_target;
+                let Some(width) = to
+                    .and_then(|t| self.net.road_of(t))
+                    .map(|r| self.net.road_lanes[r].len())
+                else {
+                    continue;
+                };
+                if group.iter().all(|&l| self.lane_veh[l as usize].is_empty()) {
+                    continue;
                 }
+                scratch.lanes.clear();
+                scratch.lanes.extend_from_slice(group);
+                self.change_on_lanes(&mut scratch, width);
             }
         }
         self.lc_scratch = scratch;
+    }
+
+    /// The pass over the lanes in `scratch.lanes` (a road's, or a group of side-by-side junction connections),
+    /// whose lane-change indices lie below `width` ([`Self::lc_lane`]).
+    fn change_on_lanes(&mut self, scratch: &mut LcScratch, width: usize) {
+        let LcScratch {
+            lanes,
+            cands,
+            dens,
+            visited,
+            blocked,
+            best_lanes,
+            next_occupation,
+        } = scratch;
+        // SUMO's findCandidate: the largest position first; the right lane first on a tie
+        cands.clear();
+        if !self.merge_two_lanes(lanes, cands) {
+            cands.extend(
+                lanes
+                    .iter()
+                    .flat_map(|&l| self.lane_veh[l as usize].iter().copied()),
+            );
+            cands.sort_by(|&a, &b| self.candidate_order(a, b));
+        }
+        dens.clear();
+        dens.resize(width, 0.0);
+        visited.clear();
+        visited.resize(width, 0);
+        blocked.clear();
+        blocked.resize(width, (None, None));
+        best_lanes.of = None;
+        for &id in cands.iter() {
+            let final_index =
+                self.change_one(id, dens, visited, blocked, best_lanes, next_occupation);
+            visited[final_index] += 1;
+            dens[final_index] += self.brutto_length(id);
+            if best_lanes.of.is_some() {
+                best_lanes.lanes[final_index].occupation =
+                    dens[final_index] + next_occupation.sums[final_index];
+            }
+        }
+    }
+
+    /// A lane's index and its right and left lanes as the lane-change pass sees them: a road lane's own; for a
+    /// via lane of a side-by-side group ([`crate::network::Network::via_groups`]), the index of the lane it leads
+    /// to and the group's lanes beside it.
+    #[inline]
+    pub(in crate::sim) fn lc_lane(&self, lane: LaneIdx) -> (usize, Option<LaneIdx>, Option<LaneIdx>) {
+        let l = self.lane_at(lane as usize);
+        match self.net.via_beside[lane as usize] {
+            Some(b) if matches!(l.kind, LaneKind::Via(_)) => (b.index as usize, b.right, b.left),
+            _ => (l.index as usize, l.right, l.left),
+        }
     }
 
     /// The candidates' order on a road of two lanes, by merging the lanes' queues (each front first) into
@@ -223,7 +261,7 @@ impl Simulation {
             return false;
         }
         // on a tie of positions, the lane of the lower index first
-        let a_first_on_tie = self.lane_at(a as usize).index < self.lane_at(b as usize).index;
+        let a_first_on_tie = self.lc_lane(a).0 < self.lc_lane(b).0;
         let (mut i, mut j) = (0, 0);
         while i < qa.len() && j < qb.len() {
             let order = pos(qa[i]).total_cmp(&pos(qb[j]));
@@ -249,9 +287,7 @@ impl Simulation {
     fn candidate_order(&self, a: VehicleId, b: VehicleId) -> std::cmp::Ordering {
         let (va, vb) = (&self.veh[a as usize], &self.veh[b as usize]);
         vb.pos.total_cmp(&va.pos).then(
-            self.lane_at(va.lane as usize)
-                .index
-                .cmp(&self.lane_at(vb.lane as usize).index),
+            self.lc_lane(va.lane).0.cmp(&self.lc_lane(vb.lane).0),
         )
     }
 
@@ -270,7 +306,10 @@ impl Simulation {
             (v.route, v.route_pos, v.vtype)
         };
         let r = &self.routes[route as usize];
-        let (k, roads_id) = (r.road_k[route_pos as usize], r.roads_id);
+        let lane = self.veh[id as usize].lane;
+        // on a junction connection, the best lanes of the road it leads to (SUMO's LC2013 on an internal lane)
+        let on_via = matches!(self.lane_at(lane as usize).kind, LaneKind::Via(_));
+        let (k, roads_id) = (r.road_k[route_pos as usize] + on_via as u32, r.roads_id);
         let best_i = match self.lc_rec(id).best_memo {
             Some((seq, rk, i)) if seq == roads_id && rk == k => i,
             _ => {
@@ -279,8 +318,7 @@ impl Simulation {
                 i
             }
         };
-        let lane = self.veh[id as usize].lane;
-        let index = self.lane_at(lane as usize).index as usize;
+        let (index, l_right, l_left) = self.lc_lane(lane);
         let best_lane_offset = self.best_cache.store[best_i as usize][index].best_lane_offset;
         self.lc_rec(id).best_lane_offset = best_lane_offset;
         let best: &[BestLane] = &self.best_cache.store[best_i as usize];
@@ -331,7 +369,6 @@ impl Simulation {
                 && best_lanes.lanes.len() == best.len()
         );
         let l = self.lane_at(lane as usize);
-        let (l_right, l_left) = (l.right, l.left);
         // SUMO lets a vehicle whose back is still in the junction behind change lanes; mapc's own scenarios were
         // measured with it staying on its lane until its back has left
         let may_change = self.spec.sumo_junction_lane_changes || v.pos >= v.length;
@@ -421,7 +458,7 @@ impl Simulation {
         self.move_to_lane(id, target);
         next_occupation.of = None;
         best_lanes.of = None;
-        let target_index = self.lane_at(target as usize).index as usize;
+        let target_index = self.lc_lane(target).0;
         let offset = self.best_cache.store[best_i as usize][target_index].best_lane_offset;
         if let Some(rec) = self.veh[id as usize].lc.as_deref_mut() {
             rec.best_lane_offset = offset;
@@ -491,9 +528,23 @@ impl Simulation {
             .collect();
         let store = &self.best_cache.store;
         let r = &self.routes[route as usize];
-        let (rest, dead_end) = self.net.lane_path(target, &r.roads[k..], |j, i| {
-            store[best_at[j] as usize][i].next_link
-        });
+        let (rest, dead_end) = match self.lane_at(target as usize).kind {
+            // onto the junction connection beside (SUMO's junction rules): the lane before is the one that
+            // connection leaves, the path goes on from the lane it leads to
+            LaneKind::Via(link) => {
+                let lk = self.link_at(link as usize);
+                if let Some(before) = lanes.last_mut() {
+                    *before = lk.from_lane;
+                }
+                let (path, dead_end) = self.net.lane_path(lk.to_lane, &r.roads[k + 1..], |j, i| {
+                    store[best_at[j + 1] as usize][i].next_link
+                });
+                (std::iter::once(target).chain(path).collect(), dead_end)
+            }
+            LaneKind::Road(_) => self.net.lane_path(target, &r.roads[k..], |j, i| {
+                store[best_at[j] as usize][i].next_link
+            }),
+        };
         lanes.extend(rest);
         self.add_lane_route(lanes, roads, dead_end)
     }
@@ -638,7 +689,7 @@ impl Simulation {
         let q = &self.lane_veh[n as usize];
         // front first; at the ego's very position, a vehicle on the lane to the right was visited first (the pass
         // takes the rightmost lane on a tie) and leads, one on the lane to the left follows
-        let n_is_right = self.lane_at(n as usize).index < self.lane_at(v.lane as usize).index;
+        let n_is_right = self.lc_lane(n).0 < self.lc_lane(v.lane).0;
         let split = if n_is_right {
             self.queue_index_behind_near(n, v.pos, guess, |o, p| o < p)
         } else {
@@ -649,11 +700,29 @@ impl Simulation {
             out.leader = Some(self.other(types, o, self.gap_ahead_same_road(id, o)));
         } else {
             let nl = self.lane_at(n as usize);
-            let nq = &best[nl.index as usize];
-            out.leader = nq.next_link.and_then(|link| {
-                let lanes = self.continuation_lanes(link, &nq.continuation);
-                self.first_ahead(types, id, lanes, nl.length - v.pos)
-            });
+            out.leader = match (nl.kind, nl.via_target) {
+                // a junction connection beside the ego's (SUMO's junction rules): the lane it leads to, then on
+                (LaneKind::Via(_), Some(to)) => {
+                    let nq = &best[self.lc_lane(n).0];
+                    let beyond = nq
+                        .next_link
+                        .into_iter()
+                        .flat_map(|link| self.continuation_lanes(link, &nq.continuation));
+                    self.first_ahead(
+                        types,
+                        id,
+                        std::iter::once(to).chain(beyond),
+                        nl.length - v.pos,
+                    )
+                }
+                _ => {
+                    let nq = &best[nl.index as usize];
+                    nq.next_link.and_then(|link| {
+                        let lanes = self.continuation_lanes(link, &nq.continuation);
+                        self.first_ahead(types, id, lanes, nl.length - v.pos)
+                    })
+                }
+            };
         }
         if let Some(&o) = q.get(split) {
             let ov = &self.veh[o as usize];
@@ -682,6 +751,16 @@ impl Simulation {
                         found = Some(self.other(types, o, gap));
                     }
                 }
+            }
+            // a junction connection beside the ego's: the first vehicle on the lane it leaves
+            if let LaneKind::Via(link) = self.lane_at(n as usize).kind {
+                let from = self.link_at(link as usize).from_lane;
+                let from_len = self.lane_at(from as usize).length;
+                found = self.lane_veh[from as usize].first().map(|&o| {
+                    let ov = &self.veh[o as usize];
+                    let gap = back + from_len - ov.pos - self.types[ov.vtype as usize].min_gap;
+                    self.other(types, o, gap)
+                });
             }
             out.follower = found;
         }

@@ -1,0 +1,112 @@
+//! Vehicle by vehicle against SUMO 1.8's own run: scenarios/sumo/ramp_metering_1x3 made deterministic (sigma 0,
+//! speed deviation 0, departPos `base`), where every vehicle of mapc drives as SUMO's did. The figures below were
+//! recorded from SUMO 1.8 (`sumo -c` of that copy, seed 0, `--fcd-output` and `--tripinfo-output`; the copy is
+//! what [`deterministic_1x3`] writes).
+
+use super::*;
+use crate::runs::scenario::spec_from_scenario;
+use std::path::PathBuf;
+
+/// ramp_metering_1x3 with its routes made deterministic, in a folder of its own; `end` s long.
+fn deterministic_1x3(tag: &str, end: u32) -> PathBuf {
+    let src = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/sumo/ramp_metering_1x3"
+    ));
+    let dir = std::env::temp_dir().join(format!("mapc_det1x3_{tag}_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["1ramp_1x3.net.xml", "1ramp_1x3.add.xml"] {
+        std::fs::copy(src.join(f), dir.join(f)).unwrap();
+    }
+    let routes = std::fs::read_to_string(src.join("1ramp_1x3.rou.xml"))
+        .unwrap()
+        .replace("sigma=\"0.9\"", "sigma=\"0\" speedDev=\"0\"")
+        .replace("sigma=\"0.8\"", "sigma=\"0\" speedDev=\"0\"")
+        .replace("departPos=\"random\"", "departPos=\"base\"");
+    std::fs::write(dir.join("1ramp_1x3.rou.xml"), routes).unwrap();
+    let cfg = std::fs::read_to_string(src.join("1ramp_1x3.sumocfg"))
+        .unwrap()
+        .replace(
+            "<begin value=\"0\"/>",
+            &format!("<begin value=\"0\"/><end value=\"{end}\"/>"),
+        );
+    std::fs::write(dir.join("1ramp_1x3.sumocfg"), cfg).unwrap();
+    dir.join("1ramp_1x3.sumocfg")
+}
+
+/// The run of the copy up to `until` s, with each vehicle's flow and number recorded; `junction_changes`: SUMO's
+/// lane changing on junction connections side by side.
+fn run_until(tag: &str, until: f64, junction_changes: bool) -> Simulation {
+    let cfg = deterministic_1x3(tag, 200);
+    let rs = mapc_scenario::ResolvedScenario::load(cfg.to_str().unwrap()).unwrap();
+    let mut spec = spec_from_scenario(&rs).unwrap();
+    spec.sumo_junction_lane_changes = junction_changes;
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    sim.record_origins();
+    while sim.time_s < until - 1e-9 {
+        sim.step().unwrap();
+    }
+    sim
+}
+
+/// The vehicle number `n` of flow `flow` (0: main_con, 4: off_ramp_con).
+fn vehicle(sim: &Simulation, flow: usize, n: u32) -> VehicleId {
+    (0..sim.veh.len() as VehicleId)
+        .find(|&id| sim.vehicle_origin(id) == Some((flow, n)))
+        .expect("the vehicle was created")
+}
+
+#[test]
+fn lane_changing_on_connections_side_by_side_slows_a_driver_as_sumo_does() {
+    // main_con.2 crosses the three-lane connection from main_road to acceleration_area; beside it main_con.3 wants
+    // its lane and asks it to let it in: SUMO's FCD has it at 20.97 m/s at 34 s (the end of the step that starts
+    // then), 22.22 without the pass on the connection
+    let speed_at_34 = |junction_changes: bool| {
+        let sim = run_until(&format!("lc{junction_changes}"), 35.0, junction_changes);
+        sim.veh[vehicle(&sim, 0, 2) as usize].speed
+    };
+    let with = speed_at_34(true);
+    assert!((with - 20.97).abs() < 0.01, "{with}");
+    let without = speed_at_34(false);
+    assert!((without - 22.22).abs() < 0.01, "{without}");
+}
+
+#[test]
+fn departures_are_tried_in_the_order_they_were_due_as_sumo_tries_them() {
+    // at 38 s: off_ramp_con.1 (due 36.364 s, refused at 37 s) enters entry_0 first, then main_con.57 (37.335 s)
+    // entry_2 and main_con.58 (37.990 s: SUMO's period of 655 ms) entry_1 (SUMO's trip-info)
+    let sim = run_until("order", 39.0, true);
+    let entered = |flow: usize, n: u32| {
+        let v = &sim.veh[vehicle(&sim, flow, n) as usize];
+        let entry = sim.routes[v.route as usize].lanes[0];
+        // mapc stamps a departure with the end of its step, SUMO with its begin
+        (v.depart_s - sim.spec.step_s, sim.lane_at(entry as usize).index)
+    };
+    assert_eq!(entered(4, 1), (38.0, 0));
+    assert_eq!(entered(0, 57), (38.0, 2));
+    assert_eq!(entered(0, 58), (38.0, 1));
+    let due = sim.veh[vehicle(&sim, 0, 58) as usize].due_s;
+    assert!((due - 37.99).abs() < 1e-9, "{due}");
+}
+
+#[test]
+fn connections_side_by_side_with_priority_form_groups_right_to_left() {
+    let cfg = deterministic_1x3("groups", 10);
+    let rs = mapc_scenario::ResolvedScenario::load(cfg.to_str().unwrap()).unwrap();
+    let net = Network::from_graph(&rs.graph).unwrap();
+    let mut sizes: Vec<usize> = net.via_groups.iter().map(Vec::len).collect();
+    sizes.sort();
+    // entry -> off_ramp_up_stream (4), off_ramp_up_stream -> main_road (3), main_road -> acceleration_area (3),
+    // off_ramp_beginning -> off_ramp (2); the zipper into end_main_road leads from acceleration_area's lanes 1-3
+    assert!(sizes.contains(&4) && sizes.iter().filter(|&&n| n == 3).count() >= 2, "{sizes:?}");
+    for g in &net.via_groups {
+        let places: Vec<_> = g.iter().map(|&l| net.via_beside[l as usize].unwrap()).collect();
+        for (i, b) in places.iter().enumerate() {
+            assert_eq!(b.right, i.checked_sub(1).map(|j| g[j]));
+            assert_eq!(b.left, g.get(i + 1).copied());
+            if i > 0 {
+                assert_eq!(b.index, places[i - 1].index + 1);
+            }
+        }
+    }
+}
