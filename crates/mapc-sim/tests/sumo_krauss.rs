@@ -43,10 +43,11 @@ fn the_krauss_run_is_pinned_bit_for_bit() {
     // speeds differ in their last bits, as the clock's sums round differently); and when a vehicle whose back is
     // still in the junction behind could change lanes, as in SUMO 1.8; and when its lane-change memory survived
     // the junctions whose connections run side by side; and when vehicles changed lanes on those connections, and
-    // departures came in SUMO's order on its millisecond clock
+    // departures came in SUMO's order on its millisecond clock; and when the lane-change pass visited the roads in
+    // SUMO's order of active lanes and a dead end's vehicle drove up to its end
     let expected = [
-        "arrived 449 departed 456 travel 4040e5f8ee18d7b7 speed 403861aa42235e04 lane changes 264",
-        "arrived 449 departed 456 travel 4040ee2028238fc9 speed 403853edff181914 lane changes 273",
+        "arrived 449 departed 456 travel 4040e624b7d17586 speed 403861cf8d3ef098 lane changes 269",
+        "arrived 449 departed 456 travel 4040ed0ad53cfd9b speed 4038561f88e0f328 lane changes 276",
     ];
     assert_eq!(got, expected, "the Krauss run changed: {got:#?}");
 }

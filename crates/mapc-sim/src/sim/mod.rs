@@ -126,6 +126,8 @@ pub struct Simulation {
     /// Per lane, the summed lengths with min gaps of its vehicles during the lane-change pass.
     lane_brutto: Vec<f64>,
     lc_scratch: lane_change::LcScratch,
+    /// SUMO's list of active lanes, under SUMO's junction rules ([`step::active_lanes`]).
+    active_lanes: step::active_lanes::ActiveLanes,
 }
 
 impl Simulation {
@@ -246,6 +248,7 @@ impl Simulation {
             best_cache: BestLanesCache::default(),
             lane_brutto: Vec::new(),
             lc_scratch: Default::default(),
+            active_lanes: Default::default(),
             net,
             spec,
         };
@@ -441,6 +444,9 @@ impl Simulation {
             self.measure.reset();
             self.detectors.reset(self.time_s - self.spec.start_time_s);
         }
+        if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
+            self.activate_lanes_at_step_start();
+        }
         // Metrics see the network as it is before the step (as the original rollouts did).
         let mut n = 0u64;
         let mut sum = 0.0;
@@ -489,6 +495,9 @@ impl Simulation {
         self.plans = plans;
         self.execute_moves();
         self.teleport_stuck();
+        if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
+            self.activate_lanes_after_moves();
+        }
         // the loops see the moves before the lane changes, as SUMO's see them while vehicles move: a vehicle
         // that passes a loop and changes lanes in the same step has passed it
         if !self.detectors.is_empty() {

@@ -110,3 +110,81 @@ fn connections_side_by_side_with_priority_form_groups_right_to_left() {
         }
     }
 }
+
+#[test]
+fn a_vehicle_on_a_dead_end_lane_drives_up_to_its_end_as_sumo_does() {
+    // on_ramp_con.3 at the end of the acceleration lane, blocked: SUMO's FCD has it at the lane's very end,
+    // 193.79 m, at 2.77 m/s after the step from 59 s (it stopped a tenth of a metre short before)
+    let sim = run_until("dead_end", 60.0, true);
+    let v = &sim.veh[vehicle(&sim, 2, 3) as usize];
+    let len = sim.lane_at(v.lane as usize).length;
+    assert!((v.pos - len).abs() < 0.01, "{} of {len}", v.pos);
+    assert!((v.speed - 2.77).abs() < 0.01, "{}", v.speed);
+}
+
+/// scenarios/sumo/ramp_game made deterministic (one type, sigma 0, no speed deviation, each flow by probability
+/// at its mean rate, departPos `base` for `random`), in a folder of its own.
+fn deterministic_ramp_game() -> PathBuf {
+    let src = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/sumo/ramp_game"
+    ));
+    let dir = std::env::temp_dir().join(format!("mapc_detrg_{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("ramp")).unwrap();
+    std::fs::copy(src.join("ramp/ramp.net.xml"), dir.join("ramp/ramp.net.xml")).unwrap();
+    let flow = |id: &str, route: &str, begin: u32, vph: u32, tail: &str| {
+        format!(
+            "<flow id=\"{id}\" route=\"{route}\" begin=\"{begin}\" end=\"90000\" vehsPerHour=\"{vph}\" departSpeed=\"max\"{tail}/>\n"
+        )
+    };
+    let (free, lane0) = (
+        " departLane=\"free\" departPos=\"free\"",
+        " departLane=\"0\" departPos=\"base\"",
+    );
+    let mut routes = String::from(
+        "<routes>\n<vType id=\"DEFAULT_VEHTYPE\" length=\"5.0\" minGap=\"2.5\" speedFactor=\"1\" speedDev=\"0\" sigma=\"0\"/>\n\
+         <route id=\"highway\" edges=\"gneE2 offramp gneE3 gneE7 gneE8 gneE11\"/>\n\
+         <route id=\"offramp\" edges=\"gneE2 offramp gneE4 gneE16 gneE18 gneE9\"/>\n\
+         <route id=\"onramp\" edges=\"gneE15 gneE17 gneE18 gneE13 gneE14 gneE7 gneE8 gneE11\"/>\n",
+    );
+    for (id, route, begin, vph, tail) in [
+        ("highway1", "highway", 0, 2500, free),
+        ("offramp", "offramp", 0, 792, lane0),
+        ("onramp", "onramp", 0, 792, ""),
+        ("highway2", "highway", 200, 1440, free),
+        ("offramp2", "offramp", 200, 180, lane0),
+        ("onramp2", "onramp", 200, 144, ""),
+    ] {
+        routes.push_str(&flow(id, route, begin, vph, tail));
+    }
+    routes.push_str("</routes>\n");
+    std::fs::write(dir.join("ramp/ramp.rou.xml"), routes).unwrap();
+    std::fs::write(
+        dir.join("ramp.sumocfg"),
+        "<configuration><input><net-file value=\"ramp/ramp.net.xml\"/><route-files value=\"ramp/ramp.rou.xml\"/></input>\
+         <time><begin value=\"0\"/><end value=\"400\"/><step-length value=\".2\"/></time></configuration>",
+    )
+    .unwrap();
+    dir.join("ramp.sumocfg")
+}
+
+#[test]
+fn roads_take_their_turn_in_the_lane_change_pass_in_sumos_order_of_active_lanes() {
+    // highway1.6 on gneE3, 12 m before the on-ramp's merge, is asked by onramp.0 on the acceleration lane
+    // downstream to make room; SUMO's pass visits the downstream road first (its lanes joined the active list
+    // later, at the front), so highway1.6 moves left in the same step: on gneE3's lane 1 at 201.62 m after the
+    // step from 27.8 s (SUMO's FCD at 28.0 s). Visited in the roads' own order, it stayed on lane 0.
+    let cfg = deterministic_ramp_game();
+    let rs = mapc_scenario::ResolvedScenario::load(cfg.to_str().unwrap()).unwrap();
+    let spec = spec_from_scenario(&rs).unwrap();
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    sim.record_origins();
+    while sim.time_s < 28.2 - 1e-9 {
+        sim.step().unwrap();
+    }
+    let v = &sim.veh[vehicle(&sim, 0, 6) as usize];
+    let gne_e3 = rs.graph.find_roads("gneE3").unwrap()[0];
+    assert_eq!(sim.net.road_ids[sim.net.road_of(v.lane).unwrap()], gne_e3);
+    assert!((v.pos - 201.62).abs() < 0.01, "{}", v.pos);
+    assert_eq!(sim.lane_at(v.lane as usize).index, 1);
+}

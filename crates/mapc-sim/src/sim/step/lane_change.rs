@@ -9,6 +9,7 @@ use crate::models::lc::{
     Surroundings,
 };
 use crate::network::best_lanes::BestLane;
+use super::active_lanes::ChangerEdge;
 use std::collections::HashMap;
 
 /// A vehicle's lane-change record between steps.
@@ -161,6 +162,29 @@ impl Simulation {
         }
         let mut scratch = std::mem::take(&mut self.lc_scratch);
         scratch.next_occupation.of = None;
+        if self.spec.sumo_junction_lane_changes {
+            // SUMO's order: the roads and connections side by side as their lanes stand in the active list
+            let edges = self.changer_edges_in_order();
+            for &e in &edges {
+                let lanes = self.changer_edge_lanes(e);
+                let width = match e {
+                    ChangerEdge::Road(_) => lanes.len(),
+                    ChangerEdge::Group(_) => {
+                        let to = self.lane_at(lanes[0] as usize).via_target;
+                        match to.and_then(|t| self.net.road_of(t)) {
+                            Some(r) => self.net.road_lanes[r].len(),
+                            None => continue,
+                        }
+                    }
+                };
+                scratch.lanes.clear();
+                scratch.lanes.extend_from_slice(self.changer_edge_lanes(e));
+                self.change_on_lanes(&mut scratch, width);
+            }
+            self.activate_changed_onto(&edges);
+            self.lc_scratch = scratch;
+            return;
+        }
         for r in 0..self.net.road_lanes.len() {
             let n = self.net.road_lanes[r].len();
             if n < 2 {
@@ -169,25 +193,6 @@ impl Simulation {
             scratch.lanes.clear();
             scratch.lanes.extend_from_slice(&self.net.road_lanes[r]);
             self.change_on_lanes(&mut scratch, n);
-        }
-        // SUMO's junction rules: vehicles change lanes on junction connections that run side by side
-        if self.spec.sumo_junction_lane_changes {
-            for g in 0..self.net.via_groups.len() {
-                let group = &self.net.via_groups[g];
-                let to = self.lane_at(group[0] as usize).via_target;
-                let Some(width) = to
-                    .and_then(|t| self.net.road_of(t))
-                    .map(|r| self.net.road_lanes[r].len())
-                else {
-                    continue;
-                };
-                if group.iter().all(|&l| self.lane_veh[l as usize].is_empty()) {
-                    continue;
-                }
-                scratch.lanes.clear();
-                scratch.lanes.extend_from_slice(group);
-                self.change_on_lanes(&mut scratch, width);
-            }
         }
         self.lc_scratch = scratch;
     }

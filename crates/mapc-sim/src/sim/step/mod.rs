@@ -10,6 +10,7 @@ pub(in crate::sim) mod junction;
 pub(in crate::sim) mod lane_change;
 #[cfg(test)]
 mod lane_change_view_tests;
+pub(in crate::sim) mod active_lanes;
 pub(in crate::sim) mod lookahead;
 pub(in crate::sim) mod moves;
 #[cfg(test)]

@@ -230,6 +230,7 @@ impl Simulation {
                     .rposition(|&o| self.veh[o as usize].pos >= v_pos)
                     .map_or(0, |i| i + 1);
                 q.insert(at, id);
+                self.note_entered(new_lane);
             }
         }
     }

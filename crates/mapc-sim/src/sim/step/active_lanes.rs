@@ -1,0 +1,163 @@
+//! SUMO's list of active lanes (`MSEdgeControl::myActiveLanes`), kept under SUMO's junction rules: the lane-change
+//! pass visits the roads (and junction connections side by side) in the order their lanes stand in it. A lane
+//! whose road has a lane changer joins at the front when it gets vehicles again, any other at the back; a lane
+//! leaves when it empties. The order decides whether a driver asked to make room by a vehicle on another road
+//! hears it before its own turn in the pass (and so changes lanes in the same step) or only after it.
+
+use super::*;
+use std::collections::VecDeque;
+
+#[derive(Clone, Debug, Default)]
+pub(in crate::sim) struct ActiveLanes {
+    order: VecDeque<LaneIdx>,
+    active: Vec<bool>,
+    /// Per lane, the vehicles that entered it in this step's moves.
+    entered: Vec<u32>,
+    /// Roads and groups already visited in this step's pass.
+    visited_roads: Vec<bool>,
+    visited_groups: Vec<bool>,
+}
+
+/// A road or a group of junction connections side by side: what SUMO's lane changer works on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(in crate::sim) enum ChangerEdge {
+    Road(usize),
+    Group(usize),
+}
+
+impl Simulation {
+    /// The road or group whose lane changer covers `lane` (SUMO's `haveNeighbors`), if any.
+    pub(in crate::sim) fn changer_edge(&self, lane: LaneIdx) -> Option<ChangerEdge> {
+        let l = self.lane_at(lane as usize);
+        match l.kind {
+            LaneKind::Road(r) => (self.net.road_lanes[r].len() > 1).then_some(ChangerEdge::Road(r)),
+            LaneKind::Via(_) => self.net.via_beside[lane as usize].map(|b| ChangerEdge::Group(b.group as usize)),
+        }
+    }
+
+    fn join_active(&mut self, lane: LaneIdx) {
+        let a = &mut self.active_lanes;
+        if a.active[lane as usize] {
+            return;
+        }
+        a.active[lane as usize] = true;
+        if self.changer_edge(lane).is_some() {
+            self.active_lanes.order.push_front(lane);
+        } else {
+            self.active_lanes.order.push_back(lane);
+        }
+    }
+
+    /// At a step's start (SUMO's `patchActiveLanes`, then `planMovements`): the lanes vehicles were inserted on
+    /// join in SUMO's numbering order; the lanes that emptied leave.
+    pub(in crate::sim) fn activate_lanes_at_step_start(&mut self) {
+        let n = self.net.lanes.len();
+        if self.active_lanes.active.len() != n {
+            self.active_lanes.active = vec![false; n];
+            self.active_lanes.entered = vec![0; n];
+        }
+        let mut joining: Vec<LaneIdx> = (0..n as LaneIdx)
+            .filter(|&l| !self.active_lanes.active[l as usize] && !self.lane_veh[l as usize].is_empty())
+            .collect();
+        joining.sort_by_key(|&l| self.net.sumo_number_rank[l as usize]);
+        for l in joining {
+            self.join_active(l);
+        }
+        self.leave_empty_lanes(|sim, l| sim.lane_veh[l as usize].len());
+    }
+
+    /// A vehicle entered `lane` in this step's moves.
+    #[inline]
+    pub(in crate::sim) fn note_entered(&mut self, lane: LaneIdx) {
+        if let Some(e) = self.active_lanes.entered.get_mut(lane as usize) {
+            *e += 1;
+        }
+    }
+
+    /// After the moves (SUMO's `executeMovements`): a lane left with none of its own vehicles leaves the list; then
+    /// the lanes vehicles entered, by SUMO's lane id, join if none of their own vehicles stayed.
+    pub(in crate::sim) fn activate_lanes_after_moves(&mut self) {
+        if self.active_lanes.active.is_empty() {
+            return;
+        }
+        let own = |sim: &Simulation, l: LaneIdx| {
+            sim.lane_veh[l as usize].len() - sim.active_lanes.entered[l as usize] as usize
+        };
+        self.leave_empty_lanes(own);
+        let mut entered: Vec<LaneIdx> = (0..self.net.lanes.len() as LaneIdx)
+            .filter(|&l| self.active_lanes.entered[l as usize] > 0)
+            .collect();
+        entered.sort_by_key(|&l| self.net.sumo_id_rank[l as usize]);
+        for l in entered {
+            if own(self, l) == 0 && !self.lane_veh[l as usize].is_empty() {
+                self.join_active(l);
+            }
+            self.active_lanes.entered[l as usize] = 0;
+        }
+    }
+
+    fn leave_empty_lanes(&mut self, count: impl Fn(&Simulation, LaneIdx) -> usize) {
+        let order = std::mem::take(&mut self.active_lanes.order);
+        let mut kept = VecDeque::with_capacity(order.len());
+        for l in order {
+            if count(self, l) == 0 {
+                self.active_lanes.active[l as usize] = false;
+            } else {
+                kept.push_back(l);
+            }
+        }
+        self.active_lanes.order = kept;
+    }
+
+    /// The roads and groups the lane-change pass visits, in the order of their first lane in the list.
+    pub(in crate::sim) fn changer_edges_in_order(&mut self) -> Vec<ChangerEdge> {
+        let a = &mut self.active_lanes;
+        a.visited_roads.clear();
+        a.visited_roads.resize(self.net.road_lanes.len(), false);
+        a.visited_groups.clear();
+        a.visited_groups.resize(self.net.via_groups.len(), false);
+        let mut out = Vec::new();
+        for i in 0..self.active_lanes.order.len() {
+            let l = self.active_lanes.order[i];
+            let Some(e) = self.changer_edge(l) else {
+                // lanes without a lane changer stand behind every other
+                break;
+            };
+            let seen = match e {
+                ChangerEdge::Road(r) => &mut self.active_lanes.visited_roads[r],
+                ChangerEdge::Group(g) => &mut self.active_lanes.visited_groups[g],
+            };
+            if !*seen {
+                *seen = true;
+                out.push(e);
+            }
+        }
+        out
+    }
+
+    /// The lanes of `edge`.
+    pub(in crate::sim) fn changer_edge_lanes(&self, edge: ChangerEdge) -> &[LaneIdx] {
+        match edge {
+            ChangerEdge::Road(r) => &self.net.road_lanes[r],
+            ChangerEdge::Group(g) => &self.net.via_groups[g],
+        }
+    }
+
+    /// After the pass (SUMO's `changeLanes`): lanes of the visited roads that vehicles changed onto join at the
+    /// front, the last of them first.
+    pub(in crate::sim) fn activate_changed_onto(&mut self, edges: &[ChangerEdge]) {
+        let mut to_add = Vec::new();
+        for &e in edges {
+            for i in 0..self.changer_edge_lanes(e).len() {
+                let l = self.changer_edge_lanes(e)[i];
+                if !self.lane_veh[l as usize].is_empty() && !self.active_lanes.active[l as usize] {
+                    self.active_lanes.active[l as usize] = true;
+                    to_add.push(l);
+                }
+            }
+        }
+        for l in to_add {
+            self.active_lanes.order.push_front(l);
+        }
+    }
+}
