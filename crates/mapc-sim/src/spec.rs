@@ -112,7 +112,7 @@ impl FlowSpec {
             return None;
         }
         if self.whole_ms {
-            let ms = |s: f64| (s * 1000.0 + 0.5).floor();
+            let ms = |s: f64| crate::numeric::floor_exact(s * 1000.0 + 0.5);
             return Some((ms(self.begin_s) + n as f64 * ms(3600.0 / self.vehs_per_hour)) / 1000.0);
         }
         Some(if n == 0 {

@@ -29,6 +29,11 @@ impl EntryQueue {
         self.built.len() as u64 + self.counted.iter().map(|&(_, n)| n).sum::<u64>()
     }
 
+    /// No vehicle waits.
+    pub(crate) fn is_empty(&self) -> bool {
+        self.built.is_empty() && self.counted.is_empty()
+    }
+
     /// Whether the next due vehicle is built now (the queue's built part has room and nothing is counted).
     pub(crate) fn builds_next(&self) -> bool {
         self.counted.is_empty() && self.built.len() < BUILT_WAITING_CAP

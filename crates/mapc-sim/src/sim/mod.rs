@@ -83,7 +83,13 @@ pub struct Simulation {
     road_entries: Vec<lane_choice::RoadEntry>,
     /// The entry lanes where an insertion failed in this step (kept to reuse its allocation).
     refused_lanes: Vec<LaneIdx>,
+    /// [`Simulation::insert_in_due_order`]'s per-queue state, kept between steps.
+    due_order_open: Vec<bool>,
+    due_order_place: Vec<usize>,
     flow_next: Vec<u64>,
+    /// Per flow, (n, departure time of its vehicle n): `FlowSpec::departure_s` of `flow_next`, kept so that each
+    /// step compares instead of computing it again.
+    flow_due: Vec<(u64, Option<f64>)>,
     /// Per flow, its vehicles built so far; and, once [`Simulation::record_origins`] asked for them, each
     /// vehicle's flow and number in it (SUMO names a flow's vehicles `flow.N`).
     flow_built: Vec<u32>,
@@ -177,8 +183,11 @@ impl Simulation {
             entry_lanes: Vec::new(),
             road_entries: Vec::new(),
             refused_lanes: Vec::new(),
+            due_order_open: Vec::new(),
+            due_order_place: Vec::new(),
             lane_order: Vec::new(),
             flow_next: vec![0; spec.flows.len()],
+            flow_due: spec.flows.iter().map(|f| (0, f.departure_s(0))).collect(),
             flow_built: vec![0; spec.flows.len()],
             origins: None,
             flow_route: Vec::new(),

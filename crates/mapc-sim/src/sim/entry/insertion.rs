@@ -35,7 +35,10 @@ impl Simulation {
             // end).
             loop {
                 let n = self.flow_next[f];
-                let Some(depart) = self.spec.flows[f].departure_s(n) else {
+                if self.flow_due[f].0 != n {
+                    self.flow_due[f] = (n, self.spec.flows[f].departure_s(n));
+                }
+                let Some(depart) = self.flow_due[f].1 else {
                     break;
                 };
                 if !(depart <= now + 1e-9) || depart >= end_s || number.is_some_and(|m| n >= m) {

@@ -173,9 +173,18 @@ impl Simulation {
     /// refused tries no more in this step, as entry by entry.
     pub(in crate::sim) fn insert_in_due_order(&mut self, refused: &mut Vec<LaneIdx>) {
         let (n_fixed, n_road) = (self.entry_lanes.len(), self.road_entries.len());
+        if self.pending.iter().all(|q| q.is_empty())
+            && self.road_entries.iter().all(|e| e.queue.is_empty())
+        {
+            return;
+        }
         // per queue (fixed entries first, then road entries): whether it may still try, and its place
-        let mut open = vec![true; n_fixed + n_road];
-        let mut place = vec![0usize; n_road];
+        let mut open = std::mem::take(&mut self.due_order_open);
+        open.clear();
+        open.resize(n_fixed + n_road, true);
+        let mut place = std::mem::take(&mut self.due_order_place);
+        place.clear();
+        place.resize(n_road, 0);
         loop {
             let mut next: Option<(f64, VehicleId, usize)> = None;
             for q in 0..n_fixed + n_road {
@@ -209,6 +218,8 @@ impl Simulation {
                 open[q] = false;
             }
         }
+        self.due_order_open = open;
+        self.due_order_place = place;
     }
 
     /// The vehicle at the front of fixed entry `ei`'s queue (a counted one is built now).

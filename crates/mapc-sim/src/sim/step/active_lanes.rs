@@ -13,9 +13,14 @@ pub(in crate::sim) struct ActiveLanes {
     active: Vec<bool>,
     /// Per lane, the vehicles that entered it in this step's moves.
     entered: Vec<u32>,
+    /// The lanes of `entered` above 0 (each once).
+    entered_lanes: Vec<LaneIdx>,
     /// Roads and groups already visited in this step's pass.
     visited_roads: Vec<bool>,
     visited_groups: Vec<bool>,
+    /// Buffers kept between steps so that the bookkeeping allocates nothing.
+    joining: Vec<LaneIdx>,
+    pub(in crate::sim) edges: Vec<ChangerEdge>,
 }
 
 /// A road or a group of junction connections side by side: what SUMO's lane changer works on.
@@ -56,13 +61,16 @@ impl Simulation {
             self.active_lanes.active = vec![false; n];
             self.active_lanes.entered = vec![0; n];
         }
-        let mut joining: Vec<LaneIdx> = (0..n as LaneIdx)
-            .filter(|&l| !self.active_lanes.active[l as usize] && !self.lane_veh[l as usize].is_empty())
-            .collect();
+        let mut joining = std::mem::take(&mut self.active_lanes.joining);
+        joining.clear();
+        joining.extend((0..n as LaneIdx).filter(|&l| {
+            !self.active_lanes.active[l as usize] && !self.lane_veh[l as usize].is_empty()
+        }));
         joining.sort_by_key(|&l| self.net.sumo_number_rank[l as usize]);
-        for l in joining {
+        for &l in &joining {
             self.join_active(l);
         }
+        self.active_lanes.joining = joining;
         self.leave_empty_lanes(|sim, l| sim.lane_veh[l as usize].len());
     }
 
@@ -70,6 +78,9 @@ impl Simulation {
     #[inline]
     pub(in crate::sim) fn note_entered(&mut self, lane: LaneIdx) {
         if let Some(e) = self.active_lanes.entered.get_mut(lane as usize) {
+            if *e == 0 {
+                self.active_lanes.entered_lanes.push(lane);
+            }
             *e += 1;
         }
     }
@@ -84,39 +95,39 @@ impl Simulation {
             sim.lane_veh[l as usize].len() - sim.active_lanes.entered[l as usize] as usize
         };
         self.leave_empty_lanes(own);
-        let mut entered: Vec<LaneIdx> = (0..self.net.lanes.len() as LaneIdx)
-            .filter(|&l| self.active_lanes.entered[l as usize] > 0)
-            .collect();
+        let mut entered = std::mem::take(&mut self.active_lanes.entered_lanes);
         entered.sort_by_key(|&l| self.net.sumo_id_rank[l as usize]);
-        for l in entered {
+        for &l in &entered {
             if own(self, l) == 0 && !self.lane_veh[l as usize].is_empty() {
                 self.join_active(l);
             }
             self.active_lanes.entered[l as usize] = 0;
         }
+        entered.clear();
+        self.active_lanes.entered_lanes = entered;
     }
 
     fn leave_empty_lanes(&mut self, count: impl Fn(&Simulation, LaneIdx) -> usize) {
-        let order = std::mem::take(&mut self.active_lanes.order);
-        let mut kept = VecDeque::with_capacity(order.len());
-        for l in order {
-            if count(self, l) == 0 {
-                self.active_lanes.active[l as usize] = false;
-            } else {
-                kept.push_back(l);
-            }
-        }
-        self.active_lanes.order = kept;
+        let mut order = std::mem::take(&mut self.active_lanes.order);
+        let mut active = std::mem::take(&mut self.active_lanes.active);
+        order.retain(|&l| {
+            let keep = count(self, l) > 0;
+            active[l as usize] = keep;
+            keep
+        });
+        self.active_lanes.active = active;
+        self.active_lanes.order = order;
     }
 
-    /// The roads and groups the lane-change pass visits, in the order of their first lane in the list.
-    pub(in crate::sim) fn changer_edges_in_order(&mut self) -> Vec<ChangerEdge> {
+    /// The roads and groups the lane-change pass visits, in the order of their first lane in the list (into
+    /// `out`, cleared first).
+    pub(in crate::sim) fn changer_edges_in_order(&mut self, out: &mut Vec<ChangerEdge>) {
         let a = &mut self.active_lanes;
         a.visited_roads.clear();
         a.visited_roads.resize(self.net.road_lanes.len(), false);
         a.visited_groups.clear();
         a.visited_groups.resize(self.net.via_groups.len(), false);
-        let mut out = Vec::new();
+        out.clear();
         for i in 0..self.active_lanes.order.len() {
             let l = self.active_lanes.order[i];
             let Some(e) = self.changer_edge(l) else {
@@ -132,7 +143,6 @@ impl Simulation {
                 out.push(e);
             }
         }
-        out
     }
 
     /// The lanes of `edge`.

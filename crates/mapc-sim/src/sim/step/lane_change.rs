@@ -164,7 +164,8 @@ impl Simulation {
         scratch.next_occupation.of = None;
         if self.spec.sumo_junction_lane_changes {
             // SUMO's order: the roads and connections side by side as their lanes stand in the active list
-            let edges = self.changer_edges_in_order();
+            let mut edges = std::mem::take(&mut self.active_lanes.edges);
+            self.changer_edges_in_order(&mut edges);
             for &e in &edges {
                 let lanes = self.changer_edge_lanes(e);
                 let width = match e {
@@ -182,6 +183,7 @@ impl Simulation {
                 self.change_on_lanes(&mut scratch, width);
             }
             self.activate_changed_onto(&edges);
+            self.active_lanes.edges = edges;
             self.lc_scratch = scratch;
             return;
         }
