@@ -465,3 +465,77 @@ scenario.print_split(75, [("mapc", [{"duration": 70.0}, {"duration": 80.0}, {"du
         "mapc 1 runs, 70.0 s / 2 runs, 85.0 s"
     );
 }
+
+/// tools/sumo_replay/deterministic.py: its copy of ramp_game draws nothing at random (flows by period, one type
+/// with sigma and speed deviation 0, no random departure places), so mapc's seeds 0 and 1 run alike; and `first`
+/// finds the step where a hand-made trace parts from its FCD.
+#[test]
+fn sumo_replays_deterministic_copy_draws_nothing_and_first_finds_where_the_runs_part() {
+    let dir = scratch_dir("deterministic_py");
+    let tool = root().join("tools/sumo_replay/deterministic.py");
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new("python3")
+            .arg(&tool)
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert_success(&out);
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let cfg = root().join("scenarios/sumo/ramp_game/ramp.sumocfg");
+    let copied = run(&["copy", cfg.to_str().unwrap(), "copy"]);
+    assert!(copied.trim().ends_with("copy/ramp.sumocfg"), "{copied}");
+    let routes = std::fs::read_to_string(dir.join("copy/ramp/ramp.rou.xml")).unwrap();
+    assert!(!routes.contains("probability") && !routes.contains("\"random\""), "{routes}");
+    assert!(routes.contains("vehsPerHour=\"792\"") && routes.contains("sigma=\"0\""), "{routes}");
+    let copy_cfg = dir.join("copy/ramp.sumocfg");
+    let sim = |seed: &str| {
+        let v = mapc_json(&[
+            "sim",
+            copy_cfg.to_str().unwrap(),
+            "--seeds",
+            "1",
+            "--first-seed",
+            seed,
+            "--json",
+        ]);
+        (v["outflow"]["mean"].clone(), v["speed"]["mean"].clone())
+    };
+    assert_eq!(sim("0"), sim("1"));
+    // two vehicles; mapc's second (stamped a step later, as traces are) drives slower from its third step
+    std::fs::write(
+        dir.join("g.json"),
+        r#"{"roads": [{"id": "R1", "provenance": {"sumo_ids": ["a"]}}]}"#,
+    )
+    .unwrap();
+    let mut fcd = String::from("<fcd-export>\n");
+    let mut trace = String::from(
+        "time_s,vehicle_id,vehicle_type,road,pos_on_road_m,corridor_x_m,speed_mps,controlled,lane\n",
+    );
+    for t in 0..4 {
+        let (p1, p2) = (5 + 10 * t, 5 + 8 * t);
+        fcd += &format!(
+            "<timestep time=\"{t}.00\"><vehicle id=\"f.0\" lane=\"a_0\" pos=\"{p1}.00\" speed=\"10.00\"/>\
+             <vehicle id=\"f.1\" lane=\"a_1\" pos=\"{p2}.00\" speed=\"8.00\"/></timestep>\n"
+        );
+        let (m2, s2) = if t < 2 { (p2, 8) } else { (p2 - 1, 7) };
+        trace += &format!(
+            "{}.00,7,car,R1,{p1}.000,,10.000,false,0\n{}.00,9,car,R1,{m2}.000,,{s2}.000,false,1\n",
+            t + 1,
+            t + 1
+        );
+    }
+    fcd += "</fcd-export>\n";
+    std::fs::write(dir.join("fcd.xml"), fcd).unwrap();
+    std::fs::write(dir.join("trace.csv"), trace).unwrap();
+    let first = run(&["first", "g.json", "fcd.xml", "trace.csv"]);
+    assert!(first.contains("2 SUMO vehicles matched, 0 not"), "{first}");
+    assert!(
+        first.contains("2.00  f.1") && first.contains("SUMO a 1 21.00 8.00") && first.contains("mapc a 1 20.00 7.00"),
+        "{first}"
+    );
+    assert_eq!(first.lines().count(), 2, "{first}");
+    let follow = run(&["follow", "g.json", "fcd.xml", "trace.csv", "f.1"]);
+    assert_eq!(follow.matches("<<").count(), 2, "{follow}");
+}
