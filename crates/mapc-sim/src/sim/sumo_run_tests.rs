@@ -188,3 +188,30 @@ fn roads_take_their_turn_in_the_lane_change_pass_in_sumos_order_of_active_lanes(
     assert!((v.pos - 201.62).abs() < 0.01, "{}", v.pos);
     assert_eq!(sim.lane_at(v.lane as usize).index, 1);
 }
+
+#[test]
+fn a_minor_link_waits_while_a_merging_foes_back_is_still_in_the_junction_as_sumo_does() {
+    // offramp.0 stands at gneJ14's minor link; onramp.4 on the major connection has entered gneE18, its back
+    // still in the junction until 37.4 s. SUMO (its FCD and link output) keeps offramp.0 standing through the step
+    // from 37.4 s (its leave speed, lowered for that link leader, makes onramp.5 approaching next a conflict) and
+    // starts it in the step from 37.6 s at 0.52 m/s
+    let cfg = deterministic_ramp_game();
+    let rs = mapc_scenario::ResolvedScenario::load(cfg.to_str().unwrap()).unwrap();
+    let spec = spec_from_scenario(&rs).unwrap();
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    sim.record_origins();
+    let gne_e16 = rs.graph.find_roads("gneE16").unwrap()[0];
+    let mut at = |sim: &mut Simulation, t: f64| {
+        while sim.time_s < t - 1e-9 {
+            sim.step().unwrap();
+        }
+        let v = &sim.veh[vehicle(sim, 1, 0) as usize];
+        (sim.net.road_of(v.lane).map(|r| sim.net.road_ids[r]), v.pos, v.speed)
+    };
+    let standing = at(&mut sim, 37.6);
+    assert_eq!(standing.0, Some(gne_e16));
+    assert!((standing.1 - 37.18).abs() < 0.01 && standing.2 == 0.0, "{standing:?}");
+    let started = at(&mut sim, 37.8);
+    assert_eq!(started.0, None, "on the junction's connection");
+    assert!((started.2 - 0.52).abs() < 0.01, "{started:?}");
+}

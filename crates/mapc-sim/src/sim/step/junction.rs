@@ -139,6 +139,43 @@ impl Simulation {
         i
     }
 
+    /// SUMO's link leaders at a merge (`MSLink::getLeaderInfo`, `MSVehicle::getSafeFollowSpeed`), under SUMO's
+    /// junction rules: a vehicle on a foe's connection into the same lane, or one whose back still lies on it,
+    /// leads ego through its minor link, and ego's speed on leaving the connection is what lets it stop before
+    /// them: nothing while the foe is inside the junction, about its distance to the link once only the foe's
+    /// back is. The leave time grows with it, so a foe approaching next blocks the link until the junction is
+    /// clear.
+    pub(in crate::sim) fn lower_leave_speeds_for_merging_foes(
+        &self,
+        plan: &mut Plan,
+        p: &CfModel,
+        speed: f64,
+        desired: f64,
+    ) {
+        for it in &mut plan.items[..plan.n_items as usize] {
+            let lk = self.link_at(it.link as usize);
+            if lk.major || lk.zipper {
+                continue;
+            }
+            for &f in &lk.foes {
+                let fl = self.link_at(f as usize);
+                if !self.lane_veh[fl.via_lane as usize].is_empty() {
+                    it.leave_speed = 0.0;
+                    continue;
+                }
+                let Some(&o) = self.lane_veh[fl.to_lane as usize].last() else {
+                    continue;
+                };
+                let ov = &self.veh[o as usize];
+                let came_by_foe = ov.route_pos > 0
+                    && self.routes[ov.route as usize].lanes[ov.route_pos as usize - 1] == fl.via_lane;
+                if ov.pos < ov.length && came_by_foe {
+                    it.leave_speed = it.leave_speed.fmin(p.stop_speed(it.dist, speed, desired));
+                }
+            }
+        }
+    }
+
     /// SUMO's `MSLink::opened` for a minor link at a merge: blocked by any foe approach that conflicts in time.
     pub(in crate::sim) fn link_opened(
         &self,

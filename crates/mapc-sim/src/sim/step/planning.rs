@@ -344,6 +344,9 @@ impl Simulation {
             k += 1;
         }
         plan.v_safe = vv;
+        if self.spec.sumo_junction_lane_changes {
+            self.lower_leave_speeds_for_merging_foes(plan, p, speed, des_cur);
+        }
         let own_lane_index = self.lane_at(v.lane as usize).index;
         // leave times from the final leave speeds; register approaches on links that minor foes check
         for it in &mut plan.items[..plan.n_items as usize] {
