@@ -43,9 +43,7 @@ fn run_until(tag: &str, until: f64, junction_changes: bool) -> Simulation {
     spec.sumo_junction_lane_changes = junction_changes;
     let mut sim = Simulation::from_spec(spec, 0).unwrap();
     sim.record_origins();
-    while sim.time_s < until - 1e-9 {
-        sim.step().unwrap();
-    }
+    step_until(&mut sim, until);
     sim
 }
 
@@ -168,20 +166,31 @@ fn deterministic_ramp_game() -> PathBuf {
     dir.join("ramp.sumocfg")
 }
 
+/// The deterministic ramp_game, resolved and ready to run with each vehicle's flow and number recorded.
+fn deterministic_ramp_game_run() -> (mapc_scenario::ResolvedScenario, Simulation) {
+    let cfg = deterministic_ramp_game();
+    let rs = mapc_scenario::ResolvedScenario::load(cfg.to_str().unwrap()).unwrap();
+    let spec = spec_from_scenario(&rs).unwrap();
+    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    sim.record_origins();
+    (rs, sim)
+}
+
+/// Steps `sim` until its clock reads `t` (the end of the step that began a step earlier).
+fn step_until(sim: &mut Simulation, t: f64) {
+    while sim.time_s < t - 1e-9 {
+        sim.step().unwrap();
+    }
+}
+
 #[test]
 fn roads_take_their_turn_in_the_lane_change_pass_in_sumos_order_of_active_lanes() {
     // highway1.6 on gneE3, 12 m before the on-ramp's merge, is asked by onramp.0 on the acceleration lane
     // downstream to make room; SUMO's pass visits the downstream road first (its lanes joined the active list
     // later, at the front), so highway1.6 moves left in the same step: on gneE3's lane 1 at 201.62 m after the
     // step from 27.8 s (SUMO's FCD at 28.0 s). Visited in the roads' own order, it stayed on lane 0.
-    let cfg = deterministic_ramp_game();
-    let rs = mapc_scenario::ResolvedScenario::load(cfg.to_str().unwrap()).unwrap();
-    let spec = spec_from_scenario(&rs).unwrap();
-    let mut sim = Simulation::from_spec(spec, 0).unwrap();
-    sim.record_origins();
-    while sim.time_s < 28.2 - 1e-9 {
-        sim.step().unwrap();
-    }
+    let (rs, mut sim) = deterministic_ramp_game_run();
+    step_until(&mut sim, 28.2);
     let v = &sim.veh[vehicle(&sim, 0, 6) as usize];
     let gne_e3 = rs.graph.find_roads("gneE3").unwrap()[0];
     assert_eq!(sim.net.road_ids[sim.net.road_of(v.lane).unwrap()], gne_e3);
@@ -195,16 +204,10 @@ fn a_minor_link_waits_while_a_merging_foes_back_is_still_in_the_junction_as_sumo
     // still in the junction until 37.4 s. SUMO (its FCD and link output) keeps offramp.0 standing through the step
     // from 37.4 s (its leave speed, lowered for that link leader, makes onramp.5 approaching next a conflict) and
     // starts it in the step from 37.6 s at 0.52 m/s
-    let cfg = deterministic_ramp_game();
-    let rs = mapc_scenario::ResolvedScenario::load(cfg.to_str().unwrap()).unwrap();
-    let spec = spec_from_scenario(&rs).unwrap();
-    let mut sim = Simulation::from_spec(spec, 0).unwrap();
-    sim.record_origins();
+    let (rs, mut sim) = deterministic_ramp_game_run();
     let gne_e16 = rs.graph.find_roads("gneE16").unwrap()[0];
-    let mut at = |sim: &mut Simulation, t: f64| {
-        while sim.time_s < t - 1e-9 {
-            sim.step().unwrap();
-        }
+    let at = |sim: &mut Simulation, t: f64| {
+        step_until(sim, t);
         let v = &sim.veh[vehicle(sim, 1, 0) as usize];
         (sim.net.road_of(v.lane).map(|r| sim.net.road_ids[r]), v.pos, v.speed)
     };
