@@ -487,8 +487,14 @@ fn sumo_replays_deterministic_copy_draws_nothing_and_first_finds_where_the_runs_
     let copied = run(&["copy", cfg.to_str().unwrap(), "copy"]);
     assert!(copied.trim().ends_with("copy/ramp.sumocfg"), "{copied}");
     let routes = std::fs::read_to_string(dir.join("copy/ramp/ramp.rou.xml")).unwrap();
-    assert!(!routes.contains("probability") && !routes.contains("\"random\""), "{routes}");
-    assert!(routes.contains("vehsPerHour=\"792\"") && routes.contains("sigma=\"0\""), "{routes}");
+    assert!(
+        !routes.contains("probability") && !routes.contains("\"random\""),
+        "{routes}"
+    );
+    assert!(
+        routes.contains("vehsPerHour=\"792\"") && routes.contains("sigma=\"0\""),
+        "{routes}"
+    );
     let copy_cfg = dir.join("copy/ramp.sumocfg");
     let sim = |seed: &str| {
         let v = mapc_json(&[
@@ -532,7 +538,9 @@ fn sumo_replays_deterministic_copy_draws_nothing_and_first_finds_where_the_runs_
     let first = run(&["first", "g.json", "fcd.xml", "trace.csv"]);
     assert!(first.contains("2 SUMO vehicles matched, 0 not"), "{first}");
     assert!(
-        first.contains("2.00  f.1") && first.contains("SUMO a 1 21.00 8.00") && first.contains("mapc a 1 20.00 7.00"),
+        first.contains("2.00  f.1")
+            && first.contains("SUMO a 1 21.00 8.00")
+            && first.contains("mapc a 1 20.00 7.00"),
         "{first}"
     );
     assert_eq!(first.lines().count(), 2, "{first}");

@@ -689,7 +689,10 @@ impl<'a> Demand<'a> {
                 check_connected(&edges, graph, &route.place)?;
                 Path {
                     from: edges[0].clone(),
-                    via: edges.get(1..edges.len().saturating_sub(1)).unwrap_or_default().to_vec(),
+                    via: edges
+                        .get(1..edges.len().saturating_sub(1))
+                        .unwrap_or_default()
+                        .to_vec(),
                     to: (edges.len() > 1).then(|| edges[edges.len() - 1].clone()),
                 }
             }

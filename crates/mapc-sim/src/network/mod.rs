@@ -173,9 +173,10 @@ fn side_by_side_groups(
     let mut by_roads: std::collections::BTreeMap<(usize, usize), Vec<&SimLink>> =
         Default::default();
     for k in links {
-        if let (LaneKind::Road(a), LaneKind::Road(b)) =
-            (lanes[k.from_lane as usize].kind, lanes[k.to_lane as usize].kind)
-        {
+        if let (LaneKind::Road(a), LaneKind::Road(b)) = (
+            lanes[k.from_lane as usize].kind,
+            lanes[k.to_lane as usize].kind,
+        ) {
             by_roads.entry((a, b)).or_default().push(k);
         }
     }
@@ -187,7 +188,12 @@ fn side_by_side_groups(
         if ks.len() < 2 || ks.iter().any(|k| !k.major || !k.foes.is_empty()) {
             continue;
         }
-        ks.sort_by_key(|k| (lanes[k.from_lane as usize].index, lanes[k.to_lane as usize].index));
+        ks.sort_by_key(|k| {
+            (
+                lanes[k.from_lane as usize].index,
+                lanes[k.to_lane as usize].index,
+            )
+        });
         let to_index = |k: &SimLink| lanes[k.to_lane as usize].index as usize;
         if ks.windows(2).any(|w| to_index(w[1]) != to_index(w[0]) + 1) {
             continue;

@@ -78,7 +78,10 @@ fn departures_are_tried_in_the_order_they_were_due_as_sumo_tries_them() {
         let v = &sim.veh[vehicle(&sim, flow, n) as usize];
         let entry = sim.routes[v.route as usize].lanes[0];
         // mapc stamps a departure with the end of its step, SUMO with its begin
-        (v.depart_s - sim.spec.step_s, sim.lane_at(entry as usize).index)
+        (
+            v.depart_s - sim.spec.step_s,
+            sim.lane_at(entry as usize).index,
+        )
     };
     assert_eq!(entered(4, 1), (38.0, 0));
     assert_eq!(entered(0, 57), (38.0, 2));
@@ -96,9 +99,15 @@ fn connections_side_by_side_with_priority_form_groups_right_to_left() {
     sizes.sort();
     // entry -> off_ramp_up_stream (4), off_ramp_up_stream -> main_road (3), main_road -> acceleration_area (3),
     // off_ramp_beginning -> off_ramp (2); the zipper into end_main_road leads from acceleration_area's lanes 1-3
-    assert!(sizes.contains(&4) && sizes.iter().filter(|&&n| n == 3).count() >= 2, "{sizes:?}");
+    assert!(
+        sizes.contains(&4) && sizes.iter().filter(|&&n| n == 3).count() >= 2,
+        "{sizes:?}"
+    );
     for g in &net.via_groups {
-        let places: Vec<_> = g.iter().map(|&l| net.via_beside[l as usize].unwrap()).collect();
+        let places: Vec<_> = g
+            .iter()
+            .map(|&l| net.via_beside[l as usize].unwrap())
+            .collect();
         for (i, b) in places.iter().enumerate() {
             assert_eq!(b.right, i.checked_sub(1).map(|j| g[j]));
             assert_eq!(b.left, g.get(i + 1).copied());
@@ -209,11 +218,18 @@ fn a_minor_link_waits_while_a_merging_foes_back_is_still_in_the_junction_as_sumo
     let at = |sim: &mut Simulation, t: f64| {
         step_until(sim, t);
         let v = &sim.veh[vehicle(sim, 1, 0) as usize];
-        (sim.net.road_of(v.lane).map(|r| sim.net.road_ids[r]), v.pos, v.speed)
+        (
+            sim.net.road_of(v.lane).map(|r| sim.net.road_ids[r]),
+            v.pos,
+            v.speed,
+        )
     };
     let standing = at(&mut sim, 37.6);
     assert_eq!(standing.0, Some(gne_e16));
-    assert!((standing.1 - 37.18).abs() < 0.01 && standing.2 == 0.0, "{standing:?}");
+    assert!(
+        (standing.1 - 37.18).abs() < 0.01 && standing.2 == 0.0,
+        "{standing:?}"
+    );
     let started = at(&mut sim, 37.8);
     assert_eq!(started.0, None, "on the junction's connection");
     assert!((started.2 - 0.52).abs() < 0.01, "{started:?}");

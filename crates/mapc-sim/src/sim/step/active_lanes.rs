@@ -36,7 +36,9 @@ impl Simulation {
         let l = self.lane_at(lane as usize);
         match l.kind {
             LaneKind::Road(r) => (self.net.road_lanes[r].len() > 1).then_some(ChangerEdge::Road(r)),
-            LaneKind::Via(_) => self.net.via_beside[lane as usize].map(|b| ChangerEdge::Group(b.group as usize)),
+            LaneKind::Via(_) => {
+                self.net.via_beside[lane as usize].map(|b| ChangerEdge::Group(b.group as usize))
+            }
         }
     }
 

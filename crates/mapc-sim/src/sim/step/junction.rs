@@ -168,7 +168,8 @@ impl Simulation {
                 };
                 let ov = &self.veh[o as usize];
                 let came_by_foe = ov.route_pos > 0
-                    && self.routes[ov.route as usize].lanes[ov.route_pos as usize - 1] == fl.via_lane;
+                    && self.routes[ov.route as usize].lanes[ov.route_pos as usize - 1]
+                        == fl.via_lane;
                 if ov.pos < ov.length && came_by_foe {
                     it.leave_speed = it.leave_speed.fmin(p.stop_speed(it.dist, speed, desired));
                 }

@@ -5,12 +5,13 @@
 
 use super::*;
 
+pub(in crate::sim) mod active_lanes;
 pub(in crate::sim) mod detection;
 pub(in crate::sim) mod junction;
 pub(in crate::sim) mod lane_change;
+pub(in crate::sim) mod lane_change_view;
 #[cfg(test)]
 mod lane_change_view_tests;
-pub(in crate::sim) mod active_lanes;
 pub(in crate::sim) mod lookahead;
 pub(in crate::sim) mod moves;
 #[cfg(test)]

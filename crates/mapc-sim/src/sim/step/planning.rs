@@ -240,7 +240,11 @@ impl Simulation {
             if k + 1 >= r.lanes.len() && r.dead_end {
                 // a lane that does not continue on the route: stop at its end (until a lane change); SUMO drives
                 // up to the end itself, mapc's own scenarios were measured stopping a margin before it
-                let margin = if self.spec.sumo_junction_lane_changes { 0.0 } else { POSITION_EPS };
+                let margin = if self.spec.sumo_junction_lane_changes {
+                    0.0
+                } else {
+                    POSITION_EPS
+                };
                 let vs = p.stop_speed(seen - margin, speed, des_cur).fmax(0.0);
                 vv = vv.fmin(vs);
                 if let Some(i) = last_item {
