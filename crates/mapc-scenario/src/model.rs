@@ -54,9 +54,10 @@ pub struct Scenario {
     /// starts two steps in, as Flow's rollouts did (the paper's scenarios). Departures are timed on it.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub sumo_clock: bool,
-    /// A vehicle may change lanes while its back is still inside the junction behind, as SUMO 1.8 lets it (a SUMO
-    /// user's scenario); otherwise it waits until its back has left, the rule mapc's own scenarios were measured
-    /// with (their figures in docs/).
+    /// SUMO 1.8's rules at junctions and in the lane-change pass (a SUMO user's scenario): among them a vehicle may
+    /// change lanes while its back is still inside the junction behind, and on connections side by side
+    /// (`SimSpec::sumo_junction_lane_changes` lists them all); otherwise the rules mapc's own scenarios were
+    /// measured with (their figures in docs/).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub sumo_junction_lane_changes: bool,
     /// Fixed-time programs that replace the network's of the same lights (SUMO runs the last program loaded).

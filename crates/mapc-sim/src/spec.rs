@@ -190,8 +190,11 @@ pub struct SimSpec {
     /// A lane's front vehicle that has stood still longer than this is teleported (SUMO's `--time-to-teleport`;
     /// 0: never).
     pub time_to_teleport_s: f64,
-    /// A vehicle may change lanes while its back is still inside the junction behind (SUMO 1.8's rule, a SUMO
-    /// user's scenario); `false`: it waits until its back has left (mapc's own scenarios).
+    /// SUMO 1.8's rules at junctions and in the lane-change pass (a SUMO user's scenario; `false` for mapc's own,
+    /// whose figures were measured without them): a vehicle may change lanes while its back is still inside the
+    /// junction behind; the lane-change memory survives connections side by side, and vehicles change lanes on
+    /// them; the pass visits roads in the order of SUMO's active lanes; a merging foe's connection leads ego
+    /// through a minor link; a vehicle on a lane that ends drives up to its end (docs/sumo_scenarios.md).
     pub sumo_junction_lane_changes: bool,
     /// The vehicles due to enter are tried in SUMO 1.8's order (a SUMO user's scenario): one list by the time each
     /// was due, whatever its entry (`MSInsertionControl::emitVehicles`); otherwise entry by entry.

@@ -95,12 +95,6 @@ pub struct Network {
     pub via_groups: Vec<Vec<LaneIdx>>,
     /// Per lane: for a via lane of `via_groups`, its place among them; `None` for every other lane.
     pub via_beside: Vec<Option<ViaBeside>>,
-    /// Per lane: its rank among the lanes by SUMO's lane id (`edge_index`, an internal lane `:junction_...`), the
-    /// order in which SUMO takes in the vehicles that entered lanes in a step.
-    pub sumo_id_rank: Vec<u32>,
-    /// Per lane: its rank in SUMO's numbering (the net file's order: internal lanes first, then each edge's lanes),
-    /// the order in which SUMO activates the lanes vehicles were inserted on.
-    pub sumo_number_rank: Vec<u32>,
 }
 
 /// A via lane's place in its group of [`Network::via_groups`].
@@ -116,58 +110,13 @@ pub struct ViaBeside {
     pub group: u32,
 }
 
-/// [`Network::sumo_id_rank`] and [`Network::sumo_number_rank`]: a road lane's SUMO id is its edge's (the road's
-/// first SUMO id, else its own id) and index; a via lane's, `:` and its junction's, then the link's number there.
-fn sumo_lane_ranks(g: &LaneGraph, lanes: &[SimLane], links: &[SimLink]) -> (Vec<u32>, Vec<u32>) {
-    let road_name = |r: usize| {
-        let road = &g.roads[r];
-        road.provenance
-            .sumo_ids
-            .first()
-            .cloned()
-            .unwrap_or_else(|| road.id.to_string())
-    };
-    let junction_name = |j: mapc_graph::JunctionId| {
-        g.junctions
-            .iter()
-            .find(|x| x.id == j)
-            .and_then(|x| x.provenance.sumo_ids.first().cloned())
-            .unwrap_or_else(|| j.to_string())
-    };
-    // (id, numbering key) per lane
-    let mut keys: Vec<(String, (u8, usize, usize))> = Vec::with_capacity(lanes.len());
-    for l in lanes {
-        keys.push(match l.kind {
-            LaneKind::Road(r) => (
-                format!("{}_{}", road_name(r), l.index),
-                (1, r, l.index as usize),
-            ),
-            LaneKind::Via(k) => (
-                format!(":{}_{k}", junction_name(links[k as usize].junction)),
-                (0, k as usize, 0),
-            ),
-        });
-    }
-    let rank = |order: Vec<usize>| {
-        let mut r = vec![0u32; order.len()];
-        for (i, l) in order.into_iter().enumerate() {
-            r[l] = i as u32;
-        }
-        r
-    };
-    let mut by_id: Vec<usize> = (0..lanes.len()).collect();
-    by_id.sort_by(|&a, &b| keys[a].0.as_bytes().cmp(keys[b].0.as_bytes()));
-    let mut by_number: Vec<usize> = (0..lanes.len()).collect();
-    by_number.sort_by_key(|&a| keys[a].1);
-    (rank(by_id), rank(by_number))
-}
-
-/// [`Network::via_groups`] and [`Network::via_beside`]: the links between the same two roads, by the index of the
-/// lane they leave; a group whose links lead to lanes that are not side by side, where one link yields, or where
-/// one merges with a link from another road, allows no changing (the last unlike SUMO, which lets a vehicle change
-/// in beside a foe's connection and does not check collisions inside junctions by default).
+/// The links between the same two roads, by the index of the lane they leave: their via lanes are marked
+/// [`SimLane::beside_another`] where there are several, and form [`Network::via_groups`] (with
+/// [`Network::via_beside`]) unless they lead to lanes that are not side by side, one of them yields, or one merges
+/// with a link from another road (the last unlike SUMO, which lets a vehicle change in beside a foe's connection
+/// and does not check collisions inside junctions by default).
 fn side_by_side_groups(
-    lanes: &[SimLane],
+    lanes: &mut [SimLane],
     links: &[SimLink],
 ) -> (Vec<Vec<LaneIdx>>, Vec<Option<ViaBeside>>) {
     let mut by_roads: std::collections::BTreeMap<(usize, usize), Vec<&SimLink>> =
@@ -183,6 +132,9 @@ fn side_by_side_groups(
     let mut groups = Vec::new();
     let mut beside = vec![None; lanes.len()];
     for (_, mut ks) in by_roads {
+        for k in &ks {
+            lanes[k.via_lane as usize].beside_another = ks.len() > 1;
+        }
         // a connection that merges with another road's keeps its lane: mapc's junction model keeps the two
         // streams apart only for the vehicles that entered them, not for one changing in beside a foe
         if ks.len() < 2 || ks.iter().any(|k| !k.major || !k.foes.is_empty()) {
@@ -335,20 +287,6 @@ impl Network {
             });
             seen.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), link_idx);
         }
-        let road_of = |lanes: &[SimLane], l: LaneIdx| match lanes[l as usize].kind {
-            LaneKind::Road(r) => r,
-            LaneKind::Via(_) => usize::MAX,
-        };
-        let mut between: HashMap<(usize, usize), usize> = HashMap::new();
-        for k in &links {
-            *between
-                .entry((road_of(&lanes, k.from_lane), road_of(&lanes, k.to_lane)))
-                .or_default() += 1;
-        }
-        for k in &links {
-            let n = between[&(road_of(&lanes, k.from_lane), road_of(&lanes, k.to_lane))];
-            lanes[k.via_lane as usize].beside_another = n > 1;
-        }
         for i in 0..links.len() {
             let foes: Vec<LinkIdx> = (0..links.len())
                 .filter(|&j| {
@@ -360,8 +298,7 @@ impl Network {
                 .collect();
             links[i].foes = foes;
         }
-        let (via_groups, via_beside) = side_by_side_groups(&lanes, &links);
-        let (sumo_id_rank, sumo_number_rank) = sumo_lane_ranks(g, &lanes, &links);
+        let (via_groups, via_beside) = side_by_side_groups(&mut lanes, &links);
         let mut net = Network {
             lanes,
             links,
@@ -375,8 +312,6 @@ impl Network {
             best_links_memo: Default::default(),
             via_groups,
             via_beside,
-            sumo_id_rank,
-            sumo_number_rank,
         };
         net.compute_downstream()?;
         Ok(net)

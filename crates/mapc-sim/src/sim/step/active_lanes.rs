@@ -18,6 +18,12 @@ pub(in crate::sim) struct ActiveLanes {
     /// Roads and groups already visited in this step's pass.
     visited_roads: Vec<bool>,
     visited_groups: Vec<bool>,
+    /// Per lane, its rank among the lanes by SUMO's lane id: the order in which SUMO takes in the vehicles that
+    /// entered lanes in a step.
+    id_rank: Vec<u32>,
+    /// Per lane, its rank in SUMO's numbering: the order in which SUMO activates the lanes vehicles were
+    /// inserted on.
+    number_rank: Vec<u32>,
     /// Buffers kept between steps so that the bookkeeping allocates nothing.
     joining: Vec<LaneIdx>,
     pub(in crate::sim) edges: Vec<ChangerEdge>,
@@ -62,13 +68,15 @@ impl Simulation {
         if self.active_lanes.active.len() != n {
             self.active_lanes.active = vec![false; n];
             self.active_lanes.entered = vec![0; n];
+            (self.active_lanes.id_rank, self.active_lanes.number_rank) =
+                sumo_lane_ranks(&self.spec.graph, &self.net);
         }
         let mut joining = std::mem::take(&mut self.active_lanes.joining);
         joining.clear();
         joining.extend((0..n as LaneIdx).filter(|&l| {
             !self.active_lanes.active[l as usize] && !self.lane_veh[l as usize].is_empty()
         }));
-        joining.sort_by_key(|&l| self.net.sumo_number_rank[l as usize]);
+        joining.sort_by_key(|&l| self.active_lanes.number_rank[l as usize]);
         for &l in &joining {
             self.join_active(l);
         }
@@ -98,7 +106,7 @@ impl Simulation {
         };
         self.leave_empty_lanes(own);
         let mut entered = std::mem::take(&mut self.active_lanes.entered_lanes);
-        entered.sort_by_key(|&l| self.net.sumo_id_rank[l as usize]);
+        entered.sort_by_key(|&l| self.active_lanes.id_rank[l as usize]);
         for &l in &entered {
             if own(self, l) == 0 && !self.lane_veh[l as usize].is_empty() {
                 self.join_active(l);
@@ -172,4 +180,55 @@ impl Simulation {
             self.active_lanes.order.push_front(l);
         }
     }
+}
+
+/// Each lane's rank by SUMO's lane id and in SUMO's numbering (the net file's order: internal lanes first, then
+/// each edge's lanes). A road lane's SUMO id is its edge's (the road's first SUMO id, else its own id) and index;
+/// a via lane's, `:` and its junction's, then the link's number there.
+fn sumo_lane_ranks(g: &mapc_graph::LaneGraph, net: &Network) -> (Vec<u32>, Vec<u32>) {
+    let (lanes, links) = (&net.lanes, &net.links);
+    let road_name = |r: usize| {
+        let road = &g.roads[r];
+        road.provenance
+            .sumo_ids
+            .first()
+            .cloned()
+            .unwrap_or_else(|| road.id.to_string())
+    };
+    let junction_names: std::collections::HashMap<mapc_graph::JunctionId, &str> = g
+        .junctions
+        .iter()
+        .filter_map(|x| Some((x.id, x.provenance.sumo_ids.first()?.as_str())))
+        .collect();
+    let junction_name = |j: mapc_graph::JunctionId| {
+        junction_names
+            .get(&j)
+            .map_or_else(|| j.to_string(), |n| n.to_string())
+    };
+    // (id, numbering key) per lane
+    let mut keys: Vec<(String, (u8, usize, usize))> = Vec::with_capacity(lanes.len());
+    for l in lanes {
+        keys.push(match l.kind {
+            LaneKind::Road(r) => (
+                format!("{}_{}", road_name(r), l.index),
+                (1, r, l.index as usize),
+            ),
+            LaneKind::Via(k) => (
+                format!(":{}_{k}", junction_name(links[k as usize].junction)),
+                (0, k as usize, 0),
+            ),
+        });
+    }
+    let rank = |order: Vec<usize>| {
+        let mut r = vec![0u32; order.len()];
+        for (i, l) in order.into_iter().enumerate() {
+            r[l] = i as u32;
+        }
+        r
+    };
+    let mut by_id: Vec<usize> = (0..lanes.len()).collect();
+    by_id.sort_by(|&a, &b| keys[a].0.as_bytes().cmp(keys[b].0.as_bytes()));
+    let mut by_number: Vec<usize> = (0..lanes.len()).collect();
+    by_number.sort_by_key(|&a| keys[a].1);
+    (rank(by_id), rank(by_number))
 }

@@ -167,10 +167,12 @@ impl Simulation {
                     continue;
                 };
                 let ov = &self.veh[o as usize];
-                let came_by_foe = ov.route_pos > 0
+                // its back still on the foe's connection
+                let back_on_foe = ov.pos < ov.length
+                    && ov.route_pos > 0
                     && self.routes[ov.route as usize].lanes[ov.route_pos as usize - 1]
                         == fl.via_lane;
-                if ov.pos < ov.length && came_by_foe {
+                if back_on_foe {
                     it.leave_speed = it.leave_speed.fmin(p.stop_speed(it.dist, speed, desired));
                 }
             }
