@@ -10,6 +10,17 @@ use common::{
 };
 use serde_json::Value;
 
+/// Runs `python3` with `args` in `dir` (a tool of tools/, standard library only) and gives its standard output.
+fn python3(dir: &std::path::Path, args: &[&std::ffi::OsStr]) -> String {
+    let out = std::process::Command::new("python3")
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert_success(&out);
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 /// The Simple Merge with 4000 human veh/h on its one-lane main road: far more than the road takes.
 fn blocked_simple_merge(name: &str) -> String {
     let path = edited_scenario("simple_merge.toml", name, |t| {
@@ -344,14 +355,10 @@ fn sumo_replays_roads_counts_vehicle_seconds_per_road_and_where_a_lane_is_left()
     }
     std::fs::write(dir.join("trace.csv"), trace).unwrap();
     let roads = |args: &[&str]| {
-        let out = std::process::Command::new("python3")
-            .arg(root().join("tools/sumo_replay/roads.py"))
-            .args(args)
-            .current_dir(&dir)
-            .output()
-            .unwrap();
-        common::assert_success(&out);
-        String::from_utf8_lossy(&out.stdout).into_owned()
+        let tool = root().join("tools/sumo_replay/roads.py");
+        let mut all = vec![tool.as_os_str()];
+        all.extend(args.iter().map(std::ffi::OsStr::new));
+        python3(&dir, &all)
     };
     let time = roads(&["time", "g.json", "fcd.xml", "trace.csv"]);
     let row = |edge: &str| -> Vec<String> {
@@ -474,15 +481,41 @@ fn sumo_replays_deterministic_copy_draws_nothing_and_first_finds_where_the_runs_
     let dir = scratch_dir("deterministic_py");
     let tool = root().join("tools/sumo_replay/deterministic.py");
     let run = |args: &[&str]| {
-        let out = std::process::Command::new("python3")
+        let mut all = vec![tool.as_os_str()];
+        all.extend(args.iter().map(std::ffi::OsStr::new));
+        python3(&dir, &all)
+    };
+    // a configuration that is missing, or a copy inside its own folder, is refused before anything is copied
+    for (cfg, out, says) in [
+        ("nonesuch.sumocfg", "nothing", "nonesuch.sumocfg"),
+        ("nothing/x.sumocfg", "nothing/inside", "x.sumocfg"),
+    ] {
+        let refused = std::process::Command::new("python3")
             .arg(&tool)
-            .args(args)
+            .args(["copy", cfg, out])
             .current_dir(&dir)
             .output()
             .unwrap();
-        assert_success(&out);
-        String::from_utf8_lossy(&out.stdout).into_owned()
-    };
+        assert!(!refused.status.success());
+        assert!(String::from_utf8_lossy(&refused.stderr).contains(says));
+        assert!(!dir.join(out).exists());
+    }
+    std::fs::create_dir_all(dir.join("nothing")).unwrap();
+    std::fs::write(
+        dir.join("nothing/x.sumocfg"),
+        "<configuration><input><route-files value=\"r.xml\"/></input></configuration>",
+    )
+    .unwrap();
+    let inside = std::process::Command::new("python3")
+        .arg(&tool)
+        .args(["copy", "nothing/x.sumocfg", "nothing/inside"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        String::from_utf8_lossy(&inside.stderr).contains("lies inside the configuration's folder")
+    );
+    assert!(!dir.join("nothing/inside").exists());
     let cfg = root().join("scenarios/sumo/ramp_game/ramp.sumocfg");
     let copied = run(&["copy", cfg.to_str().unwrap(), "copy"]);
     assert!(copied.trim().ends_with("copy/ramp.sumocfg"), "{copied}");

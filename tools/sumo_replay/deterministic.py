@@ -68,9 +68,14 @@ def make_deterministic(routes_root):
 
 
 def cmd_copy(a):
+    # the configuration is read before anything is copied: a missing or broken one copies nothing
+    routes = route_files(a.cfg)
     src = os.path.dirname(os.path.abspath(a.cfg))
-    shutil.copytree(src, a.out, dirs_exist_ok=True)
-    for rel in route_files(a.cfg):
+    out = os.path.abspath(a.out)
+    if out == src or out.startswith(src + os.sep):
+        raise SystemExit("deterministic.py copy: %s lies inside the configuration's folder %s" % (a.out, src))
+    shutil.copytree(src, out, dirs_exist_ok=True)
+    for rel in routes:
         path = os.path.join(a.out, rel)
         tree = ET.parse(path)
         make_deterministic(tree.getroot())
@@ -174,7 +179,10 @@ def main():
             p.add_argument("--from-time", type=float, default=0.0)
             p.add_argument("--to-time", type=float, default=float("inf"))
     a = ap.parse_args()
-    {"copy": cmd_copy, "first": cmd_first, "follow": cmd_follow}[a.cmd](a)
+    try:
+        {"copy": cmd_copy, "first": cmd_first, "follow": cmd_follow}[a.cmd](a)
+    except (OSError, ET.ParseError, KeyError, ValueError) as e:
+        raise SystemExit("deterministic.py %s: %s" % (a.cmd, e))
 
 
 if __name__ == "__main__":
