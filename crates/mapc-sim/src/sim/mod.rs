@@ -90,6 +90,9 @@ pub struct Simulation {
     /// Per flow, (n, departure time of its vehicle n): `FlowSpec::departure_s` of `flow_next`, kept so that each
     /// step compares instead of computing it again.
     flow_due: Vec<(u64, Option<f64>)>,
+    /// The earliest departure time of any flow's next vehicle, when no flow draws by probability: no flow has a
+    /// departure due in a step that ends before it (the flows are not visited then). NaN: visit them.
+    flows_quiet_until: f64,
     /// Per flow, its vehicles built so far; and, once [`Simulation::record_origins`] asked for them, each
     /// vehicle's flow and number in it (SUMO names a flow's vehicles `flow.N`).
     flow_built: Vec<u32>,
@@ -188,6 +191,7 @@ impl Simulation {
             lane_order: Vec::new(),
             flow_next: vec![0; spec.flows.len()],
             flow_due: spec.flows.iter().map(|f| (0, f.departure_s(0))).collect(),
+            flows_quiet_until: f64::NAN,
             flow_built: vec![0; spec.flows.len()],
             origins: None,
             flow_route: Vec::new(),

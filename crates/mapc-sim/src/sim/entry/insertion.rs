@@ -14,7 +14,10 @@ impl Simulation {
     #[inline(never)]
     pub(in crate::sim) fn insert_departures(&mut self) {
         let now = self.time_s - self.spec.step_s; // insertion happens within the step just executed
-        for f in 0..self.spec.flows.len() {
+        // (the flows' own test, `depart <= now + 1e-9`, fails for each of them: nothing to visit)
+        let quiet = self.flows_quiet_until > now + 1e-9;
+        let mut next_due = f64::INFINITY;
+        for f in 0..if quiet { 0 } else { self.spec.flows.len() } {
             let flow = &self.spec.flows[f];
             if flow.number.is_some_and(|n| self.flow_next[f] >= n) {
                 continue;
@@ -25,6 +28,7 @@ impl Simulation {
                 if due && self.rng.random::<f64>() < p * self.spec.step_s {
                     self.enqueue_departure(f);
                 }
+                next_due = f64::NAN;
                 continue;
             }
             // the scalars only: the flow's lists (via, type mix) stay where they are
@@ -41,11 +45,19 @@ impl Simulation {
                 let Some(depart) = self.flow_due[f].1 else {
                     break;
                 };
-                if !(depart <= now + 1e-9) || depart >= end_s || number.is_some_and(|m| n >= m) {
+                if depart >= end_s || number.is_some_and(|m| n >= m) {
+                    break;
+                }
+                if !(depart <= now + 1e-9) {
+                    // (a NaN left by a flow by probability stays: that flow is drawn for every step)
+                    next_due = if depart < next_due { depart } else { next_due };
                     break;
                 }
                 self.enqueue_departure(f);
             }
+        }
+        if !quiet {
+            self.flows_quiet_until = next_due;
         }
         // lanes where an insertion failed in this step: no later vehicle is tried there (SUMO's failed-insertion
         // memory; lanes chosen at insertion are tried after the fixed ones)

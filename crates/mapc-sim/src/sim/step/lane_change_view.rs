@@ -105,6 +105,12 @@ impl Simulation {
     ) -> Option<Other<'t>> {
         let v = &self.veh[id as usize];
         let p = &self.types[v.vtype as usize];
+        // far from the lane's end (most vehicles) the bound decides without the exact braking distance
+        let tc = &self.type_consts[v.vtype as usize];
+        if seen > tc.brake_gap_above(v.speed, p.tau) + p.min_gap {
+            debug_assert!(seen > p.brake_gap(v.speed, p.decel, p.tau) + p.min_gap);
+            return None;
+        }
         let mut dist = p.brake_gap(v.speed, p.decel, p.tau) + p.min_gap;
         if seen > dist {
             return None;

@@ -256,11 +256,17 @@ impl Simulation {
             if k + 1 >= r.lanes.len() {
                 // final lane: drive out at the lane's speed (SUMO's arrival handling)
                 let lane_max = self.desired_speed(v, lane);
-                let va = free_speed(seen - lane_max * dt, lane_max).fmax(NUMERICAL_EPS);
-                vv = vv.fmin(va);
-                if let Some(i) = last_item {
-                    let it = &mut plan.items[i];
-                    it.leave_speed = it.leave_speed.fmin(va);
+                // (a model whose free speed never falls below the limit lowers nothing at or below it)
+                let lowers_nothing = free_at_least_limit
+                    && lane_max >= vv
+                    && last_item.is_none_or(|i| lane_max >= plan.items[i].leave_speed);
+                if !lowers_nothing {
+                    let va = free_speed(seen - lane_max * dt, lane_max).fmax(NUMERICAL_EPS);
+                    vv = vv.fmin(va);
+                    if let Some(i) = last_item {
+                        let it = &mut plan.items[i];
+                        it.leave_speed = it.leave_speed.fmin(va);
+                    }
                 }
                 break;
             }

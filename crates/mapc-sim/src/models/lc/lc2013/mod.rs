@@ -209,6 +209,8 @@ impl Lc2013 {
     /// resets it, as SUMO's `changed`).
     pub fn decide(&self, mem: &mut Lc2013Memory, s: &Surroundings) -> Decision {
         let mut d = Decision::default();
+        // the own lane's anticipated speed, by whether a leader accelerates: both sides read it alike
+        let mut own_lane_vsafe = [None; 2];
         for side in [Side::Right, Side::Left] {
             let lane = match side {
                 Side::Right => s.right.as_ref(),
@@ -222,7 +224,8 @@ impl Lc2013 {
                 lane,
                 blocked: gaps.blocked,
             };
-            let state = gaps.blocked | self.wants_change(mem, &view, &mut d.messages);
+            let state =
+                gaps.blocked | self.wants_change(mem, &view, &mut own_lane_vsafe, &mut d.messages);
             match side {
                 Side::Right => d.state_right = state,
                 Side::Left => d.state_left = state,
@@ -259,7 +262,13 @@ impl Lc2013 {
     // out of line: inlined into `decide`, the work of both sides was hoisted and done for every vehicle, most of
     // which have a lane on one side only
     #[inline(never)]
-    fn wants_change(&self, mem: &mut Lc2013Memory, v: &SideView, msgs: &mut Vec<Message>) -> u32 {
+    fn wants_change(
+        &self,
+        mem: &mut Lc2013Memory,
+        v: &SideView,
+        own_lane_vsafe: &mut [Option<f64>; 2],
+        msgs: &mut Vec<Message>,
+    ) -> u32 {
         let s = v.s;
         let ego = &s.ego;
         let dt = ego.params.dt;
@@ -481,10 +490,17 @@ impl Lc2013 {
             neigh_lead.is_some_and(|l| l.accel > 0.0) || leader.is_some_and(|l| l.accel > 0.0);
         let neigh_lane_vsafe =
             anticipate_follow_speed(ego, neigh_lead, neigh_dist, v_max, accelerating_leader);
-        this_lane_vsafe = min2(
-            this_lane_vsafe,
-            anticipate_follow_speed(ego, leader, current_dist, v_max, accelerating_leader),
+        // (`current_dist` is the lane's best length here on both sides: only a stopped leader's overtaking
+        // shortens it, and that returns above)
+        let own = *own_lane_vsafe[accelerating_leader as usize].get_or_insert_with(|| {
+            anticipate_follow_speed(ego, leader, current_dist, v_max, accelerating_leader)
+        });
+        debug_assert_eq!(
+            own.to_bits(),
+            anticipate_follow_speed(ego, leader, current_dist, v_max, accelerating_leader)
+                .to_bits()
         );
+        this_lane_vsafe = min2(this_lane_vsafe, own);
         let relative_gain = (neigh_lane_vsafe - this_lane_vsafe)
             / max2(neigh_lane_vsafe, RELGAIN_NORMALIZATION_MIN_SPEED);
 
