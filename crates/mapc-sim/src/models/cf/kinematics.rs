@@ -16,6 +16,18 @@ pub fn brake_gap(dt: f64, speed: f64, decel: f64, headway: f64) -> f64 {
     dt * (steps * speed - reduction * steps * (steps + 1.0) / 2.0) + speed * headway
 }
 
+/// Whether a driver at `speed` surely stops within `gap` with a reaction time `headway`: Euler's stopping
+/// distance from `v` is at most `headway v + v^2 / (2 decel)` (a right Riemann sum of the continuous stop), and
+/// a metre of margin covers the rounding. Then the safe stop speed of that gap and headway, and of any longer
+/// gap, is at least `speed`, and need not be computed where only whether it reaches `speed` matters.
+#[inline(always)]
+pub fn surely_stops_within(headway: f64, decel: f64, gap: f64, speed: f64) -> bool {
+    (gap - STOP_BOUND_MARGIN_M - headway * speed) * (2.0 * decel) >= speed * speed
+}
+
+/// The margin (m) of [`surely_stops_within`]'s bound.
+const STOP_BOUND_MARGIN_M: f64 = 1.0;
+
 /// The largest speed from which a vehicle can still stop within `gap` braking at `decel` per step of `dt`
 /// (SUMO's Euler `maximumSafeStopSpeed` with no headway).
 pub fn maximum_safe_stop_speed(dt: f64, decel: f64, gap: f64) -> f64 {
@@ -98,3 +110,7 @@ pub fn minimal_arrival_time(
 pub fn speed_after_distance(dist: f64, speed: f64, accel: f64) -> f64 {
     (2.0 * dist * accel + speed * speed).fmax(0.0).sqrt()
 }
+
+#[cfg(test)]
+#[path = "kinematics_tests.rs"]
+mod tests;

@@ -133,18 +133,14 @@ impl Krauss {
             .fmin(cap)
     }
 
-    /// Whether a driver at `speed` surely stops within `gap` with its reaction time, the leader standing: Euler's
-    /// stopping distance from `v` is at most `tau v + v^2 / (2 decel)`, and a metre of margin covers the rounding.
-    /// Then the safe stop speed, and so the safe follow speed (the leader's braking distance only adds, and the
-    /// emergency correction only raises it), are at least `speed`.
+    /// Whether a driver at `speed` surely stops within `gap` with its reaction time
+    /// ([`kinematics::surely_stops_within`]): then the safe stop speed, and so the safe follow speed (the leader's
+    /// braking distance only adds, and the emergency correction only raises it), are at least `speed`.
     #[inline(always)]
     fn stops_within(&self, gap: f64, speed: f64) -> bool {
-        (gap - STOP_BOUND_MARGIN_M - self.tau * speed) * (2.0 * self.decel) >= speed * speed
+        kinematics::surely_stops_within(self.tau, self.decel, gap, speed)
     }
 }
-
-/// The margin (m) of [`Krauss::stops_within`]'s bound.
-const STOP_BOUND_MARGIN_M: f64 = 1.0;
 
 impl CarFollowModel for Krauss {
     fn follow_speed(&self, gap: f64, speed: f64, leader_speed: f64, _desired_speed: f64) -> f64 {

@@ -74,6 +74,17 @@ pub(super) fn anticipate_follow_speed(
             Some(l) => p.follow_speed_lc(l.gap, max_speed_1s, l.speed, v_max),
         }
     } else {
+        // a driver who surely stops within the gap (or the free distance) at `v_max` may drive `v_max`: the
+        // leader's braking distance only lengthens it
+        let gap = leader.map_or(dist, |l| l.gap);
+        if crate::models::cf::kinematics::surely_stops_within(p.tau, p.decel, gap, v_max) {
+            debug_assert!(
+                leader.map_or(maximum_safe_stop_speed(p, dist, p.tau), |l| {
+                    maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel)
+                }) >= v_max
+            );
+            return v_max;
+        }
         match leader {
             None => maximum_safe_stop_speed(p, dist, p.tau),
             Some(l) => maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel),
