@@ -216,3 +216,52 @@ fn fast_paths_give_the_formulas_bits() {
         }
     }
 }
+
+/// The secure gap's bound never calls a gap secure that the exact check blocks, over speeds, decelerations,
+/// headways, steps and safety factors; and it decides most gaps a few metres beyond the secure one.
+#[test]
+fn surely_secure_never_passes_a_blocked_gap() {
+    let (mut decided, mut beyond) = (0u64, 0u64);
+    for &dt in &[0.1, 0.5, 1.0] {
+        for &decel in &[1.0, 3.5, 4.5, 7.5] {
+            for &tau in &[0.0, 1.0, 1.6] {
+                let k = Krauss {
+                    accel: 2.6,
+                    decel,
+                    emergency_decel: 9.0,
+                    tau,
+                    sigma: 0.5,
+                    max_speed: 50.0,
+                    dt,
+                };
+                for si in 0..=40 {
+                    let speed = si as f64 * 1.07;
+                    for li in 0..=40 {
+                        let leader = li as f64 * 1.07;
+                        for &factor in &[0.5, 1.0, 2.0] {
+                            let secure = k.secure_gap(speed, leader) * factor;
+                            for gi in 0..=150 {
+                                let gap = gi as f64 * 1.3;
+                                let sure = k.surely_secure(gap, speed, leader, factor);
+                                assert!(
+                                    !sure || gap >= secure,
+                                    "dt {dt} decel {decel} tau {tau} v {speed} leader {leader} \
+                                     factor {factor} gap {gap}: secure {secure}"
+                                );
+                                let slack = 0.5 * dt * (2.0 * decel * dt + speed + leader);
+                                if gap > secure + factor * slack + 1e-3 {
+                                    beyond += 1;
+                                    decided += sure as u64;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(
+        decided, beyond,
+        "gaps beyond the bound's slack left to the exact check"
+    );
+}

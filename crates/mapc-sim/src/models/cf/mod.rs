@@ -40,6 +40,13 @@ pub trait CarFollowModel {
     /// The gap a vehicle at `speed` needs behind a leader at `leader_speed`.
     fn secure_gap(&self, speed: f64, leader_speed: f64) -> f64;
 
+    /// Whether `gap` is surely at least `factor` times [`Self::secure_gap`], decided without computing it (a
+    /// model with a costly secure gap gives a cheap bound; false: ask the secure gap).
+    #[inline(always)]
+    fn surely_secure(&self, _gap: f64, _speed: f64, _leader_speed: f64, _factor: f64) -> bool {
+        false
+    }
+
     /// The highest speed, at most `speed`, a vehicle may be inserted with at `gap` behind a leader.
     fn insertion_follow_speed(
         &self,
@@ -221,6 +228,10 @@ impl CarFollowModel for CfModel {
     #[inline(always)]
     fn secure_gap(&self, speed: f64, leader_speed: f64) -> f64 {
         by_model!(self, m => m.secure_gap(speed, leader_speed))
+    }
+    #[inline(always)]
+    fn surely_secure(&self, gap: f64, speed: f64, leader_speed: f64, factor: f64) -> bool {
+        by_model!(self, m => m.surely_secure(gap, speed, leader_speed, factor))
     }
     #[inline(always)]
     fn insertion_follow_speed(

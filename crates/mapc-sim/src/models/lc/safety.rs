@@ -14,10 +14,6 @@ use crate::models::cf::CarFollowModel;
 pub struct GapCheck {
     /// `LCA_BLOCKED_BY_*` and `LCA_OVERLAPPING` bits; 0 when the change is safe.
     pub blocked: u32,
-    /// The gap the new follower needs behind the ego (m), when there is one that does not overlap.
-    pub secure_back_gap: Option<f64>,
-    /// The gap the ego needs behind the new leader (m), likewise.
-    pub secure_front_gap: Option<f64>,
 }
 
 /// Checks the gaps for a change towards `side` whose neighbours are `lane`. `safety_factor` scales both secure
@@ -36,30 +32,29 @@ pub fn check_gaps(ego: &Ego, side: Side, lane: &NeighbourLane, safety_factor: f6
     {
         blocked |= by_leader | lca::OVERLAPPING;
     }
-    let mut secure_back_gap = None;
+    // (a gap far above the secure one is decided by the model's bound, without the braking distances)
     if blocked & by_follower == 0
         && let Some(f) = &lane.follower
+        && !f
+            .params
+            .surely_secure(f.gap, f.speed, ego.speed, safety_factor)
     {
         // the follower's own car-following model, at its speed, behind the ego at the ego's speed
         let secure = f.params.secure_gap(f.speed, ego.speed);
-        secure_back_gap = Some(secure);
         if f.gap < secure * safety_factor {
             blocked |= by_follower;
         }
     }
-    let mut secure_front_gap = None;
     if blocked & by_leader == 0
         && let Some(l) = &lane.leader
+        && !ego
+            .params
+            .surely_secure(l.gap, ego.speed, l.speed, safety_factor)
     {
         let secure = ego.params.secure_gap(ego.speed, l.speed);
-        secure_front_gap = Some(secure);
         if l.gap < secure * safety_factor {
             blocked |= by_leader;
         }
     }
-    GapCheck {
-        blocked,
-        secure_back_gap,
-        secure_front_gap,
-    }
+    GapCheck { blocked }
 }
