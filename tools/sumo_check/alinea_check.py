@@ -17,7 +17,8 @@ def loop_periods(export_dir):
 
 def compare(a, mapc, seeds, export_dir, manifest, points, mapc_h, sumo_h, result, check):
     n = len(seeds)
-    args = ["eval", "--controller", "alinea", "--scenario", a.scenario, "--seeds", str(n)]
+    # (the humans are `mapc_h`, run once by the caller: eval's own baseline would run them again)
+    args = ["eval", "--controller", "alinea", "--scenario", a.scenario, "--seeds", str(n), "--no-baseline"]
     for name in ("light", "detectors", "setpoint", "gain", "green"):
         value = getattr(a, "alinea_" + name)
         if value is not None:
