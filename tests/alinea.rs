@@ -43,6 +43,38 @@ fn alinea_meters_the_scenarios_own_light_from_the_loops_past_the_merge() {
 }
 
 #[test]
+fn alinea_without_the_baseline_runs_no_humans_and_reports_each_metered_run() {
+    let j = mapc_json(&[
+        "eval",
+        "--controller",
+        "alinea",
+        "--scenario",
+        "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg",
+        "--seeds",
+        "2",
+        "--no-baseline",
+        "--json",
+    ]);
+    assert!(j["humans"].is_null(), "{}", j["humans"]);
+    let runs = j["alinea_runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    // the per-run figures the summary is made of (sumo_check's lane-change columns read them)
+    let departed: f64 = runs.iter().map(|r| r["departed"].as_f64().unwrap()).sum();
+    assert!(departed > 0.0);
+    assert!(runs.iter().all(|r| r["lane_changes"].as_u64().is_some()));
+    let mean_outflow = runs
+        .iter()
+        .map(|r| r["outflow_veh_h"].as_f64().unwrap())
+        .sum::<f64>()
+        / 2.0;
+    let summary = j["alinea"]["outflow"]["mean"].as_f64().unwrap();
+    assert!(
+        (mean_outflow - summary).abs() < 1e-6 * summary.max(1.0),
+        "{mean_outflow} vs {summary}"
+    );
+}
+
+#[test]
 fn alinea_on_the_ramp_game_reads_the_first_loops_past_its_meter_and_writes_its_trace() {
     // SUMO's ramp game, metered from loops this project added (scenarios/sumo/ramp_game_alinea)
     let dir = scratch_dir("alinea-trace");

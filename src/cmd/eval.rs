@@ -81,6 +81,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             &sc.spec,
             &args.runs.seeds(),
             &args.alinea,
+            !args.no_baseline,
             args.json,
             args.trace.as_deref(),
         );

@@ -31,7 +31,8 @@ def compare(a, mapc, seeds, export_dir, manifest, points, mapc_h, sumo_h, result
     cfg = dict(light=ev["light"], detectors=ev["detectors"], periods=periods, setpoint=ev["setpoint"],
                gain_veh_h=ev["gain_veh_h"], green_s=ev["green_s"], min_rate_veh_h=ev["min_rate_veh_h"],
                max_rate_veh_h=ev["max_rate_veh_h"])
-    mapc_a = check.summary_of_mapc(ev["alinea"], n, points)
+    # (its runs give the per-run columns: lane changes, their reasons, the merges' flows)
+    mapc_a = check.summary_of_mapc(dict(ev["alinea"], runs=ev["alinea_runs"]), n, points)
     sumo_a_runs = check.run_sumo(export_dir, manifest, seeds, None, a.jobs, alinea=cfg)
     sumo_a = check.summary_of_runs(sumo_a_runs, points)
     rates = [r for run in sumo_a_runs for r in run["meter_rates"]]

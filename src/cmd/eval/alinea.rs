@@ -38,12 +38,13 @@ impl AlineaArgs {
     }
 }
 
-/// Run the humans and ALINEA on `seeds` and print both.
+/// Run ALINEA on `seeds`, and the humans beside it unless `baseline` is false, and print them.
 pub fn run(
     scenario: &str,
     spec: &SimSpec,
     seeds: &[u64],
     args: &AlineaArgs,
+    baseline: bool,
     json: bool,
     trace: Option<&std::path::Path>,
 ) -> anyhow::Result<()> {
@@ -52,7 +53,11 @@ pub fn run(
     let alinea =
         mapc_sim::Alinea::new(spec, &cfg).map_err(|e| anyhow::anyhow!("{scenario}: {e}"))?;
     let start = std::time::Instant::now();
-    let humans = mapc_sim::run_baseline_spec(spec, seeds)?;
+    let humans = if baseline {
+        Some(mapc_sim::run_baseline_spec(spec, seeds)?)
+    } else {
+        None
+    };
     let metered = seeds
         .par_iter()
         .map(|&seed| mapc_sim::run_with_alinea(spec, seed, &cfg))
@@ -72,7 +77,7 @@ pub fn run(
         })?;
     }
     // each figure over the seeds computed where every run's summary is (`Summary::of`)
-    let (h, a) = (Summary::of(&humans), Summary::of(&metered));
+    let (h, a) = (humans.as_deref().map(Summary::of), Summary::of(&metered));
     let detectors: Vec<&str> = alinea
         .detectors()
         .iter()
@@ -88,7 +93,7 @@ pub fn run(
             "light": light, "detectors": detectors, "setpoint": cfg.setpoint, "gain_veh_h": cfg.gain_veh_h,
             "green_s": cfg.green_s, "min_rate_veh_h": cfg.min_rate_veh_h, "max_rate_veh_h": cfg.max_rate_veh_h,
             "mean_rate_veh_h": mean_rate,
-            "humans": h, "alinea": a, "wall_s": start.elapsed().as_secs_f64(),
+            "humans": h, "alinea": a, "alinea_runs": metered, "wall_s": start.elapsed().as_secs_f64(),
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
@@ -109,7 +114,8 @@ pub fn run(
             format!("{:9.2} ± {:6.2}", m.mean, m.ci95)
         }
     };
-    for (name, f) in [("human", &h), ("ALINEA", &a)] {
+    for (name, f) in [("human", h.as_ref()), ("ALINEA", Some(&a))] {
+        let Some(f) = f else { continue };
         println!(
             "  {name:<7} outflow {} veh/h  inflow {} veh/h  speed {} m/s  trip {} s",
             pm(&f.outflow),
@@ -126,6 +132,9 @@ pub fn run(
             trace_note.map(|n| format!(" ({n})")).unwrap_or_default()
         );
     }
+    let Some(h) = h else {
+        return Ok(());
+    };
     let change = |x: &MeanCi, y: &MeanCi| 100.0 * (y.mean - x.mean) / x.mean;
     let disjoint = |x: &MeanCi, y: &MeanCi| (x.mean - y.mean).abs() > x.ci95 + y.ci95;
     println!(
