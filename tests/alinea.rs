@@ -5,19 +5,19 @@ mod common;
 use common::*;
 
 const RAMP_METERING: &str = "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg";
+const RAMP_GAME_ALINEA: &str = "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg";
+
+/// `mapc eval --controller alinea --scenario SCENARIO ... --json`, with `rest` between.
+fn alinea_json(scenario: &str, rest: &[&str]) -> serde_json::Value {
+    let mut args = vec!["eval", "--controller", "alinea", "--scenario", scenario];
+    args.extend_from_slice(rest);
+    args.push("--json");
+    mapc_json(&args)
+}
 
 #[test]
 fn alinea_meters_the_scenarios_own_light_from_the_loops_past_the_merge() {
-    let j = mapc_json(&[
-        "eval",
-        "--controller",
-        "alinea",
-        "--scenario",
-        RAMP_METERING,
-        "--seeds",
-        "2",
-        "--json",
-    ]);
+    let j = alinea_json(RAMP_METERING, &["--seeds", "2"]);
     assert_eq!(j["light"], "ramp_meter");
     // the loops on the acceleration area, past the merge (not the ramp's own passage loops)
     let detectors: Vec<&str> = j["detectors"]
@@ -44,17 +44,7 @@ fn alinea_meters_the_scenarios_own_light_from_the_loops_past_the_merge() {
 
 #[test]
 fn alinea_without_the_baseline_runs_no_humans_and_reports_each_metered_run() {
-    let j = mapc_json(&[
-        "eval",
-        "--controller",
-        "alinea",
-        "--scenario",
-        "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg",
-        "--seeds",
-        "2",
-        "--no-baseline",
-        "--json",
-    ]);
+    let j = alinea_json(RAMP_GAME_ALINEA, &["--seeds", "2", "--no-baseline"]);
     assert!(j["humans"].is_null(), "{}", j["humans"]);
     let runs = j["alinea_runs"].as_array().unwrap();
     assert_eq!(runs.len(), 2);
@@ -79,18 +69,10 @@ fn alinea_on_the_ramp_game_reads_the_first_loops_past_its_meter_and_writes_its_t
     // SUMO's ramp game, metered from loops this project added (scenarios/sumo/ramp_game_alinea)
     let dir = scratch_dir("alinea-trace");
     let trace = dir.join("alinea.csv");
-    let j = mapc_json(&[
-        "eval",
-        "--controller",
-        "alinea",
-        "--scenario",
-        "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg",
-        "--seeds",
-        "1",
-        "--trace",
-        trace.to_str().unwrap(),
-        "--json",
-    ]);
+    let j = alinea_json(
+        RAMP_GAME_ALINEA,
+        &["--seeds", "1", "--trace", trace.to_str().unwrap()],
+    );
     assert_eq!(j["light"], "gneJ16");
     assert_eq!(j["detectors"], serde_json::json!(["ramps_0"]));
     let rows = std::fs::read_to_string(&trace).expect("the trace under ALINEA");

@@ -110,7 +110,3 @@ pub fn minimal_arrival_time(
 pub fn speed_after_distance(dist: f64, speed: f64, accel: f64) -> f64 {
     (2.0 * dist * accel + speed * speed).fmax(0.0).sqrt()
 }
-
-#[cfg(test)]
-#[path = "kinematics_tests.rs"]
-mod tests;
