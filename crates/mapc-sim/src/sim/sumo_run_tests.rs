@@ -234,3 +234,18 @@ fn a_minor_link_waits_while_a_merging_foes_back_is_still_in_the_junction_as_sumo
     assert_eq!(started.0, None, "on the junction's connection");
     assert!((started.2 - 0.52).abs() < 0.01, "{started:?}");
 }
+
+#[test]
+fn a_driver_with_priority_slows_for_a_merging_foe_no_more_than_stopping_at_its_last_link_needs() {
+    // offramp.0 has entered gneJ14 on the minor connection and leads onramp.5, approaching on the major one. SUMO
+    // lowers onramp.5's speed for that junction leader only down to the speed at which it could still stop at the
+    // link before (a metre before gneE17's end, where it expects priority): its FCD keeps it at 13.89 m/s through
+    // 39.2 s, on gneE15 and then 1.69 m into gneE17 (mapc slowed it from 38.2 s before: 13.64 m/s), and has it at
+    // 13.68 m/s after the step from 39.2 s, the stop speed 22.16 m before that link (FCD times: the step's begin)
+    let (_, mut sim) = deterministic_ramp_game_run();
+    for (t, want) in [(38.2, 13.89), (38.6, 13.89), (39.2, 13.89), (39.4, 13.68)] {
+        step_until(&mut sim, t + 0.2);
+        let v = &sim.veh[vehicle(&sim, 2, 5) as usize];
+        assert!((v.speed - want).abs() < 0.01, "{t} s: {} m/s", v.speed);
+    }
+}

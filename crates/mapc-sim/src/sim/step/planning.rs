@@ -6,6 +6,9 @@ use super::*;
 /// Links planned ahead per vehicle.
 pub(in crate::sim) const MAX_LINK_ITEMS: usize = 4;
 
+/// Where SUMO would stop before a link it expects to have priority at: this far before the stop line (m).
+const DIST_TO_STOPLINE_EXPECT_PRIORITY: f64 = 1.0;
+
 #[derive(Clone, Copy, Debug, Default)]
 pub(in crate::sim) struct Plan {
     pub(in crate::sim) v_safe: f64,
@@ -119,6 +122,10 @@ impl Simulation {
         // the request whose leave speed later constraints lower (SUMO's `lastLink`); none before the first link
         // and after an exit link (those carry no request)
         let mut last_item: Option<usize> = None;
+        // under SUMO's rules, the speed at which the vehicle could still stop at the last link entering a junction
+        // ahead (SUMO's `myVLinkWait` of the link before): a leader found on a connection merging with that
+        // junction's never lowers the speed below it, priority or not
+        let mut entry_wait: Option<f64> = None;
 
         // `pre`: most of the plan's IDM steps, computed together ([`Self::plan_idm_batch`])
         let pre_has_free = speed <= des_cur;
@@ -303,12 +310,25 @@ impl Simulation {
                                 vv = vv.fmax(wait);
                             }
                         }
+                        if cur_major && let Some(wait) = entry_wait {
+                            vv = vv.fmax(wait);
+                        }
                     }
                 }
                 had_non_internal = true;
                 last_item = None;
             } else if let LaneKind::Via(link) = next_ref.kind {
                 let lk = self.link_at(link as usize);
+                if self.spec.sumo_junction_lane_changes {
+                    // SUMO stops a metre before a link it expects to have priority at, just before any other
+                    let stop_offset = if lk.major {
+                        DIST_TO_STOPLINE_EXPECT_PRIORITY
+                    } else {
+                        POSITION_EPS
+                    };
+                    let stop_dist = (seen - stop_offset).fmax(0.0);
+                    entry_wait = Some(vv.fmin(p.stop_speed(stop_dist, speed, des_cur)));
+                }
                 // only links where right of way is decided need a request: minor links, and major links with
                 // minor foes
                 if (plan.n_items as usize) < MAX_LINK_ITEMS
