@@ -194,7 +194,8 @@ pub struct SimSpec {
     /// whose figures were measured without them): a vehicle may change lanes while its back is still inside the
     /// junction behind; the lane-change memory survives connections side by side, and vehicles change lanes on
     /// them; the pass visits roads in the order of SUMO's active lanes; a merging foe's connection leads ego
-    /// through a minor link; a vehicle on a lane that ends drives up to its end (docs/sumo_scenarios.md).
+    /// through a minor link; a vehicle on a lane that ends drives up to its end; a junction leader lowers a driver
+    /// with priority no lower than stopping at the link before needs (docs/sumo_scenarios.md).
     pub sumo_junction_lane_changes: bool,
     /// The vehicles due to enter are tried in SUMO 1.8's order (a SUMO user's scenario): one list by the time each
     /// was due, whatever its entry (`MSInsertionControl::emitVehicles`); otherwise entry by entry.
