@@ -124,8 +124,9 @@ impl Simulation {
         let mut last_item: Option<usize> = None;
         // under SUMO's rules, the speed at which the vehicle could still stop at the last link entering a junction
         // ahead (SUMO's `myVLinkWait` of the link before): a leader found on a connection merging with that
-        // junction's never lowers the speed below it, priority or not
-        let mut entry_wait: Option<f64> = None;
+        // junction's never lowers the speed below it, priority or not. Kept as (speed planned then, distance to
+        // stop at), the stop speed computed only when a leader is found.
+        let mut entry_wait: Option<(f64, f64)> = None;
 
         // `pre`: most of the plan's IDM steps, computed together ([`Self::plan_idm_batch`])
         let pre_has_free = speed <= des_cur;
@@ -310,8 +311,8 @@ impl Simulation {
                                 vv = vv.fmax(wait);
                             }
                         }
-                        if cur_major && let Some(wait) = entry_wait {
-                            vv = vv.fmax(wait);
+                        if cur_major && let Some((planned, stop_dist)) = entry_wait {
+                            vv = vv.fmax(planned.fmin(p.stop_speed(stop_dist, speed, des_cur)));
                         }
                     }
                 }
@@ -326,8 +327,7 @@ impl Simulation {
                     } else {
                         POSITION_EPS
                     };
-                    let stop_dist = (seen - stop_offset).fmax(0.0);
-                    entry_wait = Some(vv.fmin(p.stop_speed(stop_dist, speed, des_cur)));
+                    entry_wait = Some((vv, (seen - stop_offset).fmax(0.0)));
                 }
                 // only links where right of way is decided need a request: minor links, and major links with
                 // minor foes
