@@ -542,7 +542,8 @@ fn sumo_replays_deterministic_copy_draws_nothing_and_first_finds_where_the_runs_
         (v["outflow"]["mean"].clone(), v["speed"]["mean"].clone())
     };
     assert_eq!(sim("0"), sim("1"));
-    // two vehicles; mapc's second (stamped a step later, as traces are) drives slower from its third step
+    // three vehicles; mapc's second (stamped a step later, as traces are) drives slower from its third step, and
+    // its third enters on the other lane (matched by its first step and road alone: a difference from the start)
     std::fs::write(
         dir.join("g.json"),
         r#"{"roads": [{"id": "R1", "provenance": {"sumo_ids": ["a"]}}]}"#,
@@ -565,18 +566,30 @@ fn sumo_replays_deterministic_copy_draws_nothing_and_first_finds_where_the_runs_
             t + 1
         );
     }
+    fcd += "<timestep time=\"4.00\"><vehicle id=\"f.2\" lane=\"a_0\" pos=\"0.00\" speed=\"9.00\"/></timestep>\n";
+    trace += "5.00,11,car,R1,0.000,,9.000,false,1\n";
     fcd += "</fcd-export>\n";
     std::fs::write(dir.join("fcd.xml"), fcd).unwrap();
     std::fs::write(dir.join("trace.csv"), trace).unwrap();
     let first = run(&["first", "g.json", "fcd.xml", "trace.csv"]);
-    assert!(first.contains("2 SUMO vehicles matched, 0 not"), "{first}");
+    assert!(
+        first.contains("3 SUMO vehicles matched (1 of them by their first step and road alone"),
+        "{first}"
+    );
+    assert!(first.contains(", 0 not"), "{first}");
     assert!(
         first.contains("2.00  f.1")
             && first.contains("SUMO a 1 21.00 8.00")
             && first.contains("mapc a 1 20.00 7.00"),
         "{first}"
     );
-    assert_eq!(first.lines().count(), 2, "{first}");
+    assert!(
+        first.contains("4.00  f.2")
+            && first.contains("SUMO a 0 0.00 9.00")
+            && first.contains("mapc a 1 0.00 9.00"),
+        "{first}"
+    );
+    assert_eq!(first.lines().count(), 3, "{first}");
     let follow = run(&["follow", "g.json", "fcd.xml", "trace.csv", "f.1"]);
     assert_eq!(follow.matches("<<").count(), 2, "{follow}");
 }

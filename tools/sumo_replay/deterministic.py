@@ -15,7 +15,8 @@ step where they part points at a rule of SUMO's that mapc does not follow (docs/
   speedDev 0, a vTypeDistribution becomes its most probable type (under the distribution's id), a flow by probability
   one by period at the same mean rate (`vehsPerHour` = 3600 p), departPos `random` and `random_free` become
   `base`.
-- `first`: per vehicle (mapc's trace ids matched to SUMO's by where and when each first appears), the first step
+- `first`: per vehicle (mapc's trace ids matched to SUMO's by where and when each first appears, or, for one of
+  each first seen on the same road in the same step, by that alone: an insertion on another lane), the first step
   where its road, lane (on a road), place or speed differ (by more than the FCD's rounding), earliest first.
 - `follow`: one SUMO vehicle's steps beside mapc's, `<<` where they differ.
 
@@ -91,25 +92,33 @@ def rows(a, to_time):
 
 
 def matched(sumo, mapc):
-    """SUMO vehicle -> mapc vehicle, by the step, edge, lane and place (to 0.1 m) where each first appears."""
+    """SUMO vehicle -> mapc vehicle, by the step, edge, lane and place (to 0.1 m) where each first appears; then,
+    among the vehicles left, by the step and edge alone where one of each appears there (inserted on another lane
+    or at another place: their first step is then a difference). Returns the map and how many the second pass
+    matched."""
     def firsts(rs):
         f = {}
         for r in rs:
             f.setdefault(r[1], r)
         return f
 
-    def key(r):
-        return (r[0], r[2], r[3], round(r[4], 1))
+    def one_to_one(sumo_firsts, mapc_firsts, key):
+        by_key, sumo_by_key = {}, {}
+        for v, r in mapc_firsts.items():
+            by_key.setdefault(key(r), []).append(v)
+        for v, r in sumo_firsts.items():
+            sumo_by_key.setdefault(key(r), []).append(v)
+        return {v: by_key[k][0] for k, vs in sumo_by_key.items() for v in vs
+                if len(vs) == 1 and len(by_key.get(k, [])) == 1}
 
-    by_key = {}
-    for v, r in firsts(mapc).items():
-        by_key.setdefault(key(r), []).append(v)
-    out = {}
-    for v, r in firsts(sumo).items():
-        c = by_key.get(key(r), [])
-        if len(c) == 1:
-            out[v] = c[0]
-    return out
+    sumo_firsts, mapc_firsts = firsts(sumo), firsts(mapc)
+    out = one_to_one(sumo_firsts, mapc_firsts, lambda r: (r[0], r[2], r[3], round(r[4], 1)))
+    taken = set(out.values())
+    second = one_to_one({v: r for v, r in sumo_firsts.items() if v not in out},
+                        {v: r for v, r in mapc_firsts.items() if v not in taken},
+                        lambda r: (r[0], r[2]))
+    out.update(second)
+    return out, len(second)
 
 
 def same(s, m):
@@ -125,11 +134,12 @@ def fmt(r):
 
 def cmd_first(a):
     sumo, mapc = rows(a, a.until)
-    names = matched(sumo, mapc)
+    names, by_road = matched(sumo, mapc)
     steps = {(r[1], r[0]): r for r in mapc}
     unmatched = sorted({r[1] for r in sumo} - set(names))
-    print("%d SUMO vehicles matched, %d not (first seen elsewhere in mapc)%s" % (
-        len(names), len(unmatched), (": " + ", ".join(unmatched[:8])) if unmatched else ""))
+    print("%d SUMO vehicles matched (%d of them by their first step and road alone: another lane or place), %d not "
+          "(first seen elsewhere in mapc)%s" % (
+              len(names), by_road, len(unmatched), (": " + ", ".join(unmatched[:8])) if unmatched else ""))
     found, done = [], set()
     for r in sumo:
         v = r[1]
@@ -148,7 +158,7 @@ def cmd_first(a):
 
 def cmd_follow(a):
     sumo, mapc = rows(a, a.to_time)
-    names = matched(sumo, mapc)
+    names, _ = matched(sumo, mapc)
     if a.vehicle not in names:
         raise SystemExit("deterministic.py: %s is not matched to a vehicle of mapc's" % a.vehicle)
     steps = {r[0]: r for r in mapc if r[1] == names[a.vehicle]}
