@@ -95,14 +95,37 @@ fn connections_side_by_side_with_priority_form_groups_right_to_left() {
     let cfg = deterministic_1x3("groups", 10);
     let rs = mapc_scenario::ResolvedScenario::load(cfg.to_str().unwrap()).unwrap();
     let net = Network::from_graph(&rs.graph).unwrap();
-    let mut sizes: Vec<usize> = net.via_groups.iter().map(Vec::len).collect();
-    sizes.sort();
-    // entry -> off_ramp_up_stream (4), off_ramp_up_stream -> main_road (3), main_road -> acceleration_area (3),
-    // off_ramp_beginning -> off_ramp (2); the zipper into end_main_road leads from acceleration_area's lanes 1-3
-    assert!(
-        sizes.contains(&4) && sizes.iter().filter(|&&n| n == 3).count() >= 2,
-        "{sizes:?}"
-    );
+    // each group by the SUMO edges its connections join, and its size: the acceleration lane ends before
+    // end_main_road, so the three connections from the lanes beside it merge with nothing and form a group; the
+    // off-ramp's diverge and the ramp's merge have one connection each
+    let edge = |lane: LaneIdx| match net.lanes[lane as usize].kind {
+        LaneKind::Road(r) => rs.graph.roads[r].provenance.sumo_ids[0].clone(),
+        LaneKind::Via(_) => unreachable!("a connection's ends are roads"),
+    };
+    let mut groups: Vec<(String, String, usize)> = net
+        .via_groups
+        .iter()
+        .map(|g| {
+            let LaneKind::Via(k) = net.lanes[g[0] as usize].kind else {
+                unreachable!("a group holds connections")
+            };
+            let lk = &net.links[k as usize];
+            (edge(lk.from_lane), edge(lk.to_lane), g.len())
+        })
+        .collect();
+    groups.sort();
+    let want = [
+        ("acceleration_area", "end_main_road", 3),
+        ("entry", "off_ramp_up_stream", 4),
+        ("main_road", "acceleration_area", 3),
+        ("off_ramp_beginning", "off_ramp", 2),
+        ("off_ramp_up_stream", "main_road", 3),
+    ];
+    let want: Vec<(String, String, usize)> = want
+        .iter()
+        .map(|&(a, b, n)| (a.to_string(), b.to_string(), n))
+        .collect();
+    assert_eq!(groups, want);
     for g in &net.via_groups {
         let places: Vec<_> = g
             .iter()

@@ -9,16 +9,10 @@
 use super::{Ego, NeighbourLane, Side, lca};
 use crate::models::cf::CarFollowModel;
 
-/// The result of the gap check towards one side.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GapCheck {
-    /// `LCA_BLOCKED_BY_*` and `LCA_OVERLAPPING` bits; 0 when the change is safe.
-    pub blocked: u32,
-}
-
-/// Checks the gaps for a change towards `side` whose neighbours are `lane`. `safety_factor` scales both secure
-/// gaps (SUMO's `getSafetyFactor`, 1 / lcAssertive).
-pub fn check_gaps(ego: &Ego, side: Side, lane: &NeighbourLane, safety_factor: f64) -> GapCheck {
+/// Checks the gaps for a change towards `side` whose neighbours are `lane`: the `LCA_BLOCKED_BY_*` and
+/// `LCA_OVERLAPPING` bits, 0 when the change is safe. `safety_factor` scales both secure gaps (SUMO's
+/// `getSafetyFactor`, 1 / lcAssertive).
+pub fn check_gaps(ego: &Ego, side: Side, lane: &NeighbourLane, safety_factor: f64) -> u32 {
     let by_leader = side.blocked_by_leader();
     let by_follower = side.blocked_by_follower();
     let mut blocked = 0;
@@ -56,5 +50,5 @@ pub fn check_gaps(ego: &Ego, side: Side, lane: &NeighbourLane, safety_factor: f6
             blocked |= by_leader;
         }
     }
-    GapCheck { blocked }
+    blocked
 }

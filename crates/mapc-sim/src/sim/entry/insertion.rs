@@ -14,10 +14,52 @@ impl Simulation {
     #[inline(never)]
     pub(in crate::sim) fn insert_departures(&mut self) {
         let now = self.time_s - self.spec.step_s; // insertion happens within the step just executed
-        // (the flows' own test, `depart <= now + 1e-9`, fails for each of them: nothing to visit)
-        let quiet = self.flows_quiet_until > now + 1e-9;
+        // before the next departure by period no flow has one due (`flows_quiet_until`): none is visited
+        if !(self.flows_quiet_until > now + 1e-9) {
+            self.flows_quiet_until = self.enqueue_due(now);
+        }
+        // lanes where an insertion failed in this step: no later vehicle is tried there (SUMO's failed-insertion
+        // memory; lanes chosen at insertion are tried after the fixed ones)
+        let mut refused = std::mem::take(&mut self.refused_lanes);
+        refused.clear();
+        if self.spec.sumo_insertion_order {
+            self.insert_in_due_order(&mut refused);
+            self.refused_lanes = refused;
+            return;
+        }
+        for ei in 0..self.entry_lanes.len() {
+            loop {
+                let id = match self.pending[ei].front_built() {
+                    Some(id) => id,
+                    None => match self.pending[ei].take_counted() {
+                        // a counted vehicle reaches the front: built now, then waits like any other
+                        Some(f) => {
+                            let id = self.build_flow_vehicle(f);
+                            self.pending[ei].push_taken(id);
+                            id
+                        }
+                        None => break,
+                    },
+                };
+                if self.try_insert(id) {
+                    self.pending[ei].pop_built();
+                } else {
+                    refused.push(self.entry_lanes[ei]);
+                    break;
+                }
+            }
+        }
+        for re in 0..self.road_entries.len() {
+            self.insert_at_road(re, &mut refused);
+        }
+        self.refused_lanes = refused;
+    }
+
+    /// Every flow's vehicles due by `now` join their entries' queues; returns the earliest departure time of any
+    /// flow's next vehicle by period, NaN when a flow draws by probability (it is visited every step).
+    fn enqueue_due(&mut self, now: f64) -> f64 {
         let mut next_due = f64::INFINITY;
-        for f in 0..if quiet { 0 } else { self.spec.flows.len() } {
+        for f in 0..self.spec.flows.len() {
             let flow = &self.spec.flows[f];
             if flow.number.is_some_and(|n| self.flow_next[f] >= n) {
                 continue;
@@ -56,44 +98,7 @@ impl Simulation {
                 self.enqueue_departure(f);
             }
         }
-        if !quiet {
-            self.flows_quiet_until = next_due;
-        }
-        // lanes where an insertion failed in this step: no later vehicle is tried there (SUMO's failed-insertion
-        // memory; lanes chosen at insertion are tried after the fixed ones)
-        let mut refused = std::mem::take(&mut self.refused_lanes);
-        refused.clear();
-        if self.spec.sumo_insertion_order {
-            self.insert_in_due_order(&mut refused);
-            self.refused_lanes = refused;
-            return;
-        }
-        for ei in 0..self.entry_lanes.len() {
-            loop {
-                let id = match self.pending[ei].front_built() {
-                    Some(id) => id,
-                    None => match self.pending[ei].take_counted() {
-                        // a counted vehicle reaches the front: built now, then waits like any other
-                        Some(f) => {
-                            let id = self.build_flow_vehicle(f);
-                            self.pending[ei].push_taken(id);
-                            id
-                        }
-                        None => break,
-                    },
-                };
-                if self.try_insert(id) {
-                    self.pending[ei].pop_built();
-                } else {
-                    refused.push(self.entry_lanes[ei]);
-                    break;
-                }
-            }
-        }
-        for re in 0..self.road_entries.len() {
-            self.insert_at_road(re, &mut refused);
-        }
-        self.refused_lanes = refused;
+        next_due
     }
 
     /// The next vehicle of flow `f` joins the queue at its entry (built now while the queue is short, else

@@ -217,15 +217,15 @@ impl Lc2013 {
                 Side::Left => s.left.as_ref(),
             };
             let Some(lane) = lane else { continue };
-            let gaps = check_gaps(&s.ego, side, lane, self.safety_factor());
+            let blocked = check_gaps(&s.ego, side, lane, self.safety_factor());
             let view = SideView {
                 s,
                 side,
                 lane,
-                blocked: gaps.blocked,
+                blocked,
             };
             let state =
-                gaps.blocked | self.wants_change(mem, &view, &mut own_lane_vsafe, &mut d.messages);
+                blocked | self.wants_change(mem, &view, &mut own_lane_vsafe, &mut d.messages);
             match side {
                 Side::Right => d.state_right = state,
                 Side::Left => d.state_left = state,
