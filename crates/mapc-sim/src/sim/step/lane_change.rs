@@ -131,20 +131,16 @@ impl Simulation {
     #[inline(never)]
     pub(in crate::sim) fn change_lanes(&mut self) {
         let dt = self.spec.step_s;
-        // each lane's vehicles' lengths with min gaps (SUMO's brutto occupancy), kept up to date by the changes
+        // each lane's vehicles' lengths with min gaps (SUMO's brutto occupancy), kept up to date by the changes;
+        // and, after the moves, before any message of this pass: forget the last step's advices and marks
+        // (advices sent in this pass are read in the next move)
         let mut brutto = std::mem::take(&mut self.lane_brutto);
         brutto.clear();
         brutto.resize(self.net.lanes.len(), 0.0);
         for (l, q) in self.lane_veh.iter().enumerate() {
+            let mut sum = 0.0;
             for &id in q.iter() {
-                brutto[l] += self.brutto_length(id);
-            }
-        }
-        self.lane_brutto = brutto;
-        // after the moves, before any message of this pass: forget the last step's advices and marks (advices
-        // sent in this pass are read in the next move)
-        for q in self.lane_veh.iter() {
-            for &id in q.iter() {
+                sum += self.brutto_length(id);
                 let v = &mut self.veh[id as usize];
                 let speed = v.speed;
                 let rec = v.lc.get_or_insert_with(|| {
@@ -158,7 +154,9 @@ impl Simulation {
                 // (the memory's step, the same for every type's model)
                 self.lc_models[0].prepare_step(&mut rec.mem);
             }
+            brutto[l] = sum;
         }
+        self.lane_brutto = brutto;
         let mut scratch = std::mem::take(&mut self.lc_scratch);
         scratch.next_occupation.of = None;
         if self.spec.sumo_junction_lane_changes {

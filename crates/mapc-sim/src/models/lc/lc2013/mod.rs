@@ -158,7 +158,21 @@ struct SideView<'s, 'a> {
     s: &'s Surroundings<'a>,
     side: Side,
     lane: &'s super::NeighbourLane<'a>,
-    blocked: u32,
+    safety_factor: f64,
+    /// The side's gap-check bits ([`check_gaps`]), computed at the first read.
+    blocked: std::cell::Cell<Option<u32>>,
+}
+
+impl SideView<'_, '_> {
+    /// The side's gap-check bits.
+    fn blocked(&self) -> u32 {
+        if let Some(b) = self.blocked.get() {
+            return b;
+        }
+        let b = check_gaps(&self.s.ego, self.side, self.lane, self.safety_factor);
+        self.blocked.set(Some(b));
+        b
+    }
 }
 
 impl Lc2013 {
@@ -211,26 +225,47 @@ impl Lc2013 {
         let mut d = Decision::default();
         // the own lane's anticipated speed, by whether a leader accelerates: both sides read it alike
         let mut own_lane_vsafe = [None; 2];
+        // Each side's gap check is done when its bits can be read: for an urgent wish (which informs the
+        // blockers), for any wish (the change), and, once either side wishes, for both (the state others and
+        // the next step's speed read). Without a wish the bits are read by nobody: most vehicles skip both checks.
+        let gaps = |side: Side| {
+            let lane = match side {
+                Side::Right => s.right.as_ref(),
+                Side::Left => s.left.as_ref(),
+            };
+            lane.map_or(0, |lane| {
+                check_gaps(&s.ego, side, lane, self.safety_factor())
+            })
+        };
+        let mut checked = [false; 2];
         for side in [Side::Right, Side::Left] {
             let lane = match side {
                 Side::Right => s.right.as_ref(),
                 Side::Left => s.left.as_ref(),
             };
             let Some(lane) = lane else { continue };
-            let blocked = check_gaps(&s.ego, side, lane, self.safety_factor());
             let view = SideView {
                 s,
                 side,
                 lane,
-                blocked,
+                safety_factor: self.safety_factor(),
+                blocked: std::cell::Cell::new(None),
             };
-            let state =
-                blocked | self.wants_change(mem, &view, &mut own_lane_vsafe, &mut d.messages);
+            let wish_state = self.wants_change(mem, &view, &mut own_lane_vsafe, &mut d.messages);
+            let state = if wish_state & lca::WANTS_LANECHANGE != 0 || view.blocked.get().is_some() {
+                checked[side as usize] = true;
+                wish_state | view.blocked()
+            } else {
+                wish_state
+            };
             match side {
                 Side::Right => d.state_right = state,
                 Side::Left => d.state_left = state,
             }
             if state & side.wish() != 0 && state & lca::BLOCKED == 0 {
+                if !checked[Side::Right as usize] {
+                    d.state_right |= gaps(Side::Right);
+                }
                 mem.own_state = state;
                 d.change = Some(side);
                 d.reason = Reason::of_state(state);
@@ -242,6 +277,20 @@ impl Lc2013 {
                 d.urgent_blocked.push(side);
             }
         }
+        if (d.state_right | d.state_left) & lca::WANTS_LANECHANGE != 0 {
+            if !checked[Side::Right as usize] {
+                d.state_right |= gaps(Side::Right);
+            }
+            if !checked[Side::Left as usize] {
+                d.state_left |= gaps(Side::Left);
+            }
+        }
+        debug_assert!({
+            let gap_bits = lca::BLOCKED_LEFT | lca::BLOCKED_RIGHT | lca::OVERLAPPING;
+            (d.state_right | d.state_left) & lca::WANTS_LANECHANGE == 0
+                || (d.state_right & gap_bits == gaps(Side::Right)
+                    && d.state_left & gap_bits == gaps(Side::Left))
+        });
         if d.state_right & lca::URGENT != 0 && d.state_left & lca::URGENT != 0 {
             // wants both ways: the right wins
             d.state_left = 0;
@@ -434,7 +483,7 @@ impl Lc2013 {
             let planned_speed = self.inform_leader(
                 mem,
                 ego,
-                v.blocked,
+                v.blocked(),
                 my_dir,
                 neigh_lead,
                 remaining_seconds,
@@ -444,7 +493,7 @@ impl Lc2013 {
                 self.inform_follower(
                     mem,
                     ego,
-                    v.blocked,
+                    v.blocked(),
                     my_dir,
                     v.lane.follower.as_ref(),
                     remaining_seconds,
