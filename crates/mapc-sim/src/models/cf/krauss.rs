@@ -242,6 +242,11 @@ impl CarFollowModel for Krauss {
     ) -> [f64; 4] {
         super::BATCHED_NOT
     }
+
+    #[inline(always)]
+    fn batches_plan_speeds(&self) -> bool {
+        false
+    }
 }
 
 #[cfg(test)]

@@ -101,6 +101,12 @@ pub trait CarFollowModel {
     /// [`Self::free_speed_below_limit`] towards `leader_speed[1]` (`gap[1]` unused). One at a time unless a
     /// model computes them together; a model that gains nothing from the batch returns NaN for the entries the
     /// plan then computes where it reads them ([`BATCHED_NOT`]).
+    /// Whether [`Self::plan_speeds`] computes anything: the plan gathers its arguments only then.
+    #[inline(always)]
+    fn batches_plan_speeds(&self) -> bool {
+        true
+    }
+
     #[inline(always)]
     fn plan_speeds(
         &self,
@@ -279,5 +285,10 @@ impl CarFollowModel for CfModel {
         desired_speed: f64,
     ) -> [f64; 4] {
         by_model!(self, m => m.plan_speeds(gap, speed, leader_speed, desired_speed))
+    }
+
+    #[inline(always)]
+    fn batches_plan_speeds(&self) -> bool {
+        by_model!(self, m => m.batches_plan_speeds())
     }
 }

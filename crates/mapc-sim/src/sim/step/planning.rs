@@ -66,6 +66,9 @@ impl Simulation {
     pub(in crate::sim) fn plan_idm_batch(&self, id: VehicleId, qi: usize) -> [f64; 4] {
         let v = &self.veh[id as usize];
         let p = &self.types[v.vtype as usize];
+        if !p.batches_plan_speeds() {
+            return crate::models::cf::BATCHED_NOT;
+        }
         let des_cur = self.desired_speed(v, v.lane);
         let mut gap = [1e6; 4];
         let mut leader = [0.0; 4];
