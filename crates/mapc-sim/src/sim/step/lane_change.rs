@@ -246,10 +246,13 @@ impl Simulation {
         lane: LaneIdx,
     ) -> (usize, Option<LaneIdx>, Option<LaneIdx>) {
         let l = self.lane_at(lane as usize);
-        match self.net.via_beside[lane as usize] {
-            Some(b) if matches!(l.kind, LaneKind::Via(_)) => (b.index as usize, b.right, b.left),
-            _ => (l.index as usize, l.right, l.left),
+        // (a road lane, most of the pass's, is answered without the table of via lanes)
+        if let LaneKind::Via(_) = l.kind
+            && let Some(b) = self.net.via_beside[lane as usize]
+        {
+            return (b.index as usize, b.right, b.left);
         }
+        (l.index as usize, l.right, l.left)
     }
 
     /// The candidates' order on a road of two lanes, by merging the lanes' queues (each front first) into
