@@ -25,6 +25,18 @@ pub fn surely_stops_within(headway: f64, decel: f64, gap: f64, speed: f64) -> bo
     (gap - STOP_BOUND_MARGIN_M - headway * speed) * (2.0 * decel) >= speed * speed
 }
 
+/// A lower bound of Euler's braking distance from `speed` braking `decel` each step of `dt` ([`brake_gap`] with no
+/// headway): the continuous stop's `v^2 / 2d` less what the whole braking steps save, `dt (d dt + v) / 2`, and a
+/// relative margin far above rounding; never negative.
+#[inline(always)]
+pub fn brake_gap_at_least(dt: f64, speed: f64, decel: f64) -> f64 {
+    if !(decel > 0.0 && speed >= 0.0) {
+        return 0.0;
+    }
+    ((speed * speed * (0.5 / decel) - 0.5 * dt * (decel * dt + speed)) * (1.0 - 1e-9) - 1e-6)
+        .fmax(0.0)
+}
+
 /// The margin (m) of [`surely_stops_within`]'s bound.
 const STOP_BOUND_MARGIN_M: f64 = 1.0;
 

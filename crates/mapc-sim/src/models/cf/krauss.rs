@@ -116,7 +116,9 @@ impl Krauss {
     }
 
     /// `maximum_safe_follow_speed(..).fmin(cap)`, the same bits, without the square root and divisions where the
-    /// gap alone is long enough to stop from `cap` (most leaders of free-flowing traffic and of neighbour lanes).
+    /// gap and the least of the leader's braking distance are long enough to stop from `cap` (most leaders of
+    /// free-flowing traffic and of neighbour lanes): the safe follow speed is the safe stop speed of the gap plus
+    /// the leader's braking distance, which only grows with the distance, or above it.
     #[inline(always)]
     fn safe_follow_speed_below(
         &self,
@@ -126,7 +128,12 @@ impl Krauss {
         on_insertion: bool,
         cap: f64,
     ) -> f64 {
-        if self.stops_within(gap, cap) {
+        let leader_brake = kinematics::brake_gap_at_least(self.dt, leader_speed, self.decel);
+        if self.stops_within(gap + leader_brake, cap) {
+            debug_assert!(
+                self.maximum_safe_follow_speed(gap, speed, leader_speed, on_insertion) >= cap,
+                "{self:?} gap {gap} v {speed} leader {leader_speed} cap {cap}"
+            );
             return cap;
         }
         self.maximum_safe_follow_speed(gap, speed, leader_speed, on_insertion)

@@ -296,3 +296,43 @@ fn surely_secure_never_passes_a_blocked_gap() {
         "gaps beyond the bound's slack left to the exact check"
     );
 }
+
+/// The least braking distance (`kinematics::brake_gap_at_least`) never exceeds Euler's, and the follow speed's
+/// shortcut built on it (the gap plus that distance surely long enough to stop from the cap) never skips a case
+/// whose exact safe follow speed lies below the cap; it also decides cases the gap alone leaves open (its
+/// reason to be).
+#[test]
+fn the_leaders_least_braking_distance_never_overstates_and_the_shortcut_keeps_the_cap() {
+    use super::kinematics::{brake_gap, brake_gap_at_least, surely_stops_within};
+    let (mut by_leader, mut checked) = (0u64, 0u64);
+    for k in model_grid(&[0.0, 1.0, 1.6]) {
+        for li in 0..=60 {
+            let leader = li as f64 * 0.83;
+            let least = brake_gap_at_least(k.dt, leader, k.decel);
+            assert!(
+                least <= brake_gap(k.dt, leader, k.decel, 0.0),
+                "{k:?} leader {leader}: {least}"
+            );
+            for si in 0..=40 {
+                let speed = si as f64 * 1.09;
+                let cap = (speed + k.accel * k.dt).min(k.max_speed);
+                for gi in 0..=160 {
+                    let gap = gi as f64 * 0.9;
+                    if !surely_stops_within(k.tau, k.decel, gap + least, cap) {
+                        continue;
+                    }
+                    checked += 1;
+                    by_leader += !surely_stops_within(k.tau, k.decel, gap, cap) as u64;
+                    for on_insertion in [false, true] {
+                        let exact = k.maximum_safe_follow_speed(gap, speed, leader, on_insertion);
+                        assert!(
+                            exact >= cap,
+                            "{k:?} gap {gap} v {speed} leader {leader}: {exact} < {cap}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    assert!(by_leader * 5 >= checked, "{by_leader} of {checked}");
+}
