@@ -210,7 +210,7 @@ impl Simulation {
         } = scratch;
         // SUMO's findCandidate: the largest position first; the right lane first on a tie
         cands.clear();
-        if !self.merge_two_lanes(lanes, cands) {
+        if !self.merge_lanes(lanes, cands) {
             cands.extend(
                 lanes
                     .iter()
@@ -255,38 +255,91 @@ impl Simulation {
         (l.index as usize, l.right, l.left)
     }
 
-    /// The candidates' order on a road of two lanes, by merging the lanes' queues (each front first) into
-    /// `cands`: the stable sort's order when each queue is ordered as the sort orders it. Returns false, leaving
-    /// `cands` empty, on another number of lanes or a queue out of that order (then the caller sorts).
-    fn merge_two_lanes(&self, lanes: &[LaneIdx], cands: &mut Vec<VehicleId>) -> bool {
-        let &[a, b] = lanes else { return false };
-        let qa: &[VehicleId] = &self.lane_veh[a as usize];
-        let qb: &[VehicleId] = &self.lane_veh[b as usize];
+    /// The candidates' order, by merging the lanes' queues (each front first) into `cands`: the stable sort's
+    /// order when each queue is ordered as the sort orders it (the largest position first; on a tie the lane of the
+    /// lower index, then the lane listed first). Returns false, leaving `cands` empty, when a queue is out of that
+    /// order or the lanes are more than a road has (then the caller sorts).
+    fn merge_lanes(&self, lanes: &[LaneIdx], cands: &mut Vec<VehicleId>) -> bool {
+        const MAX_LANES: usize = 8;
+        let n = lanes.len();
+        if n > MAX_LANES {
+            return false;
+        }
         let pos = |o: VehicleId| self.veh[o as usize].pos;
         let ordered = |q: &[VehicleId]| {
             q.windows(2)
                 .all(|w| pos(w[0]).total_cmp(&pos(w[1])).is_ge())
         };
-        if !ordered(qa) || !ordered(qb) {
-            return false;
-        }
-        // on a tie of positions, the lane of the lower index first
-        let a_first_on_tie = self.lc_lane(a).0 < self.lc_lane(b).0;
-        let (mut i, mut j) = (0, 0);
-        while i < qa.len() && j < qb.len() {
-            let order = pos(qa[i]).total_cmp(&pos(qb[j]));
-            if order.is_gt() || (order.is_eq() && a_first_on_tie) {
-                cands.push(qa[i]);
-                i += 1;
-            } else {
-                cands.push(qb[j]);
-                j += 1;
+        let mut queues: [&[VehicleId]; MAX_LANES] = [&[]; MAX_LANES];
+        let (mut total, mut occupied, mut last_occupied) = (0, 0, 0);
+        for (k, &l) in lanes.iter().enumerate() {
+            let q: &[VehicleId] = &self.lane_veh[l as usize];
+            queues[k] = q;
+            total += q.len();
+            if !q.is_empty() {
+                occupied += 1;
+                last_occupied = k;
             }
         }
-        cands.extend_from_slice(&qa[i..]);
-        cands.extend_from_slice(&qb[j..]);
+        if occupied <= 1 {
+            // (most passes: the vehicles of one lane, in its order)
+            let q = queues[last_occupied];
+            if !ordered(q) {
+                return false;
+            }
+            cands.extend_from_slice(q);
+            return true;
+        }
+        // each queue's front position (minus infinity once empty) and lane index
+        let mut head = [f64::NEG_INFINITY; MAX_LANES];
+        let mut index = [0usize; MAX_LANES];
+        for k in 0..n {
+            if !ordered(queues[k]) {
+                return false;
+            }
+            if let Some(&o) = queues[k].first() {
+                head[k] = pos(o);
+            }
+            index[k] = self.lc_lane(lanes[k]).0;
+        }
+        if n == 2 {
+            // two queues (most roads' pass): a plain two-way merge
+            let (qa, qb) = (queues[0], queues[1]);
+            let a_first_on_tie = index[0] <= index[1];
+            let (mut i, mut j) = (0, 0);
+            while i < qa.len() && j < qb.len() {
+                let order = pos(qa[i]).total_cmp(&pos(qb[j]));
+                if order.is_gt() || (order.is_eq() && a_first_on_tie) {
+                    cands.push(qa[i]);
+                    i += 1;
+                } else {
+                    cands.push(qb[j]);
+                    j += 1;
+                }
+            }
+            cands.extend_from_slice(&qa[i..]);
+            cands.extend_from_slice(&qb[j..]);
+            total = 0;
+        }
+        for _ in 0..total {
+            // (an empty queue's minus infinity is below every position: one is left while vehicles are)
+            let mut best = 0;
+            for k in 1..n {
+                let order = head[k].total_cmp(&head[best]);
+                if order.is_gt() || (order.is_eq() && index[k] < index[best]) {
+                    best = k;
+                }
+            }
+            let q = queues[best];
+            cands.push(q[0]);
+            queues[best] = &q[1..];
+            head[best] = queues[best].first().map_or(f64::NEG_INFINITY, |&o| pos(o));
+        }
         debug_assert!({
-            let mut sorted: Vec<VehicleId> = qa.iter().chain(qb).copied().collect();
+            let mut sorted: Vec<VehicleId> = lanes
+                .iter()
+                .flat_map(|&l| self.lane_veh[l as usize].iter().copied())
+                .collect();
             sorted.sort_by(|&x, &y| self.candidate_order(x, y));
             sorted == *cands
         });
