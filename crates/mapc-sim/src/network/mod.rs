@@ -542,22 +542,35 @@ impl Network {
 
     /// Breadth-first road path (corridors have few alternatives; the first found is the fewest roads).
     fn road_path(&self, start: usize, goal: usize) -> Option<Vec<usize>> {
-        let mut prev: HashMap<usize, usize> = HashMap::new();
+        if start == goal {
+            return Some(vec![start]);
+        }
+        // a road that follows `start` (most legs between a route's consecutive roads) is the search's first find
+        if self.road_lanes[start].iter().any(|&l| {
+            self.lanes[l as usize]
+                .out_links
+                .iter()
+                .any(|&k| self.road_of(self.links[k as usize].to_lane) == Some(goal))
+        }) {
+            return Some(vec![start, goal]);
+        }
+        const UNSEEN: usize = usize::MAX;
+        let mut prev = vec![UNSEEN; self.road_lanes.len()];
         let mut queue = std::collections::VecDeque::from([start]);
         while let Some(cur) = queue.pop_front() {
             if cur == goal {
                 let mut path = vec![cur];
                 let mut c = cur;
-                while let Some(&p) = prev.get(&c) {
-                    path.push(p);
-                    c = p;
+                while prev[c] != UNSEEN {
+                    c = prev[c];
+                    path.push(c);
                 }
                 path.reverse();
                 return Some(path);
             }
             for nxt in self.next_roads(cur) {
-                if nxt != start && !prev.contains_key(&nxt) {
-                    prev.insert(nxt, cur);
+                if nxt != start && prev[nxt] == UNSEEN {
+                    prev[nxt] = cur;
                     queue.push_back(nxt);
                 }
             }
