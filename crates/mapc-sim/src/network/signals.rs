@@ -30,22 +30,31 @@ impl SignalState {
 
 /// The state of link `index` of `light` at `t` seconds after the run's begin.
 pub fn state_at(light: &TrafficLight, index: u32, t: f64) -> SignalState {
+    state_in_phase(light, phase_at(light, t), index)
+}
+
+/// The phase of `light` at `t` seconds after the run's begin; `None` where the light shows green to all (no
+/// cycle). The simulator asks this once a step per light ([`state_in_phase`] then reads each link's letter).
+pub fn phase_at(light: &TrafficLight, t: f64) -> Option<usize> {
     let cycle: f64 = light.phases.iter().map(|p| p.duration_s).sum();
     if !(cycle > 0.0) {
-        return SignalState::Green;
+        return None;
     }
     let mut into = (t - light.offset_s).rem_euclid(cycle);
-    for p in &light.phases {
+    for (i, p) in light.phases.iter().enumerate() {
         if into < p.duration_s {
-            return p
-                .state
-                .as_bytes()
-                .get(index as usize)
-                .map_or(SignalState::Green, |&c| SignalState::of(c));
+            return Some(i);
         }
         into -= p.duration_s;
     }
-    SignalState::Green
+    None
+}
+
+/// The state of link `index` of `light` in its phase `phase` ([`phase_at`]).
+pub fn state_in_phase(light: &TrafficLight, phase: Option<usize>, index: u32) -> SignalState {
+    phase
+        .and_then(|i| light.phases[i].state.as_bytes().get(index as usize))
+        .map_or(SignalState::Green, |&c| SignalState::of(c))
 }
 
 #[cfg(test)]

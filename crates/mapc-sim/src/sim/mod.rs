@@ -71,6 +71,9 @@ pub struct Simulation {
     /// This step's (vehicle, index in its lane) in planning order (kept to reuse its allocation).
     plan_order: Vec<(VehicleId, u32)>,
     approaches: Table<Vec<Approach>>,
+    /// Each light's phase at a light time (seconds since the run's begin), found once a step
+    /// ([`Self::signal_of`] reads it for that time).
+    light_phases: (f64, Vec<Option<usize>>),
     /// Teleported vehicles on their way back ([`teleport`]).
     transfers: Vec<teleport::InTransfer>,
     /// Right of way is decided at the link (a major link with minor foes, a zipper link): approaching vehicles
@@ -176,6 +179,7 @@ impl Simulation {
         let mut sim = Simulation {
             lane_veh: Table(vec![Table(Vec::new()); net.lanes.len()]),
             approaches: Table(vec![Vec::new(); net.links.len()]),
+            light_phases: (f64::NAN, Vec::new()),
             transfers: Vec::new(),
             link_takes_requests: net
                 .links
@@ -478,6 +482,19 @@ impl Simulation {
         for a in &mut self.approaches {
             a.clear();
         }
+        if !self.net.lights.is_empty() {
+            // the lights' phases at this step's light time (the moves' and the insertions')
+            let light_time = self.time_s - self.spec.start_time_s;
+            let (t, phases) = &mut self.light_phases;
+            *t = light_time;
+            phases.clear();
+            phases.extend(
+                self.net
+                    .lights
+                    .iter()
+                    .map(|l| crate::network::signals::phase_at(l, light_time)),
+            );
+        }
         // plans are stored in visiting order (lane order, front to back), which the moves visit again unchanged
         let mut plans = std::mem::take(&mut self.plans);
         if plans.len() < n as usize {
@@ -553,8 +570,15 @@ impl Simulation {
         link: &SimLink,
         light_time: f64,
     ) -> Option<crate::network::signals::SignalState> {
+        use crate::network::signals::{phase_at, state_in_phase};
         link.signal.map(|(light, index)| {
-            crate::network::signals::state_at(&self.net.lights[light as usize], index, light_time)
+            let l = &self.net.lights[light as usize];
+            let phase = if light_time.to_bits() == self.light_phases.0.to_bits() {
+                self.light_phases.1[light as usize]
+            } else {
+                phase_at(l, light_time)
+            };
+            state_in_phase(l, phase, index)
         })
     }
 }

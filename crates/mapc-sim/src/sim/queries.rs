@@ -161,6 +161,8 @@ impl Simulation {
         }
         light.phases = phases;
         light.offset_s = now;
+        // (the phases found for this step's time are the old program's)
+        self.light_phases.0 = f64::NAN;
         Ok(())
     }
 
