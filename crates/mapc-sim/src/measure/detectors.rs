@@ -93,6 +93,8 @@ pub struct Detectors {
     intervals: Vec<DetectorInterval>,
     /// Start of the run's measured time (the totals count from it).
     since_s: f64,
+    /// A list of tracked vehicles to reuse: each step's observation fills a new one from the last.
+    spare: Vec<OnDetector>,
 }
 
 /// The time (s, from the step's start) a point `to_go` metres ahead was reached in a step of `dt` at `speed`:
@@ -135,6 +137,7 @@ impl Detectors {
                 .collect(),
             intervals: Vec::new(),
             since_s: begin_s,
+            spare: Vec::new(),
         }
     }
 
@@ -171,7 +174,8 @@ impl Detectors {
         let lane_road = Some(lp.road);
         let p = lp.spec.pos_m;
         // those it was tracking: their back passes, or they leave the lane another way
-        let mut still = Vec::with_capacity(lp.on.len());
+        let mut still = std::mem::take(&mut self.spare);
+        still.clear();
         let was_on = std::mem::take(&mut lp.on);
         for (o, s) in was_on.iter().zip(tracked) {
             debug_assert_eq!(o.id, s.id);
@@ -245,6 +249,7 @@ impl Detectors {
             }
         }
         lp.on = still;
+        self.spare = was_on;
         // an interval ends with the step that reaches it (SUMO writes at the step's end)
         let now = t + dt;
         if now - lp.interval_begin_s >= lp.spec.period_s - 1e-9 {
