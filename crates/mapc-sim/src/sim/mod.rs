@@ -483,7 +483,8 @@ impl Simulation {
             a.clear();
         }
         if !self.net.lights.is_empty() {
-            // the lights' phases at this step's light time (the moves' and the insertions')
+            // the lights' phases at this step's light time (the moves'; the insertions compute theirs from the
+            // next step's time, whose difference may differ in the last bit, and mostly find their own)
             let light_time = self.time_s - self.spec.start_time_s;
             let (t, phases) = &mut self.light_phases;
             *t = light_time;

@@ -97,16 +97,16 @@ pub trait CarFollowModel {
         false
     }
 
-    /// The four speeds most plans need, known before planning: behind leaders 0, 2 and 3, and
-    /// [`Self::free_speed_below_limit`] towards `leader_speed[1]` (`gap[1]` unused). One at a time unless a
-    /// model computes them together; a model that gains nothing from the batch returns NaN for the entries the
-    /// plan then computes where it reads them ([`BATCHED_NOT`]).
     /// Whether [`Self::plan_speeds`] computes anything: the plan gathers its arguments only then.
     #[inline(always)]
     fn batches_plan_speeds(&self) -> bool {
         true
     }
 
+    /// The four speeds most plans need, known before planning: behind leaders 0, 2 and 3, and
+    /// [`Self::free_speed_below_limit`] towards `leader_speed[1]` (`gap[1]` unused). One at a time unless a
+    /// model computes them together; a model that gains nothing from the batch returns NaN for the entries the
+    /// plan then computes where it reads them ([`BATCHED_NOT`]).
     #[inline(always)]
     fn plan_speeds(
         &self,

@@ -320,6 +320,8 @@ pub struct Decision {
     /// The reason of the change, or of the wish when none is done.
     pub reason: Option<Reason>,
     /// Its state towards each side (SUMO's `checkChange` result: wish, reason and blocked bits); 0 where no lane.
+    /// The gap checks' bits are there once either side wishes to change (only then are they read: the next
+    /// step's speed reads them beside a wish, the others read only the wish bits).
     pub state_right: u32,
     pub state_left: u32,
     /// An urgent wish towards this side was blocked: the simulator records the vehicle as that lane's
