@@ -10,13 +10,25 @@ use common::{
 };
 use serde_json::Value;
 
-/// Runs `python3` with `args` in `dir` (a tool of tools/, standard library only) and gives its standard output.
-fn python3(dir: &std::path::Path, args: &[&std::ffi::OsStr]) -> String {
-    let out = std::process::Command::new("python3")
+/// Runs `python3` with `args` in `dir` (a tool of tools/, standard library only).
+fn python3_run(dir: &std::path::Path, args: &[&std::ffi::OsStr]) -> std::process::Output {
+    std::process::Command::new("python3")
         .args(args)
         .current_dir(dir)
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+/// A tool's command line: the script `tool`, then `args`.
+fn args_of<'a>(tool: &'a std::path::Path, args: &[&'a str]) -> Vec<&'a std::ffi::OsStr> {
+    let mut all = vec![tool.as_os_str()];
+    all.extend(args.iter().map(|&a| std::ffi::OsStr::new(a)));
+    all
+}
+
+/// [`python3_run`], which must succeed: its standard output.
+fn python3(dir: &std::path::Path, args: &[&std::ffi::OsStr]) -> String {
+    let out = python3_run(dir, args);
     assert_success(&out);
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
@@ -356,9 +368,7 @@ fn sumo_replays_roads_counts_vehicle_seconds_per_road_and_where_a_lane_is_left()
     std::fs::write(dir.join("trace.csv"), trace).unwrap();
     let roads = |args: &[&str]| {
         let tool = root().join("tools/sumo_replay/roads.py");
-        let mut all = vec![tool.as_os_str()];
-        all.extend(args.iter().map(std::ffi::OsStr::new));
-        python3(&dir, &all)
+        python3(&dir, &args_of(&tool, args))
     };
     let time = roads(&["time", "g.json", "fcd.xml", "trace.csv"]);
     let row = |edge: &str| -> Vec<String> {
@@ -480,42 +490,28 @@ scenario.print_split(75, [("mapc", [{"duration": 70.0}, {"duration": 80.0}, {"du
 fn sumo_replays_deterministic_copy_draws_nothing_and_first_finds_where_the_runs_part() {
     let dir = scratch_dir("deterministic_py");
     let tool = root().join("tools/sumo_replay/deterministic.py");
-    let run = |args: &[&str]| {
-        let mut all = vec![tool.as_os_str()];
-        all.extend(args.iter().map(std::ffi::OsStr::new));
-        python3(&dir, &all)
+    let run = |args: &[&str]| python3(&dir, &args_of(&tool, args));
+    // a copy refused: it says `says` and writes nothing
+    let refused = |cfg: &str, out: &str, says: &str| {
+        let r = python3_run(&dir, &args_of(&tool, &["copy", cfg, out]));
+        assert!(!r.status.success());
+        assert!(String::from_utf8_lossy(&r.stderr).contains(says));
+        assert!(!dir.join(out).exists());
     };
     // a configuration that is missing, or a copy inside its own folder, is refused before anything is copied
-    for (cfg, out, says) in [
-        ("nonesuch.sumocfg", "nothing", "nonesuch.sumocfg"),
-        ("nothing/x.sumocfg", "nothing/inside", "x.sumocfg"),
-    ] {
-        let refused = std::process::Command::new("python3")
-            .arg(&tool)
-            .args(["copy", cfg, out])
-            .current_dir(&dir)
-            .output()
-            .unwrap();
-        assert!(!refused.status.success());
-        assert!(String::from_utf8_lossy(&refused.stderr).contains(says));
-        assert!(!dir.join(out).exists());
-    }
+    refused("nonesuch.sumocfg", "nothing", "nonesuch.sumocfg");
+    refused("nothing/x.sumocfg", "nothing/inside", "x.sumocfg");
     std::fs::create_dir_all(dir.join("nothing")).unwrap();
     std::fs::write(
         dir.join("nothing/x.sumocfg"),
         "<configuration><input><route-files value=\"r.xml\"/></input></configuration>",
     )
     .unwrap();
-    let inside = std::process::Command::new("python3")
-        .arg(&tool)
-        .args(["copy", "nothing/x.sumocfg", "nothing/inside"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        String::from_utf8_lossy(&inside.stderr).contains("lies inside the configuration's folder")
+    refused(
+        "nothing/x.sumocfg",
+        "nothing/inside",
+        "lies inside the configuration's folder",
     );
-    assert!(!dir.join("nothing/inside").exists());
     let cfg = root().join("scenarios/sumo/ramp_game/ramp.sumocfg");
     let copied = run(&["copy", cfg.to_str().unwrap(), "copy"]);
     assert!(copied.trim().ends_with("copy/ramp.sumocfg"), "{copied}");

@@ -529,15 +529,22 @@ impl Network {
     /// Roads reached from the end of road `r` (any lane), in link order, each once.
     fn next_roads(&self, r: usize) -> Vec<usize> {
         let mut out = Vec::new();
-        for &l in &self.road_lanes[r] {
-            for &k in &self.lanes[l as usize].out_links {
-                let to = self.road_of(self.links[k as usize].to_lane).unwrap();
-                if !out.contains(&to) {
-                    out.push(to);
-                }
+        for to in self.roads_after(r) {
+            if !out.contains(&to) {
+                out.push(to);
             }
         }
         out
+    }
+
+    /// The road each link out of road `r` leads onto, in link order, repeated where several do.
+    fn roads_after(&self, r: usize) -> impl Iterator<Item = usize> + '_ {
+        self.road_lanes[r].iter().flat_map(move |&l| {
+            self.lanes[l as usize]
+                .out_links
+                .iter()
+                .map(move |&k| self.road_of(self.links[k as usize].to_lane).unwrap())
+        })
     }
 
     /// Breadth-first road path (corridors have few alternatives; the first found is the fewest roads).
@@ -546,12 +553,7 @@ impl Network {
             return Some(vec![start]);
         }
         // a road that follows `start` (most legs between a route's consecutive roads) is the search's first find
-        if self.road_lanes[start].iter().any(|&l| {
-            self.lanes[l as usize]
-                .out_links
-                .iter()
-                .any(|&k| self.road_of(self.links[k as usize].to_lane) == Some(goal))
-        }) {
+        if self.roads_after(start).any(|r| r == goal) {
             return Some(vec![start, goal]);
         }
         const UNSEEN: usize = usize::MAX;

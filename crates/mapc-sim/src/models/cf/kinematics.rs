@@ -16,10 +16,18 @@ pub fn brake_gap(dt: f64, speed: f64, decel: f64, headway: f64) -> f64 {
     dt * (steps * speed - reduction * steps * (steps + 1.0) / 2.0) + speed * headway
 }
 
-/// Whether a driver at `speed` surely stops within `gap` with a reaction time `headway`: Euler's stopping
-/// distance from `v` is at most `headway v + v^2 / (2 decel)` (a right Riemann sum of the continuous stop), and
-/// a metre of margin covers the rounding. Then the safe stop speed of that gap and headway, and of any longer
-/// gap, is at least `speed`, and need not be computed where only whether it reaches `speed` matters.
+/// An upper bound of Euler's braking distance from `speed` braking `decel` each step, plus `headway` seconds at
+/// `speed` ([`brake_gap`]): `headway v + v^2 / (2 decel)`, the whole braking steps being a right Riemann sum of
+/// the continuous stop.
+#[inline(always)]
+pub fn brake_gap_at_most(speed: f64, decel: f64, headway: f64) -> f64 {
+    headway * speed + speed * speed * (0.5 / decel)
+}
+
+/// Whether a driver at `speed` surely stops within `gap` with a reaction time `headway`: the gap exceeds
+/// [`brake_gap_at_most`] (here multiplied out, without its division) by a metre, which covers the rounding. Then
+/// the safe stop speed of that gap and headway, and of any longer gap, is at least `speed`, and need not be
+/// computed where only whether it reaches `speed` matters.
 #[inline(always)]
 pub fn surely_stops_within(headway: f64, decel: f64, gap: f64, speed: f64) -> bool {
     (gap - STOP_BOUND_MARGIN_M - headway * speed) * (2.0 * decel) >= speed * speed

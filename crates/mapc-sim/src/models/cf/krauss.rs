@@ -190,25 +190,21 @@ impl CarFollowModel for Krauss {
         .fmax(0.0)
     }
 
-    /// SUMO's `insertionFollowSpeed` (Euler): the safe follow speed without the emergency rule.
-    /// Euler's braking distance from `v` lies between `v^2 / 2d - dt (d dt + v) / 2` and `v^2 / 2d` (the sum of
-    /// the speeds of the whole braking steps against the continuous stop), so the secure gap is at most the
-    /// follower's upper distance less the leader's lower one; a relative margin far above rounding.
+    /// The secure gap is at most the follower's most braking distance ([`kinematics::brake_gap_at_most`]) less
+    /// the leader's least ([`kinematics::brake_gap_at_least`]); a relative margin far above rounding.
     #[inline(always)]
     fn surely_secure(&self, gap: f64, speed: f64, leader_speed: f64, factor: f64) -> bool {
         let d = self.decel;
         if !(d > 0.0 && speed >= 0.0 && leader_speed >= 0.0 && factor >= 0.0) {
             return false;
         }
-        let inv_two_d = 0.5 / d;
-        let follower_at_most = speed * speed * inv_two_d + speed * self.tau;
-        let leader_at_least = (leader_speed * leader_speed * inv_two_d
-            - 0.5 * self.dt * (d * self.dt + leader_speed))
-            .fmax(0.0);
+        let follower_at_most = kinematics::brake_gap_at_most(speed, d, self.tau);
+        let leader_at_least = kinematics::brake_gap_at_least(self.dt, leader_speed, d);
         let secure_at_most = ((follower_at_most - leader_at_least).fmax(0.0)) * (1.0 + 1e-9) + 1e-6;
         gap >= secure_at_most * factor
     }
 
+    /// SUMO's `insertionFollowSpeed` (Euler): the safe follow speed without the emergency rule.
     fn insertion_follow_speed(
         &self,
         speed: f64,

@@ -302,25 +302,6 @@ impl Simulation {
             }
             index[k] = self.lc_lane(lanes[k]).0;
         }
-        if n == 2 {
-            // two queues (most roads' pass): a plain two-way merge
-            let (qa, qb) = (queues[0], queues[1]);
-            let a_first_on_tie = index[0] <= index[1];
-            let (mut i, mut j) = (0, 0);
-            while i < qa.len() && j < qb.len() {
-                let order = pos(qa[i]).total_cmp(&pos(qb[j]));
-                if order.is_gt() || (order.is_eq() && a_first_on_tie) {
-                    cands.push(qa[i]);
-                    i += 1;
-                } else {
-                    cands.push(qb[j]);
-                    j += 1;
-                }
-            }
-            cands.extend_from_slice(&qa[i..]);
-            cands.extend_from_slice(&qb[j..]);
-            total = 0;
-        }
         for _ in 0..total {
             // (an empty queue's minus infinity is below every position: one is left while vehicles are)
             let mut best = 0;

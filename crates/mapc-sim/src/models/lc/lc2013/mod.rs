@@ -226,8 +226,9 @@ impl Lc2013 {
         // the own lane's anticipated speed, by whether a leader accelerates: both sides read it alike
         let mut own_lane_vsafe = [None; 2];
         // Each side's gap check is done when its bits can be read: for an urgent wish (which informs the
-        // blockers), for any wish (the change), and, once either side wishes, for both (the state others and
-        // the next step's speed read). Without a wish the bits are read by nobody: most vehicles skip both checks.
+        // blockers), for any wish (the change), and, once either side wishes, for both (the state the next step's
+        // speed reads beside the wish; others read only wish bits). Without a wish nobody reads them: most
+        // vehicles skip both checks.
         let gaps = |side: Side| {
             let lane = match side {
                 Side::Right => s.right.as_ref(),
