@@ -106,6 +106,15 @@ fn passing_time(to_go: f64, speed: f64, dt: f64) -> f64 {
     (to_go / speed).clamp(0.0, dt)
 }
 
+/// Whether a vehicle at `pos` with `speed` and `length` on a loop's lane, not tracked by the loop, may enter it in
+/// a step of `dt`: its front is at or past the point `p`, and its back was before it at the step's start (its front
+/// passed it in the step, or it was put over it). [`Detectors::observe`] takes in no other untracked vehicle, so
+/// the simulator shows it only these.
+#[inline]
+pub fn may_enter(p: f64, pos: f64, speed: f64, length: f64, dt: f64) -> bool {
+    pos >= p && (pos - speed * dt) - length < p
+}
+
 impl Loop {
     fn push(&mut self, since: f64, p: Passage) {
         if p.leave_s > since {
@@ -154,13 +163,19 @@ impl Detectors {
         self.loops[detector].lane
     }
 
+    /// The position of a detector's point on its lane (m).
+    pub fn pos(&self, detector: usize) -> f64 {
+        self.loops[detector].spec.pos_m
+    }
+
     /// The vehicles each detector is tracking (to be looked up wherever they are now).
     pub fn tracked(&self, detector: usize) -> impl Iterator<Item = VehicleId> + '_ {
         self.loops[detector].on.iter().map(|o| o.id)
     }
 
-    /// Take in the step from `t` to `t + dt` for `detector`: `on_lane` are the vehicles on its lane now,
-    /// `tracked` the vehicles it was tracking (as [`Detectors::tracked`] listed them), wherever they are.
+    /// Take in the step from `t` to `t + dt` for `detector`: `on_lane` are the vehicles on its lane now (those
+    /// that [`may_enter`] it at least), `tracked` the vehicles it was tracking (as [`Detectors::tracked`] listed
+    /// them), wherever they are.
     pub fn observe(
         &mut self,
         detector: usize,
@@ -213,17 +228,15 @@ impl Detectors {
         // those on the lane it does not track: a front that passed the point in the step, or a vehicle put
         // over it (inserted, changed lanes, teleported there)
         for s in on_lane {
-            if s.pos < p || was_on.iter().any(|o| o.id == s.id) {
+            if !may_enter(p, s.pos, s.speed, s.length, dt) || was_on.iter().any(|o| o.id == s.id) {
                 continue;
             }
             let front_before = s.pos - s.speed * dt;
             let entry_s = if front_before < p {
                 t + passing_time(p - front_before, s.speed, dt)
-            } else if front_before - s.length < p {
+            } else {
                 // put over it since the last step (a lane change onto it)
                 t
-            } else {
-                continue;
             };
             // a front that passed this step whose back passed too (or one whose back already had)
             let odometer_at_point = s.odometer - (s.pos - p);

@@ -3,7 +3,7 @@
 //! the ones it was tracking, wherever they went.
 
 use super::*;
-use crate::measure::detectors::Seen;
+use crate::measure::detectors::{Seen, may_enter};
 
 impl Simulation {
     pub(in crate::sim) fn observe_detectors(&mut self) {
@@ -25,15 +25,17 @@ impl Simulation {
                     active: v.status == VehicleStatus::Active,
                 }
             };
+            // only the vehicles that may enter the loop: the others on its lane are far before or past it
+            let p = self.detectors.pos(d);
             on_lane.clear();
-            on_lane.extend(
-                self.lane_veh[self.detectors.lane(d) as usize]
-                    .iter()
-                    .filter(|&&id| {
-                        types.is_empty() || types.contains(&(self.veh[id as usize].vtype as usize))
-                    })
-                    .map(|&id| seen(id)),
-            );
+            for &id in self.lane_veh[self.detectors.lane(d) as usize].iter() {
+                let v = &self.veh[id as usize];
+                if may_enter(p, v.pos, v.speed, v.length, dt)
+                    && (types.is_empty() || types.contains(&(v.vtype as usize)))
+                {
+                    on_lane.push(seen(id));
+                }
+            }
             tracked.clear();
             tracked.extend(self.detectors.tracked(d).map(seen));
             self.detectors.observe(d, t, dt, &on_lane, &tracked);
