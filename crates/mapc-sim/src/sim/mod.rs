@@ -55,6 +55,9 @@ const LIGHT_STOP_OFFSET_M: f64 = 1.0;
 /// (netconvert's internal lanes come within a lane width of each other about a third of the way from the end).
 const CONFLICT_POINT_SHARE: f64 = 0.35;
 
+/// What a route is asked for: (from, via, to, first lane).
+type RouteRequest = (RoadId, Vec<RoadId>, Option<RoadId>, Option<u8>);
+
 /// A running simulation of one seed.
 pub struct Simulation {
     net: Network,
@@ -63,6 +66,9 @@ pub struct Simulation {
     routes: Table<Route>,
     /// Routes by (lanes, roads), so vehicles that drive the same share one.
     route_index: std::collections::HashMap<(Vec<LaneIdx>, Vec<usize>), u32>,
+    /// Routes by what they were asked for (from, via, to, first lane): a SUMO user's routes file names the same
+    /// few routes for each of its vehicles, and each is found on the network once.
+    route_asked: std::collections::HashMap<RouteRequest, u32>,
     veh: VehicleTable<Veh>,
     /// Vehicles per lane, front first (a plain vector: lanes are short and indexing is on the hot path).
     lane_veh: Table<Table<VehicleId>>,
@@ -203,6 +209,7 @@ impl Simulation {
             in_region: Table(vec![true; net.lanes.len()]),
             routes: Table(Vec::new()),
             route_index: std::collections::HashMap::new(),
+            route_asked: std::collections::HashMap::new(),
             veh: VehicleTable::default(),
             plans: Table(Vec::new()),
             plan_order: Vec::new(),

@@ -296,6 +296,23 @@ impl Simulation {
         to: Option<RoadId>,
         lane: Option<u8>,
     ) -> Result<u32, SimError> {
+        let asked = (from, via.to_vec(), to, lane);
+        if let Some(&r) = self.route_asked.get(&asked) {
+            return Ok(r);
+        }
+        let r = self.find_route(from, via, to, lane)?;
+        self.route_asked.insert(asked, r);
+        Ok(r)
+    }
+
+    /// [`Self::add_route`] on the network.
+    fn find_route(
+        &mut self,
+        from: RoadId,
+        via: &[RoadId],
+        to: Option<RoadId>,
+        lane: Option<u8>,
+    ) -> Result<u32, SimError> {
         let Some(lane) = lane else {
             let (lanes, roads, dead_end) =
                 self.net
