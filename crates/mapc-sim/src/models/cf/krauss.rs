@@ -37,6 +37,9 @@ impl Krauss {
 
     /// SUMO's `maximumSafeStopSpeedEuler`: the speed from which braking `decel` each step after a reaction time
     /// `headway` stops within `gap`.
+    // inlined into the follow speed: the call spilled the follow speed's values around it (-1.1 % instructions on
+    // the SUMO users' scenarios)
+    #[inline]
     pub fn maximum_safe_stop_speed(&self, gap: f64, headway: f64) -> f64 {
         let g = gap - NUMERICAL_EPS;
         if g <= 0.0 {

@@ -288,6 +288,9 @@ impl Lc2013 {
 
     /// SUMO's `slowDownForBlocked`: a nearly halted ego lets a blocked vehicle ahead (which wants into its lane)
     /// in by following it.
+    // inlined: `_wantsChange` calls it for every vehicle, mostly with no blocked vehicle, and the call's spills of
+    // the many live values around it cost more than the test (-1 % instructions)
+    #[inline(always)]
     pub(super) fn slow_down_for_blocked(
         &self,
         mem: &mut Lc2013Memory,

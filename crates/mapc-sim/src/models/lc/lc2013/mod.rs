@@ -221,6 +221,8 @@ impl Lc2013 {
     /// One vehicle's turn in the lane-change pass (SUMO's `MSLaneChanger::change` with this model): the right
     /// side first, then the left; the first wish that is not blocked is done. Updates the memory (a change
     /// resets it, as SUMO's `changed`).
+    // inlined into the pass's turn (its one caller): the decision's fields are then written in place
+    #[inline]
     pub fn decide(&self, mem: &mut Lc2013Memory, s: &Surroundings) -> Decision {
         let mut d = Decision::default();
         // the own lane's anticipated speed, by whether a leader accelerates: both sides read it alike
