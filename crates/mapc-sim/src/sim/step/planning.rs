@@ -73,6 +73,7 @@ impl Simulation {
         let mut gap = [1e6; 4];
         let mut leader = [0.0; 4];
         if qi > 0 {
+            // (not a closure: the optimizer kept one out of line)
             let lv = &self.veh[self.lane_veh[v.lane as usize][qi - 1] as usize];
             gap[0] = lv.pos - lv.length - v.pos - p.min_gap;
             leader[0] = lv.speed;
@@ -136,21 +137,17 @@ impl Simulation {
 
         // Leader on the own lane.
         if qi > 0 {
-            let own_leader = || {
-                let lv = &self.veh[self.lane_veh[v.lane as usize][qi - 1] as usize];
-                p.follow_speed(
-                    lv.pos - lv.length - v.pos - p.min_gap,
-                    speed,
-                    lv.speed,
-                    des_cur,
-                )
-            };
+            let lv = &self.veh[self.lane_veh[v.lane as usize][qi - 1] as usize];
+            let gap = lv.pos - lv.length - v.pos - p.min_gap;
             let vs = if pre[0].is_nan() {
-                own_leader()
+                p.follow_speed(gap, speed, lv.speed, des_cur)
             } else {
                 pre[0]
             };
-            debug_assert_eq!(vs.to_bits(), own_leader().to_bits());
+            debug_assert_eq!(
+                vs.to_bits(),
+                p.follow_speed(gap, speed, lv.speed, des_cur).to_bits()
+            );
             vv = vv.fmin(vs);
             v_link_pass.lower(vs);
         }
