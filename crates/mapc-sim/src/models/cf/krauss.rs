@@ -6,7 +6,7 @@
 //! all types brake alike, and where the leader brakes less hard (a car behind a truck: SUMO takes the larger of
 //! the two).
 
-use super::{CarFollowModel, kinematics};
+use super::{CarFollowModel, StopShare, kinematics};
 use crate::numeric::{FastMinMax, NUMERICAL_EPS, floor_exact};
 
 /// SUMO's factor on the emergency deceleration a driver computes (`EMERGENCY_DECEL_AMPLIFIER`).
@@ -64,10 +64,29 @@ impl Krauss {
         leader_speed: f64,
         on_insertion: bool,
     ) -> f64 {
+        let x = self.safe_stop_behind(gap, leader_speed);
+        self.follow_from_stop(x, gap, speed, leader_speed, on_insertion)
+    }
+
+    /// The first part of [`Self::maximum_safe_follow_speed`]: the speed that stops within the gap plus the leader's
+    /// braking distance.
+    #[inline]
+    fn safe_stop_behind(&self, gap: f64, leader_speed: f64) -> f64 {
+        let leader_brake = kinematics::brake_gap(self.dt, leader_speed, self.decel, 0.0);
+        self.maximum_safe_stop_speed(gap + leader_brake, self.tau)
+    }
+
+    /// The rest of [`Self::maximum_safe_follow_speed`] given its first part `x`: the emergency rule.
+    #[inline]
+    fn follow_from_stop(
+        &self,
+        mut x: f64,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        on_insertion: bool,
+    ) -> f64 {
         let leader_decel = self.decel;
-        let leader_brake =
-            kinematics::brake_gap(self.dt, leader_speed, self.decel.fmax(leader_decel), 0.0);
-        let mut x = self.maximum_safe_stop_speed(gap + leader_brake, self.tau);
         // (the division only where the product by the step's reciprocal cannot decide the comparison)
         if self.decel != self.emergency_decel
             && !on_insertion
@@ -122,9 +141,12 @@ impl Krauss {
     /// gap and the least of the leader's braking distance are long enough to stop from `cap` (most leaders of
     /// free-flowing traffic and of neighbour lanes): the safe follow speed is the safe stop speed of the gap plus
     /// the leader's braking distance, which only grows with the distance, or above it.
+    /// With a `share`, its stop speed is taken where it is this gap's and leader speed's, else the one computed is
+    /// kept there.
     #[inline(always)]
     fn safe_follow_speed_below(
         &self,
+        share: Option<&mut StopShare>,
         gap: f64,
         speed: f64,
         leader_speed: f64,
@@ -139,7 +161,26 @@ impl Krauss {
             );
             return cap;
         }
-        self.maximum_safe_follow_speed(gap, speed, leader_speed, on_insertion)
+        let Some(share) = share else {
+            return self
+                .maximum_safe_follow_speed(gap, speed, leader_speed, on_insertion)
+                .fmin(cap);
+        };
+        let x = match share.get(gap, leader_speed) {
+            Some(x) => {
+                debug_assert_eq!(
+                    x.to_bits(),
+                    self.safe_stop_behind(gap, leader_speed).to_bits()
+                );
+                x
+            }
+            None => {
+                let x = self.safe_stop_behind(gap, leader_speed);
+                share.set(gap, leader_speed, x);
+                x
+            }
+        };
+        self.follow_from_stop(x, gap, speed, leader_speed, on_insertion)
             .fmin(cap)
     }
 
@@ -157,14 +198,56 @@ impl CarFollowModel for Krauss {
     // spills cost more than it (with the own leader's speed computed in the plan, -0.5 to -1 % instructions)
     #[inline]
     fn follow_speed(&self, gap: f64, speed: f64, leader_speed: f64, _desired_speed: f64) -> f64 {
-        self.safe_follow_speed_below(gap, speed, leader_speed, false, self.max_next_speed(speed))
+        self.safe_follow_speed_below(
+            None,
+            gap,
+            speed,
+            leader_speed,
+            false,
+            self.max_next_speed(speed),
+        )
     }
 
     /// SUMO 1.8 skips the emergency-braking correction while lanes are changed (`MSGlobals::gComputeLC`), as it
     /// does on insertion.
     #[inline]
     fn follow_speed_lc(&self, gap: f64, speed: f64, leader_speed: f64, _desired_speed: f64) -> f64 {
-        self.safe_follow_speed_below(gap, speed, leader_speed, true, self.max_next_speed(speed))
+        self.safe_follow_speed_below(
+            None,
+            gap,
+            speed,
+            leader_speed,
+            true,
+            self.max_next_speed(speed),
+        )
+    }
+
+    /// The stop speed the lane changer kept is taken where it is this gap's and leader speed's.
+    #[inline]
+    fn follow_speed_shared(
+        &self,
+        share: &StopShare,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        _desired_speed: f64,
+    ) -> f64 {
+        let mut share = *share;
+        let cap = self.max_next_speed(speed);
+        self.safe_follow_speed_below(Some(&mut share), gap, speed, leader_speed, false, cap)
+    }
+
+    #[inline]
+    fn follow_speed_lc_sharing(
+        &self,
+        share: &mut StopShare,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        _desired_speed: f64,
+    ) -> f64 {
+        let cap = self.max_next_speed(speed);
+        self.safe_follow_speed_below(Some(share), gap, speed, leader_speed, true, cap)
     }
 
     /// SUMO's Krauss `stopSpeed`: the reaction time towards a stop point is one step.

@@ -336,3 +336,42 @@ fn the_leaders_least_braking_distance_never_overstates_and_the_shortcut_keeps_th
     }
     assert!(by_leader * 5 >= checked, "{by_leader} of {checked}");
 }
+
+/// The lane changer's kept stop speed gives the plan the follow speed's bits behind the same gap and leader speed,
+/// and is never taken for another: a share keyed on the gap alone would give the wrong speed behind a leader of
+/// another speed (and fail the comparison below, or the debug check in the read).
+#[test]
+fn a_kept_stop_speed_is_taken_only_for_its_own_gap_and_leader_speed() {
+    let mut kept = 0;
+    for m in model_grid(&[0.5, 1.0, 1.5]) {
+        for &gap in &[0.3, 2.0, 7.5, 20.0, 45.0] {
+            for &leader in &[0.0, 3.0, 9.0, 17.0] {
+                for &speed in &[1.0, 8.0, 16.0, 28.0] {
+                    let mut share = StopShare::default();
+                    let lc = m.follow_speed_lc_sharing(&mut share, gap, speed, leader, 0.0);
+                    assert_eq!(
+                        lc.to_bits(),
+                        m.follow_speed_lc(gap, speed, leader, 0.0).to_bits()
+                    );
+                    kept += share.get(gap, leader).is_some() as usize;
+                    // the plan behind the same leader, and behind another leader speed or another gap
+                    for (g, l) in [(gap, leader), (gap, leader + 2.0), (gap + 1.0, leader)] {
+                        assert_eq!(
+                            m.follow_speed_shared(&share, g, speed, l, 0.0).to_bits(),
+                            m.follow_speed(g, speed, l, 0.0).to_bits(),
+                            "{m:?} gap {g} leader {l} speed {speed}"
+                        );
+                    }
+                    // a second lane-change question behind the same leader reads it
+                    assert_eq!(
+                        m.follow_speed_lc_sharing(&mut share, gap, speed + 1.0, leader, 0.0)
+                            .to_bits(),
+                        m.follow_speed_lc(gap, speed + 1.0, leader, 0.0).to_bits()
+                    );
+                }
+            }
+        }
+    }
+    // the exact follow speed ran (and its stop speed was kept) in a good share of the cases
+    assert!(kept > 1000, "kept {kept}");
+}

@@ -18,6 +18,46 @@ pub mod krauss;
 pub use idm::IdmParams;
 pub use krauss::Krauss;
 
+/// The safe stop speed behind a leader (before the emergency rule) that the lane changer computed for one gap and
+/// leader speed, kept for the next step's plan: the positions and speeds do not change in between, so behind the
+/// same leader the plan asks the same one (about half of Krauss' exact follow speeds in congested scenarios).
+/// Read only where gap and leader speed are the same bits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StopShare {
+    gap: u64,
+    leader_speed: u64,
+    stop_speed: f64,
+}
+
+impl Default for StopShare {
+    fn default() -> Self {
+        // (a NaN gap's bits: no gap the simulator computes)
+        StopShare {
+            gap: u64::MAX,
+            leader_speed: u64::MAX,
+            stop_speed: f64::NAN,
+        }
+    }
+}
+
+impl StopShare {
+    /// The stop speed kept for `gap` and `leader_speed`, if that is what was kept.
+    #[inline(always)]
+    pub fn get(&self, gap: f64, leader_speed: f64) -> Option<f64> {
+        (self.gap == gap.to_bits() && self.leader_speed == leader_speed.to_bits())
+            .then_some(self.stop_speed)
+    }
+
+    #[inline(always)]
+    pub fn set(&mut self, gap: f64, leader_speed: f64, stop_speed: f64) {
+        *self = StopShare {
+            gap: gap.to_bits(),
+            leader_speed: leader_speed.to_bits(),
+            stop_speed,
+        };
+    }
+}
+
 /// What the simulator asks of a car-following model. The gaps exclude the min gap; `desired_speed` is the
 /// vehicle's desired speed on its lane (limit times speed factor, capped by the type's maximum).
 pub trait CarFollowModel {
@@ -29,6 +69,33 @@ pub trait CarFollowModel {
     #[inline(always)]
     fn follow_speed_lc(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64) -> f64 {
         self.follow_speed(gap, speed, leader_speed, desired_speed)
+    }
+
+    /// [`Self::follow_speed`], with a stop speed the lane changer may have kept for this gap and leader speed.
+    #[inline(always)]
+    fn follow_speed_shared(
+        &self,
+        _share: &StopShare,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+    ) -> f64 {
+        self.follow_speed(gap, speed, leader_speed, desired_speed)
+    }
+
+    /// [`Self::follow_speed_lc`] with the stop speed `share` keeps where it is this gap's and leader speed's, else
+    /// keeping in `share` the one it computes (for the next plan, or the next question behind the same leader).
+    #[inline(always)]
+    fn follow_speed_lc_sharing(
+        &self,
+        _share: &mut StopShare,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+    ) -> f64 {
+        self.follow_speed_lc(gap, speed, leader_speed, desired_speed)
     }
 
     /// The speed after one step that lets the vehicle stop within `gap`.
@@ -222,6 +289,28 @@ impl CarFollowModel for CfModel {
     #[inline(always)]
     fn follow_speed_lc(&self, gap: f64, speed: f64, leader_speed: f64, desired_speed: f64) -> f64 {
         by_model!(self, m => m.follow_speed_lc(gap, speed, leader_speed, desired_speed))
+    }
+    #[inline(always)]
+    fn follow_speed_shared(
+        &self,
+        share: &StopShare,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+    ) -> f64 {
+        by_model!(self, m => m.follow_speed_shared(share, gap, speed, leader_speed, desired_speed))
+    }
+    #[inline(always)]
+    fn follow_speed_lc_sharing(
+        &self,
+        share: &mut StopShare,
+        gap: f64,
+        speed: f64,
+        leader_speed: f64,
+        desired_speed: f64,
+    ) -> f64 {
+        by_model!(self, m => m.follow_speed_lc_sharing(share, gap, speed, leader_speed, desired_speed))
     }
     #[inline(always)]
     fn stop_speed(&self, gap: f64, speed: f64, desired_speed: f64) -> f64 {

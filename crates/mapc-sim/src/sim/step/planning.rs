@@ -139,10 +139,13 @@ impl Simulation {
         if qi > 0 {
             let lv = &self.veh[self.lane_veh[v.lane as usize][qi - 1] as usize];
             let gap = lv.pos - lv.length - v.pos - p.min_gap;
-            let vs = if pre[0].is_nan() {
-                p.follow_speed(gap, speed, lv.speed, des_cur)
-            } else {
+            let vs = if !pre[0].is_nan() {
                 pre[0]
+            } else if let Some(rec) = v.lc.as_deref() {
+                // the lane changer's stop speed behind the same leader, kept since the last pass
+                p.follow_speed_shared(&rec.mem.stop_share, gap, speed, lv.speed, des_cur)
+            } else {
+                p.follow_speed(gap, speed, lv.speed, des_cur)
             };
             debug_assert_eq!(
                 vs.to_bits(),

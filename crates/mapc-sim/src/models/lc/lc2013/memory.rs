@@ -2,6 +2,7 @@
 
 use super::speed::max2;
 use super::{LOOK_AHEAD_MIN_SPEED, lca};
+use crate::models::cf::StopShare;
 use crate::numeric::ceil_exact;
 
 /// A vehicle's memory between steps (SUMO keeps it in the model instance).
@@ -22,6 +23,8 @@ pub struct Lc2013Memory {
     pub own_state: u32,
     /// Speed advices for the next step as accelerations (`myLCAccelerationAdvices`).
     pub(super) accel_advices: Vec<f64>,
+    /// The stop speed behind the own leader computed for this lane's anticipated speed, for the next plan.
+    pub stop_share: StopShare,
 }
 
 impl Lc2013Memory {

@@ -24,7 +24,7 @@ mod tests;
 use super::safety::check_gaps;
 use super::{BlockedAhead, Decision, Ego, LaneQ, Message, Other, Reason, Side, Surroundings, lca};
 use crate::models::cf::idm::NUMERICAL_EPS;
-use crate::models::cf::{CarFollowModel, CfModel};
+use crate::models::cf::{CarFollowModel, CfModel, StopShare};
 pub use memory::Lc2013Memory;
 use speed::{anticipate_follow_speed, max2, min2};
 
@@ -344,6 +344,8 @@ impl Lc2013 {
         let counter_wish = v.side.opposite().wish();
         let change_to_best = (right && best_lane_offset < 0) || (!right && best_lane_offset > 0);
         let neigh_lead = v.lane.leader.as_ref();
+        // the stop speed behind the neighbour leader, asked by the overtaking check and the lane's anticipated speed
+        let neigh_share = &mut StopShare::default();
         let leader = s.leader.as_ref();
 
         let mut ret = mem.own_state & lca::KEPT_MARKS;
@@ -405,7 +407,8 @@ impl Lc2013 {
                 if delta_v > 0.0 {
                     let p = &ego.params;
                     let v_max_decel = max2(0.0, ego.speed - p.decel * dt);
-                    let v_safe_follow = p.follow_speed_lc(nl.gap, ego.speed, nl.speed, v_max);
+                    let v_safe_follow =
+                        p.follow_speed_lc_sharing(neigh_share, nl.gap, ego.speed, nl.speed, v_max);
                     let v_stay_behind = nl.speed - HELP_OVERTAKE;
                     let mut v_safe = if v_safe_follow >= v_max_decel {
                         v_safe_follow
@@ -540,16 +543,30 @@ impl Lc2013 {
         // anticipated speeds; with an accelerating leader, compare the speeds one second ahead
         let accelerating_leader =
             neigh_lead.is_some_and(|l| l.accel > 0.0) || leader.is_some_and(|l| l.accel > 0.0);
-        let neigh_lane_vsafe =
-            anticipate_follow_speed(ego, neigh_lead, neigh_dist, v_max, accelerating_leader);
+        let neigh_lane_vsafe = anticipate_follow_speed(
+            ego,
+            neigh_lead,
+            neigh_dist,
+            v_max,
+            accelerating_leader,
+            Some(neigh_share),
+        );
         // (`current_dist` is the lane's best length here on both sides: only a stopped leader's overtaking
         // shortens it, and that returns above)
+        let share = &mut mem.stop_share;
         let own = *own_lane_vsafe[accelerating_leader as usize].get_or_insert_with(|| {
-            anticipate_follow_speed(ego, leader, current_dist, v_max, accelerating_leader)
+            anticipate_follow_speed(
+                ego,
+                leader,
+                current_dist,
+                v_max,
+                accelerating_leader,
+                Some(share),
+            )
         });
         debug_assert_eq!(
             own.to_bits(),
-            anticipate_follow_speed(ego, leader, current_dist, v_max, accelerating_leader)
+            anticipate_follow_speed(ego, leader, current_dist, v_max, accelerating_leader, None)
                 .to_bits()
         );
         this_lane_vsafe = min2(this_lane_vsafe, own);

@@ -3,7 +3,7 @@
 
 use super::{Lc2013, Lc2013Memory, lca};
 use crate::models::cf::CarFollowModel;
-use crate::models::cf::CfModel;
+use crate::models::cf::{CfModel, StopShare};
 use crate::models::lc::{Ego, Other};
 use crate::numeric::NUMERICAL_EPS;
 
@@ -64,14 +64,19 @@ pub(super) fn anticipate_follow_speed(
     dist: f64,
     v_max: f64,
     accelerating_leader: bool,
+    // the stop speed behind `leader` for the gap and speed asked, kept or to keep
+    share: Option<&mut StopShare>,
 ) -> f64 {
     let p = &ego.params;
     let future_speed = if accelerating_leader {
         // the speed one second ahead (SUMO's #6562)
         let max_speed_1s = ego.speed + p.accel - p.accel * p.dt;
-        match leader {
-            None => p.follow_speed_lc(dist, max_speed_1s, 0.0, v_max),
-            Some(l) => p.follow_speed_lc(l.gap, max_speed_1s, l.speed, v_max),
+        match (leader, share) {
+            (None, _) => p.follow_speed_lc(dist, max_speed_1s, 0.0, v_max),
+            (Some(l), Some(share)) => {
+                p.follow_speed_lc_sharing(share, l.gap, max_speed_1s, l.speed, v_max)
+            }
+            (Some(l), None) => p.follow_speed_lc(l.gap, max_speed_1s, l.speed, v_max),
         }
     } else {
         // a driver who surely stops within the gap (or the free distance) at `v_max` may drive `v_max`: the
@@ -87,7 +92,24 @@ pub(super) fn anticipate_follow_speed(
         }
         match leader {
             None => maximum_safe_stop_speed(p, dist, p.tau),
-            Some(l) => maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel),
+            // (the car-following model's stop speed, shared, where the leader brakes no harder than the ego)
+            Some(l) => match share.filter(|_| !(l.params.decel > p.decel)) {
+                Some(share) => match share.get(l.gap, l.speed) {
+                    Some(x) => {
+                        debug_assert_eq!(
+                            x.to_bits(),
+                            maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel).to_bits()
+                        );
+                        x
+                    }
+                    None => {
+                        let x = maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel);
+                        share.set(l.gap, l.speed, x);
+                        x
+                    }
+                },
+                None => maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel),
+            },
         }
     };
     min2(v_max, future_speed)
