@@ -22,11 +22,19 @@ pub use krauss::Krauss;
 /// leader speed, kept for the next step's plan: the positions and speeds do not change in between, so behind the
 /// same leader the plan asks the same one (about half of Krauss' exact follow speeds in congested scenarios).
 /// Read only where gap and leader speed are the same bits.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 pub struct StopShare {
     gap: u64,
     leader_speed: u64,
     stop_speed: f64,
+}
+
+/// Equal bits (an empty share's NaN equals itself).
+impl PartialEq for StopShare {
+    fn eq(&self, other: &Self) -> bool {
+        (self.gap, self.leader_speed, self.stop_speed.to_bits())
+            == (other.gap, other.leader_speed, other.stop_speed.to_bits())
+    }
 }
 
 impl Default for StopShare {
