@@ -166,20 +166,9 @@ impl Krauss {
                 .maximum_safe_follow_speed(gap, speed, leader_speed, on_insertion)
                 .fmin(cap);
         };
-        let x = match share.get(gap, leader_speed) {
-            Some(x) => {
-                debug_assert_eq!(
-                    x.to_bits(),
-                    self.safe_stop_behind(gap, leader_speed).to_bits()
-                );
-                x
-            }
-            None => {
-                let x = self.safe_stop_behind(gap, leader_speed);
-                share.set(gap, leader_speed, x);
-                x
-            }
-        };
+        let x = share.get_or_keep(gap, leader_speed, || {
+            self.safe_stop_behind(gap, leader_speed)
+        });
         self.follow_from_stop(x, gap, speed, leader_speed, on_insertion)
             .fmin(cap)
     }
@@ -222,32 +211,19 @@ impl CarFollowModel for Krauss {
         )
     }
 
-    /// The stop speed the lane changer kept is taken where it is this gap's and leader speed's.
+    /// The lane changer's follow speed leaves out the emergency rule, as on insertion.
     #[inline]
-    fn follow_speed_shared(
-        &self,
-        share: &StopShare,
-        gap: f64,
-        speed: f64,
-        leader_speed: f64,
-        _desired_speed: f64,
-    ) -> f64 {
-        let mut share = *share;
-        let cap = self.max_next_speed(speed);
-        self.safe_follow_speed_below(Some(&mut share), gap, speed, leader_speed, false, cap)
-    }
-
-    #[inline]
-    fn follow_speed_lc_sharing(
+    fn follow_speed_sharing(
         &self,
         share: &mut StopShare,
+        lc: bool,
         gap: f64,
         speed: f64,
         leader_speed: f64,
         _desired_speed: f64,
     ) -> f64 {
         let cap = self.max_next_speed(speed);
-        self.safe_follow_speed_below(Some(share), gap, speed, leader_speed, true, cap)
+        self.safe_follow_speed_below(Some(share), gap, speed, leader_speed, lc, cap)
     }
 
     /// SUMO's Krauss `stopSpeed`: the reaction time towards a stop point is one step.

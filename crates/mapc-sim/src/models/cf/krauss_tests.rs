@@ -348,7 +348,7 @@ fn a_kept_stop_speed_is_taken_only_for_its_own_gap_and_leader_speed() {
             for &leader in &[0.0, 3.0, 9.0, 17.0] {
                 for &speed in &[1.0, 8.0, 16.0, 28.0] {
                     let mut share = StopShare::default();
-                    let lc = m.follow_speed_lc_sharing(&mut share, gap, speed, leader, 0.0);
+                    let lc = m.follow_speed_sharing(&mut share, true, gap, speed, leader, 0.0);
                     assert_eq!(
                         lc.to_bits(),
                         m.follow_speed_lc(gap, speed, leader, 0.0).to_bits()
@@ -357,14 +357,15 @@ fn a_kept_stop_speed_is_taken_only_for_its_own_gap_and_leader_speed() {
                     // the plan behind the same leader, and behind another leader speed or another gap
                     for (g, l) in [(gap, leader), (gap, leader + 2.0), (gap + 1.0, leader)] {
                         assert_eq!(
-                            m.follow_speed_shared(&share, g, speed, l, 0.0).to_bits(),
+                            m.follow_speed_sharing(&mut share.clone(), false, g, speed, l, 0.0)
+                                .to_bits(),
                             m.follow_speed(g, speed, l, 0.0).to_bits(),
                             "{m:?} gap {g} leader {l} speed {speed}"
                         );
                     }
                     // a second lane-change question behind the same leader reads it
                     assert_eq!(
-                        m.follow_speed_lc_sharing(&mut share, gap, speed + 1.0, leader, 0.0)
+                        m.follow_speed_sharing(&mut share, true, gap, speed + 1.0, leader, 0.0)
                             .to_bits(),
                         m.follow_speed_lc(gap, speed + 1.0, leader, 0.0).to_bits()
                     );

@@ -56,13 +56,26 @@ impl StopShare {
             .then_some(self.stop_speed)
     }
 
+    /// The stop speed kept for `gap` and `leader_speed`, else `stop_speed()` (the computation it stands for),
+    /// kept from then on. Debug builds compare a kept one with the computation.
     #[inline(always)]
-    pub fn set(&mut self, gap: f64, leader_speed: f64, stop_speed: f64) {
+    pub fn get_or_keep(
+        &mut self,
+        gap: f64,
+        leader_speed: f64,
+        stop_speed: impl Fn() -> f64,
+    ) -> f64 {
+        if let Some(x) = self.get(gap, leader_speed) {
+            debug_assert_eq!(x.to_bits(), stop_speed().to_bits());
+            return x;
+        }
+        let x = stop_speed();
         *self = StopShare {
             gap: gap.to_bits(),
             leader_speed: leader_speed.to_bits(),
-            stop_speed,
+            stop_speed: x,
         };
+        x
     }
 }
 
@@ -79,31 +92,24 @@ pub trait CarFollowModel {
         self.follow_speed(gap, speed, leader_speed, desired_speed)
     }
 
-    /// [`Self::follow_speed`], with a stop speed the lane changer may have kept for this gap and leader speed.
+    /// [`Self::follow_speed_lc`] (`lc`) or [`Self::follow_speed`] with the stop speed `share` keeps where it is
+    /// this gap's and leader speed's, else keeping in `share` the one computed (for the next plan, or the next
+    /// question behind the same leader). A model without a stop speed to share ignores it.
     #[inline(always)]
-    fn follow_speed_shared(
-        &self,
-        _share: &StopShare,
-        gap: f64,
-        speed: f64,
-        leader_speed: f64,
-        desired_speed: f64,
-    ) -> f64 {
-        self.follow_speed(gap, speed, leader_speed, desired_speed)
-    }
-
-    /// [`Self::follow_speed_lc`] with the stop speed `share` keeps where it is this gap's and leader speed's, else
-    /// keeping in `share` the one it computes (for the next plan, or the next question behind the same leader).
-    #[inline(always)]
-    fn follow_speed_lc_sharing(
+    fn follow_speed_sharing(
         &self,
         _share: &mut StopShare,
+        lc: bool,
         gap: f64,
         speed: f64,
         leader_speed: f64,
         desired_speed: f64,
     ) -> f64 {
-        self.follow_speed_lc(gap, speed, leader_speed, desired_speed)
+        if lc {
+            self.follow_speed_lc(gap, speed, leader_speed, desired_speed)
+        } else {
+            self.follow_speed(gap, speed, leader_speed, desired_speed)
+        }
     }
 
     /// The speed after one step that lets the vehicle stop within `gap`.
@@ -299,26 +305,16 @@ impl CarFollowModel for CfModel {
         by_model!(self, m => m.follow_speed_lc(gap, speed, leader_speed, desired_speed))
     }
     #[inline(always)]
-    fn follow_speed_shared(
-        &self,
-        share: &StopShare,
-        gap: f64,
-        speed: f64,
-        leader_speed: f64,
-        desired_speed: f64,
-    ) -> f64 {
-        by_model!(self, m => m.follow_speed_shared(share, gap, speed, leader_speed, desired_speed))
-    }
-    #[inline(always)]
-    fn follow_speed_lc_sharing(
+    fn follow_speed_sharing(
         &self,
         share: &mut StopShare,
+        lc: bool,
         gap: f64,
         speed: f64,
         leader_speed: f64,
         desired_speed: f64,
     ) -> f64 {
-        by_model!(self, m => m.follow_speed_lc_sharing(share, gap, speed, leader_speed, desired_speed))
+        by_model!(self, m => m.follow_speed_sharing(share, lc, gap, speed, leader_speed, desired_speed))
     }
     #[inline(always)]
     fn stop_speed(&self, gap: f64, speed: f64, desired_speed: f64) -> f64 {

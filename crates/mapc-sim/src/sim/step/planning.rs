@@ -143,7 +143,9 @@ impl Simulation {
                 pre[0]
             } else if let Some(rec) = v.lc.as_deref() {
                 // the lane changer's stop speed behind the same leader, kept since the last pass
-                p.follow_speed_shared(&rec.mem.stop_share, gap, speed, lv.speed, des_cur)
+                // (a copy: the move changes the positions, the plan keeps nothing for later)
+                let mut share = rec.mem.stop_share;
+                p.follow_speed_sharing(&mut share, false, gap, speed, lv.speed, des_cur)
             } else {
                 p.follow_speed(gap, speed, lv.speed, des_cur)
             };

@@ -407,8 +407,14 @@ impl Lc2013 {
                 if delta_v > 0.0 {
                     let p = &ego.params;
                     let v_max_decel = max2(0.0, ego.speed - p.decel * dt);
-                    let v_safe_follow =
-                        p.follow_speed_lc_sharing(neigh_share, nl.gap, ego.speed, nl.speed, v_max);
+                    let v_safe_follow = p.follow_speed_sharing(
+                        neigh_share,
+                        true,
+                        nl.gap,
+                        ego.speed,
+                        nl.speed,
+                        v_max,
+                    );
                     let v_stay_behind = nl.speed - HELP_OVERTAKE;
                     let mut v_safe = if v_safe_follow >= v_max_decel {
                         v_safe_follow

@@ -74,7 +74,7 @@ pub(super) fn anticipate_follow_speed(
         match (leader, share) {
             (None, _) => p.follow_speed_lc(dist, max_speed_1s, 0.0, v_max),
             (Some(l), Some(share)) => {
-                p.follow_speed_lc_sharing(share, l.gap, max_speed_1s, l.speed, v_max)
+                p.follow_speed_sharing(share, true, l.gap, max_speed_1s, l.speed, v_max)
             }
             (Some(l), None) => p.follow_speed_lc(l.gap, max_speed_1s, l.speed, v_max),
         }
@@ -94,20 +94,9 @@ pub(super) fn anticipate_follow_speed(
             None => maximum_safe_stop_speed(p, dist, p.tau),
             // (the car-following model's stop speed, shared, where the leader brakes no harder than the ego)
             Some(l) => match share.filter(|_| !(l.params.decel > p.decel)) {
-                Some(share) => match share.get(l.gap, l.speed) {
-                    Some(x) => {
-                        debug_assert_eq!(
-                            x.to_bits(),
-                            maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel).to_bits()
-                        );
-                        x
-                    }
-                    None => {
-                        let x = maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel);
-                        share.set(l.gap, l.speed, x);
-                        x
-                    }
-                },
+                Some(share) => share.get_or_keep(l.gap, l.speed, || {
+                    maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel)
+                }),
                 None => maximum_safe_follow_speed(p, l.gap, l.speed, l.params.decel),
             },
         }
