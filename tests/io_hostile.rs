@@ -317,3 +317,33 @@ fn an_output_that_cannot_be_written_is_refused_before_the_run() {
     assert_eq!(names_in(&dir), vec!["plain.txt", "taken.csv"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_refused_scenario_leaves_no_output_folder() {
+    // the outputs' folders, missing, are checked before loading but made only when their files are written: a
+    // scenario refused at load leaves none of them
+    let dir = scratch_dir("refused-no-folders");
+    let cfg = dir.join("bad.sumocfg");
+    std::fs::write(
+        &cfg,
+        "<configuration><input><net-file value=\"missing.net.xml\"/></input></configuration>",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    refused(
+        &[
+            "sim",
+            s(&cfg),
+            "--seeds",
+            "1",
+            "--detector-output",
+            s(&out.join("loops")),
+            "--tripinfo-output",
+            s(&out.join("trips").join("t.xml")),
+            "--summary-output",
+            s(&out.join("s.xml")),
+        ],
+        &["missing.net.xml"],
+    );
+    assert_eq!(names_in(&dir), vec!["bad.sumocfg"]);
+}

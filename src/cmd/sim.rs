@@ -47,9 +47,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.tripinfo_output.as_deref(),
         args.summary_output.as_deref(),
     ])?;
-    // the loops' folder too, made now as its files' writes would make it
+    // the loops' folder too (made when its files are written)
     if let Some(dir) = &args.detector_output {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        mapc_graph::check_folder_creatable(dir)
+            .with_context(|| format!("creating {}", dir.display()))?;
     }
     let rs = args.avs.apply(super::common::load_scenario_or_sumo(
         args.input.as_deref().unwrap_or(&args.scenario),

@@ -41,9 +41,9 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     write_atomically_with(path, |w| w.write_all(bytes))
 }
 
-/// Whether [`write_atomically`] can write `path` (its folder made or there, a temporary created beside it and
-/// removed, the path no directory): asked before a long run, so that the run does not end in a refusal that
-/// loses it. Creates the folder, as the write would.
+/// Whether [`write_atomically`] can write `path`: the path is no directory, and its folder takes files or can be
+/// made ([`check_folder_creatable`]). Asked before a long run, so that the run does not end in a refusal that loses
+/// it; it leaves nothing behind, so that a command refused after it has written nothing.
 pub fn check_writable(path: &Path) -> std::io::Result<()> {
     if path.is_dir() {
         return Err(std::io::Error::new(
@@ -51,8 +51,48 @@ pub fn check_writable(path: &Path) -> std::io::Result<()> {
             "is a directory",
         ));
     }
-    let tmp = written_temporary(path, |_| Ok(()))?;
-    std::fs::remove_file(tmp)
+    check_folder_creatable(folder_of(path))
+}
+
+/// Whether folder `dir` takes files, or can be made and would: the nearest of it and the folders above it that
+/// exists must be a folder and take a temporary file (made there and removed at once). Nothing is made.
+pub fn check_folder_creatable(dir: &Path) -> std::io::Result<()> {
+    let mut existing = dir;
+    loop {
+        match std::fs::metadata(existing) {
+            Ok(m) if m.is_dir() => break,
+            Ok(_) => {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::NotADirectory,
+                    format!("{} is not a folder", existing.display()),
+                ));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => match existing.parent() {
+                Some(up) => {
+                    existing = if up.as_os_str().is_empty() {
+                        Path::new(".")
+                    } else {
+                        up
+                    }
+                }
+                None => return Err(e),
+            },
+            Err(e) => return Err(e),
+        }
+    }
+    let probe = existing.join(temporary_name("mapc-write-check", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)?;
+    std::fs::remove_file(&probe)
+}
+
+/// The folder `path` is written in (`.` for a bare file name).
+fn folder_of(path: &Path) -> &Path {
+    path.parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
 }
 
 /// [`write_atomically`] for output written piece by piece (traces): `body` writes into a buffered temporary file
@@ -110,10 +150,7 @@ fn written_temporary(
     path: &Path,
     body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
 ) -> std::io::Result<PathBuf> {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let dir = folder_of(path);
     std::fs::create_dir_all(dir)?;
     let file_name = path
         .file_name()

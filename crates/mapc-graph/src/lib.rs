@@ -32,7 +32,8 @@ pub use filekind::MapcFile;
 pub use ids::{JunctionId, RoadId};
 pub use index::RoadIndex;
 pub use io::{
-    GraphFileError, check_writable, write_all_atomically, write_atomically, write_atomically_with,
+    GraphFileError, check_folder_creatable, check_writable, write_all_atomically, write_atomically,
+    write_atomically_with,
 };
 pub use lookup::LookupError;
 pub use model::*;
