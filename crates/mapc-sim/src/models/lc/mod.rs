@@ -227,8 +227,9 @@ pub struct Other<'a> {
     /// its back minus the ego's front minus the ego's min gap.
     pub gap: f64,
     pub speed: f64,
-    /// Its acceleration in the last step (SUMO's `getAcceleration`).
-    pub accel: f64,
+    /// Its speed one step before: its acceleration in the last step ([`Other::accel`]) is the difference over the
+    /// step, divided only where it is read.
+    pub speed_before: f64,
     /// Its type's car-following parameters, borrowed from the simulator's table (copied, they cost more than the
     /// model's gap checks).
     pub params: &'a CfModel,
@@ -244,6 +245,21 @@ pub struct Other<'a> {
 impl Other<'_> {
     pub fn length_with_gap(&self) -> f64 {
         self.length + self.params.min_gap
+    }
+
+    /// Its acceleration in the last step of `dt` seconds (SUMO's `getAcceleration`).
+    pub fn accel(&self, dt: f64) -> f64 {
+        (self.speed - self.speed_before) / dt
+    }
+
+    /// Whether [`Self::accel`] is positive, without the division where it cannot change the answer: a positive
+    /// difference divided by a step of at most a second is never rounded to zero.
+    #[inline]
+    pub fn accelerates(&self, dt: f64) -> bool {
+        let diff = self.speed - self.speed_before;
+        let positive = diff > 0.0 && (dt <= 1.0 || diff / dt > 0.0);
+        debug_assert_eq!(positive, self.accel(dt) > 0.0);
+        positive
     }
 }
 

@@ -17,7 +17,9 @@ pub(in crate::sim) struct LcVeh {
     pub(in crate::sim) mem: <LcModel as LaneChangeModel>::Memory,
     /// Its speed at the last pass, for its acceleration in the next.
     prev_speed: f64,
-    pub(in crate::sim) accel: f64,
+    /// Its speed at the pass before the last: the others read its acceleration over the last step from it and
+    /// its speed now (`Other::speed_before`).
+    pub(in crate::sim) speed_before: f64,
     /// Its lane's best-lane offset at the last pass (read when its speed is patched).
     pub(in crate::sim) best_lane_offset: i32,
     /// The best lanes it used last: (its route's road sequence, road index in it, index in
@@ -130,7 +132,6 @@ impl Simulation {
     // executed up to 1 % more instructions as the pass changed)
     #[inline(never)]
     pub(in crate::sim) fn change_lanes(&mut self) {
-        let dt = self.spec.step_s;
         // each lane's vehicles' lengths with min gaps (SUMO's brutto occupancy), kept up to date by the changes;
         // and, after the moves, before any message of this pass: forget the last step's advices and marks
         // (advices sent in this pass are read in the next move)
@@ -149,7 +150,7 @@ impl Simulation {
                         ..LcVeh::default()
                     })
                 });
-                rec.accel = (speed - rec.prev_speed) / dt;
+                rec.speed_before = rec.prev_speed;
                 rec.prev_speed = speed;
                 // (the memory's step, the same for every type's model)
                 self.lc_models[0].prepare_step(&mut rec.mem);

@@ -23,7 +23,7 @@ impl Simulation {
             id: o as u64,
             gap,
             speed: ov.speed,
-            accel: rec.map_or(0.0, |r| r.accel),
+            speed_before: rec.map_or(ov.speed, |r| r.speed_before),
             params: &types[ov.vtype as usize],
             length: ov.length,
             max_speed: self.desired_speed(ov, ov.lane),

@@ -63,7 +63,7 @@ impl Lc2013 {
         let Some(nv) = neigh_lead else {
             return planned_speed;
         };
-        let neigh_next_speed = nv.speed - dt * max2(1.0, -nv.accel);
+        let neigh_next_speed = nv.speed - dt * max2(1.0, -nv.accel(dt));
         let neigh_next_gap = nv.gap + dt * (neigh_next_speed - planned_speed);
         if blocked & lca::BLOCKED_BY_LEADER != 0 {
             // overtake the leader, or fall behind it?

@@ -110,6 +110,8 @@ pub struct Lc2013 {
     change_prob_threshold_right: f64,
     /// `myChangeProbThresholdLeft`: 0.2 / lcSpeedGain = 0.2 by default.
     change_prob_threshold_left: f64,
+    /// SUMO's `getSafetyFactor`, `1 / lcAssertive`: asked for every vehicle's both sides, divided once.
+    safety_factor: f64,
     /// The decay factors of the speed-gain wish for the step the simulator runs with.
     decay: StepDecay,
 }
@@ -185,6 +187,7 @@ impl Lc2013 {
             params,
             change_prob_threshold_right,
             change_prob_threshold_left,
+            safety_factor: 1.0 / params.assertive,
             decay: StepDecay::new(0.0),
         }
     }
@@ -215,7 +218,7 @@ impl Lc2013 {
 
     /// SUMO's `getSafetyFactor`.
     pub fn safety_factor(&self) -> f64 {
-        1.0 / self.params.assertive
+        self.safety_factor
     }
 
     /// One vehicle's turn in the lane-change pass (SUMO's `MSLaneChanger::change` with this model): the right
@@ -547,8 +550,8 @@ impl Lc2013 {
         }
 
         // anticipated speeds; with an accelerating leader, compare the speeds one second ahead
-        let accelerating_leader =
-            neigh_lead.is_some_and(|l| l.accel > 0.0) || leader.is_some_and(|l| l.accel > 0.0);
+        let accelerating_leader = neigh_lead.is_some_and(|l| l.accelerates(dt))
+            || leader.is_some_and(|l| l.accelerates(dt));
         let neigh_lane_vsafe = anticipate_follow_speed(
             ego,
             neigh_lead,

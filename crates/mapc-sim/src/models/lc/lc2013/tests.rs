@@ -35,7 +35,7 @@ fn other(id: u64, gap: f64, speed: f64) -> Other<'static> {
         id,
         gap,
         speed,
-        accel: 0.0,
+        speed_before: speed,
         params: &HUMAN,
         length: 5.0,
         max_speed: 30.0,
