@@ -41,6 +41,28 @@ fn absolute_graph(text: &str) -> String {
         .join("\n")
 }
 
+/// A SUMO configuration's files made absolute (they are named relative to the configuration, which is mutated in a
+/// scratch folder): `net-file`, `route-files` and `additional-files`, each a comma-separated list.
+fn absolute_sumo_files(text: &str, folder: &Path) -> String {
+    text.lines()
+        .map(|l| {
+            let option = ["net-file", "route-files", "additional-files"]
+                .iter()
+                .find(|o| l.trim_start().starts_with(&format!("<{o} value=\"")));
+            let Some(o) = option else {
+                return l.to_string();
+            };
+            let files = l.split('"').nth(1).unwrap_or_default();
+            let absolute: Vec<String> = files
+                .split(',')
+                .map(|f| folder.join(f.trim()).display().to_string())
+                .collect();
+            format!("<{o} value=\"{}\"/>", absolute.join(","))
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 const KINDS: &[Kind] = &[
     Kind {
         name: "sumo-net",
@@ -71,6 +93,43 @@ const KINDS: &[Kind] = &[
             "--seeds",
             "1",
             "--json",
+        ],
+    },
+    Kind {
+        name: "sumo-trips",
+        seed_file: "scenarios/sumo/route_choice/trips.rou.xml",
+        file_name: "t.rou.xml",
+        text: true,
+        args: &[
+            "sim",
+            "--net",
+            "scenarios/sumo/route_choice/diamond.net.xml",
+            "--routes",
+            "{in}",
+            "--seeds",
+            "1",
+            "--json",
+        ],
+    },
+    Kind {
+        name: "sumo-config",
+        // a configuration with a net, flows of several types, a ramp meter's static light and induction loops,
+        // whose demand ends (with no end, or a negative one, the run lasts as SUMO's would: to the last arrival)
+        seed_file: "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg",
+        file_name: "c.sumocfg",
+        text: true,
+        args: &[
+            "sim",
+            "{in}",
+            "--seeds",
+            "1",
+            "--json",
+            "--tripinfo-output",
+            "{out}/trips/t.xml",
+            "--summary-output",
+            "{out}/s.xml",
+            "--detector-output",
+            "{out}/loops",
         ],
     },
     Kind {
@@ -199,6 +258,38 @@ const FLAG_LINES: &[&[&str]] = &[
         "{out}/run",
     ],
     &[
+        "eval",
+        "--controller",
+        "alinea",
+        "--scenario",
+        "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg",
+        "--seeds",
+        "1",
+        "--alinea-setpoint",
+        "{n}",
+    ],
+    &[
+        "eval",
+        "--controller",
+        "alinea",
+        "--scenario",
+        "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg",
+        "--seeds",
+        "1",
+        "--alinea-gain",
+        "{n}",
+    ],
+    &[
+        "sim",
+        "scenarios/sumo/ramp_game_alinea/ramp_alinea.sumocfg",
+        "--seeds",
+        "1",
+        "--av-share",
+        "{n}",
+        "--detector-output",
+        "{out}/loops",
+    ],
+    &[
         "window",
         "maps/rongwu.net.xml",
         "--all",
@@ -269,7 +360,7 @@ fn run_case(args: &[String]) -> Ran {
     }
 }
 
-/// The files a case left in its output folder (its input excepted).
+/// The files and folders a case left in its output folder (its input excepted).
 fn left_behind(dir: &Path, input: &Path) -> Vec<PathBuf> {
     let mut left = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -277,6 +368,7 @@ fn left_behind(dir: &Path, input: &Path) -> Vec<PathBuf> {
         for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
             let p = e.path();
             if p.is_dir() {
+                left.push(p.clone());
                 stack.push(p);
             } else if p != input {
                 left.push(p);
@@ -342,6 +434,11 @@ fn mutated_inputs_and_flags_end_in_exit_0_or_2() {
         let mut seed = std::fs::read(root().join(kind.seed_file)).unwrap();
         if kind.seed_file.ends_with(".toml") {
             seed = absolute_graph(std::str::from_utf8(&seed).unwrap()).into_bytes();
+        }
+        if kind.seed_file.ends_with(".sumocfg") {
+            let folder = root().join(kind.seed_file);
+            let folder = folder.parent().unwrap();
+            seed = absolute_sumo_files(std::str::from_utf8(&seed).unwrap(), folder).into_bytes();
         }
         for case in 0..cases_per_kind() {
             let dir = base.join(format!("{}-{case}", kind.name));
@@ -436,6 +533,10 @@ fn the_judge_catches_each_kind_of_wrong_answer() {
             wrong.stderr
         );
     }
+    // an empty folder left by a refusal is caught too
+    std::fs::create_dir(dir.join("loops")).unwrap();
+    assert!(judge(&ran(Some(2), "error: refused", false), &dir, &input).is_some());
+    std::fs::remove_dir(dir.join("loops")).unwrap();
     std::fs::write(dir.join("out.toml"), "half").unwrap();
     assert!(judge(&ran(Some(2), "error: refused", false), &dir, &input).is_some());
     std::fs::remove_dir_all(dir).unwrap();
