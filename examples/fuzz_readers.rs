@@ -1,6 +1,6 @@
 //! A fuzz harness for mapc's readers, run in-process for as long as asked (no nightly toolchain needed, unlike
 //! `cargo fuzz`): it mutates the shipped inputs of each kind (SUMO net, OSM XML, OSM PBF, scenario TOML, graph
-//! JSON, policy JSON), feeds each mutant to the reader as the binary would, and counts the answers. A panic or a
+//! JSON, policy JSON, a SUMO user's route and additional files), feeds each mutant to the reader as the binary would, and counts the answers. A panic or a
 //! read slower than `--limit-s` is a finding: its input is kept under `--out` to reproduce it. A scenario that
 //! loads is also simulated for a short horizon (panics of the simulator are findings too).
 //!
@@ -28,9 +28,13 @@ enum Kind {
     Scenario,
     Graph,
     Policy,
+    /// A SUMO route file, run on its own net (SUMO's ramp game).
+    SumoRoutes,
+    /// A SUMO additional file (a ramp meter's light and induction loops), run with its net and routes.
+    SumoAdditional,
 }
 
-const KINDS: [(Kind, &str, &str); 7] = [
+const KINDS: [(Kind, &str, &str); 9] = [
     (Kind::SumoNet, "sumo-net", "maps/simple_merge.net.xml"),
     (Kind::OsmXml, "osm-xml", "maps/a2_braunschweig.osm"),
     (Kind::OsmPbf, "osm-pbf", "maps/i696.osm.pbf"),
@@ -46,7 +50,50 @@ const KINDS: [(Kind, &str, &str); 7] = [
         "policy",
         "policies/simple_merge_distributed.json",
     ),
+    (
+        Kind::SumoRoutes,
+        "sumo-routes",
+        "scenarios/sumo/ramp_game/ramp/ramp.rou.xml",
+    ),
+    (
+        Kind::SumoAdditional,
+        "sumo-additional",
+        "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.add.xml",
+    ),
 ];
+
+/// A short run of a scenario that loaded (400 steps after at most 100 of warm-up): the point is what the
+/// simulator does with what the reader let through.
+fn run_short(rs: &mapc_scenario::ResolvedScenario) -> Result<(), String> {
+    let mut spec = mapc_sim::spec_from_scenario(rs).map_err(|e| e.to_string())?;
+    spec.horizon_steps = spec.horizon_steps.min(400);
+    spec.warmup_steps = spec.warmup_steps.min(100);
+    mapc_sim::Simulation::from_spec(spec, 0)
+        .and_then(|mut s| s.run())
+        .map(drop)
+        .map_err(|e| e.to_string())
+}
+
+/// A SUMO scenario of `net` with the mutant written as one of its route files (`routes` empty) or its additional
+/// file, read as `mapc sim --net --routes --additional` reads it, then run briefly.
+fn read_sumo(input: &[u8], scratch: &Path, net: &str, routes: &[&str]) -> Result<(), String> {
+    let path = scratch.join(if routes.is_empty() {
+        "r.rou.xml"
+    } else {
+        "a.add.xml"
+    });
+    std::fs::write(&path, input).map_err(|e| e.to_string())?;
+    let (routes, additional) = if routes.is_empty() {
+        (vec![path], vec![])
+    } else {
+        (routes.iter().map(PathBuf::from).collect(), vec![path])
+    };
+    let options = mapc_scenario::sumo::ReadOptions::default();
+    let read = mapc_scenario::sumo::from_files(Path::new(net), &routes, &additional, &options)
+        .map_err(|e| e.to_string())?;
+    let rs = mapc_scenario::ResolvedScenario::from_sumo(read, net).map_err(|e| e.to_string())?;
+    run_short(&rs)
+}
 
 #[derive(Default)]
 struct Tally {
@@ -93,16 +140,21 @@ fn read(kind: Kind, input: &[u8], scratch: &Path) -> Result<(), String> {
                 "s.toml",
             )
             .map_err(|e| e.to_string())?;
-            let mut spec = mapc_sim::spec_from_scenario(&rs).map_err(|e| e.to_string())?;
-            // a short run (a graph named by the scenario is looked for in scenarios/): the point is what the
-            // simulator does with what the reader let through
-            spec.horizon_steps = spec.horizon_steps.min(400);
-            spec.warmup_steps = spec.warmup_steps.min(100);
-            mapc_sim::Simulation::from_spec(spec, 0)
-                .and_then(|mut s| s.run())
-                .map(drop)
-                .map_err(|e| e.to_string())
+            // (a graph named by the scenario is looked for in scenarios/)
+            run_short(&rs)
         }
+        Kind::SumoRoutes => read_sumo(
+            input,
+            scratch,
+            "scenarios/sumo/ramp_game/ramp/ramp.net.xml",
+            &[],
+        ),
+        Kind::SumoAdditional => read_sumo(
+            input,
+            scratch,
+            "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.net.xml",
+            &["scenarios/sumo/ramp_metering_1x3/1ramp_1x3.rou.xml"],
+        ),
         Kind::Policy => {
             let path = scratch.join("p.json");
             std::fs::write(&path, input).map_err(|e| e.to_string())?;
