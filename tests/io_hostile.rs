@@ -319,7 +319,7 @@ fn an_output_that_cannot_be_written_is_refused_before_the_run() {
 }
 
 #[test]
-fn a_refused_scenario_leaves_no_output_folder() {
+fn a_refused_input_leaves_no_output_folder() {
     // the outputs' folders, missing, are checked before loading but made only when their files are written: a
     // scenario refused at load leaves none of them
     let dir = scratch_dir("refused-no-folders");
@@ -345,5 +345,12 @@ fn a_refused_scenario_leaves_no_output_folder() {
         ],
         &["missing.net.xml"],
     );
-    assert_eq!(names_in(&dir), vec!["bad.sumocfg"]);
+    // the pipeline's folder too: its import makes it, and a map refused there leaves none
+    let map = dir.join("bad.osm");
+    std::fs::write(&map, "not a map").unwrap();
+    refused(
+        &["pipeline", s(&map), "-o", s(&out.join("job"))],
+        &["bad.osm"],
+    );
+    assert_eq!(names_in(&dir), vec!["bad.osm", "bad.sumocfg"]);
 }

@@ -93,7 +93,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let out = &args.output;
     // a map that cannot be read fails before anything is written
     std::fs::metadata(&args.map).map_err(|e| anyhow::anyhow!("{}: {e}", args.map.display()))?;
-    std::fs::create_dir_all(out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
+    // the output folder is made by the import's write: a map refused there leaves no folder behind
+    mapc_graph::check_folder_creatable(out)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
     let map_stem = super::common::map_stem(&args.map);
     let file = |name: String| path_text(&out.join(name));
     let graph = file(format!("{map_stem}.graph.json"));
