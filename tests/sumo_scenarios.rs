@@ -657,3 +657,59 @@ fn a_vehicle_departs_at_the_first_step_at_or_after_its_time_as_sumo_stamps_it() 
         );
     }
 }
+
+/// `path` gzip-compressed into `to`.
+fn gzip(path: &std::path::Path, to: &std::path::Path) {
+    use std::io::Write;
+    let mut z = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    z.write_all(&std::fs::read(path).unwrap()).unwrap();
+    std::fs::write(to, z.finish().unwrap()).unwrap();
+}
+
+#[test]
+fn gzip_compressed_nets_and_routes_run_as_the_plain_files() {
+    // SUMO reads any XML input compressed; users ship `.net.xml.gz` and `.rou.xml.gz`
+    let dir = scratch_dir("sumo-gz");
+    let src = root().join("scenarios/sumo/route_choice");
+    gzip(
+        &src.join("diamond.net.xml"),
+        &dir.join("diamond.net.xml.gz"),
+    );
+    gzip(&src.join("trips.rou.xml"), &dir.join("trips.rou.xml.gz"));
+    let cfg = dir.join("gz.sumocfg");
+    std::fs::write(
+        &cfg,
+        std::fs::read_to_string(src.join("route_choice.sumocfg"))
+            .unwrap()
+            .replace("diamond.net.xml", "diamond.net.xml.gz")
+            .replace("trips.rou.xml", "trips.rou.xml.gz"),
+    )
+    .unwrap();
+    let runs = |cfg: &str| {
+        let j = mapc_json(&["sim", cfg, "--seeds", "3", "--json"]);
+        j["runs"].clone()
+    };
+    let plain = runs("scenarios/sumo/route_choice/route_choice.sumocfg");
+    assert!(plain[0]["arrived"].as_u64().unwrap() > 0, "{plain}");
+    assert_eq!(runs(cfg.to_str().unwrap()), plain);
+    // a compressed net imports as a map too
+    let graph = dir.join("g.graph.json");
+    let import = run_mapc(&[
+        "import",
+        dir.join("diamond.net.xml.gz").to_str().unwrap(),
+        "-o",
+        graph.to_str().unwrap(),
+    ]);
+    assert!(
+        import.status.success(),
+        "{}",
+        String::from_utf8_lossy(&import.stderr)
+    );
+    // a compressed file cut short is refused, named
+    let gz = std::fs::read(dir.join("trips.rou.xml.gz")).unwrap();
+    std::fs::write(dir.join("trips.rou.xml.gz"), &gz[..gz.len() / 2]).unwrap();
+    refused(
+        &["sim", cfg.to_str().unwrap(), "--seeds", "1"],
+        &["trips.rou.xml.gz", "gzip-compressed"],
+    );
+}

@@ -63,6 +63,15 @@ impl<R: Read> Read for Capped<R> {
     }
 }
 
+/// `inner` read under the cap: a stream whose size no file bounds (a decompressed input).
+pub fn capped<R: Read>(inner: R) -> std::io::Result<Capped<R>> {
+    Ok(Capped {
+        inner,
+        cap: max_input_bytes()?,
+        read: 0,
+    })
+}
+
 /// `path` opened for reading under the cap; a regular file already over it is refused here.
 pub fn open(path: &Path) -> std::io::Result<Capped<std::fs::File>> {
     let cap = max_input_bytes()?;

@@ -28,6 +28,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod error;
+pub mod gz;
 pub mod osm;
 mod osm_pbf;
 mod osm_xml;
@@ -155,7 +156,7 @@ pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
             path: path.to_path_buf(),
         });
     }
-    let head = filekind::read_head(path).map_err(|e| ImportError::io(path, e))?;
+    let (head, _) = gz::read_head(path).map_err(|e| ImportError::io(path, e))?;
     if let Some(kind) = filekind::sniff(&head) {
         return Err(ImportError::unsupported(
             path,
@@ -170,7 +171,7 @@ pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
             ),
         ));
     }
-    if let Some(f) = MapFormat::from_name(path) {
+    if let Some(f) = MapFormat::from_name(&gz::inner_name(path)) {
         return Ok(f);
     }
     MapFormat::sniff(&head).ok_or_else(|| {
@@ -184,6 +185,11 @@ pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
 /// Read any supported map, chosen by its file name (`.osm`, `.osm.pbf`, `.net.xml`) or, failing that, its content.
 pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
     let format = detect_format(path)?;
+    if gz::is_gzip(&filekind::read_head(path).map_err(|e| ImportError::io(path, e))?) {
+        // a compressed map is read whole, decompressed (its messages' lines are the decompressed text's)
+        let bytes = gz::read_input(path).map_err(|e| ImportError::io(path, e))?;
+        return import_bytes(&bytes, format, &path.display().to_string(), options);
+    }
     let source = Source {
         file: path.display().to_string(),
         format: format.source_format(),

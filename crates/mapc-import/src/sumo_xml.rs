@@ -51,7 +51,7 @@ pub(crate) fn number_attr(key: &str, text: Option<&str>) -> Result<Option<f64>, 
 /// Read `path`, a SUMO XML file whose root element is one of `roots` (`what` names such a file in errors:
 /// "a SUMO route file"). The root comes back with the whole file below it.
 pub fn read_sumo_xml(path: &Path, roots: &[&str], what: &str) -> Result<SumoElement, ImportError> {
-    let bytes = mapc_graph::input::read(path).map_err(|e| ImportError::io(path, e))?;
+    let bytes = crate::gz::read_input(path).map_err(|e| ImportError::io(path, e))?;
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(ImportError::Empty {
             path: path.to_path_buf(),
