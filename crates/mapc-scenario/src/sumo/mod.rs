@@ -110,15 +110,34 @@ pub fn from_files(
     from_config(config, options)
 }
 
+/// The root elements of route and additional files SUMO 1.8 reads (`additionals` in some users' files).
+const CONTAINERS: [&str; 4] = ["routes", "additional", "additionals", "add"];
+
+/// A route or additional file's elements as SUMO reads them, wherever they stand: a container inside the root (a
+/// `<routes>` inside an `<additionals>`, as some users' files have) holds elements like the root's own, in place.
+fn flatten_containers(mut root: mapc_import::SumoElement) -> mapc_import::SumoElement {
+    let is_container = |e: &mapc_import::SumoElement| CONTAINERS.contains(&e.name.as_str());
+    if root.children.iter().any(is_container) {
+        for c in std::mem::take(&mut root.children) {
+            if is_container(&c) {
+                root.children.extend(flatten_containers(c).children);
+            } else {
+                root.children.push(c);
+            }
+        }
+    }
+    root
+}
+
 fn from_config(config: SumoConfig, options: &ReadOptions) -> Result<FromSumo, SumoError> {
     let mut warnings = config.warnings.clone();
     let mut files = Vec::new();
     for p in config.route_files.iter().chain(&config.additional_files) {
-        files.push(mapc_import::read_sumo_xml(
+        files.push(flatten_containers(mapc_import::read_sumo_xml(
             p,
-            &["routes", "additional", "add"],
+            &CONTAINERS,
             "a SUMO route or additional file",
-        )?);
+        )?));
     }
     let graph = mapc_import::import_path(&config.net_file, &mapc_import::ImportOptions::default())?;
     let scenario = demand::scenario(&config, &files, &graph, options, &mut warnings)?;

@@ -446,3 +446,21 @@ fn a_route_of_one_edge_reads_as_a_flow_without_via_or_destination() {
         .collect();
     assert_eq!(flows, [("M1", 0, None), ("M2", 0, None)]);
 }
+
+#[test]
+fn elements_inside_a_nested_routes_container_read_as_sumo_reads_them() {
+    // some users' files wrap routes in an <additionals> root; SUMO 1.8 reads the elements wherever they stand
+    let nested = r#"<additionals><routes><vType id="car"/><route id="r" edges="M1 M2"/></routes>
+<flow id="f" type="car" route="r" begin="0" end="60" vehsPerHour="600"/></additionals>"#;
+    let flat = r#"<routes><vType id="car"/><route id="r" edges="M1 M2"/>
+<flow id="f" type="car" route="r" begin="0" end="60" vehsPerHour="600"/></routes>"#;
+    let read = |tag: &str, routes: &str| {
+        let dir = with_files(tag, &[("r.rou.xml", routes), ("s.sumocfg", CFG)]);
+        let r = from_sumocfg(&dir.join("s.sumocfg"), &ReadOptions::default()).unwrap();
+        (r.scenario.flows, r.scenario.vehicle_types)
+    };
+    let (flows, types) = read("nested", nested);
+    assert_eq!(flows.len(), 1);
+    assert!(types.contains_key("car"));
+    assert_eq!((flows, types), read("flat", flat));
+}
