@@ -74,19 +74,25 @@ fn run_short(rs: &mapc_scenario::ResolvedScenario) -> Result<(), String> {
         .map_err(|e| e.to_string())
 }
 
-/// A SUMO scenario of `net` with the mutant written as one of its route files (`routes` empty) or its additional
-/// file, read as `mapc sim --net --routes --additional` reads it, then run briefly.
-fn read_sumo(input: &[u8], scratch: &Path, net: &str, routes: &[&str]) -> Result<(), String> {
-    let path = scratch.join(if routes.is_empty() {
-        "r.rou.xml"
-    } else {
-        "a.add.xml"
+/// Which file of a SUMO scenario the mutant is.
+enum SumoPart {
+    /// The route file.
+    Routes,
+    /// The additional file, beside these route files.
+    Additional { routes: &'static [&'static str] },
+}
+
+/// The SUMO scenario of `net` with the mutant written as its `part`, read as `mapc sim --net --routes
+/// --additional` reads it, then run briefly.
+fn read_sumo(input: &[u8], scratch: &Path, net: &str, part: SumoPart) -> Result<(), String> {
+    let path = scratch.join(match part {
+        SumoPart::Routes => "r.rou.xml",
+        SumoPart::Additional { .. } => "a.add.xml",
     });
     std::fs::write(&path, input).map_err(|e| e.to_string())?;
-    let (routes, additional) = if routes.is_empty() {
-        (vec![path], vec![])
-    } else {
-        (routes.iter().map(PathBuf::from).collect(), vec![path])
+    let (routes, additional) = match part {
+        SumoPart::Routes => (vec![path], vec![]),
+        SumoPart::Additional { routes } => (routes.iter().map(PathBuf::from).collect(), vec![path]),
     };
     let options = mapc_scenario::sumo::ReadOptions::default();
     let read = mapc_scenario::sumo::from_files(Path::new(net), &routes, &additional, &options)
@@ -147,13 +153,15 @@ fn read(kind: Kind, input: &[u8], scratch: &Path) -> Result<(), String> {
             input,
             scratch,
             "scenarios/sumo/ramp_game/ramp/ramp.net.xml",
-            &[],
+            SumoPart::Routes,
         ),
         Kind::SumoAdditional => read_sumo(
             input,
             scratch,
             "scenarios/sumo/ramp_metering_1x3/1ramp_1x3.net.xml",
-            &["scenarios/sumo/ramp_metering_1x3/1ramp_1x3.rou.xml"],
+            SumoPart::Additional {
+                routes: &["scenarios/sumo/ramp_metering_1x3/1ramp_1x3.rou.xml"],
+            },
         ),
         Kind::Policy => {
             let path = scratch.join("p.json");

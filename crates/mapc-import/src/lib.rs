@@ -143,6 +143,11 @@ impl MapFormat {
 /// The format of a map file: by its name, else by its first bytes. A file mapc wrote for a later stage (a graph,
 /// a scenario, a policy) is recognised by its content and refused with what it is, whatever its name.
 pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
+    detect(path).map(|(format, _)| format)
+}
+
+/// [`detect_format`], and whether the file is gzip-compressed ([`gz`]).
+fn detect(path: &Path) -> Result<(MapFormat, bool), ImportError> {
     let meta = std::fs::metadata(path).map_err(|e| ImportError::io(path, e))?;
     if meta.is_dir() {
         return Err(ImportError::unsupported(
@@ -156,7 +161,7 @@ pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
             path: path.to_path_buf(),
         });
     }
-    let (head, _) = gz::read_head(path).map_err(|e| ImportError::io(path, e))?;
+    let (head, compressed) = gz::read_head(path).map_err(|e| ImportError::io(path, e))?;
     if let Some(kind) = filekind::sniff(&head) {
         return Err(ImportError::unsupported(
             path,
@@ -172,20 +177,21 @@ pub fn detect_format(path: &Path) -> Result<MapFormat, ImportError> {
         ));
     }
     if let Some(f) = MapFormat::from_name(&gz::inner_name(path)) {
-        return Ok(f);
+        return Ok((f, compressed));
     }
-    MapFormat::sniff(&head).ok_or_else(|| {
+    let format = MapFormat::sniff(&head).ok_or_else(|| {
         ImportError::unsupported(
             path,
             "not a map mapc reads (expected OSM XML, OSM PBF or a SUMO net.xml, or a graph mapc wrote)",
         )
-    })
+    })?;
+    Ok((format, compressed))
 }
 
 /// Read any supported map, chosen by its file name (`.osm`, `.osm.pbf`, `.net.xml`) or, failing that, its content.
 pub fn import_path(path: &Path, options: &ImportOptions) -> Result<LaneGraph, ImportError> {
-    let format = detect_format(path)?;
-    if gz::is_gzip(&filekind::read_head(path).map_err(|e| ImportError::io(path, e))?) {
+    let (format, compressed) = detect(path)?;
+    if compressed {
         // a compressed map is read whole, decompressed (its messages' lines are the decompressed text's)
         let bytes = gz::read_input(path).map_err(|e| ImportError::io(path, e))?;
         return import_bytes(&bytes, format, &path.display().to_string(), options);

@@ -15,10 +15,10 @@ use std::collections::HashMap;
 #[derive(Clone, Debug, Default)]
 pub(in crate::sim) struct LcVeh {
     pub(in crate::sim) mem: <LcModel as LaneChangeModel>::Memory,
-    /// Its speed at the last pass, for its acceleration in the next.
-    prev_speed: f64,
-    /// Its speed at the pass before the last: the others read its acceleration over the last step from it and
-    /// its speed now (`Other::speed_before`).
+    /// Its speed at the latest pass (this one, once the pass has started).
+    pass_speed: f64,
+    /// Its speed at the pass before that: the others read its acceleration over the last step from it and its
+    /// speed now (`Other::speed_before`).
     pub(in crate::sim) speed_before: f64,
     /// Its lane's best-lane offset at the last pass (read when its speed is patched).
     pub(in crate::sim) best_lane_offset: i32,
@@ -146,12 +146,12 @@ impl Simulation {
                 let speed = v.speed;
                 let rec = v.lc.get_or_insert_with(|| {
                     Box::new(LcVeh {
-                        prev_speed: speed,
+                        pass_speed: speed,
                         ..LcVeh::default()
                     })
                 });
-                rec.speed_before = rec.prev_speed;
-                rec.prev_speed = speed;
+                rec.speed_before = rec.pass_speed;
+                rec.pass_speed = speed;
                 // (the memory's step, the same for every type's model)
                 self.lc_models[0].prepare_step(&mut rec.mem);
             }
