@@ -207,7 +207,7 @@ fn the_default_corridor_follows_the_motorway_on_every_map() {
     }
 }
 
-/// A scenario's `time_to_teleport_s` outside [0, 48 h] is refused naming the key.
+/// A scenario's `time_to_teleport_s` outside [0, a week] is refused naming the key.
 #[test]
 fn a_time_to_teleport_out_of_range_is_refused() {
     for bad in ["-1.0", "nan", "1e9"] {

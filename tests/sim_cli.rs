@@ -235,7 +235,7 @@ fn an_absurd_horizon_is_refused_with_the_limit_named() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("horizon_steps") && err.contains("48 h"),
+        err.contains("horizon_steps") && err.contains("168 h"),
         "{err}"
     );
 }
@@ -263,7 +263,7 @@ fn a_flow_beginning_outside_the_run_is_refused_with_the_range() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "begin_s = {begin}: {err}");
         let expected = format!(
-            "{}: flows[0].begin_s: {shown} is outside the allowed range [0, 172800] s",
+            "{}: flows[0].begin_s: {shown} is outside the allowed range [0, 604800] s",
             path.display()
         );
         assert!(err.contains(&expected), "{err}");

@@ -19,7 +19,7 @@
 //! - **resolved scenario**: a scenario with its network built or loaded into a [`mapc_graph::LaneGraph`].
 //! - **entry capacity**: one vehicle per step per entry road, per entry lane for flows departing on a lane index,
 //!   per lane of the road for `random` and `free` (`bounds.rs`); demand above it is refused, like a horizon past
-//!   48 h.
+//!   a week.
 //! - **allowed range**: every number of a scenario (times, counts, speeds, lengths, driver parameters) lies in
 //!   one (`ranges.rs`), checked on loading; outside it, the key, the value and the range are named.
 //! - **fill time**: the free-flow travel time of the longest route (`timing.rs`); a horizon that leaves too little

@@ -64,7 +64,7 @@ impl Range {
         v.is_finite() && v >= self.lo && v <= self.hi
     }
 
-    /// `[0, 172800] s`, `[0.1, 50] m/s²`.
+    /// `[0, 604800] s`, `[0.1, 50] m/s²`.
     pub fn describe(&self) -> String {
         let unit = if self.unit.is_empty() {
             String::new()
@@ -263,7 +263,7 @@ mod tests {
         assert_eq!(r.key, "flows[2].begin_s");
         assert_eq!(
             r.message,
-            "-1e308 is outside the allowed range [0, 172800] s"
+            "-1e308 is outside the allowed range [0, 604800] s"
         );
         let mut s = Scenario::simple_merge();
         s.vehicle_types.get_mut("av").unwrap().accel = f64::NAN;

@@ -23,7 +23,7 @@ fn demand_above_one_insertion_per_step_and_absurd_horizons_are_refused() {
     let mut spec = human_spec();
     spec.horizon_steps = 10_000_000;
     let err = Simulation::from_spec(spec, 0).err().unwrap().to_string();
-    assert!(err.contains("48 h"), "{err}");
+    assert!(err.contains("168 h"), "{err}");
 }
 
 #[test]
@@ -132,7 +132,7 @@ fn departure_times_always_advance_or_are_refused() {
         spec.flows[1].begin_s = begin;
         let err = within(spec).unwrap_err();
         assert!(
-            err.contains("flow 1: begin_s") && err.contains("[0, 172800] s"),
+            err.contains("flow 1: begin_s") && err.contains("[0, 604800] s"),
             "{begin}: {err}"
         );
     }

@@ -217,7 +217,7 @@ fn a_flow_beginning_outside_the_run_is_refused_with_the_key_the_value_and_the_ra
         assert!(
             err.starts_with(path.to_str().unwrap())
                 && err.contains(&format!(
-                    "flows[0].begin_s: {shown} is outside the allowed range [0, 172800] s"
+                    "flows[0].begin_s: {shown} is outside the allowed range [0, 604800] s"
                 )),
             "{begin}: {err}"
         );

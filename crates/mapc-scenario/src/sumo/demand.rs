@@ -630,7 +630,12 @@ impl<'a> Demand<'a> {
             .and_then(|t| self.types.get(t))
             .map_or(f64::INFINITY, |t| t.max_speed);
         let mut roads: Vec<mapc_graph::RoadId> = vec![*stops[0].last().expect("found roads")];
-        for next in &stops[1..] {
+        for (prev, next) in stops.iter().zip(&stops[1..]) {
+            if prev == next {
+                // SUMO routes a stop on the edge it is already on as that edge alone (a trip from an edge to
+                // itself drives it, as RESCO's Cologne trips do)
+                continue;
+            }
             let here = *roads.last().expect("a first road");
             let leg = self
                 .routes_by_road
@@ -649,7 +654,12 @@ impl<'a> Demand<'a> {
             roads.extend(leg.into_iter().skip(1));
             roads.extend(next.iter().skip(1));
         }
-        let inner = &roads[1..roads.len().saturating_sub(stops.last().map_or(1, Vec::len))];
+        // (a trip from an edge to itself has no roads between)
+        let end = roads
+            .len()
+            .saturating_sub(stops.last().map_or(1, Vec::len))
+            .max(1);
+        let inner = &roads[1..end];
         let mut names: Vec<String> = Vec::new();
         for &r in inner {
             let name = road_name(graph, r);
@@ -693,7 +703,8 @@ impl<'a> Demand<'a> {
                         .get(1..edges.len().saturating_sub(1))
                         .unwrap_or_default()
                         .to_vec(),
-                    to: (edges.len() > 1).then(|| edges[edges.len() - 1].clone()),
+                    // (a one-edge route ends on its edge: `to` is never left to mapc's "down the corridor")
+                    to: Some(edges[edges.len() - 1].clone()),
                 }
             }
             None => {

@@ -431,8 +431,9 @@ fn a_types_lane_change_parameters_are_read() {
 }
 
 #[test]
-fn a_route_of_one_edge_reads_as_a_flow_without_via_or_destination() {
-    // a route of a single edge once panicked on its empty middle
+fn a_route_of_one_edge_reads_as_a_flow_that_ends_on_it() {
+    // a route of a single edge once panicked on its empty middle; then its vehicles drove on down the corridor
+    // (a flow without a destination), where SUMO's arrive at the edge's end
     let routes = r#"<routes><vType id="car"/><route id="r" edges="M1"/>
 <flow id="f" type="car" route="r" begin="0" end="60" vehsPerHour="600"/>
 <vehicle id="v" type="car" depart="1"><route edges="M2"/></vehicle></routes>"#;
@@ -444,7 +445,7 @@ fn a_route_of_one_edge_reads_as_a_flow_without_via_or_destination() {
         .iter()
         .map(|f| (f.from.as_str(), f.via.len(), f.to.as_deref()))
         .collect();
-    assert_eq!(flows, [("M1", 0, None), ("M2", 0, None)]);
+    assert_eq!(flows, [("M1", 0, Some("M1")), ("M2", 0, Some("M2"))]);
 }
 
 #[test]

@@ -95,6 +95,9 @@ pub struct Network {
     pub via_groups: Vec<Vec<LaneIdx>>,
     /// Per lane: for a via lane of `via_groups`, its place among them; `None` for every other lane.
     pub via_beside: Vec<Option<ViaBeside>>,
+    /// Some lane leads back to itself (a city grid, a ring): the moves cannot all see their leaders moved first
+    /// ([`Network::compute_downstream`]'s order breaks each loop at one place).
+    pub cyclic: bool,
 }
 
 /// A via lane's place in its group of [`Network::via_groups`].
@@ -312,16 +315,19 @@ impl Network {
             best_links_memo: Default::default(),
             via_groups,
             via_beside,
+            cyclic: false,
         };
-        net.compute_downstream()?;
+        net.compute_downstream();
         Ok(net)
     }
 
-    /// Longest downstream distance per lane; fails on a cycle (a corridor never has one).
-    fn compute_downstream(&mut self) -> Result<(), SimError> {
+    /// Longest downstream distance per lane, the moves' order (downstream lanes first). On a network with loops
+    /// (a city grid) each loop is cut where the depth-first walk meets it again: the distance counts the lanes
+    /// after the cut as ending there, and [`Network::cyclic`] is set. Without loops, every lane's successors are
+    /// done when it is, and the distances are the longest paths.
+    fn compute_downstream(&mut self) {
         let n = self.lanes.len();
         let mut state = vec![0u8; n]; // 0 new, 1 on stack, 2 done
-        let mut order = Vec::with_capacity(n);
         for start in 0..n {
             if state[start] != 0 {
                 continue;
@@ -338,30 +344,22 @@ impl Network {
                             state[s] = 1;
                             stack.push((s, 0));
                         }
-                        1 => {
-                            return Err(SimError::Network(format!(
-                                "the network has a cycle through {}; only corridors without loops can be simulated",
-                                self.lane_names[s]
-                            )));
-                        }
+                        1 => self.cyclic = true,
                         _ => {}
                     }
                 } else {
+                    // (a successor still on the walk's stack closes a loop: it is left out)
+                    let best = succ
+                        .iter()
+                        .filter(|&&s| state[s as usize] == 2)
+                        .map(|&s| self.lanes[s as usize].downstream_m)
+                        .fold(0.0, f64::max);
+                    self.lanes[lane].downstream_m = self.lanes[lane].length + best;
                     state[lane] = 2;
-                    order.push(lane);
                     stack.pop();
                 }
             }
         }
-        for &lane in &order {
-            let best = self
-                .successors(lane as LaneIdx)
-                .iter()
-                .map(|&s| self.lanes[s as usize].downstream_m)
-                .fold(0.0, f64::max);
-            self.lanes[lane].downstream_m = self.lanes[lane].length + best;
-        }
-        Ok(())
     }
 
     pub(crate) fn successors(&self, lane: LaneIdx) -> Vec<LaneIdx> {

@@ -2,6 +2,7 @@
 //! merge point (SUMO's leader search, including the junction's foe leaders).
 
 use super::*;
+use crate::network::signals::SignalState;
 
 impl Simulation {
     /// Calls `f(leader, gap)` for every vehicle the ego must follow within `max_dist` (gap: bumper to bumper).
@@ -134,6 +135,17 @@ impl Simulation {
             // a minor-road vehicle at its stop line enters only when its link opens: an ego with right of way
             // does not brake for it
             if !check_from || beside_yields {
+                continue;
+            }
+            // a foe held by its light (red), or yielding under it (`g`) to the vehicles inside the junction on
+            // links it must let pass, as ego is, does not enter ahead of ego: braking for it, ego would hold the
+            // junction for the foe that waits for ego (a deadlock of a city grid's left turns)
+            if !guard
+                && matches!(
+                    self.signal_of(fl, self.time_s - self.spec.start_time_s),
+                    Some(SignalState::Red | SignalState::GreenYield)
+                )
+            {
                 continue;
             }
             if let Some(&o) = self.lane_veh[fl.from_lane as usize].first() {

@@ -1,0 +1,116 @@
+//! SUMO users' city networks through the binary: streets both ways (a network with loops), signalised junctions
+//! whose left turns yield, and trips from an edge to itself, on sumo-rl's 3x3 grid (scenarios/sumo/sumo_rl_3x3grid).
+
+mod common;
+use common::*;
+
+const GRID: &str = "scenarios/sumo/sumo_rl_3x3grid";
+
+/// The grid's configuration with its files named absolutely and its end at `end_s`, written to a scratch folder.
+fn grid_until(name: &str, end_s: u32) -> std::path::PathBuf {
+    let dir = scratch_dir(name);
+    let src = root().join(GRID);
+    let text = std::fs::read_to_string(src.join("3x3grid.sumocfg"))
+        .unwrap()
+        .replace(
+            "value=\"3x3Grid2lanes",
+            &format!("value=\"{}/3x3Grid2lanes", src.display()),
+        )
+        .replace(
+            "value=\"routes14000",
+            &format!("value=\"{}/routes14000", src.display()),
+        )
+        .replace(
+            "<end value=\"260000\"/>",
+            &format!("<end value=\"{end_s}\"/>"),
+        );
+    assert!(text.contains(&format!("<end value=\"{end_s}\"/>")));
+    let cfg = dir.join("grid.sumocfg");
+    std::fs::write(&cfg, text).unwrap();
+    cfg
+}
+
+fn run_of(cfg: &std::path::Path, first_seed: u32) -> serde_json::Value {
+    let j = mapc_json(&[
+        "sim",
+        cfg.to_str().unwrap(),
+        "--seeds",
+        "1",
+        "--first-seed",
+        &first_seed.to_string(),
+        "--json",
+    ]);
+    j["runs"][0].clone()
+}
+
+#[test]
+fn a_city_grid_with_loops_runs_as_its_configuration_says() {
+    // the streets run both ways: the lanes form loops, which the simulator once refused
+    let run = run_of(&grid_until("grid-loops", 3000), 0);
+    // one vehicle every 2 s, each on its own route, no teleports (time-to-teleport -1)
+    assert_eq!(run["departed"], 1500, "{run}");
+    let arrived = run["arrived"].as_u64().unwrap();
+    // about a minute and a half of travel: those still driving at the end are the last ones in
+    assert!((1400..1500).contains(&arrived), "{run}");
+    assert!(run["lane_changes"].as_u64().unwrap() > 0, "{run}");
+}
+
+#[test]
+fn a_left_turn_waiting_at_its_light_does_not_hold_a_vehicle_inside_the_junction() {
+    // seed 8 at 9 505 s: a vehicle crossing straight on green entered the junction as a left-turner of the cross
+    // street stood at its red stop line, merging into the same lane. Braking for that foe, it stopped inside; once
+    // the turn had its yielding green it waited for the vehicle inside: neither moved again, and the grid filled.
+    let run = run_of(&grid_until("grid-junction", 11_000), 8);
+    let (departed, arrived) = (
+        run["departed"].as_u64().unwrap(),
+        run["arrived"].as_u64().unwrap(),
+    );
+    assert_eq!(departed, 5500, "{run}");
+    // some 50 vehicles drive the grid at a time; the deadlock held over 250 by 11 000 s
+    assert!(departed - arrived < 100, "{run}");
+}
+
+#[test]
+fn a_trip_from_an_edge_to_itself_drives_that_edge() {
+    // RESCO's Cologne trips include some from an edge to itself: SUMO routes them as that edge alone
+    let dir = scratch_dir("grid-self-trip");
+    let routes = dir.join("self.rou.xml");
+    std::fs::write(
+        &routes,
+        r#"<routes>
+    <trip id="self" depart="0" from="1Ei" to="1Ei"/>
+    <trip id="across" depart="1" from="1Ei" to="0Wo"/>
+</routes>
+"#,
+    )
+    .unwrap();
+    let trips = dir.join("trips.xml");
+    assert_success(&run_mapc(&[
+        "sim",
+        "--net",
+        root()
+            .join(GRID)
+            .join("3x3Grid2lanes.net.xml")
+            .to_str()
+            .unwrap(),
+        "--routes",
+        routes.to_str().unwrap(),
+        "--seeds",
+        "1",
+        "--tripinfo-output",
+        trips.to_str().unwrap(),
+    ]));
+    let text = std::fs::read_to_string(&trips).unwrap();
+    let route_length = |id: &str| -> f64 {
+        let line = text
+            .lines()
+            .find(|l| l.contains(&format!("<tripinfo id=\"{id}\" ")))
+            .unwrap_or_else(|| panic!("no trip of {id}:\n{text}"));
+        let at = line.find("routeLength=\"").unwrap() + "routeLength=\"".len();
+        line[at..].split('"').next().unwrap().parse().unwrap()
+    };
+    let (alone, across) = (route_length("self"), route_length("across"));
+    // 1Ei alone, against 1Ei, a junction and 0Ei... to 0Wo
+    assert!(alone > 50.0 && alone < 300.0, "{text}");
+    assert!(across > alone + 100.0, "{text}");
+}
