@@ -102,6 +102,10 @@ pub struct Simulation {
     /// The earliest departure time of any flow's next vehicle, when no flow draws by probability: no flow has a
     /// departure due in a step that ends before it (the flows are not visited then). NaN: visit them.
     flows_quiet_until: f64,
+    /// The flows each step visits for departures.
+    flow_schedule: entry::flow_schedule::FlowSchedule,
+    /// No vehicle was on the network at the last step's start ([`Simulation::step`]'s short way).
+    was_empty: bool,
     /// Per flow, its vehicles built so far; and, once [`Simulation::record_origins`] asked for them, each
     /// vehicle's flow and number in it (SUMO names a flow's vehicles `flow.N`).
     flow_built: Vec<u32>,
@@ -202,6 +206,8 @@ impl Simulation {
             flow_next: vec![0; spec.flows.len()],
             flow_due: spec.flows.iter().map(|f| (0, f.departure_s(0))).collect(),
             flows_quiet_until: f64::NAN,
+            flow_schedule: Default::default(),
+            was_empty: false,
             flow_built: vec![0; spec.flows.len()],
             origins: None,
             flow_route: Vec::new(),
@@ -468,9 +474,6 @@ impl Simulation {
             self.measure.reset();
             self.detectors.reset(self.time_s - self.spec.start_time_s);
         }
-        if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
-            self.activate_lanes_at_step_start();
-        }
         // Metrics see the network as it is before the step (as the original rollouts did).
         let mut n = 0u64;
         let mut sum = 0.0;
@@ -485,6 +488,29 @@ impl Simulation {
             self.metrics.speed_steps += 1;
         }
         self.metrics.veh_steps += n;
+        if n == 0 {
+            // An empty network (before the first departure, or the hours a SUMO user's run goes on after its last
+            // vehicle: sumo-rl's 3x3 grid ends 68 h after it): nothing plans, moves or changes lanes; the loops'
+            // intervals, the departures and the clock go on. What the last step with vehicles left behind (their
+            // junction requests, the active lanes' list) is cleared once, as that step's successor would.
+            if !self.was_empty {
+                self.was_empty = true;
+                if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
+                    self.activate_lanes_at_step_start();
+                }
+                for a in &mut self.approaches {
+                    a.clear();
+                }
+            }
+            if !self.detectors.is_empty() {
+                self.observe_detectors();
+            }
+            return self.end_step();
+        }
+        self.was_empty = false;
+        if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
+            self.activate_lanes_at_step_start();
+        }
 
         for a in &mut self.approaches {
             a.clear();
@@ -544,6 +570,11 @@ impl Simulation {
         if self.net.multi_lane {
             self.change_lanes();
         }
+        self.end_step()
+    }
+
+    /// A step's end: the clock, then the departures and teleported vehicles that enter at its end.
+    fn end_step(&mut self) -> Result<(), SimError> {
         self.time_s += self.spec.step_s;
         self.step += 1;
         self.metrics.steps += 1;

@@ -55,22 +55,32 @@ impl Simulation {
         self.refused_lanes = refused;
     }
 
-    /// Every flow's vehicles due by `now` join their entries' queues; returns the earliest departure time of any
-    /// flow's next vehicle by period, NaN when a flow draws by probability (it is visited every step).
+    /// Every flow's vehicles due by `now` join their entries' queues, flow by flow in index order; returns the
+    /// earliest departure time of any flow's next vehicle by period, NaN when a flow draws by probability (it is
+    /// visited every step).
     fn enqueue_due(&mut self, now: f64) -> f64 {
-        let mut next_due = f64::INFINITY;
-        for f in 0..self.spec.flows.len() {
+        if !self.flow_schedule.started() {
+            let (flows, due) = (&self.spec.flows, &self.flow_due);
+            self.flow_schedule
+                .start(flows.iter().zip(due).map(|(flow, &(_, first))| {
+                    let left =
+                        first.filter(|&t| t < flow.end_s && flow.number.is_none_or(|m| m > 0));
+                    (flow.probability.is_some(), left)
+                }));
+        }
+        let visit = self.flow_schedule.take_visit(now);
+        for &f in &visit {
             let flow = &self.spec.flows[f];
-            if flow.number.is_some_and(|n| self.flow_next[f] >= n) {
-                continue;
-            }
             if let Some(p) = flow.probability {
+                if flow.number.is_some_and(|n| self.flow_next[f] >= n) {
+                    self.flow_schedule.drop_probability(f);
+                    continue;
+                }
                 // SUMO: one draw a step, a vehicle with probability p per second (at most one a step)
                 let due = flow.begin_s <= now + 1e-9 && now < flow.end_s;
                 if due && self.rng.random::<f64>() < p * self.spec.step_s {
                     self.enqueue_departure(f);
                 }
-                next_due = f64::NAN;
                 continue;
             }
             // the scalars only: the flow's lists (via, type mix) stay where they are
@@ -91,14 +101,14 @@ impl Simulation {
                     break;
                 }
                 if !(depart <= now + 1e-9) {
-                    // (a NaN left by a flow by probability stays: that flow is drawn for every step)
-                    next_due = if depart < next_due { depart } else { next_due };
+                    self.flow_schedule.wait(f, depart);
                     break;
                 }
                 self.enqueue_departure(f);
             }
         }
-        next_due
+        self.flow_schedule.give_back(visit);
+        self.flow_schedule.quiet_until()
     }
 
     /// The next vehicle of flow `f` joins the queue at its entry (built now while the queue is short, else

@@ -6,6 +6,7 @@ use super::*;
 
 #[cfg(test)]
 mod depart_lane_tests;
+pub(in crate::sim) mod flow_schedule;
 pub(in crate::sim) mod insertion;
 pub(in crate::sim) mod lane_choice;
 pub(in crate::sim) mod teleport;
