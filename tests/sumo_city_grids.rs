@@ -114,3 +114,100 @@ fn a_trip_from_an_edge_to_itself_drives_that_edge() {
     assert!(alone > 50.0 && alone < 300.0, "{text}");
     assert!(across > alone + 100.0, "{text}");
 }
+
+const INGOLSTADT: &str = "scenarios/sumo/resco_ingolstadt1/ingolstadt1.sumocfg";
+
+#[test]
+fn sidewalks_are_left_out_and_sumos_lane_ids_kept_in_its_outputs() {
+    // Ingolstadt's streets have a sidewalk as lane 0 (`allow="pedestrian"`): once driven as a car lane, every
+    // vehicle entered on it and changed lanes strategically off it (1.56 changes a vehicle; SUMO 1.8: 0.57)
+    let dir = scratch_dir("ingolstadt-sidewalks");
+    let graph = dir.join("g.graph.json");
+    assert_success(&run_mapc(&[
+        "import",
+        root()
+            .join("scenarios/sumo/resco_ingolstadt1/ingolstadt1.net.xml")
+            .to_str()
+            .unwrap(),
+        "-o",
+        graph.to_str().unwrap(),
+    ]));
+    let g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&graph).unwrap()).unwrap();
+    let road = g["roads"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["provenance"]["sumo_ids"][0] == "201963537#1")
+        .expect("the main street's edge");
+    assert_eq!(road["lanes"].as_array().unwrap().len(), 3, "{road}");
+    assert_eq!(
+        road["provenance"]["sumo_lanes"],
+        serde_json::json!([1, 2, 3])
+    );
+
+    let trips = dir.join("trips.xml");
+    let j = mapc_json(&[
+        "sim",
+        INGOLSTADT,
+        "--seeds",
+        "1",
+        "--json",
+        "--tripinfo-output",
+        trips.to_str().unwrap(),
+    ]);
+    let run = &j["runs"][0];
+    let per_vehicle = run["lane_changes"].as_f64().unwrap() / run["departed"].as_f64().unwrap();
+    assert!(per_vehicle < 0.8, "{run}");
+    // the trip info names SUMO's lanes: a car departs on the street's lane 1, 2 or 3, never its sidewalk
+    let text = std::fs::read_to_string(&trips).unwrap();
+    assert!(
+        text.contains("departLane=\"201963537#1_1\""),
+        "{text:.2000}"
+    );
+    assert!(!text.contains("departLane=\"201963537#1_0\""));
+}
+
+#[test]
+fn a_vehicle_departing_before_the_begin_is_left_out_and_a_recorded_arrival_ignored() {
+    // RESCO's Cologne files hold a day's vehicles as SUMO's vehroute-output wrote them (`arrival` recorded) and
+    // their configurations run an hour of it: SUMO 1.8 leaves out the vehicles before the begin
+    let dir = scratch_dir("grid-begin");
+    std::fs::write(
+        dir.join("r.rou.xml"),
+        r#"<routes>
+    <vehicle id="early" depart="50.00" arrival="120.00"><route edges="1Ei 0Ei 0Wo"/></vehicle>
+    <vehicle id="late" depart="150.00" arrival="220.00"><route edges="1Ei 0Ei 0Wo"/></vehicle>
+</routes>
+"#,
+    )
+    .unwrap();
+    let net = root().join(GRID).join("3x3Grid2lanes.net.xml");
+    std::fs::write(
+        dir.join("c.sumocfg"),
+        format!(
+            r#"<configuration><input><net-file value="{}"/><route-files value="r.rou.xml"/></input>
+<time><begin value="100"/><end value="400"/></time></configuration>"#,
+            net.display()
+        ),
+    )
+    .unwrap();
+    let trips = dir.join("trips.xml");
+    let out = run_mapc(&[
+        "sim",
+        dir.join("c.sumocfg").to_str().unwrap(),
+        "--seeds",
+        "1",
+        "--tripinfo-output",
+        trips.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("1 vehicles depart before the begin"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&trips).unwrap();
+    assert!(text.contains("<tripinfo id=\"late\" "), "{text}");
+    assert!(!text.contains("id=\"early\""), "{text}");
+}

@@ -29,6 +29,10 @@ pub struct Provenance {
     /// source map's graph gave them stay findable in every later stage.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub joined: Vec<String>,
+    /// A road from a SUMO edge some of whose lanes are closed to cars (sidewalks, cycle and bus lanes, left out):
+    /// the SUMO index of each of its lanes, right to left. Empty where the indices are the road's own.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sumo_lanes: Vec<u8>,
 }
 
 impl Provenance {
@@ -67,6 +71,12 @@ impl Provenance {
             sumo_ids: union(&self.sumo_ids, &other.sumo_ids),
             made_by: union(&self.made_by, &other.made_by),
             joined: union(&self.joined, &other.joined),
+            // (the lanes of the first piece: a road joined of several keeps its lane count)
+            sumo_lanes: if self.sumo_lanes.is_empty() {
+                other.sumo_lanes.clone()
+            } else {
+                self.sumo_lanes.clone()
+            },
         }
     }
 }
@@ -197,6 +207,18 @@ pub struct Road {
 impl Road {
     pub fn lane_count(&self) -> usize {
         self.lanes.len()
+    }
+    /// The road's lane of SUMO lane index `sumo_index` (`EDGE_2` is the edge's lane 2): the same index unless
+    /// lanes closed to cars were left out ([`Provenance::sumo_lanes`]); `None` for a lane left out or beyond.
+    pub fn lane_of_sumo_index(&self, sumo_index: u32) -> Option<u8> {
+        if self.provenance.sumo_lanes.is_empty() {
+            return (sumo_index < self.lanes.len() as u32).then_some(sumo_index as u8);
+        }
+        self.provenance
+            .sumo_lanes
+            .iter()
+            .position(|&i| i as u32 == sumo_index)
+            .map(|k| k as u8)
     }
     /// Speed limit of the rightmost lane.
     pub fn speed_mps(&self) -> f64 {

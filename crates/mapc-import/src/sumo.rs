@@ -9,7 +9,7 @@ use mapc_graph::{
     Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance,
     RightOfWay, Road, RoadId, Source, Warnings,
 };
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::io::BufRead;
 
 // Above this (300 km/h) a lane's speed is a mistake in the data; counted as `speed_implausible`.
@@ -27,6 +27,22 @@ struct SumoLane {
     length: f64,
     width: f64,
     shape: Vec<[f64; 2]>,
+    /// Passenger cars may drive it (its `allow` and `disallow`): not a sidewalk, a cycle, bus or tram lane.
+    cars: bool,
+}
+
+/// Whether SUMO lets a passenger car (the default vehicle class) on a lane with these `allow` and `disallow`
+/// lists: `allow` names the only classes let on (`all` for every one), `disallow` the classes kept off.
+fn cars_allowed(allow: Option<&str>, disallow: Option<&str>) -> bool {
+    let names = |list: &str| {
+        list.split_whitespace()
+            .any(|c| c == "passenger" || c == "all")
+    };
+    match (allow, disallow) {
+        (Some(a), _) => names(a),
+        (None, Some(d)) => !names(d),
+        (None, None) => true,
+    }
 }
 
 struct SumoEdge {
@@ -223,6 +239,7 @@ fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                             shape: el
                                 .shape("shape")?
                                 .ok_or_else(|| el.err("missing `shape`"))?,
+                            cars: cars_allowed(el.get("allow"), el.get("disallow")),
                         };
                         if lane.length < 0.0 || lane.speed < 0.0 {
                             return Err(el.err("negative length or speed"));
@@ -430,8 +447,36 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         }
     }
 
+    // Lanes closed to cars (sidewalks, cycle, bus and tram lanes) are not the simulator's: a road keeps the others,
+    // numbered from 0, and remembers their SUMO indices; an edge with none (a footway, a railway) is left out.
+    // (An edge closed to cars altogether, a footway, stays a road as it was: its lanes are all the simulator
+    // could give it, and the maps' road ids stay as they were.)
+    let car_lane = |e: &SumoEdge, index: u8| {
+        e.lanes.iter().any(|l| l.index == index && l.cars) || e.lanes.iter().all(|l| !l.cars)
+    };
+    let closed_edges: HashSet<&str> = HashSet::new();
+    for e in net.edges.iter().filter(|e| !e.internal) {
+        let closed = e.lanes.iter().filter(|l| !l.cars).count();
+        if closed > 0 && closed < e.lanes.len() {
+            warnings.add(
+                "lanes_closed_to_cars",
+                format!(
+                    "edge {}: {closed} of {} lanes closed to passenger cars, left out",
+                    e.id,
+                    e.lanes.len()
+                ),
+            );
+        }
+    }
+    // Per kept edge, each SUMO lane index's lane in the graph (`None`: closed to cars).
+    let mut lane_in_graph: HashMap<&str, Vec<Option<u8>>> = HashMap::new();
+
     // Junctions that normal edges use, in file order.
-    let normal: Vec<&SumoEdge> = net.edges.iter().filter(|e| !e.internal).collect();
+    let normal: Vec<&SumoEdge> = net
+        .edges
+        .iter()
+        .filter(|e| !e.internal && !closed_edges.contains(e.id.as_str()))
+        .collect();
     let mut used: HashMap<&str, bool> = HashMap::new();
     for e in &normal {
         used.insert(e.from.as_str(), true);
@@ -503,6 +548,19 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                 ),
             ));
         }
+        let some_car_lane = lanes.iter().any(|l| l.cars);
+        let sumo_lanes: Vec<u8> = lanes
+            .iter()
+            .filter(|l| l.cars || !some_car_lane)
+            .map(|l| l.index)
+            .collect();
+        let mut in_graph = vec![None; lanes.len()];
+        for (k, &i) in sumo_lanes.iter().enumerate() {
+            in_graph[i as usize] = Some(k as u8);
+        }
+        lane_in_graph.insert(e.id.as_str(), in_graph);
+        let all_lanes = lanes.len();
+        lanes.retain(|l| l.cars || !some_car_lane);
         let geometry = match &e.shape {
             Some(s) if s.len() >= 2 => s.clone(),
             _ => centre_line(&lanes),
@@ -525,6 +583,9 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         if geographic && let Some(w) = osm_id_in(&e.id) {
             provenance.osm_ways.push(w);
         }
+        if sumo_lanes.len() < all_lanes {
+            provenance.sumo_lanes = sumo_lanes;
+        }
         roads.push(Road {
             id,
             from,
@@ -535,8 +596,9 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             priority: e.priority,
             lanes: lanes
                 .iter()
-                .map(|l| Lane {
-                    index: l.index,
+                .enumerate()
+                .map(|(k, l)| Lane {
+                    index: k as u8,
                     speed_mps: l.speed,
                     width_m: l.width,
                     length_m: l.length.max(0.01),
@@ -566,6 +628,10 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             let Some(e) = edge_index.get(c.from.as_str()).filter(|e| !e.internal) else {
                 continue;
             };
+            // (SUMO's requests number the vehicles' links: not those of sidewalks into walking areas)
+            if !car_lane(e, c.from_lane) {
+                continue;
+            }
             let lane = format!("{}_{}", c.from, c.from_lane);
             let pos = requests
                 .get(e.to.as_str())
@@ -623,6 +689,17 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                 ));
             }
         }
+        if closed_edges.contains(c.from.as_str()) || closed_edges.contains(c.to.as_str()) {
+            continue;
+        }
+        let graph_lane = |edge: &str, lane: u8| lane_in_graph[edge][lane as usize];
+        let (Some(from_lane), Some(to_lane)) = (
+            graph_lane(&c.from, c.from_lane),
+            graph_lane(&c.to, c.to_lane),
+        ) else {
+            // a link of a lane closed to cars (a cycle lane's, a sidewalk's)
+            continue;
+        };
         if from_edge.to != to_edge.from {
             return Err(ParseError::new(
                 c.at,
@@ -698,9 +775,9 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         connections.push(Connection {
             junction,
             from_road: road_of[c.from.as_str()],
-            from_lane: c.from_lane,
+            from_lane,
             to_road: road_of[c.to.as_str()],
-            to_lane: c.to_lane,
+            to_lane,
             via_length_m: via_length,
             via_speed_mps: via_speed,
             right_of_way,
@@ -752,5 +829,33 @@ fn centre_line(lanes: &[&SumoLane]) -> Vec<[f64; 2]> {
             .collect()
     } else {
         lanes[lanes.len() / 2].shape.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cars_allowed;
+
+    #[test]
+    fn a_lane_is_a_cars_lane_as_its_allow_and_disallow_say() {
+        assert!(cars_allowed(None, None));
+        // RESCO's Ingolstadt sidewalks, an I-210 cycle path, a bus lane, a tram track
+        assert!(!cars_allowed(Some("pedestrian"), None));
+        assert!(!cars_allowed(Some("delivery bicycle pedestrian"), None));
+        assert!(!cars_allowed(Some("bus"), None));
+        assert!(!cars_allowed(None, Some("all")));
+        assert!(!cars_allowed(None, Some("pedestrian passenger")));
+        // netconvert's lists for motorways and streets
+        assert!(cars_allowed(
+            Some(
+                "private emergency authority army vip passenger hov taxi bus coach delivery truck trailer"
+            ),
+            None
+        ));
+        assert!(cars_allowed(
+            None,
+            Some("pedestrian tram rail_urban rail rail_electric rail_fast ship")
+        ));
+        assert!(cars_allowed(Some("all"), None));
     }
 }

@@ -44,13 +44,17 @@ pub struct SumoOutputs {
     begin_s: f64,
 }
 
-/// A SUMO lane id: the road's SUMO edge id (its label where it has none) and the lane index.
+/// A SUMO lane id: the road's SUMO edge id (its label where it has none) and the lane's SUMO index (where the
+/// import left out lanes closed to cars, the index among all the edge's lanes).
 fn lane_name(g: &LaneGraph, road: RoadId, lane: u8) -> String {
-    let edge = g
-        .road(road)
+    let r = g.road(road);
+    let edge = r
         .and_then(|r| r.provenance.sumo_ids.first().cloned())
         .unwrap_or_else(|| road.to_string());
-    format!("{edge}_{lane}")
+    let index = r
+        .and_then(|r| r.provenance.sumo_lanes.get(lane as usize).copied())
+        .unwrap_or(lane);
+    format!("{edge}_{index}")
 }
 
 impl SumoOutputs {

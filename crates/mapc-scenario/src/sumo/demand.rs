@@ -42,6 +42,8 @@ struct Demand<'a> {
     routes_by_road: std::cell::OnceCell<mapc_graph::topology::RoadRoutes>,
     /// Kinds of element or attribute dropped, once each.
     skipped: BTreeSet<String>,
+    /// Attributes dropped (skipping), each with the first value seen.
+    skipped_attrs: BTreeMap<String, String>,
 }
 
 /// The mapc scenario of `config`'s files (`files`: route and additional files, read), on the network `graph`
@@ -68,6 +70,7 @@ pub fn scenario(
         detectors: Vec::new(),
         routes_by_road: std::cell::OnceCell::new(),
         skipped: BTreeSet::new(),
+        skipped_attrs: BTreeMap::new(),
     };
     for f in files {
         for e in &f.children {
@@ -96,6 +99,16 @@ pub fn scenario(
         );
     }
     let begin = config.begin_s;
+    // SUMO 1.8 leaves out a vehicle whose departure lies before the run's begin (RESCO's Cologne files hold the
+    // whole day's vehicles, its configurations run an hour of it)
+    let before = flows.len();
+    flows.retain(|f| !(f.vehicle && f.begin_s < begin));
+    if flows.len() < before {
+        warnings.push(format!(
+            "{} vehicles depart before the begin ({begin} s): left out, as SUMO leaves them out",
+            before - flows.len()
+        ));
+    }
     let end = config
         .end_s
         .unwrap_or(last_departure + DRAIN_AFTER_LAST_DEPARTURE_S);
@@ -115,6 +128,11 @@ pub fn scenario(
         f.end_s = f.end_s.map(|e| e - begin);
     }
     warnings.extend(d.skipped.iter().map(|s| format!("dropped: {s}")));
+    warnings.extend(
+        d.skipped_attrs
+            .iter()
+            .map(|(kind, first)| format!("dropped: {kind} (such as {first})")),
+    );
     let name = config
         .path
         .as_deref()
@@ -183,12 +201,9 @@ fn induction_loop(e: &SumoElement, graph: &LaneGraph) -> Result<crate::model::De
         .find_roads(edge)
         .map_err(|_| SumoError::at(&e.place, format!("the network has no lane `{lane_id}`")))?[0];
     let r = graph.road(road).expect("a road found in the graph");
-    if index as usize >= r.lanes.len() {
-        return Err(SumoError::at(
-            &e.place,
-            format!("the network has no lane `{lane_id}`"),
-        ));
-    }
+    let Some(lane) = r.lane_of_sumo_index(index as u32) else {
+        return Err(SumoError::at(&e.place, no_car_lane(lane_id, r)));
+    };
     let pos_m =
         num(e, "pos")?.ok_or_else(|| SumoError::at(&e.place, "<inductionLoop> without `pos`"))?;
     let friendly_pos = match e.get("friendlyPos") {
@@ -215,7 +230,7 @@ fn induction_loop(e: &SumoElement, graph: &LaneGraph) -> Result<crate::model::De
     Ok(crate::model::Detector {
         id,
         road: edge.to_string(),
-        lane: index,
+        lane,
         pos_m,
         period_s,
         friendly_pos,
@@ -225,6 +240,18 @@ fn induction_loop(e: &SumoElement, graph: &LaneGraph) -> Result<crate::model::De
             .unwrap_or_default(),
         file: Some(need("file")?.to_string()),
     })
+}
+
+/// Why a SUMO lane id names no lane of road `r`: none such, or one closed to cars that the import left out.
+fn no_car_lane(lane_id: &str, r: &mapc_graph::Road) -> String {
+    if r.provenance.sumo_lanes.is_empty() {
+        format!("the network has no lane `{lane_id}`")
+    } else {
+        format!(
+            "the network has no lane `{lane_id}` for cars (its edge's lanes closed to cars, sidewalks and cycle or \
+             bus lanes, are left out)"
+        )
+    }
 }
 
 impl<'a> Demand<'a> {
@@ -457,10 +484,21 @@ impl<'a> Demand<'a> {
                 "arrivalLane" => v == "current",
                 "arrivalPos" => v == "max",
                 "arrivalSpeed" => v == "current",
+                // what SUMO's vehroute-output records of an earlier run (RESCO's Cologne files): SUMO 1.8 reads
+                // such a file back and leaves these out
+                "arrival" | "routeLength" => true,
                 _ => false,
             };
             if !fine {
-                self.unsupported(e, format!("`{k}=\"{v}\"` on a <{}>", e.name), options)?;
+                if options.skip_unsupported {
+                    // one warning per attribute, with its first value, not one per value (a file of thousands
+                    // of vehicles)
+                    self.skipped_attrs
+                        .entry(format!("`{k}` on a <{}>", e.name))
+                        .or_insert_with(|| format!("`{k}=\"{v}\"`"));
+                } else {
+                    self.unsupported(e, format!("`{k}=\"{v}\"` on a <{}>", e.name), options)?;
+                }
                 dropped.push(k);
             }
         }
@@ -481,7 +519,28 @@ impl<'a> Demand<'a> {
         {
             None | Some("first") => None,
             Some(l @ ("best" | "random" | "free")) => Some(l.to_string()),
-            Some(l) if l.parse::<u32>().is_ok() => Some(l.to_string()),
+            Some(l) if let Ok(sumo_index) = l.parse::<u32>() => {
+                // SUMO's index on the departure edge; the road's own where lanes closed to cars were left out
+                let road = graph
+                    .find_roads(&path.from)
+                    .ok()
+                    .and_then(|roads| graph.road(roads[0]));
+                match road.filter(|r| !r.provenance.sumo_lanes.is_empty()) {
+                    Some(r) => match r.lane_of_sumo_index(sumo_index) {
+                        Some(k) => Some(k.to_string()),
+                        None => {
+                            return Err(SumoError::at(
+                                &e.place,
+                                format!(
+                                    "departLane=\"{l}\": {}",
+                                    no_car_lane(&format!("{}_{l}", path.from), r)
+                                ),
+                            ));
+                        }
+                    },
+                    None => Some(l.to_string()),
+                }
+            }
             Some(l) => {
                 self.unsupported(e, format!("departLane `{l}`"), options)?;
                 None
