@@ -169,7 +169,7 @@ fn sidewalks_are_left_out_and_sumos_lane_ids_kept_in_its_outputs() {
 }
 
 #[test]
-fn a_vehicle_departing_before_the_begin_is_left_out_and_a_recorded_arrival_ignored() {
+fn a_vehicle_departing_before_the_begin_is_left_out_and_the_trips_are_stamped_on_sumos_clock() {
     // RESCO's Cologne files hold a day's vehicles as SUMO's vehroute-output wrote them (`arrival` recorded) and
     // their configurations run an hour of it: SUMO 1.8 leaves out the vehicles before the begin
     let dir = scratch_dir("grid-begin");
@@ -207,7 +207,11 @@ fn a_vehicle_departing_before_the_begin_is_left_out_and_a_recorded_arrival_ignor
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // stamped on SUMO's clock, which reads the begin at the first step
     let text = std::fs::read_to_string(&trips).unwrap();
-    assert!(text.contains("<tripinfo id=\"late\" "), "{text}");
+    assert!(
+        text.contains("<tripinfo id=\"late\" depart=\"150.00\""),
+        "{text}"
+    );
     assert!(!text.contains("id=\"early\""), "{text}");
 }

@@ -123,6 +123,7 @@ impl Scenario {
             measure: None,
             queue_excess_demand: false,
             sumo_clock: false,
+            clock_begin_s: 0.0,
             sumo_junction_lane_changes: false,
             light_programs: Vec::new(),
             detectors: Vec::new(),

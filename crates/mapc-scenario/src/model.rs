@@ -50,10 +50,15 @@ pub struct Scenario {
     /// scenario).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub queue_excess_demand: bool,
-    /// The clock reads 0 at the first step, as SUMO's does at its `begin` (a SUMO user's scenario); otherwise it
-    /// starts two steps in, as Flow's rollouts did (the paper's scenarios). Departures are timed on it.
+    /// The clock reads 0 at the first step, where SUMO's reads its `begin` ([`Scenario::clock_begin_s`]; a SUMO
+    /// user's scenario); otherwise it starts two steps in, as Flow's rollouts did (the paper's scenarios).
+    /// Departures are timed on it.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub sumo_clock: bool,
+    /// SUMO's clock at the first step (a SUMO user's `begin`; the run's own clock still reads 0 there): the lights
+    /// run their programs on it, and SUMO's outputs are stamped with it.
+    #[serde(default, skip_serializing_if = "is_zero_m")]
+    pub clock_begin_s: f64,
     /// SUMO 1.8's rules at junctions and in the lane-change pass (a SUMO user's scenario): among them a vehicle may
     /// change lanes while its back is still inside the junction behind, and on connections side by side
     /// (`SimSpec::sumo_junction_lane_changes` lists them all); otherwise the rules mapc's own scenarios were

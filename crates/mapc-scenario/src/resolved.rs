@@ -223,6 +223,16 @@ impl ResolvedScenario {
                 }
             }
         }
+        // SUMO runs a light's program on its own clock, which reads `begin` at the first step: the cycle is
+        // shifted by it so that the run's clock (0 there) finds the phase SUMO's finds
+        if scenario.clock_begin_s != 0.0 {
+            for l in &mut graph.lights {
+                let cycle: f64 = l.phases.iter().map(|p| p.duration_s).sum();
+                if cycle > 0.0 {
+                    l.offset_s -= scenario.clock_begin_s.rem_euclid(cycle);
+                }
+            }
+        }
         let path = PathBuf::from(origin);
         let invalid = |key: String, message: String| ScenarioError::Invalid {
             path: path.clone(),

@@ -174,6 +174,9 @@ pub struct SimSpec {
     pub warmup_steps: u64,
     /// Simulation time at step 0 (the original runs two set-up steps before the horizon starts).
     pub start_time_s: f64,
+    /// SUMO's clock at step 0 (a SUMO user's `begin`): SUMO's outputs are stamped on it. The lights' offsets
+    /// already run on it ([`mapc_scenario::Scenario::clock_begin_s`]); the simulation itself does not read it.
+    pub clock_begin_s: f64,
     /// Roads where controlled vehicles take commands; `None`: everywhere.
     pub control_region: Option<Vec<RoadId>>,
     /// How many controlled vehicles a policy drives at once (for the environment; the simulator obeys every

@@ -92,6 +92,8 @@ impl SumoOutputs {
         let g = &sim.spec().graph;
         let now = sim.time_s() - self.begin_s;
         let dt = sim.step_s();
+        // SUMO's clock reads the configuration's `begin` at the first step
+        let clock = sim.spec().clock_begin_s;
         // SUMO stamps what happens in a step with the step's begin: insertions and arrivals, as its summary
         let stamp = now - dt;
         for &id in sim.departed_last_step() {
@@ -155,14 +157,15 @@ impl SumoOutputs {
                 let _ = writeln!(
                     out,
                     "    <tripinfo id=\"{name}\" depart=\"{:.2}\" departLane=\"{}\" departPos=\"{:.2}\" departSpeed=\"{:.2}\" \
-                     departDelay=\"{:.2}\" arrival=\"{stamp:.2}\" arrivalLane=\"{}\" arrivalPos=\"{:.2}\" arrivalSpeed=\"{:.2}\" \
+                     departDelay=\"{:.2}\" arrival=\"{:.2}\" arrivalLane=\"{}\" arrivalPos=\"{:.2}\" arrivalSpeed=\"{:.2}\" \
                      duration=\"{duration:.2}\" routeLength=\"{:.2}\" waitingTime=\"{:.2}\" waitingCount=\"{}\" stopTime=\"0.00\" \
                      timeLoss=\"{:.2}\" rerouteNo=\"0\" devices=\"tripinfo_{name}\" vType=\"{}\" speedFactor=\"{:.2}\" vaporized=\"\"/>",
-                    t.depart,
+                    t.depart + clock,
                     xml_escape(&t.depart_lane),
                     t.depart_pos,
                     t.depart_speed,
                     t.depart_delay,
+                    stamp + clock,
                     xml_escape(&lane_name(g, v.road, v.lane_index)),
                     arrival_pos,
                     v.speed,
@@ -184,7 +187,7 @@ impl SumoOutputs {
                 "    <step time=\"{:.2}\" loaded=\"{}\" inserted=\"{}\" running=\"{running}\" waiting=\"{waiting}\" \
                  ended=\"{}\" arrived=\"{}\" collisions=\"0\" teleports=\"0\" halting=\"{halting}\" stopped=\"0\" \
                  meanWaitingTime=\"{:.2}\" meanTravelTime=\"{:.2}\" meanSpeed=\"{:.2}\" meanSpeedRelative=\"{:.2}\" duration=\"0\"/>",
-                now - dt,
+                now - dt + clock,
                 self.inserted + waiting,
                 self.inserted,
                 self.arrived,
@@ -250,8 +253,8 @@ pub fn detector_files(sim: &Simulation, files: &[Option<String>]) -> Vec<(String
             body,
             "    <interval begin=\"{:.2}\" end=\"{:.2}\" id=\"{}\" nVehContrib=\"{}\" flow=\"{:.2}\" \
              occupancy=\"{:.2}\" speed=\"{:.2}\" harmonicMeanSpeed=\"{:.2}\" length=\"{:.2}\" nVehEntered=\"{}\"/>",
-            i.begin_s,
-            i.end_s,
+            i.begin_s + sim.spec().clock_begin_s,
+            i.end_s + sim.spec().clock_begin_s,
             xml_escape(&detectors[i.detector].id),
             i.vehicles_passed,
             i.flow_per_hour,

@@ -173,6 +173,7 @@ pub fn scenario(
         measure: None,
         queue_excess_demand: true,
         sumo_clock: true,
+        clock_begin_s: begin,
         sumo_junction_lane_changes: true,
         light_programs: lights,
         detectors: std::mem::take(&mut d.detectors),

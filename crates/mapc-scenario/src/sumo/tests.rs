@@ -465,3 +465,47 @@ fn elements_inside_a_nested_routes_container_read_as_sumo_reads_them() {
     assert!(types.contains_key("car"));
     assert_eq!((flows, types), read("flat", flat));
 }
+
+#[test]
+fn lights_run_on_sumos_clock_which_reads_the_begin_at_the_first_step() {
+    // sumo-rl's 3x3 grid: a 66 s cycle (24 + 2 + 1 + 36 + 2 + 1). SUMO starts a light's program at the begin as
+    // if it had run since 0: begun at 33 s, light 5 is 6 s into its fourth phase
+    let grid = shipped("sumo_rl_3x3grid");
+    let dir = std::env::temp_dir().join(format!("mapc_sumo_begin_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = dir.join("g.sumocfg");
+    let phase_at_first_step = |begin: u32| {
+        std::fs::write(
+            &cfg,
+            format!(
+                r#"<configuration><input><net-file value="{}"/><route-files value="{}"/></input>
+<time><begin value="{begin}"/><end value="{}"/></time></configuration>"#,
+                grid.join("3x3Grid2lanes.net.xml").display(),
+                grid.join("routes14000.rou.xml").display(),
+                begin + 600
+            ),
+        )
+        .unwrap();
+        let r = from_sumocfg(&cfg, &ReadOptions::default()).unwrap();
+        assert_eq!(r.scenario.clock_begin_s, begin as f64);
+        let rs = ResolvedScenario::from_sumo(r, "g.sumocfg").unwrap();
+        let light = rs.graph.lights.iter().find(|l| l.id == "5").unwrap();
+        let cycle: f64 = light.phases.iter().map(|p| p.duration_s).sum();
+        assert_eq!(cycle, 66.0);
+        // the phase the run's clock finds at 0 s (phases: 24, 2, 1, 36, 2, 1 s)
+        let into = (0.0 - light.offset_s).rem_euclid(cycle);
+        let mut left = into;
+        light
+            .phases
+            .iter()
+            .position(|p| {
+                let here = left < p.duration_s;
+                left -= p.duration_s;
+                here
+            })
+            .unwrap()
+    };
+    assert_eq!(phase_at_first_step(0), 0);
+    assert_eq!(phase_at_first_step(33), 3);
+    assert_eq!(phase_at_first_step(66 * 10 + 25), 1);
+}

@@ -532,6 +532,7 @@ fn corridor_scenario(
         measure: None,
         queue_excess_demand: s.queue_excess_demand,
         sumo_clock: s.sumo_clock,
+        clock_begin_s: s.clock_begin_s,
         sumo_junction_lane_changes: s.sumo_junction_lane_changes,
         light_programs: s.light_programs.clone(),
         // a window keeps its own roads only: detectors named on the source network are not carried

@@ -207,6 +207,7 @@ pub fn spec_from_scenario(rs: &ResolvedScenario) -> Result<SimSpec, SimError> {
         step_s,
         horizon_steps: sc.horizon_steps as u64,
         warmup_steps: sc.warmup_steps as u64,
+        clock_begin_s: sc.clock_begin_s,
         start_time_s: if sc.sumo_clock {
             0.0
         } else {
