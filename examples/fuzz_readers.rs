@@ -34,8 +34,14 @@ enum Kind {
     SumoAdditional,
 }
 
-const KINDS: [(Kind, &str, &str); 9] = [
+const KINDS: [(Kind, &str, &str); 10] = [
     (Kind::SumoNet, "sumo-net", "maps/simple_merge.net.xml"),
+    // a city's net: sidewalks closed to cars, crossings, a light
+    (
+        Kind::SumoNet,
+        "sumo-net-city",
+        "scenarios/sumo/resco_ingolstadt1/ingolstadt1.net.xml",
+    ),
     (Kind::OsmXml, "osm-xml", "maps/a2_braunschweig.osm"),
     (Kind::OsmPbf, "osm-pbf", "maps/i696.osm.pbf"),
     (Kind::Scenario, "scenario", "scenarios/simple_merge.toml"),
