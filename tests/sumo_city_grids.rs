@@ -215,3 +215,15 @@ fn a_vehicle_departing_before_the_begin_is_left_out_and_the_trips_are_stamped_on
     );
     assert!(!text.contains("id=\"early\""), "{text}");
 }
+
+#[test]
+fn a_vehicle_held_by_its_red_light_does_not_hold_a_yielding_green() {
+    // The grid's left turns drive on a yielding green (`g`) and merge with the straight stream of the cross street,
+    // which then has red. Its first vehicle, standing at the red stop line, made a request as if it would pass, and
+    // the left-turner waited for it a whole phase: the grid's trips 3.4 % longer than SUMO's, left-turners' 6 to
+    // 10 s. SUMO's driver that stops for its light makes no request. Mean trip of seed 0 to 3 000 s: 110.7 s
+    // before, 104.8 s after (SUMO 1.8 over the whole run: 108.5 s).
+    let run = run_of(&grid_until("grid-red-request", 3000), 0);
+    let mean = run["mean_travel_time_s"].as_f64().unwrap();
+    assert!(mean < 108.0, "{run}");
+}

@@ -2,6 +2,7 @@
 //! limit ahead, and a request at every link where right of way is decided.
 
 use super::*;
+use crate::network::signals::SignalState;
 
 /// Links planned ahead per vehicle.
 pub(in crate::sim) const MAX_LINK_ITEMS: usize = 4;
@@ -383,6 +384,7 @@ impl Simulation {
             self.lower_leave_speeds_for_merging_foes(plan, p, speed, des_cur);
         }
         let own_lane_index = self.lane_at(v.lane as usize).index;
+        let light_time = self.time_s - self.spec.start_time_s;
         // leave times from the final leave speeds; register approaches on links that minor foes check
         for it in &mut plan.items[..plan.n_items as usize] {
             let via_len = self
@@ -392,6 +394,20 @@ impl Simulation {
                 + (via_len + v.length)
                     / (0.5 * (it.arrival_speed + it.leave_speed)).fmax(NUMERICAL_EPS);
             if self.link_takes_requests[it.link as usize] {
+                // a driver who stops for its light (red, or yellow where it can still brake) makes no request
+                // (SUMO's `setRequest` false): it must not hold a foe's yielding green
+                let lk = self.link_at(it.link as usize);
+                let held = lk.signal.is_some()
+                    && match self.signal_of(lk, light_time) {
+                        Some(SignalState::Red) => true,
+                        Some(SignalState::Yellow) => {
+                            if plan.stop_brake_gap.is_nan() {
+                                plan.stop_brake_gap = p.brake_gap(speed, p.decel, 0.0);
+                            }
+                            it.dist >= plan.stop_brake_gap
+                        }
+                        _ => false,
+                    };
                 self.approaches[it.link as usize].push(Approach {
                     veh: id,
                     arrival_time: it.arrival_time,
@@ -399,7 +415,7 @@ impl Simulation {
                     leave_speed: it.leave_speed,
                     arrival_time_braking: it.arrival_time_braking,
                     arrival_speed_braking: it.arrival_speed_braking,
-                    will_pass: it.will_pass,
+                    will_pass: it.will_pass && !held,
                     decel: p.decel,
                     dist: it.dist,
                     speed: v.speed,
