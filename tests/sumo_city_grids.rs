@@ -227,3 +227,56 @@ fn a_vehicle_held_by_its_red_light_does_not_hold_a_yielding_green() {
     let mean = run["mean_travel_time_s"].as_f64().unwrap();
     assert!(mean < 108.0, "{run}");
 }
+
+#[test]
+fn a_left_turn_on_a_yielding_green_waits_for_the_crossing_stream() {
+    // The net's request table says which links a link yields to, crossing ones too: the grid's left turn from
+    // 5Wi's lane 1 into 2Si yields to the straight stream of 5Si into 2Si's lane 0 and to 5Si's own left turn,
+    // which cross it without merging into its lane
+    let dir = scratch_dir("grid-crossing");
+    let graph = dir.join("g.graph.json");
+    assert_success(&run_mapc(&[
+        "import",
+        root()
+            .join(GRID)
+            .join("3x3Grid2lanes.net.xml")
+            .to_str()
+            .unwrap(),
+        "-o",
+        graph.to_str().unwrap(),
+    ]));
+    let g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&graph).unwrap()).unwrap();
+    let road = |sumo: &str| {
+        g["roads"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["provenance"]["sumo_ids"][0] == sumo)
+            .unwrap()["id"]
+            .clone()
+    };
+    let (w5, s2, s5, e4) = (road("5Wi"), road("2Si"), road("5Si"), road("4Ei"));
+    let left = g["connections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["from_road"] == w5 && c["from_lane"] == 1 && c["to_road"] == s2)
+        .expect("5Wi's left turn");
+    let yields = left["yields_to"].as_array().expect("its request's foes");
+    let yields_to =
+        |from: &serde_json::Value, from_lane: u64, to: &serde_json::Value, to_lane: u64| {
+            yields.iter().any(|k| {
+                k["from_road"] == *from
+                    && k["from_lane"] == from_lane
+                    && k["to_road"] == *to
+                    && k["to_lane"] == to_lane
+            })
+        };
+    assert!(yields_to(&s5, 0, &s2, 0), "{left}");
+    assert!(yields_to(&s5, 1, &e4, 1), "{left}");
+    // and the left-turners wait for them: seed 0's mean trip to 3 000 s, 104.8 s without, 106.5 s with
+    let run = run_of(&grid_until("grid-crossing-run", 3000), 0);
+    let mean = run["mean_travel_time_s"].as_f64().unwrap();
+    assert!(mean > 105.5, "{run}");
+}

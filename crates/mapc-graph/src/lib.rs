@@ -129,6 +129,7 @@ pub(crate) mod tests {
         ];
         for (from, row) in [(0, RightOfWay::Minor), (1, RightOfWay::Major)] {
             g.connections.push(Connection {
+                yields_to: Vec::new(),
                 junction: JunctionId(2),
                 from_road: RoadId(from),
                 from_lane: 0,

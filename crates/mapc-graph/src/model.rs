@@ -269,6 +269,19 @@ pub struct Connection {
     /// The traffic light that controls this connection, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signal: Option<Signal>,
+    /// The connections of the same junction this one yields to, crossing ones included (a SUMO net's `<request>`
+    /// table; empty elsewhere): by their lanes, which stay what they are whatever the graph's order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub yields_to: Vec<ConnectionLanes>,
+}
+
+/// A connection named by its lanes: from road and lane, to road and lane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct ConnectionLanes {
+    pub from_road: RoadId,
+    pub from_lane: u8,
+    pub to_road: RoadId,
+    pub to_lane: u8,
 }
 
 /// A connection's traffic light: the light's id and the connection's index in its phases' states (SUMO's `tl`

@@ -6,8 +6,8 @@ use crate::error::ParseError;
 use crate::xml::{Item, XmlStream, attrs, describe};
 use mapc_graph::validate::{LANE_SPEED_MPS, LANE_WIDTH_M, MAX_LENGTH_M, outside};
 use mapc_graph::{
-    Connection, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection, Provenance,
-    RightOfWay, Road, RoadId, Source, Warnings,
+    Connection, ConnectionLanes, Junction, JunctionId, JunctionKind, Lane, LaneGraph, Projection,
+    Provenance, RightOfWay, Road, RoadId, Source, Warnings,
 };
 use std::collections::{HashMap, HashSet};
 use std::io::BufRead;
@@ -652,6 +652,8 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         }
     }
     let mut connections = Vec::new();
+    // per graph connection, its SUMO junction and index in that junction's request table
+    let mut link_of_connection: Vec<(&str, usize)> = Vec::new();
     for (ci, c) in net.connections.iter().enumerate() {
         let el = || Some(format!("<connection from=\"{}\" to=\"{}\">", c.from, c.to));
         let from_edge = edge_index.get(c.from.as_str()).ok_or_else(|| {
@@ -772,6 +774,7 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         if let Some(v) = &c.via {
             provenance.sumo_ids.push(v.clone());
         }
+        link_of_connection.push((from_edge.to.as_str(), link));
         connections.push(Connection {
             junction,
             from_road: road_of[c.from.as_str()],
@@ -787,7 +790,41 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             }),
             right_of_way_overridden: false,
             provenance,
+            yields_to: Vec::new(),
         });
+    }
+
+    // The links each connection yields to, by its junction's request table (the response's last character is
+    // link 0): crossing links too, where the table is the only word on them.
+    let lanes_of: HashMap<(&str, usize), ConnectionLanes> = link_of_connection
+        .iter()
+        .zip(&connections)
+        .map(|(&key, c)| {
+            (
+                key,
+                ConnectionLanes {
+                    from_road: c.from_road,
+                    from_lane: c.from_lane,
+                    to_road: c.to_road,
+                    to_lane: c.to_lane,
+                },
+            )
+        })
+        .collect();
+    for (c, &(junction, link)) in connections.iter_mut().zip(&link_of_connection) {
+        let Some((_, response)) = requests
+            .get(junction)
+            .and_then(|j| j.requests.iter().find(|(i, _)| *i == link))
+        else {
+            continue;
+        };
+        c.yields_to = response
+            .bytes()
+            .rev()
+            .enumerate()
+            .filter(|&(_, b)| b == b'1')
+            .filter_map(|(foe, _)| lanes_of.get(&(junction, foe)).copied())
+            .collect();
     }
 
     let mut graph = LaneGraph::new(source, projection);

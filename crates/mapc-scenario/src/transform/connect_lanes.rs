@@ -63,6 +63,7 @@ pub fn apply(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, Transf
                 .retain(|k| !(k.from_road == a && k.to_road == b));
             for &(from, from_lane, to, to_lane) in links.iter().filter(|l| l.0 == a && l.2 == b) {
                 let mut k = Connection {
+                    yields_to: Vec::new(),
                     from_road: from,
                     from_lane,
                     to_road: to,

@@ -382,6 +382,7 @@ pub fn ensure_connection(g: &mut LaneGraph, from: RoadId, to: RoadId, step: &str
         RightOfWay::Minor
     };
     g.connections.push(Connection {
+        yields_to: Vec::new(),
         junction,
         from_road: from,
         from_lane: 0,
@@ -588,6 +589,7 @@ pub(crate) mod test_maps {
                 RightOfWay::Minor
             };
             g.connections.push(Connection {
+                yields_to: Vec::new(),
                 junction: j,
                 from_road: a,
                 from_lane: 0,

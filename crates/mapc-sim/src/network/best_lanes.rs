@@ -354,6 +354,7 @@ mod tests {
             if let Some(&m) = lanes.get(i + 1) {
                 for lane in 0..n.min(m) as u8 {
                     g.connections.push(Connection {
+                        yields_to: Vec::new(),
                         junction: JunctionId(i as u32 + 1),
                         from_road: RoadId(i as u32),
                         from_lane: lane,

@@ -66,6 +66,9 @@ pub struct SimLink {
     pub zipper: bool,
     /// Links into the same lane from another lane: they merge with this one.
     pub foes: Vec<LinkIdx>,
+    /// The other links of its junction it yields to by the net's request table (a SUMO net): those that cross
+    /// it, a left turn's oncoming stream. Read on a yielding green (`g`).
+    pub crossing_foes: Vec<LinkIdx>,
     /// The fixed-time light that controls it: (index into [`Network::lights`], index in its phases' states).
     pub signal: Option<(u32, u32)>,
 }
@@ -234,6 +237,8 @@ impl Network {
         // One link per lane-level connection (repeated connections collapse into one).
         let mut links: Vec<SimLink> = Vec::new();
         let mut seen: HashMap<(RoadId, u8, RoadId, u8), LinkIdx> = HashMap::new();
+        // per link, the connections its own yields to
+        let mut yields: Vec<&Vec<mapc_graph::ConnectionLanes>> = Vec::new();
         for c in &g.connections {
             if seen.contains_key(&(c.from_road, c.from_lane, c.to_road, c.to_lane)) {
                 continue;
@@ -281,6 +286,7 @@ impl Network {
                 major: c.right_of_way != RightOfWay::Minor,
                 zipper: c.right_of_way == RightOfWay::Zipper,
                 foes: Vec::new(),
+                crossing_foes: Vec::new(),
                 signal: c.signal.as_ref().and_then(|s| {
                     g.lights
                         .iter()
@@ -289,6 +295,7 @@ impl Network {
                 }),
             });
             seen.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), link_idx);
+            yields.push(&c.yields_to);
         }
         for i in 0..links.len() {
             let foes: Vec<LinkIdx> = (0..links.len())
@@ -300,6 +307,15 @@ impl Network {
                 .map(|j| j as LinkIdx)
                 .collect();
             links[i].foes = foes;
+        }
+        for (i, ys) in yields.iter().enumerate() {
+            let crossing: Vec<LinkIdx> = ys
+                .iter()
+                .filter_map(|k| seen.get(&(k.from_road, k.from_lane, k.to_road, k.to_lane)))
+                .copied()
+                .filter(|&j| j as usize != i && !links[i].foes.contains(&j))
+                .collect();
+            links[i].crossing_foes = crossing;
         }
         let (via_groups, via_beside) = side_by_side_groups(&mut lanes, &links);
         let mut net = Network {

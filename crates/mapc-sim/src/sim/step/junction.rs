@@ -197,6 +197,38 @@ impl Simulation {
         !blocked
     }
 
+    /// Whether a vehicle approaching a crossing link of the net's request table blocks ego's request `it` on a
+    /// yielding green (SUMO's `MSLink::blockedByFoe` for a foe into another lane): their passages overlap, the
+    /// foe neither through before ego arrives nor arriving (as an impatient driver expects it) after ego has left
+    /// and the look-ahead.
+    pub(in crate::sim) fn crossing_blocked(
+        &self,
+        id: VehicleId,
+        it: &LinkItem,
+        can_brake: bool,
+    ) -> bool {
+        let lk = self.link_at(it.link as usize);
+        if lk.crossing_foes.is_empty() {
+            return false;
+        }
+        let v = &self.veh[id as usize];
+        let tc = &self.type_consts[v.vtype as usize];
+        let impatience = if can_brake {
+            (tc.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        lk.crossing_foes.iter().any(|&foe| {
+            self.approaches[foe as usize].iter().any(|a| {
+                a.veh != id
+                    && a.will_pass
+                    && !(a.leave_time < it.arrival_time)
+                    && !((1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking
+                        > it.leave_time + LINK_LOOKAHEAD_S)
+            })
+        })
+    }
+
     /// Every foe approach that blocks ego's request `it` (SUMO's `MSLink::blockedByFoe` over the link's foes):
     /// its passage overlaps ego's within `lookahead` seconds, or one of them could not brake for the other.
     fn blocking_approaches(

@@ -69,7 +69,10 @@ impl Simulation {
                         }
                         continue;
                     }
-                    let opened = it.will_pass && self.link_opened(id, it, can_brake);
+                    let opened = it.will_pass
+                        && self.link_opened(id, it, can_brake)
+                        && !(signal == Some(SignalState::GreenYield)
+                            && self.crossing_blocked(id, it, can_brake));
                     if !opened && (can_brake || !it.will_pass) {
                         let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
                             it.stop_dist,
