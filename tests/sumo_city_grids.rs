@@ -30,6 +30,38 @@ fn grid_until(name: &str, end_s: u32) -> std::path::PathBuf {
     cfg
 }
 
+/// The lane graph `mapc import` makes of `net` (a path from the repository's root), and a road's mapc id by its
+/// SUMO edge id.
+fn imported(
+    net: &str,
+    name: &str,
+) -> (
+    serde_json::Value,
+    impl Fn(&str) -> serde_json::Value + use<>,
+) {
+    let dir = scratch_dir(name);
+    let graph = dir.join("g.graph.json");
+    assert_success(&run_mapc(&[
+        "import",
+        root().join(net).to_str().unwrap(),
+        "-o",
+        graph.to_str().unwrap(),
+    ]));
+    let g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&graph).unwrap()).unwrap();
+    let roads = g["roads"].clone();
+    let road = move |sumo: &str| {
+        roads
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["provenance"]["sumo_ids"][0] == sumo)
+            .unwrap_or_else(|| panic!("no road of edge {sumo}"))
+            .clone()
+    };
+    (g, road)
+}
+
 fn run_of(cfg: &std::path::Path, first_seed: u32) -> serde_json::Value {
     let j = mapc_json(&[
         "sim",
@@ -121,32 +153,18 @@ const INGOLSTADT: &str = "scenarios/sumo/resco_ingolstadt1/ingolstadt1.sumocfg";
 fn sidewalks_are_left_out_and_sumos_lane_ids_kept_in_its_outputs() {
     // Ingolstadt's streets have a sidewalk as lane 0 (`allow="pedestrian"`): once driven as a car lane, every
     // vehicle entered on it and changed lanes strategically off it (1.56 changes a vehicle; SUMO 1.8: 0.57)
-    let dir = scratch_dir("ingolstadt-sidewalks");
-    let graph = dir.join("g.graph.json");
-    assert_success(&run_mapc(&[
-        "import",
-        root()
-            .join("scenarios/sumo/resco_ingolstadt1/ingolstadt1.net.xml")
-            .to_str()
-            .unwrap(),
-        "-o",
-        graph.to_str().unwrap(),
-    ]));
-    let g: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&graph).unwrap()).unwrap();
-    let road = g["roads"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|r| r["provenance"]["sumo_ids"][0] == "201963537#1")
-        .expect("the main street's edge");
+    let (_, road) = imported(
+        "scenarios/sumo/resco_ingolstadt1/ingolstadt1.net.xml",
+        "ingolstadt-sidewalks",
+    );
+    let road = road("201963537#1");
     assert_eq!(road["lanes"].as_array().unwrap().len(), 3, "{road}");
     assert_eq!(
         road["provenance"]["sumo_lanes"],
         serde_json::json!([1, 2, 3])
     );
 
-    let trips = dir.join("trips.xml");
+    let trips = scratch_dir("ingolstadt-sidewalks-run").join("trips.xml");
     let j = mapc_json(&[
         "sim",
         INGOLSTADT,
@@ -233,29 +251,8 @@ fn a_left_turn_on_a_yielding_green_waits_for_the_crossing_stream() {
     // The net's request table says which links a link yields to, crossing ones too: the grid's left turn from
     // 5Wi's lane 1 into 2Si yields to the straight stream of 5Si into 2Si's lane 0 and to 5Si's own left turn,
     // which cross it without merging into its lane
-    let dir = scratch_dir("grid-crossing");
-    let graph = dir.join("g.graph.json");
-    assert_success(&run_mapc(&[
-        "import",
-        root()
-            .join(GRID)
-            .join("3x3Grid2lanes.net.xml")
-            .to_str()
-            .unwrap(),
-        "-o",
-        graph.to_str().unwrap(),
-    ]));
-    let g: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&graph).unwrap()).unwrap();
-    let road = |sumo: &str| {
-        g["roads"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|r| r["provenance"]["sumo_ids"][0] == sumo)
-            .unwrap()["id"]
-            .clone()
-    };
+    let (g, road_of) = imported(&format!("{GRID}/3x3Grid2lanes.net.xml"), "grid-crossing");
+    let road = |sumo: &str| road_of(sumo)["id"].clone();
     let (w5, s2, s5, e4) = (road("5Wi"), road("2Si"), road("5Si"), road("4Ei"));
     let left = g["connections"]
         .as_array()

@@ -197,6 +197,17 @@ impl Simulation {
         !blocked
     }
 
+    /// How far a waiting driver expects a foe to brake for it: its type's impatience, growing with its waiting time;
+    /// a driver who can no longer stop takes any gap.
+    fn impatience(&self, id: VehicleId, can_brake: bool) -> f64 {
+        if !can_brake {
+            return 1.0;
+        }
+        let v = &self.veh[id as usize];
+        let tc = &self.type_consts[v.vtype as usize];
+        (tc.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0)
+    }
+
     /// Whether a vehicle approaching a crossing link of the net's request table blocks ego's request `it` on a
     /// yielding green (SUMO's `MSLink::blockedByFoe` for a foe into another lane): their passages overlap, the
     /// foe neither through before ego arrives nor arriving (as an impatient driver expects it) after ego has left
@@ -211,13 +222,7 @@ impl Simulation {
         if lk.crossing_foes.is_empty() {
             return false;
         }
-        let v = &self.veh[id as usize];
-        let tc = &self.type_consts[v.vtype as usize];
-        let impatience = if can_brake {
-            (tc.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0)
-        } else {
-            1.0
-        };
+        let impatience = self.impatience(id, can_brake);
         lk.crossing_foes.iter().any(|&foe| {
             self.approaches[foe as usize].iter().any(|a| {
                 a.veh != id
@@ -241,13 +246,7 @@ impl Simulation {
     ) {
         let lk = self.link_at(it.link as usize);
         let v = &self.veh[id as usize];
-        let tc = &self.type_consts[v.vtype as usize];
-        // a driver who can no longer stop takes any gap
-        let impatience = if can_brake {
-            (tc.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0)
-        } else {
-            1.0
-        };
+        let impatience = self.impatience(id, can_brake);
         // the spec's deceleration, which the IDM parameters carry unchanged
         let decel = self.types[v.vtype as usize].decel;
         for &foe in &lk.foes {
