@@ -67,7 +67,7 @@ pub struct SimLink {
     /// Links into the same lane from another lane: they merge with this one.
     pub foes: Vec<LinkIdx>,
     /// The other links of its junction it yields to by the net's request table (a SUMO net): those that cross
-    /// it, a left turn's oncoming stream. Read on a yielding green (`g`).
+    /// it, a left turn's oncoming stream. Read on a yielding green (`g`) and at an unsignalised minor link.
     pub crossing_foes: Vec<LinkIdx>,
     /// The fixed-time light that controls it: (index into [`Network::lights`], index in its phases' states).
     pub signal: Option<(u32, u32)>,

@@ -209,9 +209,9 @@ impl Simulation {
     }
 
     /// Whether a vehicle approaching a crossing link of the net's request table blocks ego's request `it` on a
-    /// yielding green (SUMO's `MSLink::blockedByFoe` for a foe into another lane): their passages overlap, the
-    /// foe neither through before ego arrives nor arriving (as an impatient driver expects it) after ego has left
-    /// and the look-ahead.
+    /// yielding green or an unsignalised minor link (SUMO's `MSLink::blockedByFoe` for a foe into another lane):
+    /// their passages overlap, the foe neither through before ego arrives nor arriving (as an impatient driver
+    /// expects it) after ego has left and the look-ahead.
     pub(in crate::sim) fn crossing_blocked(
         &self,
         id: VehicleId,

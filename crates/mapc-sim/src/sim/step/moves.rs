@@ -71,7 +71,8 @@ impl Simulation {
                     }
                     let opened = it.will_pass
                         && self.link_opened(id, it, can_brake)
-                        && !(signal == Some(SignalState::GreenYield)
+                        && !((signal == Some(SignalState::GreenYield)
+                            || (signal.is_none() && !lk.major))
                             && self.crossing_blocked(id, it, can_brake));
                     if !opened && (can_brake || !it.will_pass) {
                         let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
