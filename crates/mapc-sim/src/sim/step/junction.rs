@@ -179,14 +179,35 @@ impl Simulation {
         }
     }
 
-    /// SUMO's `MSLink::opened` for a minor link at a merge: blocked by any foe approach that conflicts in time.
+    /// SUMO's `MSLink::opened` for a minor link: blocked by any foe approach that conflicts in time. With
+    /// `crossing` (a yielding green, an unsignalised minor link), also by a vehicle approaching a link that crosses
+    /// it by the net's request table, where their passages overlap: the foe neither through before ego arrives nor
+    /// arriving (as an impatient driver expects it) after ego has left and the look-ahead (`blockedByFoe` for a
+    /// foe into another lane).
     pub(in crate::sim) fn link_opened(
         &self,
         id: VehicleId,
         it: &LinkItem,
         can_brake: bool,
+        crossing: bool,
     ) -> bool {
         let lk = self.link_at(it.link as usize);
+        if crossing && !lk.crossing_foes.is_empty() {
+            let impatience = self.impatience(id, can_brake);
+            let crossed = lk.crossing_foes.iter().any(|&foe| {
+                self.approaches[foe as usize].iter().any(|a| {
+                    a.veh != id
+                        && a.will_pass
+                        && !(a.leave_time < it.arrival_time)
+                        && !((1.0 - impatience) * a.arrival_time
+                            + impatience * a.arrival_time_braking
+                            > it.leave_time + LINK_LOOKAHEAD_S)
+                })
+            });
+            if crossed {
+                return false;
+            }
+        }
         if lk.major {
             return true;
         }
@@ -206,32 +227,6 @@ impl Simulation {
         let v = &self.veh[id as usize];
         let tc = &self.type_consts[v.vtype as usize];
         (tc.impatience + v.waiting_s / TIME_TO_IMPATIENCE_S).clamp(0.0, 1.0)
-    }
-
-    /// Whether a vehicle approaching a crossing link of the net's request table blocks ego's request `it` on a
-    /// yielding green or an unsignalised minor link (SUMO's `MSLink::blockedByFoe` for a foe into another lane):
-    /// their passages overlap, the foe neither through before ego arrives nor arriving (as an impatient driver
-    /// expects it) after ego has left and the look-ahead.
-    pub(in crate::sim) fn crossing_blocked(
-        &self,
-        id: VehicleId,
-        it: &LinkItem,
-        can_brake: bool,
-    ) -> bool {
-        let lk = self.link_at(it.link as usize);
-        if lk.crossing_foes.is_empty() {
-            return false;
-        }
-        let impatience = self.impatience(id, can_brake);
-        lk.crossing_foes.iter().any(|&foe| {
-            self.approaches[foe as usize].iter().any(|a| {
-                a.veh != id
-                    && a.will_pass
-                    && !(a.leave_time < it.arrival_time)
-                    && !((1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking
-                        > it.leave_time + LINK_LOOKAHEAD_S)
-            })
-        })
     }
 
     /// Every foe approach that blocks ego's request `it` (SUMO's `MSLink::blockedByFoe` over the link's foes):

@@ -69,11 +69,9 @@ impl Simulation {
                         }
                         continue;
                     }
-                    let opened = it.will_pass
-                        && self.link_opened(id, it, can_brake)
-                        && !((signal == Some(SignalState::GreenYield)
-                            || (signal.is_none() && !lk.major))
-                            && self.crossing_blocked(id, it, can_brake));
+                    let crossing =
+                        signal == Some(SignalState::GreenYield) || (signal.is_none() && !lk.major);
+                    let opened = it.will_pass && self.link_opened(id, it, can_brake, crossing);
                     if !opened && (can_brake || !it.will_pass) {
                         let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
                             it.stop_dist,
