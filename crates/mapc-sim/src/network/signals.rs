@@ -13,7 +13,10 @@ pub enum SignalState {
     GreenYield,
     /// `y`/`Y`: stop if one can still brake in time.
     Yellow,
-    /// `r`, `u` (red-yellow), `s` and anything else: stop.
+    /// `s`: stop, then drive on yielding to the foes with priority (a right turn on red; SUMO's
+    /// `LINKSTATE_STOP`).
+    Stop,
+    /// `r`, `u` (red-yellow) and anything else: stop.
     Red,
 }
 
@@ -23,6 +26,7 @@ impl SignalState {
             b'G' | b'o' | b'O' => SignalState::Green,
             b'g' => SignalState::GreenYield,
             b'y' | b'Y' => SignalState::Yellow,
+            b's' => SignalState::Stop,
             _ => SignalState::Red,
         }
     }

@@ -137,13 +137,13 @@ impl Simulation {
             if !check_from || beside_yields {
                 continue;
             }
-            // a foe held by its light (red), or yielding under it (`g`) to the vehicles inside the junction on
-            // links it must let pass, as ego is, does not enter ahead of ego: braking for it, ego would hold the
-            // junction for the foe that waits for ego (a deadlock of a city grid's left turns)
+            // a foe held by its light (red), or yielding under it (`g`, or `s` after its stop) to the vehicles
+            // inside the junction on links it must let pass, as ego is, does not enter ahead of ego: braking for it,
+            // ego would hold the junction for the foe that waits for ego (a deadlock of a city grid's left turns)
             if !guard
                 && matches!(
                     self.signal_of(fl, self.time_s - self.spec.start_time_s),
-                    Some(SignalState::Red | SignalState::GreenYield)
+                    Some(SignalState::Red | SignalState::GreenYield | SignalState::Stop)
                 )
             {
                 continue;

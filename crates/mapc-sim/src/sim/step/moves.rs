@@ -48,7 +48,17 @@ impl Simulation {
                                 plan.stop_brake_gap
                             }
                         || v.speed < p.decel * dt;
-                    // red: stop; yellow: stop where one still can (SUMO); green yielding: a minor link
+                    // red: stop; yellow: stop where one still can (SUMO); green yielding: a minor link; a stop
+                    // (`s`): a minor link once the driver has stood a step at its stop line (SUMO's stop sign)
+                    if signal == Some(SignalState::Stop) && self.veh[id as usize].waiting_s < dt {
+                        let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
+                            it.stop_dist,
+                            v.speed,
+                            it.desired_speed,
+                        ));
+                        v_safe = v_safe.fmin(v_link_wait);
+                        break;
+                    }
                     if matches!(signal, Some(SignalState::Red | SignalState::Yellow)) {
                         if signal == Some(SignalState::Red) || can_brake {
                             let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
@@ -70,7 +80,8 @@ impl Simulation {
                         continue;
                     }
                     let crossing =
-                        signal == Some(SignalState::GreenYield) || (signal.is_none() && !lk.major);
+                        matches!(signal, Some(SignalState::GreenYield | SignalState::Stop))
+                            || (signal.is_none() && !lk.major);
                     let opened = it.will_pass && self.link_opened(id, it, can_brake, crossing);
                     if !opened && (can_brake || !it.will_pass) {
                         let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
