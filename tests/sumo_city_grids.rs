@@ -277,3 +277,14 @@ fn a_left_turn_on_a_yielding_green_waits_for_the_crossing_stream() {
     let mean = run["mean_travel_time_s"].as_f64().unwrap();
     assert!(mean > 105.5, "{run}");
 }
+
+#[test]
+fn the_streams_a_left_turn_crosses_make_their_requests() {
+    // Ingolstadt's left turn from 201963537#1 yields, by its junction's request table, to the oncoming straight
+    // links, which no link merging with them yields to: their vehicles made no request, and the left-turners saw
+    // none to wait for (trips 14.5 % shorter than SUMO's over ten seeds). Seed 0's mean trip: 46.1 s before,
+    // 53.1 s after; SUMO 1.8, seeds 0-9: 53.3 s.
+    let j = mapc_json(&["sim", INGOLSTADT, "--seeds", "1", "--json"]);
+    let mean = j["runs"][0]["mean_travel_time_s"].as_f64().unwrap();
+    assert!(mean > 50.0, "{}", j["runs"][0]);
+}

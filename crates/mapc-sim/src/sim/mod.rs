@@ -82,8 +82,8 @@ pub struct Simulation {
     light_phases: (f64, Vec<Option<usize>>),
     /// Teleported vehicles on their way back ([`teleport`]).
     transfers: Vec<teleport::InTransfer>,
-    /// Right of way is decided at the link (a major link with minor foes, a zipper link): approaching vehicles
-    /// register their requests there.
+    /// Right of way is decided at the link (a major link with minor foes, a zipper link, a link another one
+    /// crosses by the net's request table): approaching vehicles register their requests there.
     link_takes_requests: Table<bool>,
     /// Per entry lane, the vehicles waiting to be inserted, in departure order.
     pending: Vec<EntryQueue>,
@@ -157,6 +157,13 @@ impl Simulation {
     pub fn from_spec(spec: SimSpec, seed: u64) -> Result<Simulation, SimError> {
         spec.validate()?;
         let net = Network::from_graph(&spec.graph)?;
+        // links another one crosses (the net's request table): their approaches are what a yielding link checks
+        let mut crossed = vec![false; net.links.len()];
+        for l in &net.links {
+            for &f in &l.crossing_foes {
+                crossed[f as usize] = true;
+            }
+        }
         let dt = spec.step_s;
         let types: Vec<CfModel> = spec
             .vehicle_types
@@ -194,7 +201,10 @@ impl Simulation {
             link_takes_requests: net
                 .links
                 .iter()
-                .map(|l| l.zipper || l.foes.iter().any(|&f| !net.links[f as usize].major))
+                .enumerate()
+                .map(|(i, l)| {
+                    l.zipper || l.foes.iter().any(|&f| !net.links[f as usize].major) || crossed[i]
+                })
                 .collect(),
             pending: Vec::new(),
             entry_lanes: Vec::new(),
