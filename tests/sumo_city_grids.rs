@@ -288,3 +288,16 @@ fn the_streams_a_left_turn_crosses_make_their_requests() {
     let mean = j["runs"][0]["mean_travel_time_s"].as_f64().unwrap();
     assert!(mean > 50.0, "{}", j["runs"][0]);
 }
+
+#[test]
+fn a_sumo_users_run_is_not_told_to_set_mapcs_warm_up() {
+    // the horizon's fit (the corridor outflow's warning, "set warmup_steps") is mapc's own scenarios' matter: a
+    // configuration has no such key, and its figures are SUMO's; the fit stays in the JSON
+    let cfg = grid_until("grid-no-warmup-warning", 800);
+    let out = run_mapc(&["sim", cfg.to_str().unwrap(), "--seeds", "1", "--json"]);
+    assert_success(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("warmup_steps"), "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(j["horizon_warning"].is_string(), "{j}");
+}
