@@ -301,3 +301,25 @@ fn a_sumo_users_run_is_not_told_to_set_mapcs_warm_up() {
     let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(j["horizon_warning"].is_string(), "{j}");
 }
+
+#[test]
+fn the_empty_hours_after_the_last_vehicle_count_their_steps_and_change_nothing() {
+    // the grid is empty from about 14 100 s: the steps after it take the short way (nothing plans, moves or
+    // changes lanes), and the run is the same run with more steps
+    let ended = run_of(&grid_until("grid-empty-a", 15_000), 3);
+    let longer = run_of(&grid_until("grid-empty-b", 20_000), 3);
+    assert_eq!(ended["arrived"], 7000, "{ended}");
+    assert_eq!(
+        (ended["steps"].as_u64(), longer["steps"].as_u64()),
+        (Some(15_000), Some(20_000))
+    );
+    for key in [
+        "arrived",
+        "departed",
+        "mean_travel_time_s",
+        "lane_changes",
+        "vehicle_steps",
+    ] {
+        assert_eq!(ended[key], longer[key], "{key}");
+    }
+}

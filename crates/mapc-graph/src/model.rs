@@ -284,6 +284,18 @@ pub struct ConnectionLanes {
     pub to_lane: u8,
 }
 
+impl Connection {
+    /// The lanes it joins, which name it.
+    pub fn lanes(&self) -> ConnectionLanes {
+        ConnectionLanes {
+            from_road: self.from_road,
+            from_lane: self.from_lane,
+            to_road: self.to_road,
+            to_lane: self.to_lane,
+        }
+    }
+}
+
 /// A connection's traffic light: the light's id and the connection's index in its phases' states (SUMO's `tl`
 /// and `linkIndex`).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -236,11 +236,11 @@ impl Network {
             g.roads.iter().enumerate().map(|(i, r)| (r.id, i)).collect();
         // One link per lane-level connection (repeated connections collapse into one).
         let mut links: Vec<SimLink> = Vec::new();
-        let mut seen: HashMap<(RoadId, u8, RoadId, u8), LinkIdx> = HashMap::new();
+        let mut seen: HashMap<mapc_graph::ConnectionLanes, LinkIdx> = HashMap::new();
         // per link, the connections its own yields to
         let mut yields: Vec<&Vec<mapc_graph::ConnectionLanes>> = Vec::new();
         for c in &g.connections {
-            if seen.contains_key(&(c.from_road, c.from_lane, c.to_road, c.to_lane)) {
+            if seen.contains_key(&c.lanes()) {
                 continue;
             }
             let (Some(&fr), Some(&tr)) = (road_index.get(&c.from_road), road_index.get(&c.to_road))
@@ -294,7 +294,7 @@ impl Network {
                         .map(|l| (l as u32, s.index))
                 }),
             });
-            seen.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), link_idx);
+            seen.insert(c.lanes(), link_idx);
             yields.push(&c.yields_to);
         }
         for i in 0..links.len() {
@@ -311,7 +311,7 @@ impl Network {
         for (i, ys) in yields.iter().enumerate() {
             let crossing: Vec<LinkIdx> = ys
                 .iter()
-                .filter_map(|k| seen.get(&(k.from_road, k.from_lane, k.to_road, k.to_lane)))
+                .filter_map(|k| seen.get(k))
                 .copied()
                 .filter(|&j| j as usize != i && !links[i].foes.contains(&j))
                 .collect();

@@ -48,25 +48,15 @@ impl Simulation {
                                 plan.stop_brake_gap
                             }
                         || v.speed < p.decel * dt;
-                    // red: stop; yellow: stop where one still can (SUMO); green yielding: a minor link; a stop
-                    // (`s`): a minor link once the driver has stood a step at its stop line (SUMO's stop sign)
-                    if signal == Some(SignalState::Stop) && self.veh[id as usize].waiting_s < dt {
-                        let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
-                            it.stop_dist,
-                            v.speed,
-                            it.desired_speed,
-                        ));
-                        v_safe = v_safe.fmin(v_link_wait);
-                        break;
-                    }
+                    // the speed that stops `stop_dist` ahead, never above the plan's at the link
+                    let wait = |stop_dist: f64| {
+                        it.v_link_pass
+                            .fmin(p.stop_speed(stop_dist, v.speed, it.desired_speed))
+                    };
+                    // red: stop; yellow: stop where one still can (SUMO); green yielding: a minor link
                     if matches!(signal, Some(SignalState::Red | SignalState::Yellow)) {
                         if signal == Some(SignalState::Red) || can_brake {
-                            let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
-                                (it.dist - LIGHT_STOP_OFFSET_M).fmax(0.0),
-                                v.speed,
-                                it.desired_speed,
-                            ));
-                            v_safe = v_safe.fmin(v_link_wait);
+                            v_safe = v_safe.fmin(wait((it.dist - LIGHT_STOP_OFFSET_M).fmax(0.0)));
                             break;
                         }
                         continue;
@@ -79,17 +69,16 @@ impl Simulation {
                         }
                         continue;
                     }
+                    // a stop (`s`): a minor link once the driver has stood a step at its stop line (SUMO's stop
+                    // sign)
+                    let must_stop = signal == Some(SignalState::Stop) && v.waiting_s < dt;
                     let crossing =
                         matches!(signal, Some(SignalState::GreenYield | SignalState::Stop))
                             || (signal.is_none() && !lk.major);
-                    let opened = it.will_pass && self.link_opened(id, it, can_brake, crossing);
-                    if !opened && (can_brake || !it.will_pass) {
-                        let v_link_wait = it.v_link_pass.fmin(p.stop_speed(
-                            it.stop_dist,
-                            v.speed,
-                            it.desired_speed,
-                        ));
-                        v_safe = v_safe.fmin(v_link_wait);
+                    let opened =
+                        !must_stop && it.will_pass && self.link_opened(id, it, can_brake, crossing);
+                    if !opened && (can_brake || !it.will_pass || must_stop) {
+                        v_safe = v_safe.fmin(wait(it.stop_dist));
                         break;
                     }
                 }

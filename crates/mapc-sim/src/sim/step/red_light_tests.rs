@@ -4,10 +4,9 @@
 use super::*;
 use crate::runs::scenario::spec_from_scenario;
 
-/// Where a lone ramp vehicle of scenarios/sumo/ramp_metering_1x3 (meter G 5 s, r 5 s from the run's begin), put
-/// 4.88 m before the line at the ramp's limit of 13.89 m/s, is after one step that starts with the light red
-/// (`red`) or green: (its lane is still the ramp's, its place, its speed, the ramp's length).
-fn one_step_at_the_line(red: bool) -> (bool, f64, f64, f64) {
+/// ramp_metering_1x3 without its flows (meter G 5 s, r 5 s from the run's begin), its meter's red phase showing
+/// `red_letter`, and the ramp's road.
+fn meter_without_flows(red_letter: &str) -> (Simulation, mapc_graph::RoadId) {
     let cfg = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
@@ -16,7 +15,21 @@ fn one_step_at_the_line(red: bool) -> (bool, f64, f64, f64) {
     let ramp = rs.graph.find_roads("on_ramp").unwrap()[0];
     let mut spec = spec_from_scenario(&rs).expect("simulator spec");
     spec.flows.clear();
-    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    let meter = spec
+        .graph
+        .lights
+        .iter_mut()
+        .find(|l| l.id == "ramp_meter")
+        .unwrap();
+    meter.phases[1].state = red_letter.to_string();
+    (Simulation::from_spec(spec, 0).unwrap(), ramp)
+}
+
+/// Where a lone ramp vehicle of scenarios/sumo/ramp_metering_1x3 (meter G 5 s, r 5 s from the run's begin), put
+/// 4.88 m before the line at the ramp's limit of 13.89 m/s, is after one step that starts with the light red
+/// (`red`) or green: (its lane is still the ramp's, its place, its speed, the ramp's length).
+fn one_step_at_the_line(red: bool) -> (bool, f64, f64, f64) {
+    let (mut sim, ramp) = meter_without_flows("r");
     // the moves read the light at the step's start
     while ((sim.time_s - sim.spec.start_time_s).rem_euclid(10.0) >= 5.0) != red {
         sim.step().unwrap();
@@ -47,22 +60,7 @@ fn a_vehicle_that_cannot_brake_before_a_red_light_stands_at_its_line() {
 /// Where a ramp vehicle of ramp_metering_1x3 standing 2 m before the meter's line when its red phase begins is
 /// after `steps` steps, with the red phase's letter `letter`: (still on the ramp, its place, the ramp's length).
 fn standing_at_the_meter(letter: &str, steps: usize) -> (bool, f64, f64) {
-    let cfg = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenarios/sumo/ramp_metering_1x3/1ramp_1x3.sumocfg"
-    );
-    let rs = mapc_scenario::ResolvedScenario::load(cfg).expect("shipped SUMO scenario");
-    let ramp = rs.graph.find_roads("on_ramp").unwrap()[0];
-    let mut spec = spec_from_scenario(&rs).expect("simulator spec");
-    spec.flows.clear();
-    let meter = spec
-        .graph
-        .lights
-        .iter_mut()
-        .find(|l| l.id == "ramp_meter")
-        .unwrap();
-    meter.phases[1].state = letter.to_string();
-    let mut sim = Simulation::from_spec(spec, 0).unwrap();
+    let (mut sim, ramp) = meter_without_flows(letter);
     while (sim.time_s - sim.spec.start_time_s).rem_euclid(10.0) != 5.0 {
         sim.step().unwrap();
     }
