@@ -92,6 +92,10 @@ pub(crate) fn run_command_line(words: &[String]) -> anyhow::Result<()> {
 }
 
 fn main() -> ExitCode {
+    if let Err(e) = mapc_sim::numeric::check_cpu() {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
     restore_default_sigpipe();
     keep_freed_memory();
     let cli = match Cli::try_parse() {

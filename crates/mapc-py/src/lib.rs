@@ -217,6 +217,7 @@ fn save_policy(
 
 #[pymodule]
 fn _mapc(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    mapc_sim::numeric::check_cpu().map_err(pyo3::exceptions::PyImportError::new_err)?;
     m.add("MapcError", m.py().get_type::<MapcError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;

@@ -5,11 +5,64 @@
 /// Below this a quantity counts as zero (SUMO's `NUMERICAL_EPS`).
 pub const NUMERICAL_EPS: f64 = 0.001;
 
-/// `x.floor()`, bit for bit, without the library call the baseline x86-64 target makes for `floor` (no SSE4.1
-/// `roundsd`): below 2^52 in magnitude, truncation through an integer is exact and only needs a correction of one
-/// for negative non-integers; zeros are their own floor; NaN, infinities and large values take the library path.
+/// Whether the target rounds to an integer in one instruction: x86-64 with SSE4.1 (`roundsd`; x86-64-v2 and later,
+/// the level `.cargo/config.toml` builds for) and AArch64 (`frintm`).
+const NATIVE_ROUNDING: bool = cfg!(any(
+    target_arch = "aarch64",
+    all(target_arch = "x86_64", target_feature = "sse4.1")
+));
+
+/// Whether this processor runs what the build uses: an x86-64 build for x86-64-v2 (`.cargo/config.toml`) needs
+/// its instructions (SSE4.1 and the rest of the level); `Err` says what is missing and how to build for this
+/// processor. The binary and the Python module check it first: otherwise the first such instruction would kill
+/// the process.
+pub fn check_cpu() -> Result<(), String> {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse4.1"))]
+    {
+        let level = [
+            ("ssse3", std::arch::is_x86_feature_detected!("ssse3")),
+            ("sse4.1", std::arch::is_x86_feature_detected!("sse4.1")),
+            ("sse4.2", std::arch::is_x86_feature_detected!("sse4.2")),
+            ("popcnt", std::arch::is_x86_feature_detected!("popcnt")),
+        ];
+        let missing: Vec<&str> = level.iter().filter(|f| !f.1).map(|f| f.0).collect();
+        if !missing.is_empty() {
+            return Err(format!(
+                "this build of mapc uses x86-64-v2 instructions this processor lacks ({}); build it for this \
+                 processor with RUSTFLAGS=\"-C target-cpu=native\"",
+                missing.join(", ")
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `x.floor()`, bit for bit: the instruction where the target has one ([`NATIVE_ROUNDING`]), else
+/// [`floor_by_truncation`] instead of the baseline x86-64 target's library call.
 #[inline(always)]
 pub(crate) fn floor_exact(x: f64) -> f64 {
+    if NATIVE_ROUNDING {
+        x.floor()
+    } else {
+        floor_by_truncation(x)
+    }
+}
+
+/// `x.ceil()`, bit for bit (as [`floor_exact`]).
+#[inline(always)]
+pub(crate) fn ceil_exact(x: f64) -> f64 {
+    if NATIVE_ROUNDING {
+        x.ceil()
+    } else {
+        ceil_by_truncation(x)
+    }
+}
+
+/// `x.floor()`, bit for bit, without a library call: below 2^52 in magnitude, truncation through an integer is
+/// exact and only needs a correction of one for negative non-integers; zeros are their own floor; NaN, infinities
+/// and large values take the library path.
+#[inline(always)]
+fn floor_by_truncation(x: f64) -> f64 {
     if x == 0.0 {
         x
     } else if x.abs() < 4_503_599_627_370_496.0 {
@@ -17,6 +70,20 @@ pub(crate) fn floor_exact(x: f64) -> f64 {
         if t > x { t - 1.0 } else { t }
     } else {
         library_floor(x)
+    }
+}
+
+/// `x.ceil()`, bit for bit, without a library call (as [`floor_by_truncation`]); the sign is copied from `x` so
+/// that a negative number above -1 gives -0, as the library's.
+#[inline(always)]
+fn ceil_by_truncation(x: f64) -> f64 {
+    if x == 0.0 {
+        x
+    } else if x.abs() < 4_503_599_627_370_496.0 {
+        let t = truncate(x);
+        (if t < x { t + 1.0 } else { t }).copysign(x)
+    } else {
+        library_ceil(x)
     }
 }
 
@@ -28,20 +95,6 @@ fn truncate(x: f64) -> f64 {
     debug_assert!(x.abs() < 4_503_599_627_370_496.0);
     // SAFETY: the callers test |x| < 2^52 first: x is finite and its truncation fits an i64
     (unsafe { x.to_int_unchecked::<i64>() }) as f64
-}
-
-/// `x.ceil()`, bit for bit, without the library call (as [`floor_exact`]); the sign is copied from `x` so that
-/// a negative number above -1 gives -0, as the library's.
-#[inline(always)]
-pub(crate) fn ceil_exact(x: f64) -> f64 {
-    if x == 0.0 {
-        x
-    } else if x.abs() < 4_503_599_627_370_496.0 {
-        let t = truncate(x);
-        (if t < x { t + 1.0 } else { t }).copysign(x)
-    } else {
-        library_ceil(x)
-    }
 }
 
 /// `exact().floor()`, bit for bit, given `approx`, a value of the same expression computed with fewer divisions

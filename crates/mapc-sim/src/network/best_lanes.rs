@@ -62,7 +62,7 @@ struct Q {
 #[derive(Debug, Default)]
 pub struct BestLinksMemo(std::sync::Mutex<BestLinksMap>);
 
-type BestLinksMap = std::collections::HashMap<(Vec<usize>, u64), Vec<Option<LinkIdx>>>;
+type BestLinksMap = rustc_hash::FxHashMap<(Vec<usize>, u64), Vec<Option<LinkIdx>>>;
 
 impl Clone for BestLinksMemo {
     fn clone(&self) -> Self {

@@ -65,10 +65,10 @@ pub struct Simulation {
     types: Table<CfModel>,
     routes: Table<Route>,
     /// Routes by (lanes, roads), so vehicles that drive the same share one.
-    route_index: std::collections::HashMap<(Vec<LaneIdx>, Vec<usize>), u32>,
+    route_index: rustc_hash::FxHashMap<(Vec<LaneIdx>, Vec<usize>), u32>,
     /// Routes by what they were asked for (from, via, to, first lane): a SUMO user's routes file names the same
     /// few routes for each of its vehicles, and each is found on the network once.
-    route_asked: std::collections::HashMap<RouteRequest, u32>,
+    route_asked: rustc_hash::FxHashMap<RouteRequest, u32>,
     veh: VehicleTable<Veh>,
     /// Vehicles per lane, front first (a plain vector: lanes are short and indexing is on the hot path).
     lane_veh: Table<Table<VehicleId>>,
@@ -109,7 +109,7 @@ pub struct Simulation {
     /// Per flow, its vehicles built so far; and, once [`Simulation::record_origins`] asked for them, each
     /// vehicle's flow and number in it (SUMO names a flow's vehicles `flow.N`).
     flow_built: Vec<u32>,
-    origins: Option<std::collections::HashMap<VehicleId, (u32, u32)>>,
+    origins: Option<rustc_hash::FxHashMap<VehicleId, (u32, u32)>>,
     /// Per flow, its route (for `random` and `free`: the one from the rightmost lane, until a lane is chosen).
     flow_route: Vec<u32>,
     /// Per flow whose lane is chosen at insertion, where its vehicles wait and its route from each lane.
@@ -142,7 +142,7 @@ pub struct Simulation {
     /// Per vehicle type, its LC2013 (its `lc*` parameters).
     lc_models: Table<lane_change::LcModel>,
     /// Road sequences of the routes, numbered (routes that differ only in lanes share one).
-    road_seqs: std::collections::HashMap<Vec<usize>, u32>,
+    road_seqs: rustc_hash::FxHashMap<Vec<usize>, u32>,
     /// Best lanes computed so far, by (road sequence, index of the current road in it, vehicle type).
     best_cache: BestLanesCache,
     /// Per lane, the summed lengths with min gaps of its vehicles during the lane-change pass.
@@ -150,6 +150,8 @@ pub struct Simulation {
     lc_scratch: lane_change::LcScratch,
     /// SUMO's list of active lanes, under SUMO's junction rules ([`step::active_lanes`]).
     active_lanes: step::active_lanes::ActiveLanes,
+    /// The longest any vehicle has waited, after the last moves (the teleport check looks at lanes only beyond it).
+    longest_wait_s: f64,
 }
 
 impl Simulation {
@@ -224,8 +226,8 @@ impl Simulation {
             flow_lanes: Vec::new(),
             in_region: Table(vec![true; net.lanes.len()]),
             routes: Table(Vec::new()),
-            route_index: std::collections::HashMap::new(),
-            route_asked: std::collections::HashMap::new(),
+            route_index: rustc_hash::FxHashMap::default(),
+            route_asked: rustc_hash::FxHashMap::default(),
             veh: VehicleTable::default(),
             plans: Table(Vec::new()),
             plan_order: Vec::new(),
@@ -284,11 +286,12 @@ impl Simulation {
                 .iter()
                 .map(|t| lane_change::model_of(&t.lane_change, dt))
                 .collect(),
-            road_seqs: std::collections::HashMap::new(),
+            road_seqs: rustc_hash::FxHashMap::default(),
             best_cache: BestLanesCache::default(),
             lane_brutto: Vec::new(),
             lc_scratch: Default::default(),
             active_lanes: Default::default(),
+            longest_wait_s: 0.0,
             net,
             spec,
         };

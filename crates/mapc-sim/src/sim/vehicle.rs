@@ -40,7 +40,7 @@ pub(super) struct Veh {
     pub(super) free_flow_s: f64,
     /// Its lane-change record (multi-lane networks only: made at its first lane-change pass, dropped when it
     /// leaves).
-    pub(super) lc: Option<Box<lane_change::LcVeh>>,
+    pub(super) lc: Option<lane_change::LcVeh>,
     /// The driver's own random draws (dawdling), independent of every other vehicle and of the thread count.
     pub(super) rng: DriverRng,
     /// Where it is inserted on its entry lane.
@@ -220,6 +220,9 @@ impl Simulation {
             .position(|&o| self.veh[o as usize].pos < pos)
             .unwrap_or(q.len());
         q.insert(at, id);
+        if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
+            self.active_lanes.placed.push(lane);
+        }
         let v = &mut self.veh[id as usize];
         v.status = VehicleStatus::Active;
         v.lane = lane;

@@ -23,7 +23,8 @@ impl Simulation {
     /// checks each lane's front vehicle after the moves).
     pub(in crate::sim) fn teleport_stuck(&mut self) {
         let bound = self.spec.time_to_teleport_s;
-        if !(bound > 0.0) {
+        // (most steps: nobody has waited that long, as the moves found)
+        if !(bound > 0.0) || !(self.longest_wait_s > bound) {
             return;
         }
         for li in 0..self.lane_order.len() {

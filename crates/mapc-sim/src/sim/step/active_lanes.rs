@@ -24,6 +24,9 @@ pub(in crate::sim) struct ActiveLanes {
     /// Per lane, its rank in SUMO's numbering: the order in which SUMO activates the lanes vehicles were
     /// inserted on.
     number_rank: Vec<u32>,
+    /// The lanes vehicles were put on since the last step's start ([`Simulation::place`]): the only lanes that
+    /// can hold vehicles without being in the list then.
+    pub(in crate::sim) placed: Vec<LaneIdx>,
     /// Buffers kept between steps so that the bookkeeping allocates nothing.
     joining: Vec<LaneIdx>,
     pub(in crate::sim) edges: Vec<ChangerEdge>,
@@ -73,10 +76,20 @@ impl Simulation {
         }
         let mut joining = std::mem::take(&mut self.active_lanes.joining);
         joining.clear();
-        joining.extend((0..n as LaneIdx).filter(|&l| {
+        joining.extend(self.active_lanes.placed.drain(..).filter(|&l| {
             !self.active_lanes.active[l as usize] && !self.lane_veh[l as usize].is_empty()
         }));
         joining.sort_by_key(|&l| self.active_lanes.number_rank[l as usize]);
+        joining.dedup();
+        debug_assert_eq!(joining, {
+            let mut all: Vec<LaneIdx> = (0..n as LaneIdx)
+                .filter(|&l| {
+                    !self.active_lanes.active[l as usize] && !self.lane_veh[l as usize].is_empty()
+                })
+                .collect();
+            all.sort_by_key(|&l| self.active_lanes.number_rank[l as usize]);
+            all
+        });
         for &l in &joining {
             self.join_active(l);
         }
@@ -120,9 +133,13 @@ impl Simulation {
     fn leave_empty_lanes(&mut self, count: impl Fn(&Simulation, LaneIdx) -> usize) {
         let mut order = std::mem::take(&mut self.active_lanes.order);
         let mut active = std::mem::take(&mut self.active_lanes.active);
+        // (a lane in the list is marked active: only a lane that leaves is marked again)
         order.retain(|&l| {
+            debug_assert!(active[l as usize]);
             let keep = count(self, l) > 0;
-            active[l as usize] = keep;
+            if !keep {
+                active[l as usize] = false;
+            }
             keep
         });
         self.active_lanes.active = active;

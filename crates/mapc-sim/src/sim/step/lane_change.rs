@@ -9,7 +9,7 @@ use crate::models::lc::{
     BlockedAhead, Ego, LaneChangeModel, LaneQ, Lc2013, Message, NeighbourLane, Side, Surroundings,
 };
 use crate::network::best_lanes::BestLane;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// A vehicle's lane-change record between steps.
 #[derive(Clone, Debug, Default)]
@@ -67,6 +67,9 @@ struct NextOccupation {
 #[derive(Clone, Debug, Default)]
 pub(in crate::sim) struct BestLanesCache {
     index: HashMap<(u32, u32, u16), u32>,
+    /// The entries of `store` by (road sequence, road index): types whose best lanes there are the same share
+    /// one entry, so that the pass's views and occupation sums, kept by entry, carry over between their vehicles.
+    by_place: HashMap<(u32, u32), Vec<u32>>,
     pub(in crate::sim) store: Vec<Vec<BestLane>>,
     /// The route after a lane change, by (route, lane of it changed from, lane changed to, vehicle type).
     after_change: HashMap<(u32, u32, LaneIdx, u16), u32>,
@@ -83,9 +86,21 @@ impl Simulation {
         }
         let brake = self.type_consts[vtype as usize].max_brake_dist;
         let best = self.net.best_lanes(&r.roads[k..], brake);
-        let i = self.best_cache.store.len() as u32;
-        self.best_cache.store.push(best);
-        self.best_cache.index.insert(key, i);
+        let cache = &mut self.best_cache;
+        let same_place = cache.by_place.entry((key.0, key.1)).or_default();
+        let i = match same_place
+            .iter()
+            .find(|&&i| same_best_lanes(&cache.store[i as usize], &best))
+        {
+            Some(&i) => i,
+            None => {
+                let i = cache.store.len() as u32;
+                cache.store.push(best);
+                same_place.push(i);
+                i
+            }
+        };
+        cache.index.insert(key, i);
         i
     }
 
@@ -111,7 +126,7 @@ impl Simulation {
         let has_lane_changer = l.left.is_some()
             || l.right.is_some()
             || (l.beside_another && self.spec.sumo_junction_lane_changes);
-        let Some(rec) = self.veh[id as usize].lc.as_deref_mut() else {
+        let Some(rec) = self.veh[id as usize].lc.as_mut() else {
             return wanted;
         };
         self.lc_models[vtype].patch_speed(
@@ -144,11 +159,9 @@ impl Simulation {
                 sum += self.brutto_length(id);
                 let v = &mut self.veh[id as usize];
                 let speed = v.speed;
-                let rec = v.lc.get_or_insert_with(|| {
-                    Box::new(LcVeh {
-                        pass_speed: speed,
-                        ..LcVeh::default()
-                    })
+                let rec = v.lc.get_or_insert_with(|| LcVeh {
+                    pass_speed: speed,
+                    ..LcVeh::default()
                 });
                 rec.speed_before = rec.pass_speed;
                 rec.pass_speed = speed;
@@ -473,7 +486,7 @@ impl Simulation {
         let vtype = self.veh[id as usize].vtype as usize;
         let mem = &mut self.veh[id as usize]
             .lc
-            .as_deref_mut()
+            .as_mut()
             .expect("recorded at the pass's start")
             .mem;
         let d = self.lc_models[vtype].decide(mem, &s);
@@ -505,7 +518,7 @@ impl Simulation {
         best_lanes.of = None;
         let target_index = self.lc_lane(target).0;
         let offset = self.best_cache.store[best_i as usize][target_index].best_lane_offset;
-        if let Some(rec) = self.veh[id as usize].lc.as_deref_mut() {
+        if let Some(rec) = self.veh[id as usize].lc.as_mut() {
             rec.best_lane_offset = offset;
         }
         self.metrics.lane_changes += 1;
@@ -604,7 +617,7 @@ impl Simulation {
     fn lc_rec(&mut self, id: VehicleId) -> &mut LcVeh {
         self.veh[id as usize]
             .lc
-            .as_deref_mut()
+            .as_mut()
             .expect("recorded at the pass's start")
     }
 
@@ -612,6 +625,18 @@ impl Simulation {
     pub(in crate::sim) fn forget_lc(&mut self, id: VehicleId) {
         self.veh[id as usize].lc = None;
     }
+}
+
+/// The same best lanes, bit for bit (the pass's arithmetic reads them).
+fn same_best_lanes(a: &[BestLane], b: &[BestLane]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| {
+            x.length.to_bits() == y.length.to_bits()
+                && x.best_lane_offset == y.best_lane_offset
+                && x.next_link == y.next_link
+                && x.leads_elsewhere == y.leads_elsewhere
+                && x.continuation == y.continuation
+        })
 }
 
 /// The model every vehicle uses (SUMO 1.8's LC2013 defaults), for steps of `dt` seconds.

@@ -18,7 +18,7 @@ impl Simulation {
         gap: f64,
     ) -> Other<'t> {
         let ov = &self.veh[o as usize];
-        let rec = ov.lc.as_deref();
+        let rec = ov.lc.as_ref();
         Other {
             id: o as u64,
             gap,

@@ -163,14 +163,14 @@ fn the_memory_is_cleared_on_a_junction_connection_and_kept_on_a_road_with_lanes(
             let v = &sim.veh[id as usize];
             (v.speed, v.vtype as usize, v.lane)
         };
-        let mem = &mut sim.veh[id as usize].lc.as_deref_mut().unwrap().mem;
+        let mem = &mut sim.veh[id as usize].lc.as_mut().unwrap().mem;
         mem.speed_gain_probability = 0.5;
         mem.keep_right_probability = -0.7;
         mem.look_ahead_speed = 20.0;
         // no advice and no blocked wish: the car-following speed passes unchanged, the memory as told
         let next = sim.patch_lc_speed(id, speed, vtype, lane, 30.0, 0.0, 10.0, 15.0);
         assert_eq!(next, 10.0);
-        let mem = &sim.veh[id as usize].lc.as_deref().unwrap().mem;
+        let mem = &sim.veh[id as usize].lc.as_ref().unwrap().mem;
         let got = (
             mem.speed_gain_probability,
             mem.keep_right_probability,

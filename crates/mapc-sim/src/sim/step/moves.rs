@@ -110,6 +110,7 @@ impl Simulation {
         }
         // 2. move, downstream lanes first and front to back, never past the (already moved) leader
         let mut pi = 0;
+        let mut longest_wait: f64 = 0.0;
         for li in 0..self.lane_order.len() {
             let lane = self.lane_order[li];
             let mut qi = 0;
@@ -147,9 +148,11 @@ impl Simulation {
                 } else {
                     0.0
                 };
+                longest_wait = longest_wait.fmax(v.waiting_s);
                 qi += 1;
             }
         }
+        self.longest_wait_s = longest_wait;
         // 3. lane changes along routes and arrivals; vehicles moved into a lane are appended behind its others
         for li in 0..self.lane_order.len() {
             let lane = self.lane_order[li];

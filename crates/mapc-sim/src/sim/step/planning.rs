@@ -142,7 +142,7 @@ impl Simulation {
             let gap = lv.pos - lv.length - v.pos - p.min_gap;
             let vs = if !pre[0].is_nan() {
                 pre[0]
-            } else if let Some(rec) = v.lc.as_deref() {
+            } else if let Some(rec) = v.lc.as_ref() {
                 // the lane changer's stop speed behind the same leader, kept since the last pass
                 // (a copy: the move changes the positions, the plan keeps nothing for later)
                 let mut share = rec.mem.stop_share;
