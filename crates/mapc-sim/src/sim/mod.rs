@@ -150,6 +150,8 @@ pub struct Simulation {
     lc_scratch: lane_change::LcScratch,
     /// SUMO's list of active lanes, under SUMO's junction rules ([`step::active_lanes`]).
     active_lanes: step::active_lanes::ActiveLanes,
+    /// The vehicles on the network's lanes (kept where a vehicle joins or leaves a lane's queue).
+    in_network: usize,
     /// The longest any vehicle has waited, after the last moves (the teleport check looks at lanes only beyond it).
     longest_wait_s: f64,
 }
@@ -292,6 +294,7 @@ impl Simulation {
             lc_scratch: Default::default(),
             active_lanes: Default::default(),
             longest_wait_s: 0.0,
+            in_network: 0,
             net,
             spec,
         };
@@ -488,14 +491,18 @@ impl Simulation {
             self.detectors.reset(self.time_s - self.spec.start_time_s);
         }
         // Metrics see the network as it is before the step (as the original rollouts did).
+        // (the lanes walked only when vehicles are on them: a SUMO user's run may go on for hours after its last)
         let mut n = 0u64;
         let mut sum = 0.0;
-        for q in self.lane_veh.iter() {
-            for &id in q {
-                n += 1;
-                sum += self.veh[id as usize].speed;
+        if self.in_network > 0 {
+            for q in self.lane_veh.iter() {
+                for &id in q {
+                    n += 1;
+                    sum += self.veh[id as usize].speed;
+                }
             }
         }
+        debug_assert_eq!(n as usize, self.in_network);
         if n > 0 && sum / n as f64 > 0.0 {
             self.metrics.speed_sum += sum / n as f64;
             self.metrics.speed_steps += 1;

@@ -106,7 +106,11 @@ impl Simulation {
 
     /// Number of vehicles in the network.
     pub fn active_count(&self) -> usize {
-        self.lane_veh.iter().map(|q| q.len()).sum()
+        debug_assert_eq!(
+            self.in_network,
+            self.lane_veh.iter().map(|q| q.len()).sum::<usize>()
+        );
+        self.in_network
     }
 
     /// Every vehicle created so far (pending, active, arrived).

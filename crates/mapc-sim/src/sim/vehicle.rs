@@ -220,6 +220,7 @@ impl Simulation {
             .position(|&o| self.veh[o as usize].pos < pos)
             .unwrap_or(q.len());
         q.insert(at, id);
+        self.in_network += 1;
         if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
             self.active_lanes.placed.push(lane);
         }

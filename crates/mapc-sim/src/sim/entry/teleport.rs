@@ -39,6 +39,7 @@ impl Simulation {
                 continue;
             }
             self.lane_veh[lane as usize].remove(0);
+            self.in_network -= 1;
             self.forget_lc(id);
             self.metrics.teleports += 1;
             let v = &self.veh[id as usize];

@@ -171,6 +171,7 @@ impl Simulation {
                 if last {
                     if v.pos > len - POSITION_EPS {
                         self.lane_veh[lane as usize].remove(0);
+                        self.in_network -= 1;
                         self.arrive(id);
                         continue;
                     }
@@ -180,6 +181,7 @@ impl Simulation {
                     break;
                 }
                 self.lane_veh[lane as usize].remove(0);
+                self.in_network -= 1;
                 let mut v_pos = v.pos;
                 let mut rp = v.route_pos as usize;
                 // a fast vehicle (or a long step) may cross several short lanes in one step
@@ -235,6 +237,7 @@ impl Simulation {
                     .rposition(|&o| self.veh[o as usize].pos >= v_pos)
                     .map_or(0, |i| i + 1);
                 q.insert(at, id);
+                self.in_network += 1;
                 self.note_entered(new_lane);
             }
         }
