@@ -463,6 +463,7 @@ impl Simulation {
                 n,
                 best,
                 guess,
+                true,
                 s.right.insert(NeighbourLane::default()),
             );
         }
@@ -474,6 +475,7 @@ impl Simulation {
                 n,
                 best,
                 guess,
+                false,
                 s.left.insert(NeighbourLane::default()),
             );
         }

@@ -136,7 +136,8 @@ impl Simulation {
     /// into `out`: the leader is the nearest vehicle already visited in this pass (front ahead of `id`'s front),
     /// the follower the next one, even when it drives alongside (then its gap is negative); across the lane's end
     /// along its best continuation, and across its start through the connections into it. `guess`: the likely
-    /// index of the split in `n`'s queue (taken when right, else searched).
+    /// index of the split in `n`'s queue (taken when right, else searched); `n_is_right`: `n` lies to the right of
+    /// the ego's lane (the caller knows the side).
     // inlined: its two neighbours are then written where the model reads them, not copied there
     #[inline(always)]
     pub(in crate::sim) fn neighbours<'t>(
@@ -146,6 +147,7 @@ impl Simulation {
         n: LaneIdx,
         best: &[BestLane],
         guess: usize,
+        n_is_right: bool,
         out: &mut NeighbourLane<'t>,
     ) {
         let v = &self.veh[id as usize];
@@ -153,7 +155,7 @@ impl Simulation {
         let q = &self.lane_veh[n as usize];
         // front first; at the ego's very position, a vehicle on the lane to the right was visited first (the pass
         // takes the rightmost lane on a tie) and leads, one on the lane to the left follows
-        let n_is_right = self.lc_lane(n).0 < self.lc_lane(v.lane).0;
+        debug_assert_eq!(n_is_right, self.lc_lane(n).0 < self.lc_lane(v.lane).0);
         let split = if n_is_right {
             self.queue_index_behind_near(n, v.pos, guess, |o, p| o < p)
         } else {

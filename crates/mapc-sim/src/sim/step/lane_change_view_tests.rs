@@ -56,7 +56,8 @@ fn a_neighbour_alongside_is_the_follower_not_the_leader() {
     let (mut leaders, mut followers, mut alongside) = (0, 0, 0);
     each_side_lane(&mut sim, 500, |sim, id, n, best| {
         let mut got = NeighbourLane::default();
-        sim.neighbours(&sim.types, id, n, best, usize::MAX, &mut got);
+        let n_is_right = sim.lc_lane(n).0 < sim.lc_lane(sim.veh[id as usize].lane).0;
+        sim.neighbours(&sim.types, id, n, best, usize::MAX, n_is_right, &mut got);
         let v = &sim.veh[id as usize];
         let n_is_right =
             sim.lane_at(n as usize).index < sim.lane_at(sim.veh[id as usize].lane as usize).index;
@@ -208,7 +209,8 @@ fn a_neighbour_leader_is_looked_for_along_the_lanes_best_continuation_past_a_sho
         let first = sim.link_at(link as usize);
         let next_two = [first.via_lane, first.to_lane];
         let mut got = NeighbourLane::default();
-        sim.neighbours(&sim.types, id, n, best, usize::MAX, &mut got);
+        let n_is_right = sim.lc_lane(n).0 < sim.lc_lane(sim.veh[id as usize].lane).0;
+        sim.neighbours(&sim.types, id, n, best, usize::MAX, n_is_right, &mut got);
         let Some(l) = got.leader else {
             return;
         };
