@@ -16,25 +16,44 @@ const NATIVE_ROUNDING: bool = cfg!(any(
 /// its instructions (SSE4.1 and the rest of the level); `Err` says what is missing and how to build for this
 /// processor. The binary and the Python module check it first: otherwise the first such instruction would kill
 /// the process.
+#[cfg(all(target_arch = "x86_64", target_feature = "sse4.1"))]
 pub fn check_cpu() -> Result<(), String> {
-    #[cfg(all(target_arch = "x86_64", target_feature = "sse4.1"))]
-    {
-        let level = [
-            ("ssse3", std::arch::is_x86_feature_detected!("ssse3")),
-            ("sse4.1", std::arch::is_x86_feature_detected!("sse4.1")),
-            ("sse4.2", std::arch::is_x86_feature_detected!("sse4.2")),
-            ("popcnt", std::arch::is_x86_feature_detected!("popcnt")),
-        ];
-        let missing: Vec<&str> = level.iter().filter(|f| !f.1).map(|f| f.0).collect();
-        if !missing.is_empty() {
-            return Err(format!(
-                "this build of mapc uses x86-64-v2 instructions this processor lacks ({}); build it for this \
-                 processor with RUSTFLAGS=\"-C target-cpu=native\"",
-                missing.join(", ")
-            ));
-        }
-    }
+    cpu_lacks(|feature| match feature {
+        "ssse3" => std::arch::is_x86_feature_detected!("ssse3"),
+        "sse4.1" => std::arch::is_x86_feature_detected!("sse4.1"),
+        "sse4.2" => std::arch::is_x86_feature_detected!("sse4.2"),
+        _ => std::arch::is_x86_feature_detected!("popcnt"),
+    })
+}
+
+/// [`check_cpu`] where the build asks nothing beyond its target's baseline.
+#[cfg(not(all(target_arch = "x86_64", target_feature = "sse4.1")))]
+pub fn check_cpu() -> Result<(), String> {
     Ok(())
+}
+
+/// x86-64-v2's instructions beyond the baseline that this build may use.
+#[cfg_attr(
+    not(all(target_arch = "x86_64", target_feature = "sse4.1")),
+    allow(dead_code)
+)]
+const X86_64_V2: [&str; 4] = ["ssse3", "sse4.1", "sse4.2", "popcnt"];
+
+/// [`check_cpu`]'s verdict given which features the processor has.
+#[cfg_attr(
+    not(all(target_arch = "x86_64", target_feature = "sse4.1")),
+    allow(dead_code)
+)]
+fn cpu_lacks(has: impl Fn(&str) -> bool) -> Result<(), String> {
+    let missing: Vec<&str> = X86_64_V2.into_iter().filter(|f| !has(f)).collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(format!(
+        "this build of mapc uses x86-64-v2 instructions this processor lacks ({}); build it for this processor \
+         with RUSTFLAGS=\"-C target-cpu=native\"",
+        missing.join(", ")
+    ))
 }
 
 /// `x.floor()`, bit for bit: the instruction where the target has one ([`NATIVE_ROUNDING`]), else

@@ -110,3 +110,13 @@ fn floor_near_is_the_exact_floor_bit_for_bit() {
         );
     }
 }
+
+#[test]
+fn a_processor_without_x86_64_v2_is_told_what_it_lacks() {
+    assert_eq!(cpu_lacks(|_| true), Ok(()));
+    let e = cpu_lacks(|f| f != "sse4.1" && f != "popcnt").unwrap_err();
+    assert!(e.contains("(sse4.1, popcnt)"), "{e}");
+    assert!(e.contains("RUSTFLAGS=\"-C target-cpu=native\""), "{e}");
+    // this machine runs the build that tests it
+    assert_eq!(check_cpu(), Ok(()));
+}

@@ -140,6 +140,7 @@ impl Simulation {
     /// the ego's lane (the caller knows the side).
     // inlined: its two neighbours are then written where the model reads them, not copied there
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     pub(in crate::sim) fn neighbours<'t>(
         &self,
         types: &'t Table<CfModel>,
