@@ -1,8 +1,9 @@
 //! SUMO 1.8's command line on the scenario `mapc bench` measures, for the side-by-side speed figure. A SUMO
 //! user's scenario runs as the user runs it (`sumo -c X.sumocfg`, or `sumo -n N -r R -a A`); a mapc scenario is
 //! exported first (`mapc_sumo`, as `mapc export --sumo` does). Each seed runs with `--seed S
-//! --duration-log.statistics true` (and no schema validation); its vehicle-steps are SUMO's own count (UPS x duration), its CPU time and peak
-//! memory the kernel's for the child process.
+//! --duration-log.statistics true` (and no schema validation); its vehicle-steps are SUMO's own count (UPS x
+//! duration), its CPU time and peak memory the kernel's for the child process. A configuration runs from a copy of
+//! its folder, so that the outputs it asks for do not overwrite the user's files.
 
 use anyhow::{Context, bail};
 use std::path::{Path, PathBuf};
@@ -115,7 +116,10 @@ pub fn run_sumo(
             .join(",")
     };
     let files: Vec<String> = match input {
-        SumoInput::Config(cfg) => vec!["-c".into(), absolute(cfg).display().to_string()],
+        SumoInput::Config(cfg) => {
+            let run_cfg = scratch_copy(cfg, dir)?.unwrap_or_else(|| absolute(cfg));
+            vec!["-c".into(), run_cfg.display().to_string()]
+        }
         SumoInput::Files {
             net,
             routes,
@@ -218,6 +222,105 @@ pub fn cpu_seconds(u: &libc::rusage) -> f64 {
     tv(u.ru_utime) + tv(u.ru_stime)
 }
 
+/// The configuration `cfg` in a copy of its folder under `dir`, so that the outputs it asks of SUMO (trip info,
+/// routes, the loops' files), written beside the files that name them, land in the copy and not over the user's
+/// own. `None` where the configuration names a file outside its folder (the copy would not hold it): SUMO then
+/// runs on the user's files in place.
+fn scratch_copy(cfg: &Path, dir: &Path) -> anyhow::Result<Option<PathBuf>> {
+    let conf = mapc_scenario::sumo::config::read(cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let canonical = |p: &Path| std::fs::canonicalize(p).ok();
+    let (Some(cfg_abs), Some(home)) = (
+        canonical(cfg),
+        cfg.parent().and_then(|h| {
+            canonical(if h.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                h
+            })
+        }),
+    ) else {
+        return Ok(None);
+    };
+    let inputs = std::iter::once(&conf.net_file)
+        .chain(&conf.route_files)
+        .chain(&conf.additional_files);
+    let mut inside = true;
+    for f in inputs {
+        inside &= canonical(f).is_some_and(|f| f.starts_with(&home));
+    }
+    let scratch = dir.join("scenario");
+    let dir_abs = canonical(dir);
+    // (the working folder itself, where it lies inside the user's folder, is not copied into itself)
+    if !inside || dir_abs.as_ref().is_some_and(|d| home.starts_with(d)) {
+        return Ok(None);
+    }
+    // (a configuration that sits in a large folder, a home folder say, runs in place rather than copy it all)
+    let mut budget = SCRATCH_BUDGET;
+    if !fits(&home, dir_abs.as_deref(), &mut budget) {
+        return Ok(None);
+    }
+    copy_tree(&home, &scratch, dir_abs.as_deref())?;
+    let rel = cfg_abs
+        .strip_prefix(&home)
+        .expect("the configuration lies in its folder");
+    Ok(Some(scratch.join(rel)))
+}
+
+/// The most [`scratch_copy`] copies: files, and bytes.
+const SCRATCH_BUDGET: (u64, u64) = (10_000, 256 << 20);
+
+/// Whether the files under `from` (but `skip`) fit in what is left of `budget`, which they use up.
+fn fits(from: &Path, skip: Option<&Path>, budget: &mut (u64, u64)) -> bool {
+    let Ok(entries) = std::fs::read_dir(from) else {
+        return false;
+    };
+    for entry in entries {
+        let Ok(entry) = entry else { return false };
+        let path = entry.path();
+        if skip.is_some_and(|s| path == s) {
+            continue;
+        }
+        let Ok(kind) = entry.file_type() else {
+            return false;
+        };
+        if kind.is_dir() {
+            if !fits(&path, skip, budget) {
+                return false;
+            }
+        } else if let Some(meta) = std::fs::metadata(&path).ok().filter(|m| m.is_file()) {
+            if budget.0 == 0 || budget.1 < meta.len() {
+                return false;
+            }
+            *budget = (budget.0 - 1, budget.1 - meta.len());
+        }
+    }
+    true
+}
+
+/// Copies the files under `from` into `to` (folders made as needed), leaving out `skip`; a link to a file is
+/// copied as the file, a link to a folder left out.
+fn copy_tree(from: &Path, to: &Path, skip: Option<&Path>) -> anyhow::Result<()> {
+    std::fs::create_dir_all(to).with_context(|| format!("creating {}", to.display()))?;
+    for entry in std::fs::read_dir(from).with_context(|| format!("reading {}", from.display()))? {
+        let entry = entry.with_context(|| format!("reading {}", from.display()))?;
+        let path = entry.path();
+        if skip.is_some_and(|s| path == s) {
+            continue;
+        }
+        let target = to.join(entry.file_name());
+        let kind = entry
+            .file_type()
+            .with_context(|| format!("reading {}", path.display()))?;
+        if kind.is_dir() {
+            copy_tree(&path, &target, skip)?;
+        } else if kind.is_file() || std::fs::metadata(&path).is_ok_and(|m| m.is_file()) {
+            std::fs::copy(&path, &target)
+                .with_context(|| format!("copying {} to {}", path.display(), target.display()))?;
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -229,5 +332,38 @@ mod tests {
         let out = " Duration: 250ms\n UPS: 1000\n";
         assert_eq!(moved_vehicles(out), Some(250.0));
         assert_eq!(moved_vehicles("Simulation ended at time: 1001.00\n"), None);
+    }
+
+    #[test]
+    fn a_configuration_runs_from_a_copy_of_its_folder_unless_it_reaches_outside() {
+        let root = std::env::temp_dir().join(format!("mapc-scratch-test-{}", std::process::id()));
+        let home = root.join("study");
+        std::fs::create_dir_all(home.join("nets")).unwrap();
+        std::fs::write(home.join("nets/a.net.xml"), "<net/>").unwrap();
+        std::fs::write(home.join("a.rou.xml"), "<routes/>").unwrap();
+        std::fs::write(root.join("outside.rou.xml"), "<routes/>").unwrap();
+        let cfg = |routes: &str| {
+            format!(
+                "<configuration><input><net-file value=\"nets/a.net.xml\"/>\
+                 <route-files value=\"{routes}\"/></input><output>\
+                 <tripinfo-output value=\"trips.xml\"/></output></configuration>"
+            )
+        };
+        std::fs::write(home.join("a.sumocfg"), cfg("a.rou.xml")).unwrap();
+        std::fs::write(home.join("b.sumocfg"), cfg("../outside.rou.xml")).unwrap();
+        let work = root.join("work");
+        std::fs::create_dir_all(&work).unwrap();
+        let copied = scratch_copy(&home.join("a.sumocfg"), &work)
+            .unwrap()
+            .unwrap();
+        assert_eq!(copied, work.join("scenario/a.sumocfg"));
+        assert!(work.join("scenario/nets/a.net.xml").is_file());
+        assert!(work.join("scenario/a.rou.xml").is_file());
+        // a file named outside the folder: SUMO runs on the user's files where they are
+        assert_eq!(
+            scratch_copy(&home.join("b.sumocfg"), &root.join("work2")).unwrap(),
+            None
+        );
+        std::fs::remove_dir_all(&root).unwrap();
     }
 }
