@@ -2,8 +2,8 @@
 //! user's scenario runs as the user runs it (`sumo -c X.sumocfg`, or `sumo -n N -r R -a A`); a mapc scenario is
 //! exported first (`mapc_sumo`, as `mapc export --sumo` does). Each seed runs with `--seed S
 //! --duration-log.statistics true` (and no schema validation); its vehicle-steps are SUMO's own count (UPS x
-//! duration), its CPU time and peak memory the kernel's for the child process. A configuration runs from a copy of
-//! its folder, so that the outputs it asks for do not overwrite the user's files.
+//! duration), its CPU time and peak memory the kernel's for the child process. A user's files run from a copy of
+//! the folder that holds them, so that the outputs they ask for do not overwrite the user's own.
 
 use anyhow::{Context, bail};
 use std::path::{Path, PathBuf};
@@ -125,6 +125,12 @@ pub fn run_sumo(
             routes,
             additional,
         } => {
+            let mut given = vec![net.to_path_buf()];
+            given.extend(routes.iter().cloned());
+            given.extend(additional.iter().cloned());
+            let run = scratch_files(&given, dir)?.unwrap_or(given);
+            let (net, rest) = run.split_first().expect("a net is given");
+            let (routes, additional) = rest.split_at(routes.len());
             let mut v = vec!["-n".into(), absolute(net).display().to_string()];
             v.extend(["-r".into(), joined(routes)]);
             if !additional.is_empty() {
@@ -228,45 +234,71 @@ pub fn cpu_seconds(u: &libc::rusage) -> f64 {
 /// runs on the user's files in place.
 fn scratch_copy(cfg: &Path, dir: &Path) -> anyhow::Result<Option<PathBuf>> {
     let conf = mapc_scenario::sumo::config::read(cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let canonical = |p: &Path| std::fs::canonicalize(p).ok();
-    let (Some(cfg_abs), Some(home)) = (
-        canonical(cfg),
-        cfg.parent().and_then(|h| {
-            canonical(if h.as_os_str().is_empty() {
-                Path::new(".")
-            } else {
-                h
-            })
-        }),
-    ) else {
+    let Some(home) = folder_of(cfg) else {
         return Ok(None);
     };
-    let inputs = std::iter::once(&conf.net_file)
-        .chain(&conf.route_files)
-        .chain(&conf.additional_files);
-    let mut inside = true;
-    for f in inputs {
-        inside &= canonical(f).is_some_and(|f| f.starts_with(&home));
-    }
-    let scratch = dir.join("scenario");
-    let dir_abs = canonical(dir);
-    // (the working folder itself, where it lies inside the user's folder, is not copied into itself)
-    if !inside || dir_abs.as_ref().is_some_and(|d| home.starts_with(d)) {
-        return Ok(None);
-    }
-    // (a configuration that sits in a large folder, a home folder say, runs in place rather than copy it all)
-    let mut budget = SCRATCH_BUDGET;
-    if !fits(&home, dir_abs.as_deref(), &mut budget) {
-        return Ok(None);
-    }
-    copy_tree(&home, &scratch, dir_abs.as_deref())?;
-    let rel = cfg_abs
-        .strip_prefix(&home)
-        .expect("the configuration lies in its folder");
-    Ok(Some(scratch.join(rel)))
+    let mut files = vec![cfg.to_path_buf(), conf.net_file.clone()];
+    files.extend(conf.route_files.iter().cloned());
+    files.extend(conf.additional_files.iter().cloned());
+    Ok(copy_holding(&home, &files, dir)?.map(|copied| copied[0].clone()))
 }
 
-/// The most [`scratch_copy`] copies: files, and bytes.
+/// The net, route and additional files of `sumo -n -r -a` in a copy of the folder that holds them all (as
+/// [`scratch_copy`]: an induction loop writes its file beside the additional file that defines it), in the order
+/// given; `None` where they share no folder small enough to copy.
+fn scratch_files(files: &[PathBuf], dir: &Path) -> anyhow::Result<Option<Vec<PathBuf>>> {
+    let folders: Vec<PathBuf> = files.iter().filter_map(|f| folder_of(f)).collect();
+    if folders.len() != files.len() || folders.is_empty() {
+        return Ok(None);
+    }
+    let mut home = folders[0].clone();
+    while !folders.iter().all(|f| f.starts_with(&home)) {
+        if !home.pop() {
+            return Ok(None);
+        }
+    }
+    copy_holding(&home, files, dir)
+}
+
+/// The canonical folder of a file.
+fn folder_of(file: &Path) -> Option<PathBuf> {
+    std::fs::canonicalize(file)
+        .ok()?
+        .parent()
+        .map(Path::to_path_buf)
+}
+
+/// `home` copied to `dir/scenario` and `files` (which must lie in it) as they are in the copy; `None`, copying
+/// nothing, where a file lies outside `home` or `home` is larger than [`SCRATCH_BUDGET`] (a home folder, say).
+/// The working folder `dir`, where it lies inside `home`, is left out of the copy.
+fn copy_holding(
+    home: &Path,
+    files: &[PathBuf],
+    dir: &Path,
+) -> anyhow::Result<Option<Vec<PathBuf>>> {
+    let dir_abs = std::fs::canonicalize(dir).ok();
+    let mut inside = Vec::with_capacity(files.len());
+    for f in files {
+        let rel = std::fs::canonicalize(f)
+            .ok()
+            .and_then(|f| f.strip_prefix(home).ok().map(Path::to_path_buf));
+        match rel {
+            Some(rel) => inside.push(rel),
+            None => return Ok(None),
+        }
+    }
+    let mut budget = SCRATCH_BUDGET;
+    if !fits(home, dir_abs.as_deref(), &mut budget) {
+        return Ok(None);
+    }
+    let scratch = dir.join("scenario");
+    copy_tree(home, &scratch, dir_abs.as_deref())?;
+    Ok(Some(
+        inside.into_iter().map(|rel| scratch.join(rel)).collect(),
+    ))
+}
+
+/// The most [`copy_holding`] copies: files, and bytes.
 const SCRATCH_BUDGET: (u64, u64) = (10_000, 256 << 20);
 
 /// Whether the files under `from` (but `skip`) fit in what is left of `budget`, which they use up.
@@ -364,6 +396,19 @@ mod tests {
             scratch_copy(&home.join("b.sumocfg"), &root.join("work2")).unwrap(),
             None
         );
+        // `sumo -n -r`: the folder that holds both, the files in the order given
+        let work3 = root.join("work3");
+        std::fs::create_dir_all(&work3).unwrap();
+        let given = [home.join("nets/a.net.xml"), root.join("outside.rou.xml")];
+        let copied = scratch_files(&given, &work3).unwrap().unwrap();
+        assert_eq!(
+            copied,
+            [
+                work3.join("scenario/study/nets/a.net.xml"),
+                work3.join("scenario/outside.rou.xml")
+            ]
+        );
+        assert!(copied.iter().all(|f| f.is_file()));
         std::fs::remove_dir_all(&root).unwrap();
     }
 }
