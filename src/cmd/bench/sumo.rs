@@ -237,16 +237,75 @@ fn scratch_copy(cfg: &Path, dir: &Path) -> anyhow::Result<Option<PathBuf>> {
     let Some(home) = folder_of(cfg) else {
         return Ok(None);
     };
+    // (outputs named outside the folder, or absolute, go where they always went: SUMO runs in place)
+    let config_xml = mapc_import::read_sumo_xml(
+        cfg,
+        &["configuration", "sumoConfiguration"],
+        "a SUMO configuration",
+    )?;
+    if writes_outside(&config_xml)
+        || conf
+            .additional_files
+            .iter()
+            .any(|a| additional_writes_outside(a))
+    {
+        return Ok(None);
+    }
     let mut files = vec![cfg.to_path_buf(), conf.net_file.clone()];
     files.extend(conf.route_files.iter().cloned());
     files.extend(conf.additional_files.iter().cloned());
     Ok(copy_holding(&home, &files, dir)?.map(|copied| copied[0].clone()))
 }
 
+/// Whether a configuration names an output file (an option `*-output`, `output-prefix` or a log) absolute or
+/// outside its folder: relative to a copy it would land outside the scratch folder, or in a folder not there.
+fn writes_outside(e: &mapc_import::SumoElement) -> bool {
+    let names_output = e.name.ends_with("-output")
+        || matches!(
+            e.name.as_str(),
+            "output-prefix" | "log" | "message-log" | "error-log"
+        );
+    (names_output && e.get("value").is_some_and(leaves_folder))
+        || e.children.iter().any(writes_outside)
+}
+
+/// Whether an additional file's elements write a file (an induction loop's `file`, ...) absolute or outside
+/// its folder; an additional file that cannot be read says yes (SUMO runs in place and reports it).
+fn additional_writes_outside(path: &Path) -> bool {
+    fn any_file(e: &mapc_import::SumoElement) -> bool {
+        ["file", "output"]
+            .iter()
+            .any(|k| e.get(k).is_some_and(leaves_folder))
+            || e.children.iter().any(any_file)
+    }
+    mapc_import::read_sumo_xml(
+        path,
+        &["routes", "additional", "additionals", "add"],
+        "a SUMO additional file",
+    )
+    .map_or(true, |root| any_file(&root))
+}
+
+/// A file name that is absolute or climbs out of the folder it is relative to.
+fn leaves_folder(name: &str) -> bool {
+    name.split([',', ' '])
+        .map(str::trim)
+        .filter(|n| !n.is_empty())
+        .any(|n| {
+            let p = Path::new(n);
+            p.is_absolute()
+                || p.components()
+                    .any(|c| matches!(c, std::path::Component::ParentDir))
+        })
+}
+
 /// The net, route and additional files of `sumo -n -r -a` in a copy of the folder that holds them all (as
 /// [`scratch_copy`]: an induction loop writes its file beside the additional file that defines it), in the order
 /// given; `None` where they share no folder small enough to copy.
 fn scratch_files(files: &[PathBuf], dir: &Path) -> anyhow::Result<Option<Vec<PathBuf>>> {
+    if files.iter().skip(1).any(|a| additional_writes_outside(a)) {
+        return Ok(None);
+    }
     let folders: Vec<PathBuf> = files.iter().filter_map(|f| folder_of(f)).collect();
     if folders.len() != files.len() || folders.is_empty() {
         return Ok(None);
@@ -276,6 +335,10 @@ fn copy_holding(
     files: &[PathBuf],
     dir: &Path,
 ) -> anyhow::Result<Option<Vec<PathBuf>>> {
+    // (files with only the file system's root in common run in place)
+    if home.parent().is_none() {
+        return Ok(None);
+    }
     let dir_abs = std::fs::canonicalize(dir).ok();
     let mut inside = Vec::with_capacity(files.len());
     for f in files {
@@ -292,7 +355,11 @@ fn copy_holding(
         return Ok(None);
     }
     let scratch = dir.join("scenario");
-    copy_tree(home, &scratch, dir_abs.as_deref())?;
+    // (a file that cannot be copied, unreadable or gone meanwhile: SUMO runs on the user's files in place)
+    if copy_tree(home, &scratch, dir_abs.as_deref()).is_err() {
+        std::fs::remove_dir_all(&scratch).ok();
+        return Ok(None);
+    }
     Ok(Some(
         inside.into_iter().map(|rel| scratch.join(rel)).collect(),
     ))
@@ -394,6 +461,16 @@ mod tests {
         // a file named outside the folder: SUMO runs on the user's files where they are
         assert_eq!(
             scratch_copy(&home.join("b.sumocfg"), &root.join("work2")).unwrap(),
+            None
+        );
+        // an output named outside the folder: in place too
+        std::fs::write(
+            home.join("c.sumocfg"),
+            cfg("a.rou.xml").replace("trips.xml", "../results/trips.xml"),
+        )
+        .unwrap();
+        assert_eq!(
+            scratch_copy(&home.join("c.sumocfg"), &root.join("work4")).unwrap(),
             None
         );
         // `sumo -n -r`: the folder that holds both, the files in the order given
