@@ -19,9 +19,11 @@ const NATIVE_ROUNDING: bool = cfg!(any(
 #[cfg(all(target_arch = "x86_64", target_feature = "sse4.1"))]
 pub fn check_cpu() -> Result<(), String> {
     cpu_lacks(|feature| match feature {
+        "sse3" => std::arch::is_x86_feature_detected!("sse3"),
         "ssse3" => std::arch::is_x86_feature_detected!("ssse3"),
         "sse4.1" => std::arch::is_x86_feature_detected!("sse4.1"),
         "sse4.2" => std::arch::is_x86_feature_detected!("sse4.2"),
+        "cmpxchg16b" => std::arch::is_x86_feature_detected!("cmpxchg16b"),
         _ => std::arch::is_x86_feature_detected!("popcnt"),
     })
 }
@@ -32,12 +34,13 @@ pub fn check_cpu() -> Result<(), String> {
     Ok(())
 }
 
-/// x86-64-v2's instructions beyond the baseline that this build may use.
+/// x86-64-v2's instructions beyond the baseline that this build may use (but LAHF and SAHF, which every processor
+/// with the others has).
 #[cfg_attr(
     not(all(target_arch = "x86_64", target_feature = "sse4.1")),
     allow(dead_code)
 )]
-const X86_64_V2: [&str; 4] = ["ssse3", "sse4.1", "sse4.2", "popcnt"];
+const X86_64_V2: [&str; 6] = ["sse3", "ssse3", "sse4.1", "sse4.2", "popcnt", "cmpxchg16b"];
 
 /// [`check_cpu`]'s verdict given which features the processor has.
 #[cfg_attr(
