@@ -389,3 +389,23 @@ fn a_graph_file_with_bad_lanes_is_an_error_naming_the_element() {
         ],
     );
 }
+
+#[test]
+fn a_sumo_edge_between_missing_junctions_is_an_error_naming_it() {
+    let text = String::from_utf8(map("simple_merge.net.xml")).unwrap();
+    let edge = "<edge id=\"left\" from=\"left\" to=\"center\"";
+    for (attr, bad_edge) in [
+        ("from", "<edge id=\"left\" from=\"nowhere\" to=\"center\""),
+        ("to", "<edge id=\"left\" from=\"left\" to=\"nowhere\""),
+    ] {
+        let bad = text.replacen(edge, bad_edge, 1);
+        fails_with(
+            &scratch(&format!("{attr}_junction.net.xml"), bad.as_bytes()),
+            &[
+                &format!("line {}", line_of(&text, edge)),
+                "<edge id=\"left\">",
+                &format!("`{attr}` names junction `nowhere`, which the net lacks"),
+            ],
+        );
+    }
+}

@@ -128,7 +128,11 @@ pub fn run_sumo(
             let mut given = vec![net.to_path_buf()];
             given.extend(routes.iter().cloned());
             given.extend(additional.iter().cloned());
-            let run = scratch_files(&given, dir)?.unwrap_or(given);
+            let run = if additional.iter().any(|a| additional_writes_outside(a)) {
+                given
+            } else {
+                scratch_files(&given, dir)?.unwrap_or(given)
+            };
             let (net, rest) = run.split_first().expect("a net is given");
             let (routes, additional) = rest.split_at(routes.len());
             let mut v = vec!["-n".into(), absolute(net).display().to_string()];
@@ -238,12 +242,7 @@ fn scratch_copy(cfg: &Path, dir: &Path) -> anyhow::Result<Option<PathBuf>> {
         return Ok(None);
     };
     // (outputs named outside the folder, or absolute, go where they always went: SUMO runs in place)
-    let config_xml = mapc_import::read_sumo_xml(
-        cfg,
-        &["configuration", "sumoConfiguration"],
-        "a SUMO configuration",
-    )?;
-    if writes_outside(&config_xml)
+    if conf.outputs.iter().any(|o| leaves_folder(o))
         || conf
             .additional_files
             .iter()
@@ -255,18 +254,6 @@ fn scratch_copy(cfg: &Path, dir: &Path) -> anyhow::Result<Option<PathBuf>> {
     files.extend(conf.route_files.iter().cloned());
     files.extend(conf.additional_files.iter().cloned());
     Ok(copy_holding(&home, &files, dir)?.map(|copied| copied[0].clone()))
-}
-
-/// Whether a configuration names an output file (an option `*-output`, `output-prefix` or a log) absolute or
-/// outside its folder: relative to a copy it would land outside the scratch folder, or in a folder not there.
-fn writes_outside(e: &mapc_import::SumoElement) -> bool {
-    let names_output = e.name.ends_with("-output")
-        || matches!(
-            e.name.as_str(),
-            "output-prefix" | "log" | "message-log" | "error-log"
-        );
-    (names_output && e.get("value").is_some_and(leaves_folder))
-        || e.children.iter().any(writes_outside)
 }
 
 /// Whether an additional file's elements write a file (an induction loop's `file`, ...) absolute or outside
@@ -303,9 +290,6 @@ fn leaves_folder(name: &str) -> bool {
 /// [`scratch_copy`]: an induction loop writes its file beside the additional file that defines it), in the order
 /// given; `None` where they share no folder small enough to copy.
 fn scratch_files(files: &[PathBuf], dir: &Path) -> anyhow::Result<Option<Vec<PathBuf>>> {
-    if files.iter().skip(1).any(|a| additional_writes_outside(a)) {
-        return Ok(None);
-    }
     let folders: Vec<PathBuf> = files.iter().filter_map(|f| folder_of(f)).collect();
     if folders.len() != files.len() || folders.is_empty() {
         return Ok(None);

@@ -145,20 +145,16 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     let mut roads = Vec::new();
     for e in &normal {
         let place = || Some(format!("<edge id=\"{}\">", e.id));
-        let from = *junction_of.get(e.from.as_str()).ok_or_else(|| {
-            ParseError::new(
-                e.at,
-                place(),
-                format!("`from` names junction `{}`, which the net lacks", e.from),
-            )
-        })?;
-        let to = *junction_of.get(e.to.as_str()).ok_or_else(|| {
-            ParseError::new(
-                e.at,
-                place(),
-                format!("`to` names junction `{}`, which the net lacks", e.to),
-            )
-        })?;
+        let junction = |attr: &str, id: &str| {
+            junction_of.get(id).copied().ok_or_else(|| {
+                ParseError::new(
+                    e.at,
+                    place(),
+                    format!("`{attr}` names junction `{id}`, which the net lacks"),
+                )
+            })
+        };
+        let (from, to) = (junction("from", &e.from)?, junction("to", &e.to)?);
         let mut lanes: Vec<&SumoLane> = e.lanes.iter().collect();
         lanes.sort_by_key(|l| l.index);
         if let Some((i, l)) = lanes

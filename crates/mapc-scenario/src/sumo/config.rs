@@ -33,6 +33,9 @@ pub struct SumoConfig {
     pub scale: f64,
     /// Options read but without effect in mapc, one line each.
     pub warnings: Vec<String>,
+    /// The files SUMO itself writes for this configuration, as it names them (`*-output`, `output-prefix` and the
+    /// logs: relative to the configuration's folder); mapc writes none of them.
+    pub outputs: Vec<String>,
 }
 
 impl SumoConfig {
@@ -52,6 +55,7 @@ impl SumoConfig {
             default_car_follow_model: "Krauss".into(),
             scale: 1.0,
             warnings: Vec::new(),
+            outputs: Vec::new(),
         }
     }
 }
@@ -121,6 +125,14 @@ pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
     let mut action_step: Option<(f64, String)> = None;
     for o in options {
         let value = o.get("value").unwrap_or("").trim();
+        if o.name.ends_with("-output")
+            || matches!(
+                o.name.as_str(),
+                "output-prefix" | "log" | "message-log" | "error-log"
+            )
+        {
+            c.outputs.push(value.to_string());
+        }
         let num = || -> Result<f64, SumoError> {
             value
                 .parse::<f64>()

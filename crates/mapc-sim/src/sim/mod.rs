@@ -515,7 +515,7 @@ impl Simulation {
             // junction requests, the active lanes' list) is cleared once, as that step's successor would.
             if !self.was_empty {
                 self.was_empty = true;
-                if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
+                if self.keeps_active_lanes() {
                     self.activate_lanes_at_step_start();
                 }
                 for a in &mut self.approaches {
@@ -528,7 +528,7 @@ impl Simulation {
             return self.end_step();
         }
         self.was_empty = false;
-        if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
+        if self.keeps_active_lanes() {
             self.activate_lanes_at_step_start();
         }
 
@@ -579,7 +579,7 @@ impl Simulation {
         self.plans = plans;
         self.execute_moves();
         self.teleport_stuck();
-        if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
+        if self.keeps_active_lanes() {
             self.activate_lanes_after_moves();
         }
         // the loops see the moves before the lane changes, as SUMO's see them while vehicles move: a vehicle

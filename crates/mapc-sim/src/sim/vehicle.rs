@@ -221,7 +221,7 @@ impl Simulation {
             .unwrap_or(q.len());
         q.insert(at, id);
         self.in_network += 1;
-        if self.spec.sumo_junction_lane_changes && self.net.multi_lane {
+        if self.keeps_active_lanes() {
             self.active_lanes.placed.push(lane);
         }
         let v = &mut self.veh[id as usize];

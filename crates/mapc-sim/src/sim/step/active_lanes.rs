@@ -40,6 +40,13 @@ pub(in crate::sim) enum ChangerEdge {
 }
 
 impl Simulation {
+    /// Whether the run keeps SUMO's list of active lanes: under SUMO's junction rules, on a network where lanes
+    /// change.
+    #[inline]
+    pub(in crate::sim) fn keeps_active_lanes(&self) -> bool {
+        self.spec.sumo_junction_lane_changes && self.net.multi_lane
+    }
+
     /// The road or group whose lane changer covers `lane` (SUMO's `haveNeighbors`), if any.
     pub(in crate::sim) fn changer_edge(&self, lane: LaneIdx) -> Option<ChangerEdge> {
         let l = self.lane_at(lane as usize);
