@@ -15,6 +15,27 @@ pub(in crate::sim) fn exact_reciprocal(d: f64) -> Option<f64> {
     (d.is_normal() && d.to_bits() & MANTISSA == 0).then(|| 1.0 / d)
 }
 
+/// SUMO's `canBrake` at a link `dist` ahead: the driver at `speed` needs less to stop, or stops within a step.
+/// `stop_brake_gap`: its braking distance where the plan computed it (NaN: computed here, where the bound does
+/// not decide).
+pub(in crate::sim) fn can_brake_before(
+    p: &CfModel,
+    tc: &TypeConsts,
+    speed: f64,
+    dist: f64,
+    stop_brake_gap: f64,
+    dt: f64,
+) -> bool {
+    dist > tc.brake_gap_above(speed, 0.0)
+        || dist
+            > if stop_brake_gap.is_nan() {
+                p.brake_gap(speed, p.decel, 0.0)
+            } else {
+                stop_brake_gap
+            }
+        || speed < p.decel * dt
+}
+
 impl Simulation {
     pub(in crate::sim) fn execute_moves(&mut self) {
         let dt = self.spec.step_s;
@@ -40,14 +61,8 @@ impl Simulation {
                         continue;
                     }
                     let tc = &self.type_consts[v.vtype as usize];
-                    let can_brake = it.dist > tc.brake_gap_above(v.speed, 0.0)
-                        || it.dist
-                            > if plan.stop_brake_gap.is_nan() {
-                                p.brake_gap(v.speed, p.decel, 0.0)
-                            } else {
-                                plan.stop_brake_gap
-                            }
-                        || v.speed < p.decel * dt;
+                    let can_brake =
+                        can_brake_before(p, tc, v.speed, it.dist, plan.stop_brake_gap, dt);
                     // the speed that stops `stop_dist` ahead, never above the plan's at the link
                     let wait = |stop_dist: f64| {
                         it.v_link_pass

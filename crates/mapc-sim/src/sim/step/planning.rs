@@ -400,12 +400,15 @@ impl Simulation {
                 let held = lk.signal.is_some()
                     && match self.signal_of(lk, light_time) {
                         Some(SignalState::Red) => true,
-                        Some(SignalState::Yellow) => {
-                            if plan.stop_brake_gap.is_nan() {
-                                plan.stop_brake_gap = p.brake_gap(speed, p.decel, 0.0);
-                            }
-                            it.dist >= plan.stop_brake_gap
-                        }
+                        // (as the move decides it)
+                        Some(SignalState::Yellow) => super::moves::can_brake_before(
+                            p,
+                            &tc,
+                            speed,
+                            it.dist,
+                            plan.stop_brake_gap,
+                            dt,
+                        ),
                         _ => false,
                     };
                 self.approaches[it.link as usize].push(Approach {
