@@ -220,6 +220,14 @@ impl Road {
             .position(|&i| i as u32 == sumo_index)
             .map(|k| k as u8)
     }
+    /// The SUMO lane index of the road's lane `lane` (the inverse of [`Self::lane_of_sumo_index`]).
+    pub fn sumo_index_of_lane(&self, lane: u8) -> u8 {
+        self.provenance
+            .sumo_lanes
+            .get(lane as usize)
+            .copied()
+            .unwrap_or(lane)
+    }
     /// Speed limit of the rightmost lane.
     pub fn speed_mps(&self) -> f64 {
         self.lanes.first().map_or(0.0, |l| l.speed_mps)

@@ -51,9 +51,7 @@ fn lane_name(g: &LaneGraph, road: RoadId, lane: u8) -> String {
     let edge = r
         .and_then(|r| r.provenance.sumo_ids.first().cloned())
         .unwrap_or_else(|| road.to_string());
-    let index = r
-        .and_then(|r| r.provenance.sumo_lanes.get(lane as usize).copied())
-        .unwrap_or(lane);
+    let index = r.map_or(lane, |r| r.sumo_index_of_lane(lane));
     format!("{edge}_{index}")
 }
 
