@@ -272,6 +272,26 @@ fn a_left_turn_on_a_yielding_green_waits_for_the_crossing_stream() {
         };
     assert!(yields_to(&s5, 0, &s2, 0), "{left}");
     assert!(yields_to(&s5, 1, &e4, 1), "{left}");
+    // a left turn of the grid yields inside its junction (`cont="1"`, an internal junction), a straight link not
+    assert_eq!(left["yields_inside"], true, "{left}");
+    let straight = g["connections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["from_road"] == s5 && c["to_road"] == s2)
+        .expect("5Si's straight link");
+    assert!(straight.get("yields_inside").is_none(), "{straight}");
+    let cont = |c: &&serde_json::Value| c["yields_inside"] == true;
+    assert_eq!(
+        g["connections"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(cont)
+            .count(),
+        36,
+        "the net's 36 requests with cont=\"1\""
+    );
     // and the left-turners wait for them: seed 0's mean trip to 3 000 s, 104.8 s without, 106.5 s with
     let run = run_of(&grid_until("grid-crossing-run", 3000), 0);
     let mean = run["mean_travel_time_s"].as_f64().unwrap();

@@ -130,6 +130,7 @@ pub(crate) mod tests {
         for (from, row) in [(0, RightOfWay::Minor), (1, RightOfWay::Major)] {
             g.connections.push(Connection {
                 yields_to: Vec::new(),
+                yields_inside: false,
                 junction: JunctionId(2),
                 from_road: RoadId(from),
                 from_lane: 0,

@@ -281,6 +281,10 @@ pub struct Connection {
     /// table; empty elsewhere): by their lanes, which stay what they are whatever the graph's order.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub yields_to: Vec<ConnectionLanes>,
+    /// Its driver yields inside the junction, not at the stop line (a SUMO net's internal junction, `cont` in its
+    /// request table): a left turn waits in the junction for the oncoming stream to clear.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub yields_inside: bool,
 }
 
 /// A connection named by its lanes: from road and lane, to road and lane.

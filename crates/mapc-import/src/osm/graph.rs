@@ -335,6 +335,7 @@ fn osm_connections(graph: &LaneGraph, road_piece: &[(i64, u32)]) -> Vec<Connecti
                 for lane in 0..fr.lanes.len() as u8 {
                     out.push(Connection {
                         yields_to: Vec::new(),
+                        yields_inside: false,
                         junction: j.id,
                         from_road: from,
                         from_lane: lane,

@@ -58,7 +58,8 @@ pub(super) struct SumoJunction {
     pub(super) internal: bool,
     pub(super) inc_lanes: Vec<String>,
     /// (request index, response bits).
-    pub(super) requests: Vec<(usize, String)>,
+    /// (index, response, cont) of each `<request>`.
+    pub(super) requests: Vec<(usize, String, bool)>,
 }
 
 pub(super) struct SumoConnection {
@@ -306,11 +307,12 @@ pub(super) fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                         let index: usize =
                             el.int("index")?.ok_or_else(|| el.err("missing `index`"))?;
                         let response = el.req("response")?.to_string();
+                        let cont = el.get("cont") == Some("1");
                         net.junctions
                             .last_mut()
                             .expect("in a junction")
                             .requests
-                            .push((index, response));
+                            .push((index, response, cont));
                     }
                     (2, "tlLogic") => {
                         let id = el.req("id")?.to_string();

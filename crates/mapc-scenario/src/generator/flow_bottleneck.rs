@@ -80,6 +80,7 @@ pub fn flow_bottleneck(p: &FlowBottleneckParams) -> Result<LaneGraph, String> {
     g.roads = roads;
     let link = |junction: u32, from_lane: u8, to_lane: u8, via: f64, right_of_way| Connection {
         yields_to: Vec::new(),
+        yields_inside: false,
         junction: JunctionId(junction),
         from_road: RoadId(junction - 1),
         from_lane,

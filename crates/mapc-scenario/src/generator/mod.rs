@@ -205,6 +205,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     let connection =
         |from: &str, from_lane: u8, to: &str, to_lane: u8, via: f64, speed: f64, row| Connection {
             yields_to: Vec::new(),
+            yields_inside: false,
             junction: jid(edges.iter().find(|e| e.0 == from).unwrap().2),
             from_road: rid(from),
             from_lane,
@@ -329,6 +330,7 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
     g.connections = (0..p.lanes_after)
         .map(|lane| Connection {
             yields_to: Vec::new(),
+            yields_inside: false,
             junction: JunctionId(1),
             from_road: RoadId(0),
             from_lane: lane + dropped,

@@ -64,6 +64,7 @@ pub fn apply(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, Transf
             for &(from, from_lane, to, to_lane) in links.iter().filter(|l| l.0 == a && l.2 == b) {
                 let mut k = Connection {
                     yields_to: Vec::new(),
+                    yields_inside: false,
                     from_road: from,
                     from_lane,
                     to_road: to,

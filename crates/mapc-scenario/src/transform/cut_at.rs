@@ -110,6 +110,7 @@ pub fn cut_road(
     for lane in 0..r.lanes.len() as u8 {
         g.connections.push(Connection {
             yields_to: Vec::new(),
+            yields_inside: false,
             junction: new_junction,
             from_road: road,
             from_lane: lane,

@@ -383,6 +383,7 @@ pub fn ensure_connection(g: &mut LaneGraph, from: RoadId, to: RoadId, step: &str
     };
     g.connections.push(Connection {
         yields_to: Vec::new(),
+        yields_inside: false,
         junction,
         from_road: from,
         from_lane: 0,
@@ -590,6 +591,7 @@ pub(crate) mod test_maps {
             };
             g.connections.push(Connection {
                 yields_to: Vec::new(),
+                yields_inside: false,
                 junction: j,
                 from_road: a,
                 from_lane: 0,

@@ -355,6 +355,7 @@ mod tests {
                 for lane in 0..n.min(m) as u8 {
                     g.connections.push(Connection {
                         yields_to: Vec::new(),
+                        yields_inside: false,
                         junction: JunctionId(i as u32 + 1),
                         from_road: RoadId(i as u32),
                         from_lane: lane,

@@ -69,6 +69,9 @@ pub struct SimLink {
     /// The other links of its junction it yields to by the net's request table (a SUMO net): those that cross
     /// it, a left turn's oncoming stream. Read on a yielding green (`g`) and at an unsignalised minor link.
     pub crossing_foes: Vec<LinkIdx>,
+    /// Its driver yields inside the junction (SUMO's `cont`): SUMO 1.8 skips the slow approach to the foe
+    /// visibility point there.
+    pub yields_inside: bool,
     /// The fixed-time light that controls it: (index into [`Network::lights`], index in its phases' states).
     pub signal: Option<(u32, u32)>,
 }
@@ -287,6 +290,7 @@ impl Network {
                 zipper: c.right_of_way == RightOfWay::Zipper,
                 foes: Vec::new(),
                 crossing_foes: Vec::new(),
+                yields_inside: c.yields_inside,
                 signal: c.signal.as_ref().and_then(|s| {
                     g.lights
                         .iter()

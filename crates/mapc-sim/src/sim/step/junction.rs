@@ -140,11 +140,12 @@ impl Simulation {
     }
 
     /// SUMO's link leaders at a merge (`MSLink::getLeaderInfo`, `MSVehicle::getSafeFollowSpeed`), under SUMO's
-    /// junction rules: a vehicle on a foe's connection into the same lane, or one whose back still lies on it,
-    /// leads ego through its minor link, and ego's speed on leaving the connection is what lets it stop before
-    /// them: nothing while the foe is inside the junction, about its distance to the link once only the foe's
-    /// back is. The leave time grows with it, so a foe approaching next blocks the link until the junction is
-    /// clear.
+    /// junction rules: a vehicle that has left a foe's connection into the same lane but whose back still lies on
+    /// it leads ego through its minor link, and ego's speed on leaving the connection is what lets it stop about
+    /// the distance to the link. The leave time grows with it, so a foe approaching next blocks the link until the
+    /// junction is clear. (A foe still inside the junction leads ego by the plan's link leaders, as in SUMO: ego
+    /// may follow it in; it once zeroed the leave speed, and a driver at a minor stop line of RESCO's cologne3
+    /// waited two steps longer than SUMO's.)
     pub(in crate::sim) fn lower_leave_speeds_for_merging_foes(
         &self,
         plan: &mut Plan,
@@ -159,10 +160,6 @@ impl Simulation {
             }
             for &f in &lk.foes {
                 let fl = self.link_at(f as usize);
-                if !self.lane_veh[fl.via_lane as usize].is_empty() {
-                    it.leave_speed = 0.0;
-                    continue;
-                }
                 let Some(&o) = self.lane_veh[fl.to_lane as usize].last() else {
                     continue;
                 };

@@ -52,7 +52,16 @@ impl Simulation {
                 let v = &self.veh[id as usize];
                 let p = &self.types[v.vtype as usize];
                 let mut v_safe = plan.v_safe;
+                // under SUMO's rules, the least speed past a minor link's point of no return (SUMO's `vSafeMin`)
+                let (mut v_safe_min, mut v_safe_min_dist) = (f64::NEG_INFINITY, 0.0);
+                // held before a link (its light, a foe, no room beyond it), or crawling towards one (SUMO's
+                // `myHaveToWaitOnNextLink`)
+                let mut waits = false;
+                let mut held = false;
                 for it in &plan.items[..plan.n_items as usize] {
+                    if plan.hold_dist <= it.dist {
+                        break;
+                    }
                     let lk = self.link_at(it.link as usize);
                     let signal = self.signal_of(lk, light_time);
                     if signal == Some(SignalState::Green)
@@ -72,6 +81,7 @@ impl Simulation {
                     if matches!(signal, Some(SignalState::Red | SignalState::Yellow)) {
                         if signal == Some(SignalState::Red) || can_brake {
                             v_safe = v_safe.fmin(wait((it.dist - LIGHT_STOP_OFFSET_M).fmax(0.0)));
+                            (waits, held) = (true, true);
                             break;
                         }
                         continue;
@@ -94,9 +104,46 @@ impl Simulation {
                         !must_stop && it.will_pass && self.link_opened(id, it, can_brake, crossing);
                     if !opened && (can_brake || !it.will_pass || must_stop) {
                         v_safe = v_safe.fmin(wait(it.stop_dist));
+                        (waits, held) = (true, true);
                         break;
                     }
+                    if opened
+                        && crossing
+                        && !lk.yields_inside
+                        && self.spec.sumo_junction_lane_changes
+                    {
+                        // SUMO's approach to an open minor link: a driver who cannot yet see every foe (farther
+                        // than the visibility distance) keeps able to stop at the line; nearer, it must get across
+                        if it.dist > FOE_VISIBILITY_M {
+                            v_safe = v_safe.fmin(wait(it.stop_dist));
+                            (waits, held) = (true, true);
+                            break;
+                        }
+                        let across = self.lane_at(v.lane as usize).length - v.pos;
+                        v_safe_min = ((across + POSITION_EPS) / dt).fmin(it.v_link_pass);
+                        v_safe_min_dist = across;
+                    }
                 }
+                if !held && plan.hold_dist.is_finite() {
+                    // no room beyond the junction ahead ([`super::junction_space`])
+                    v_safe = v_safe.fmin(plan.hold_speed);
+                    (waits, held) = (true, true);
+                }
+                if !held && (v_safe < v.speed || v_safe < HALTING_SPEED) {
+                    waits = true;
+                }
+                if v_safe + NUMERICAL_EPS < v_safe_min {
+                    // it cannot get across: it stops before the line instead
+                    v_safe = v_safe.fmin(p.stop_speed(
+                        v_safe_min_dist,
+                        v.speed,
+                        self.desired_speed(v, v.lane),
+                    ));
+                    v_safe_min = f64::NEG_INFINITY;
+                    waits = true;
+                }
+                self.veh[id as usize].waits_at_link = waits;
+                let v = &self.veh[id as usize];
                 // finalise: acceleration and deceleration bounds (emergency braking allowed when unsafe)
                 let v_max = v_safe.fmin(v.speed + p.accel * dt);
                 let v_min = (v.speed - p.decel * dt)
@@ -113,6 +160,8 @@ impl Simulation {
                     let desired = self.desired_speed(v, lane);
                     next = self.patch_lc_speed(id, speed, vtype, lane, desired, v_min, next, v_max);
                 }
+                // (SUMO's `finalizeSpeed` then its least speed)
+                next = next.fmax(v_safe_min);
                 let v = &self.veh[id as usize];
                 let p = &self.types[v.vtype as usize];
                 if v.controlled && v.accel_cmd.is_finite() && self.in_region[v.lane as usize] {

@@ -1,0 +1,73 @@
+//! Two of SUMO 1.8's junction rules, vehicle by vehicle against SUMO's own run of two small networks made for
+//! them (`tests/data/sumo_rules/`, built by SUMO 1.8's netconvert; the figures below are SUMO's FCD, seed 0).
+
+use mapc_scenario::ResolvedScenario;
+use mapc_sim::{Simulation, spec_from_scenario};
+
+fn simulation(cfg: &str) -> Simulation {
+    let path = format!("{}/tests/data/sumo_rules/{cfg}", env!("CARGO_MANIFEST_DIR"));
+    let rs = ResolvedScenario::load(&path).unwrap();
+    Simulation::from_spec(spec_from_scenario(&rs).unwrap(), 0).unwrap()
+}
+
+/// After `n` steps, (in the junction, position, speed) of vehicle `id`: SUMO's FCD at time `n - 1` (it stamps a
+/// step with its start).
+fn after(sim: &mut Simulation, n: u64, id: u32) -> (bool, f64, f64) {
+    while sim.step_index() < n {
+        sim.step().unwrap();
+    }
+    let v = sim.vehicle(id).expect("on the network");
+    (v.in_junction, v.pos_m, v.speed)
+}
+
+#[test]
+fn a_driver_approaching_an_open_minor_link_keeps_able_to_stop_until_it_sees_the_foes() {
+    // `side` joins `main` at a priority junction; no one else drives. SUMO's driver slows as if to stop at the
+    // line until it is within the foe visibility distance (4.5 m), though the link is open all along: 13.89 m/s
+    // 21.7 m before the line, 11.71 at 14.0 m, 7.21 at 2.8 m, then across at the connection's 6.51 m/s
+    let mut sim = simulation("minor_link/minor.sumocfg");
+    let recorded = [
+        (13, false, 171.08, 13.89),
+        (14, false, 182.79, 11.71),
+        (15, false, 189.99, 7.21),
+        (16, true, 3.70, 6.51),
+    ];
+    for (n, inside, pos, speed) in recorded {
+        let (got_inside, got_pos, got_speed) = after(&mut sim, n, 0);
+        assert_eq!(got_inside, inside, "step {n}");
+        assert!(
+            (got_pos - pos).abs() < 0.01,
+            "step {n}: at {got_pos}, SUMO {pos}"
+        );
+        assert!(
+            (got_speed - speed).abs() < 0.01,
+            "step {n}: {got_speed} m/s, SUMO {speed}"
+        );
+    }
+}
+
+#[test]
+fn a_driver_waits_before_a_junction_with_no_room_beyond_it() {
+    // A red light 52.8 m past the junction holds a queue that fills `out`; its last car stands 5.39 m in, so the
+    // next one would stand inside the junction, blocking the connection from `side`. SUMO's driver stops a metre
+    // before the line instead (295.00 of `main`'s 296.00 m), and the queue grows on `main`.
+    let mut sim = simulation("room_beyond/room.sumocfg");
+    let (inside, pos, speed) = after(&mut sim, 61, 9);
+    assert!(!inside);
+    assert!((pos - 295.00).abs() < 0.01, "at {pos}");
+    assert!(speed < 0.01, "{speed}");
+    let (inside, pos, speed) = after(&mut sim, 61, 10);
+    assert!(!inside);
+    assert!(
+        (pos - 279.77).abs() < 0.01 && (speed - 11.46).abs() < 0.01,
+        "{pos} {speed}"
+    );
+    // at 119 s every car behind stands on `main`, 5.8 m apart (length and min gap), none in the junction
+    for (id, pos) in [(10, 289.20), (16, 254.39), (24, 207.98)] {
+        let (inside, got, speed) = after(&mut sim, 120, id);
+        assert!(
+            !inside && (got - pos).abs() < 0.01 && speed < 0.01,
+            "vehicle {id}: {got} m, {speed} m/s"
+        );
+    }
+}
