@@ -232,6 +232,14 @@ impl CarFollowModel for Krauss {
             .fmin(self.max_next_speed(speed))
     }
 
+    /// The stop speed is the safe stop speed with a reaction time of one step, capped by one step of full
+    /// acceleration: at least `v` where both are ([`kinematics::surely_stops_within`]).
+    #[inline(always)]
+    fn stop_speed_at_least(&self, gap: f64, speed: f64, v: f64) -> bool {
+        v <= self.max_next_speed(speed)
+            && kinematics::surely_stops_within(self.dt, self.decel, gap, v)
+    }
+
     /// SUMO's `MSCFModel::freeSpeed` (Euler): brake `decel` each step from this speed to reach `max_speed` where
     /// it starts, `seen` metres ahead.
     fn free_speed(&self, _speed: f64, seen: f64, max_speed: f64, _desired_speed: f64) -> f64 {

@@ -115,6 +115,12 @@ pub trait CarFollowModel {
     /// The speed after one step that lets the vehicle stop within `gap`.
     fn stop_speed(&self, gap: f64, speed: f64, desired_speed: f64) -> f64;
 
+    /// Whether [`Self::stop_speed`] is surely at least `v`, decided without computing it (false: ask it).
+    #[inline(always)]
+    fn stop_speed_at_least(&self, _gap: f64, _speed: f64, _v: f64) -> bool {
+        false
+    }
+
     /// The speed after one step towards `max_speed`, which applies `seen` metres ahead.
     fn free_speed(&self, speed: f64, seen: f64, max_speed: f64, desired_speed: f64) -> f64;
 
@@ -319,6 +325,10 @@ impl CarFollowModel for CfModel {
     #[inline(always)]
     fn stop_speed(&self, gap: f64, speed: f64, desired_speed: f64) -> f64 {
         by_model!(self, m => m.stop_speed(gap, speed, desired_speed))
+    }
+    #[inline(always)]
+    fn stop_speed_at_least(&self, gap: f64, speed: f64, v: f64) -> bool {
+        by_model!(self, m => m.stop_speed_at_least(gap, speed, v))
     }
     #[inline(always)]
     fn free_speed(&self, speed: f64, seen: f64, max_speed: f64, desired_speed: f64) -> f64 {

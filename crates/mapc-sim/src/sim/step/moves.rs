@@ -54,14 +54,7 @@ impl Simulation {
                 let mut v_safe = plan.v_safe;
                 // under SUMO's rules, the least speed past a minor link's point of no return (SUMO's `vSafeMin`)
                 let (mut v_safe_min, mut v_safe_min_dist) = (f64::NEG_INFINITY, 0.0);
-                // held before a link (its light, a foe, no room beyond it), or crawling towards one (SUMO's
-                // `myHaveToWaitOnNextLink`)
-                let mut waits = false;
-                let mut held = false;
                 for it in &plan.items[..plan.n_items as usize] {
-                    if plan.hold_dist <= it.dist {
-                        break;
-                    }
                     let lk = self.link_at(it.link as usize);
                     let signal = self.signal_of(lk, light_time);
                     if signal == Some(SignalState::Green)
@@ -81,7 +74,6 @@ impl Simulation {
                     if matches!(signal, Some(SignalState::Red | SignalState::Yellow)) {
                         if signal == Some(SignalState::Red) || can_brake {
                             v_safe = v_safe.fmin(wait((it.dist - LIGHT_STOP_OFFSET_M).fmax(0.0)));
-                            (waits, held) = (true, true);
                             break;
                         }
                         continue;
@@ -104,7 +96,6 @@ impl Simulation {
                         !must_stop && it.will_pass && self.link_opened(id, it, can_brake, crossing);
                     if !opened && (can_brake || !it.will_pass || must_stop) {
                         v_safe = v_safe.fmin(wait(it.stop_dist));
-                        (waits, held) = (true, true);
                         break;
                     }
                     if opened
@@ -115,22 +106,19 @@ impl Simulation {
                         // SUMO's approach to an open minor link: a driver who cannot yet see every foe (farther
                         // than the visibility distance) keeps able to stop at the line; nearer, it must get across
                         if it.dist > FOE_VISIBILITY_M {
-                            v_safe = v_safe.fmin(wait(it.stop_dist));
-                            (waits, held) = (true, true);
+                            // (the stop speed only where it may be the lower)
+                            if !(it.v_link_pass >= v_safe
+                                && p.stop_speed_at_least(it.stop_dist, v.speed, v_safe))
+                            {
+                                v_safe = v_safe.fmin(wait(it.stop_dist));
+                            }
+                            debug_assert!(v_safe <= wait(it.stop_dist));
                             break;
                         }
                         let across = self.lane_at(v.lane as usize).length - v.pos;
                         v_safe_min = ((across + POSITION_EPS) / dt).fmin(it.v_link_pass);
                         v_safe_min_dist = across;
                     }
-                }
-                if !held && plan.hold_dist.is_finite() {
-                    // no room beyond the junction ahead ([`super::junction_space`])
-                    v_safe = v_safe.fmin(plan.hold_speed);
-                    (waits, held) = (true, true);
-                }
-                if !held && (v_safe < v.speed || v_safe < HALTING_SPEED) {
-                    waits = true;
                 }
                 if v_safe + NUMERICAL_EPS < v_safe_min {
                     // it cannot get across: it stops before the line instead
@@ -140,10 +128,7 @@ impl Simulation {
                         self.desired_speed(v, v.lane),
                     ));
                     v_safe_min = f64::NEG_INFINITY;
-                    waits = true;
                 }
-                self.veh[id as usize].waits_at_link = waits;
-                let v = &self.veh[id as usize];
                 // finalise: acceleration and deceleration bounds (emergency braking allowed when unsafe)
                 let v_max = v_safe.fmin(v.speed + p.accel * dt);
                 let v_min = (v.speed - p.decel * dt)
