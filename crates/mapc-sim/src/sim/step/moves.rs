@@ -52,8 +52,9 @@ impl Simulation {
                 let v = &self.veh[id as usize];
                 let p = &self.types[v.vtype as usize];
                 let mut v_safe = plan.v_safe;
-                // under SUMO's rules, the least speed past a minor link's point of no return (SUMO's `vSafeMin`)
-                let (mut v_safe_min, mut v_safe_min_dist) = (f64::NEG_INFINITY, 0.0);
+                // under SUMO's rules, the least speed past a minor link's point of no return (SUMO's `vSafeMin`),
+                // and the distance across
+                let mut across_min: Option<(f64, f64)> = None;
                 for it in &plan.items[..plan.n_items as usize] {
                     let lk = self.link_at(it.link as usize);
                     let signal = self.signal_of(lk, light_time);
@@ -116,18 +117,17 @@ impl Simulation {
                             break;
                         }
                         let across = self.lane_at(v.lane as usize).length - v.pos;
-                        v_safe_min = ((across + POSITION_EPS) / dt).fmin(it.v_link_pass);
-                        v_safe_min_dist = across;
+                        across_min =
+                            Some((((across + POSITION_EPS) / dt).fmin(it.v_link_pass), across));
                     }
                 }
-                if v_safe + NUMERICAL_EPS < v_safe_min {
+                if let Some((min, dist)) = across_min
+                    && v_safe + NUMERICAL_EPS < min
+                {
                     // it cannot get across: it stops before the line instead
-                    v_safe = v_safe.fmin(p.stop_speed(
-                        v_safe_min_dist,
-                        v.speed,
-                        self.desired_speed(v, v.lane),
-                    ));
-                    v_safe_min = f64::NEG_INFINITY;
+                    v_safe =
+                        v_safe.fmin(p.stop_speed(dist, v.speed, self.desired_speed(v, v.lane)));
+                    across_min = None;
                 }
                 // finalise: acceleration and deceleration bounds (emergency braking allowed when unsafe)
                 let v_max = v_safe.fmin(v.speed + p.accel * dt);
@@ -145,8 +145,10 @@ impl Simulation {
                     let desired = self.desired_speed(v, lane);
                     next = self.patch_lc_speed(id, speed, vtype, lane, desired, v_min, next, v_max);
                 }
-                // (SUMO's `finalizeSpeed` then its least speed)
-                next = next.fmax(v_safe_min);
+                if let Some((min, _)) = across_min {
+                    // (SUMO's `finalizeSpeed` then its least speed)
+                    next = next.fmax(min);
+                }
                 let v = &self.veh[id as usize];
                 let p = &self.types[v.vtype as usize];
                 if v.controlled && v.accel_cmd.is_finite() && self.in_region[v.lane as usize] {
