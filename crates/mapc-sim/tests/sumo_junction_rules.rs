@@ -45,3 +45,42 @@ fn a_driver_approaching_an_open_minor_link_keeps_able_to_stop_until_it_sees_the_
         );
     }
 }
+
+#[test]
+fn a_driver_before_its_minor_link_waits_for_a_merging_car_that_entered_the_junction_first() {
+    // A car on `main` enters the junction at 21 s; SUMO's car on `side` must not enter beside it, whether it stands
+    // at its line already (departing at 5 s: the car on `main` is farther from the merge point, yet SUMO's
+    // `MSLink::isLeader` makes it the leader, having entered first) or arrives as it enters (7 s: the car on
+    // `main` is nearer the merge point but overlaps it, a negative gap): it stops before entering, and goes in
+    // the step after the car on `main` has left the connection. mapc's car went in a step early in both.
+    let mut sim = simulation("minor_link/behind5.sumocfg");
+    for (n, inside, pos, speed) in [
+        (22, false, 192.70, 0.0),
+        (23, false, 192.70, 0.0),
+        (24, true, 2.50, 2.60),
+    ] {
+        let (got_inside, got_pos, got_speed) = after(&mut sim, n, 1);
+        assert_eq!(got_inside, inside, "departing at 5 s, step {n}");
+        assert!(
+            (got_pos - pos).abs() < 0.01,
+            "step {n}: at {got_pos}, SUMO {pos}"
+        );
+        assert!(
+            (got_speed - speed).abs() < 0.01,
+            "step {n}: {got_speed} m/s, SUMO {speed}"
+        );
+    }
+    let mut sim = simulation("minor_link/behind7.sumocfg");
+    for (n, inside, pos, speed) in [(23, false, 192.70, 2.71), (24, true, 5.21, 5.31)] {
+        let (got_inside, got_pos, got_speed) = after(&mut sim, n, 1);
+        assert_eq!(got_inside, inside, "departing at 7 s, step {n}");
+        assert!(
+            (got_pos - pos).abs() < 0.01,
+            "step {n}: at {got_pos}, SUMO {pos}"
+        );
+        assert!(
+            (got_speed - speed).abs() < 0.01,
+            "step {n}: {got_speed} m/s, SUMO {speed}"
+        );
+    }
+}

@@ -166,6 +166,52 @@ impl Simulation {
         }
     }
 
+    /// A driver still before its minor link, `dist_to_merge` from the end of its connection `via` (of length
+    /// `via_length`), under SUMO's rules: the speed behind its link leaders inside the junction, and the speed
+    /// that stops it before entering if it must (infinite if not). A leader that overlaps it (a negative gap)
+    /// makes it stop before entering, as SUMO's `getSafeFollowSpeed` does for an in-lapping leader; so does a car
+    /// on a merging connection farther from the merge point, which entered the junction first (SUMO's
+    /// `MSLink::isLeader`). Out of line: the plan of every other driver keeps its registers.
+    #[inline(never)]
+    pub(in crate::sim) fn minor_entry_leaders(
+        &self,
+        id: VehicleId,
+        via: LaneIdx,
+        dist_to_merge: f64,
+        via_length: f64,
+        speed: f64,
+        desired: f64,
+    ) -> (f64, f64) {
+        let v = &self.veh[id as usize];
+        let p = &self.types[v.vtype as usize];
+        let stop_before = || {
+            p.stop_speed(
+                (dist_to_merge - via_length - POSITION_EPS).fmax(0.0),
+                speed,
+                desired,
+            )
+        };
+        let mut m = f64::INFINITY;
+        self.junction_foe_leaders(id, via, dist_to_merge, false, &mut |o, gap| {
+            m = m.fmin(if gap - p.min_gap < 0.0 {
+                stop_before()
+            } else {
+                p.follow_speed(gap - p.min_gap, speed, self.veh[o as usize].speed, desired)
+            });
+        });
+        let LaneKind::Via(link) = self.lane_at(via as usize).kind else {
+            return (m, f64::INFINITY);
+        };
+        let behind = self.link_at(link as usize).foes.iter().any(|&foe| {
+            let fl = self.link_at(foe as usize);
+            let flen = self.lane_at(fl.via_lane as usize).length;
+            self.lane_veh[fl.via_lane as usize]
+                .iter()
+                .any(|&o| flen - self.veh[o as usize].pos >= dist_to_merge)
+        });
+        (m, if behind { stop_before() } else { f64::INFINITY })
+    }
+
     /// A minor-road vehicle inside the junction that has not reached the conflict point yet keeps yielding to every
     /// major-road vehicle inside the junction beside it, even one a little behind (SUMO's right of way among
     /// junction leaders): with a negative gap it brakes as hard as it can. A major-road vehicle so far behind that

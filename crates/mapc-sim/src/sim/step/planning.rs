@@ -290,15 +290,26 @@ impl Simulation {
                 // the exit link of a junction: vehicles on merging connections closer to the merge point lead
                 let cur_major = self.link_at(cur_link as usize).major;
                 if k > v.route_pos as usize && !self.link_at(cur_link as usize).foes.is_empty() {
-                    let mut m = f64::INFINITY;
-                    self.junction_foe_leaders(id, lane, seen, false, &mut |o, gap| {
-                        m = m.fmin(p.follow_speed(
-                            gap - p.min_gap,
-                            speed,
-                            self.veh[o as usize].speed,
-                            des_cur,
-                        ));
-                    });
+                    // under SUMO's rules, a driver still before its minor link meets its link leaders apart
+                    // ([`Self::minor_entry_leaders`])
+                    let before_minor = self.spec.sumo_junction_lane_changes
+                        && !cur_major
+                        && k == v.route_pos as usize + 1
+                        && !matches!(cur.kind, LaneKind::Via(_));
+                    let (m, behind_stop) = if before_minor {
+                        self.minor_entry_leaders(id, lane, seen, lane_ref.length, speed, des_cur)
+                    } else {
+                        let mut m = f64::INFINITY;
+                        self.junction_foe_leaders(id, lane, seen, false, &mut |o, gap| {
+                            m = m.fmin(p.follow_speed(
+                                gap - p.min_gap,
+                                speed,
+                                self.veh[o as usize].speed,
+                                des_cur,
+                            ));
+                        });
+                        (m, f64::INFINITY)
+                    };
                     if m.is_finite() {
                         // (the pass speed is reset on the next lane)
                         vv = vv.fmin(m);
@@ -321,6 +332,7 @@ impl Simulation {
                             vv = vv.fmax(planned.fmin(p.stop_speed(stop_dist, speed, des_cur)));
                         }
                     }
+                    vv = vv.fmin(behind_stop);
                 }
                 had_non_internal = true;
                 last_item = None;
