@@ -409,3 +409,23 @@ fn a_sumo_edge_between_missing_junctions_is_an_error_naming_it() {
         );
     }
 }
+
+#[test]
+fn a_request_whose_cont_is_not_a_boolean_is_an_error_naming_it() {
+    // `cont` says whether the link leads into an internal junction: a value SUMO would not read as a boolean
+    let text = String::from_utf8(map("simple_merge.net.xml")).unwrap();
+    let request = "<request index=\"1\" response=\"01\" foes=\"01\" cont=\"0\"/>";
+    let bad = text.replacen(
+        request,
+        "<request index=\"1\" response=\"01\" foes=\"01\" cont=\"maybe\"/>",
+        1,
+    );
+    fails_with(
+        &scratch("cont.net.xml", bad.as_bytes()),
+        &[
+            &format!("line {}", line_of(&text, request)),
+            "<request",
+            "`cont` is `maybe`, not true or false",
+        ],
+    );
+}

@@ -39,7 +39,7 @@ mod xml;
 
 pub use error::ImportError;
 pub use summary::Summary;
-pub use sumo_xml::{SumoElement, read_sumo_xml};
+pub use sumo_xml::{SumoElement, read_sumo_xml, sumo_bool};
 
 use mapc_graph::{LaneGraph, MapcFile, RightOfWay, Source, SourceFormat, filekind};
 use std::io::BufReader;

@@ -48,6 +48,15 @@ pub(crate) fn number_attr(key: &str, text: Option<&str>) -> Result<Option<f64>, 
     }
 }
 
+/// A boolean as SUMO's options and attributes spell it (`None`: not one).
+pub fn sumo_bool(value: &str) -> Option<bool> {
+    match value.trim() {
+        "true" | "1" | "on" | "yes" | "x" => Some(true),
+        "false" | "0" | "off" | "no" | "" => Some(false),
+        _ => None,
+    }
+}
+
 /// Read `path`, a SUMO XML file whose root element is one of `roots` (`what` names such a file in errors:
 /// "a SUMO route file"). The root comes back with the whole file below it.
 pub fn read_sumo_xml(path: &Path, roots: &[&str], what: &str) -> Result<SumoElement, ImportError> {

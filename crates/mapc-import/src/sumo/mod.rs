@@ -387,8 +387,8 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                 // The junction's request table: any `1` in the response means this link yields to another.
                 let yields = requests
                     .get(from_edge.to.as_str())
-                    .and_then(|j| j.requests.iter().find(|(i, _, _)| *i == link))
-                    .is_some_and(|(_, response, _)| response.contains('1'));
+                    .and_then(|j| j.requests.iter().find(|r| r.index == link))
+                    .is_some_and(|r| r.response.contains('1'));
                 if yields {
                     RightOfWay::Minor
                 } else {
@@ -461,14 +461,15 @@ fn fill_yields(
         .map(|(&key, c)| (key, c.lanes()))
         .collect();
     for (c, &(junction, link)) in connections.iter_mut().zip(link_of_connection) {
-        let Some((_, response, cont)) = requests
+        let Some(request) = requests
             .get(junction)
-            .and_then(|j| j.requests.iter().find(|(i, _, _)| *i == link))
+            .and_then(|j| j.requests.iter().find(|r| r.index == link))
         else {
             continue;
         };
-        c.yields_inside = *cont;
-        c.yields_to = response
+        c.yields_inside = request.cont;
+        c.yields_to = request
+            .response
             .bytes()
             .rev()
             .enumerate()

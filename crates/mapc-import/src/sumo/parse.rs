@@ -57,9 +57,15 @@ pub(super) struct SumoJunction {
     pub(super) pos: [f64; 2],
     pub(super) internal: bool,
     pub(super) inc_lanes: Vec<String>,
-    /// (request index, response bits).
-    /// (index, response, cont) of each `<request>`.
-    pub(super) requests: Vec<(usize, String, bool)>,
+    pub(super) requests: Vec<SumoRequest>,
+}
+
+/// A junction's `<request>`: its link index, the response bits (the last character is link 0) and `cont` (the
+/// link leads into an internal junction).
+pub(super) struct SumoRequest {
+    pub(super) index: usize,
+    pub(super) response: String,
+    pub(super) cont: bool,
 }
 
 pub(super) struct SumoConnection {
@@ -102,6 +108,14 @@ impl Element<'_> {
     fn req_num(&self, key: &str) -> Result<f64, ParseError> {
         self.num(key)?
             .ok_or_else(|| self.err(format!("missing `{key}`")))
+    }
+    fn flag(&self, key: &str) -> Result<Option<bool>, ParseError> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(v) => crate::sumo_xml::sumo_bool(v)
+                .map(Some)
+                .ok_or_else(|| self.err(format!("`{key}` is `{v}`, not true or false"))),
+        }
     }
     fn int<T: std::str::FromStr>(&self, key: &str) -> Result<Option<T>, ParseError> {
         match self.get(key) {
@@ -307,12 +321,16 @@ pub(super) fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                         let index: usize =
                             el.int("index")?.ok_or_else(|| el.err("missing `index`"))?;
                         let response = el.req("response")?.to_string();
-                        let cont = el.get("cont") == Some("1");
+                        let cont = el.flag("cont")?.unwrap_or(false);
                         net.junctions
                             .last_mut()
                             .expect("in a junction")
                             .requests
-                            .push((index, response, cont));
+                            .push(SumoRequest {
+                                index,
+                                response,
+                                cont,
+                            });
                     }
                     (2, "tlLogic") => {
                         let id = el.req("id")?.to_string();

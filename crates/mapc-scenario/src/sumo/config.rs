@@ -101,15 +101,6 @@ const WITHOUT_EFFECT: &[&str] = &[
 ];
 
 /// Read a `.sumocfg`.
-/// A boolean as SUMO's options and attributes spell it.
-pub(super) fn sumo_bool(value: &str) -> Option<bool> {
-    match value.trim() {
-        "true" | "1" | "on" | "yes" | "x" => Some(true),
-        "false" | "0" | "off" | "no" | "" => Some(false),
-        _ => None,
-    }
-}
-
 pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
     let root = mapc_import::read_sumo_xml(
         path,
@@ -141,7 +132,7 @@ pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
                 .ok_or_else(|| SumoError::at(&o.place, format!("`{value}` is not a number")))
         };
         let flag = || -> Result<bool, SumoError> {
-            sumo_bool(value)
+            mapc_import::sumo_bool(value)
                 .ok_or_else(|| SumoError::at(&o.place, format!("`{value}` is not true or false")))
         };
         let refuse = |why: &str| {

@@ -204,7 +204,7 @@ fn induction_loop(e: &SumoElement, graph: &LaneGraph) -> Result<crate::model::De
         num(e, "pos")?.ok_or_else(|| SumoError::at(&e.place, "<inductionLoop> without `pos`"))?;
     let friendly_pos = match e.get("friendlyPos") {
         None => false,
-        Some(v) => crate::sumo::config::sumo_bool(v).ok_or_else(|| {
+        Some(v) => mapc_import::sumo_bool(v).ok_or_else(|| {
             SumoError::at(&e.place, format!("friendlyPos=\"{v}\" is not a boolean"))
         })?,
     };
