@@ -177,6 +177,48 @@ fn sumo_outputs_have_sumos_elements_and_attributes() {
     assert_eq!(summary.matches("<step ").count(), 16_000);
 }
 
+/// The attributes SUMO 1.8 writes on a floating-car data `<vehicle>` (read from its own file).
+const FCD_ATTRS: &[&str] = &[
+    "id", "x", "y", "angle", "type", "speed", "pos", "lane", "slope",
+];
+
+#[test]
+fn fcd_output_has_sumos_elements_and_its_first_step() {
+    let dir = scratch_dir("fcd-output");
+    let fcd = dir.join("fcd.xml");
+    let out = run_mapc(&[
+        "sim",
+        HIGHWAY_RAMP,
+        "--seeds",
+        "1",
+        "--fcd-output",
+        fcd.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    let fcd = std::fs::read_to_string(&fcd).unwrap();
+    assert_eq!(attrs_of(&fcd, "vehicle"), FCD_ATTRS);
+    assert_eq!(fcd.matches("<timestep ").count(), 16_000);
+    assert!(fcd.trim_end().ends_with("</fcd-export>"));
+    // SUMO 1.8's own first step of this scenario (`sumo -c highway-ramp.sumocfg --fcd-output`), byte for byte:
+    // the first two vehicles at their departure, on the main road and on the ramp that climbs at 26.57 degrees
+    let sumo_first = "    <timestep time=\"0.00\">
+        <vehicle id=\"f_1_passenger_through.0\" x=\"104.43\" y=\"95.20\" angle=\"90.00\" type=\"passenger\" speed=\"0.00\" pos=\"4.60\" lane=\"M1_0\" slope=\"0.00\"/>
+        <vehicle id=\"f_2_passenger_through.0\" x=\"104.80\" y=\"0.61\" angle=\"63.43\" type=\"passenger\" speed=\"0.00\" pos=\"4.60\" lane=\"onr_0\" slope=\"0.00\"/>
+    </timestep>
+    <timestep time=\"0.10\">
+";
+    assert!(fcd.contains(sumo_first), "{}", &fcd[..fcd.len().min(1200)]);
+    // each step's vehicles in the order of their ids, as SUMO's vehicle table has them
+    for step in fcd.split("<timestep ").skip(1).take(2000) {
+        let ids: Vec<&str> = step
+            .split("<vehicle id=\"")
+            .skip(1)
+            .map(|v| &v[..v.find('"').unwrap()])
+            .collect();
+        assert!(ids.is_sorted(), "{ids:?}");
+    }
+}
+
 /// A trace asked beside SUMO's outputs: all of them are written, from the first seed's one run (the trip-info used
 /// to be left out, without a word, whenever `--trace` was given).
 #[test]
@@ -195,6 +237,8 @@ fn a_trace_and_sumos_outputs_are_written_together_from_the_same_run() {
         &path("both_trip.xml"),
         "--summary-output",
         &path("both_summary.xml"),
+        "--fcd-output",
+        &path("both_fcd.xml"),
     ]);
     sim(&["--trace", &path("trace.csv")]);
     sim(&[
@@ -203,12 +247,14 @@ fn a_trace_and_sumos_outputs_are_written_together_from_the_same_run() {
         "--summary-output",
         &path("summary.xml"),
     ]);
+    sim(&["--fcd-output", &path("fcd.xml")]);
     let read = |name: &str| {
         std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name} not written: {e}"))
     };
     assert_eq!(read("both.csv"), read("trace.csv"));
     assert_eq!(read("both_trip.xml"), read("trip.xml"));
     assert_eq!(read("both_summary.xml"), read("summary.xml"));
+    assert_eq!(read("both_fcd.xml"), read("fcd.xml"));
 }
 
 #[test]

@@ -35,6 +35,10 @@ pub struct Args {
     /// Write SUMO's summary file of the first seed's run (`--summary-output` of SUMO 1.8).
     #[arg(long, value_name = "FILE")]
     pub summary_output: Option<PathBuf>,
+    /// Write SUMO's floating-car data of the first seed's run (`--fcd-output` of SUMO 1.8: each vehicle's position,
+    /// angle, speed and lane after every step).
+    #[arg(long, value_name = "FILE")]
+    pub fcd_output: Option<PathBuf>,
     /// Write the induction loops' files of the first seed's run into DIR, each under the name of the file its
     /// `inductionLoop` names (what SUMO 1.8 writes there).
     #[arg(long, value_name = "DIR")]
@@ -46,6 +50,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.trace.as_deref(),
         args.tripinfo_output.as_deref(),
         args.summary_output.as_deref(),
+        args.fcd_output.as_deref(),
     ])?;
     // the loops' folder too (made when its files are written)
     if let Some(dir) = &args.detector_output {
@@ -71,6 +76,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // the seeds run below without the trace or SUMO's outputs: the regime's runs may start some of them
     let sumo_outputs = args.tripinfo_output.is_some()
         || args.summary_output.is_some()
+        || args.fcd_output.is_some()
         || args.detector_output.is_some();
     let first_writes = args.trace.is_some() || sumo_outputs;
     // (the regime's runs are the humans': the seeds' own runs where no type is an AV)
@@ -199,8 +205,8 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
     pb
 }
 
-/// Run `seed` once and write from that one run whatever was asked of it: the trace, SUMO's trip-info and summary
-/// files, the loops' files (each atomically).
+/// Run `seed` once and write from that one run whatever was asked of it: the trace, SUMO's trip-info, summary and
+/// floating-car data files, the loops' files (each atomically; the trace and the floating-car data as the run goes).
 fn write_first_run(
     spec: &mapc_sim::SimSpec,
     seed: u64,
@@ -208,6 +214,42 @@ fn write_first_run(
     detector_files: &[Option<String>],
 ) -> anyhow::Result<RunMetrics> {
     let mut sim = Simulation::from_spec(spec.clone(), seed)?;
+    let Some(path) = &args.fcd_output else {
+        return first_run_writing(sim, args, detector_files, None);
+    };
+    let mut fcd = mapc_sumo::fcd::FcdOutput::new(&mut sim);
+    // the writer speaks io::Error; the run's own error is kept aside and returned as is
+    let (mut failure, mut metrics) = (None, None);
+    let written = mapc_graph::write_atomically_with(path, |w| {
+        fcd.start(w)?;
+        match first_run_writing(sim, args, detector_files, Some((&mut fcd, &mut *w, path))) {
+            Ok(m) => metrics = Some(m),
+            Err(e) => {
+                let io = std::io::Error::other(e.to_string());
+                failure = Some(e);
+                return Err(io);
+            }
+        }
+        fcd.finish(w)
+    });
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    written.with_context(|| format!("writing {}", path.display()))?;
+    Ok(metrics.expect("the run ended"))
+}
+
+/// [`write_first_run`]'s run, with the floating-car data's writer where one was asked for.
+fn first_run_writing(
+    mut sim: Simulation,
+    args: &Args,
+    detector_files: &[Option<String>],
+    mut fcd: Option<(
+        &mut mapc_sumo::fcd::FcdOutput,
+        &mut dyn std::io::Write,
+        &std::path::Path,
+    )>,
+) -> anyhow::Result<RunMetrics> {
     let mut out = (args.tripinfo_output.is_some() || args.summary_output.is_some()).then(|| {
         mapc_sumo::run_outputs::SumoOutputs::new(
             &mut sim,
@@ -215,18 +257,34 @@ fn write_first_run(
             args.summary_output.is_some(),
         )
     });
+    let mut observe = |s: &Simulation| -> anyhow::Result<()> {
+        if let Some(out) = &mut out {
+            out.observe(s);
+        }
+        if let Some((fcd, w, path)) = &mut fcd {
+            fcd.observe(s, w)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+        Ok(())
+    };
     match &args.trace {
         Some(path) => {
-            let mut note = None;
-            write_trace_file(path, |w| {
+            let (mut note, mut failure) = (None, None);
+            let traced = write_trace_file(path, |w| {
                 note = mapc_sim::trace_sim(&mut sim, w, |s| {
-                    if let Some(out) = &mut out {
-                        out.observe(s);
-                    }
-                    Ok(())
+                    // (the floating-car data's own error, kept aside: the trace's writer passes only the simulator's)
+                    observe(s).map_err(|e| {
+                        let said = mapc_sim::SimError::Spec(e.to_string());
+                        failure = Some(e);
+                        said
+                    })
                 })?;
                 Ok(())
-            })?;
+            });
+            if let Some(e) = failure {
+                return Err(e);
+            }
+            traced?;
             if let Some(note) = note {
                 eprintln!("note: {}: {note}", path.display());
             }
@@ -234,9 +292,7 @@ fn write_first_run(
         None => {
             while !sim.is_done() {
                 sim.step()?;
-                if let Some(out) = &mut out {
-                    out.observe(&sim);
-                }
+                observe(&sim)?;
             }
         }
     }

@@ -112,6 +112,7 @@ pub(crate) mod tests {
             ref_: None,
             priority,
             lanes: vec![Lane {
+                shape: Vec::new(),
                 index: 0,
                 speed_mps: 30.0,
                 width_m: 3.5,
@@ -129,6 +130,7 @@ pub(crate) mod tests {
         ];
         for (from, row) in [(0, RightOfWay::Minor), (1, RightOfWay::Major)] {
             g.connections.push(Connection {
+                via_shape: Vec::new(),
                 yields_to: Vec::new(),
                 yields_inside: false,
                 junction: JunctionId(2),

@@ -169,6 +169,11 @@ pub struct Lane {
     /// records it): its traffic must change lanes before the end.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub end: Option<LaneEnd>,
+    /// The lane's own centre line where the input drew one (a SUMO net's lane `shape`, cut back at the junctions),
+    /// from its start to its end; empty elsewhere, and where a transformation changed the lane's length (then the
+    /// road's centre line moved sideways stands for it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shape: Vec<[f64; 2]>,
 }
 
 /// Why a lane ends where its road goes on.
@@ -285,6 +290,10 @@ pub struct Connection {
     /// request table): a left turn waits in the junction for the oncoming stream to clear.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub yields_inside: bool,
+    /// The path inside the junction where the input drew one (a SUMO net's internal lanes' shapes, one after
+    /// another); empty elsewhere.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub via_shape: Vec<[f64; 2]>,
 }
 
 /// A connection named by its lanes: from road and lane, to road and lane.

@@ -19,6 +19,7 @@
 //! the routes and initial positions are mapc-sim's ([`mapc_sim::spec_from_scenario`]).
 
 pub mod demand;
+pub mod fcd;
 mod junctions;
 pub mod names;
 pub mod net;

@@ -296,7 +296,7 @@ fn edge(out: &mut String, graph: &LaneGraph, names: &SumoNames, i: usize, road: 
 }
 
 /// A lane's centre line: the road's centre line moved sideways (lane 0 is the rightmost) by whole lane widths.
-fn lane_shape(road: &Road, lane: usize) -> Vec<[f64; 2]> {
+pub(crate) fn lane_shape(road: &Road, lane: usize) -> Vec<[f64; 2]> {
     let widths: Vec<f64> = road.lanes.iter().map(|l| l.width_m).collect();
     let total: f64 = widths.iter().sum();
     // Distance of the lane's centre to the left of the road's centre line.

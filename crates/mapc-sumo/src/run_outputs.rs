@@ -46,13 +46,23 @@ pub struct SumoOutputs {
 
 /// A SUMO lane id: the road's SUMO edge id (its label where it has none) and the lane's SUMO index (where the
 /// import left out lanes closed to cars, the index among all the edge's lanes).
-fn lane_name(g: &LaneGraph, road: RoadId, lane: u8) -> String {
+pub(crate) fn lane_name(g: &LaneGraph, road: RoadId, lane: u8) -> String {
     let r = g.road(road);
     let edge = r
         .and_then(|r| r.provenance.sumo_ids.first().cloned())
         .unwrap_or_else(|| road.to_string());
     let index = r.map_or(lane, |r| r.sumo_index_of_lane(lane));
     format!("{edge}_{index}")
+}
+
+/// SUMO's name of a vehicle: `flow.N`, the id of a `<vehicle>` or `<trip>`, or `veh.ID` for one that came from no
+/// flow (the run must keep its vehicles' origins: [`Simulation::record_origins`]).
+pub(crate) fn vehicle_name(sim: &Simulation, id: VehicleId) -> String {
+    match sim.vehicle_origin(id) {
+        Some((f, _)) if sim.spec().flows[f].single_vehicle => sim.spec().flows[f].id.clone(),
+        Some((f, n)) => format!("{}.{n}", sim.spec().flows[f].id),
+        None => format!("veh.{id}"),
+    }
 }
 
 impl SumoOutputs {
@@ -65,16 +75,6 @@ impl SumoOutputs {
             summary: summary.then(String::new),
             begin_s: sim.time_s(),
             ..SumoOutputs::default()
-        }
-    }
-
-    /// SUMO's name of a vehicle: `flow.N`, the id of a `<vehicle>` or `<trip>`, or `veh.ID` for one that came
-    /// from no flow.
-    fn vehicle_name(sim: &Simulation, id: VehicleId) -> String {
-        match sim.vehicle_origin(id) {
-            Some((f, _)) if sim.spec().flows[f].single_vehicle => sim.spec().flows[f].id.clone(),
-            Some((f, n)) => format!("{}.{n}", sim.spec().flows[f].id),
-            None => format!("veh.{id}"),
         }
     }
 
@@ -151,7 +151,7 @@ impl SumoOutputs {
             self.arrived += 1;
             self.travel_sum += duration;
             if let Some(out) = &mut self.tripinfo {
-                let name = xml_escape(&Self::vehicle_name(sim, id));
+                let name = xml_escape(&vehicle_name(sim, id));
                 let _ = writeln!(
                     out,
                     "    <tripinfo id=\"{name}\" depart=\"{:.2}\" departLane=\"{}\" departPos=\"{:.2}\" departSpeed=\"{:.2}\" \

@@ -265,6 +265,7 @@ pub fn build_graph(
                         width_m: OSM_LANE_WIDTH_M,
                         length_m: length,
                         end: None,
+                        shape: Vec::new(),
                     })
                     .collect(),
                 geometry: seq.iter().map(|&n| local(n)).collect(),
@@ -347,6 +348,7 @@ fn osm_connections(graph: &LaneGraph, road_piece: &[(i64, u32)]) -> Vec<Connecti
                         signal: None,
                         right_of_way_overridden: false,
                         provenance: Provenance::default(),
+                        via_shape: Vec::new(),
                     });
                 }
             }

@@ -52,8 +52,8 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     };
     let geographic = projection.is_geographic();
 
-    // Lanes of internal edges, by lane id: (length, speed).
-    let mut internal_lanes: HashMap<&str, (f64, f64)> = HashMap::new();
+    // Lanes of internal edges, by lane id: (length, speed, shape).
+    let mut internal_lanes: HashMap<&str, (f64, f64, &[[f64; 2]])> = HashMap::new();
     let mut edge_index: HashMap<&str, &SumoEdge> = HashMap::new();
     for e in &net.edges {
         if edge_index.insert(e.id.as_str(), e).is_some() {
@@ -72,7 +72,7 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         }
         if e.internal {
             for l in &e.lanes {
-                internal_lanes.insert(l.id.as_str(), (l.length, l.speed));
+                internal_lanes.insert(l.id.as_str(), (l.length, l.speed, &l.shape));
             }
         }
     }
@@ -229,6 +229,7 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                     width_m: l.width,
                     length_m: l.length.max(0.01),
                     end: None,
+                    shape: l.shape.clone(),
                 })
                 .collect(),
             geometry,
@@ -341,10 +342,11 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         let junction = junction_of[from_edge.to.as_str()];
         // Follow the internal lanes from `via` to the next normal edge.
         let (mut via_length, mut via_speed) = (0.0, None::<f64>);
+        let mut via_shape: Vec<[f64; 2]> = Vec::new();
         let mut next = c.via.clone();
         let mut steps = 0;
         while let Some(lane) = next.take() {
-            let &(len, speed) = internal_lanes.get(lane.as_str()).ok_or_else(|| {
+            let &(len, speed, shape) = internal_lanes.get(lane.as_str()).ok_or_else(|| {
                 ParseError::new(
                     c.at,
                     el(),
@@ -352,6 +354,10 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                 )
             })?;
             via_length += len;
+            // (one internal lane starts where the one before ends)
+            let joint =
+                usize::from(via_shape.last().is_some() && via_shape.last() == shape.first());
+            via_shape.extend_from_slice(&shape[joint.min(shape.len())..]);
             via_speed = Some(via_speed.map_or(speed, |s: f64| s.min(speed)));
             steps += 1;
             if steps > 16 {
@@ -418,6 +424,7 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             provenance,
             yields_to: Vec::new(),
             yields_inside: false,
+            via_shape,
         });
     }
 

@@ -87,7 +87,6 @@ const WITHOUT_EFFECT: &[&str] = &[
     "precision",
     "human-readable-time",
     "statistic-output",
-    "fcd-output",
     "emission-output",
     "queue-output",
     "lanechange-output",
@@ -219,7 +218,7 @@ pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
                 }
             }
             // written where the run asks for them (`mapc sim --tripinfo-output`), not into the user's folder
-            "tripinfo-output" | "summary-output" => c.warnings.push(format!(
+            "tripinfo-output" | "summary-output" | "fcd-output" => c.warnings.push(format!(
                 "{}: option `{}` not written; `mapc sim --{} FILE` writes it",
                 o.place, o.name, o.name
             )),

@@ -509,3 +509,22 @@ fn lights_run_on_sumos_clock_which_reads_the_begin_at_the_first_step() {
     assert_eq!(phase_at_first_step(33), 3);
     assert_eq!(phase_at_first_step(66 * 10 + 25), 1);
 }
+
+#[test]
+fn the_outputs_a_configuration_asks_for_are_named_with_the_flag_that_writes_them() {
+    // highway_ramp's analysis configuration asks SUMO for trip infos, floating-car data and a summary
+    let r = from_sumocfg(
+        &shipped("highway_ramp/highway-ramp-analysis.sumocfg"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    for option in ["tripinfo-output", "fcd-output", "summary-output"] {
+        assert!(
+            r.warnings.iter().any(|w| w.contains(&format!(
+                "option `{option}` not written; `mapc sim --{option} FILE` writes it"
+            ))),
+            "{option}: {:?}",
+            r.warnings
+        );
+    }
+}

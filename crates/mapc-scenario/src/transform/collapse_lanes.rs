@@ -20,6 +20,8 @@ pub fn apply(c: &mut Corridor, _opts: &SimplifyOptions) -> Result<String, Transf
         r.lanes[0].index = 0;
         // A road's driving length is its rightmost lane's.
         r.lanes[0].length_m = r.length_m;
+        // (the lane drawn by the input is no longer the road's)
+        r.lanes[0].shape.clear();
     }
     sort_connections(&mut c.graph);
     let before = c.graph.connections.len();

@@ -80,6 +80,8 @@ pub fn cut_road(
     second.provenance = provenance.clone();
     for lane in &mut second.lanes {
         lane.length_m -= lane.length_m * fraction;
+        // (the input's drawing was of the whole lane)
+        lane.shape.clear();
     }
     {
         let first = g.road_mut(road).unwrap();
@@ -89,6 +91,7 @@ pub fn cut_road(
         first.provenance = provenance;
         for lane in &mut first.lanes {
             lane.length_m *= fraction;
+            lane.shape.clear();
             // a lane that ends does so at the road's end, now the second piece's
             lane.end = None;
         }
@@ -109,6 +112,7 @@ pub fn cut_road(
     }
     for lane in 0..r.lanes.len() as u8 {
         g.connections.push(Connection {
+            via_shape: Vec::new(),
             yields_to: Vec::new(),
             yields_inside: false,
             junction: new_junction,

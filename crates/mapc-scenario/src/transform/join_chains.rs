@@ -69,6 +69,8 @@ pub fn join_at(c: &mut Corridor, j: JunctionId) -> Option<(RoadId, RoadId)> {
     } else {
         let mut lane = a.lanes[0].clone();
         lane.length_m = length;
+        // (the input drew the first road's lane only)
+        lane.shape.clear();
         lane.speed_mps = speed;
         vec![lane]
     };
@@ -128,6 +130,7 @@ fn joined_lanes(g: &LaneGraph, a: &Road, b: &Road) -> Vec<Lane> {
                 la.length_m / la.speed_mps + via_m / via_speed + lb.length_m / lb.speed_mps;
             let mut lane = la.clone();
             lane.length_m = length;
+            lane.shape.clear();
             if travel_s.is_finite() && travel_s > 0.0 {
                 lane.speed_mps = length / travel_s;
             }

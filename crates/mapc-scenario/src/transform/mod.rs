@@ -382,6 +382,7 @@ pub fn ensure_connection(g: &mut LaneGraph, from: RoadId, to: RoadId, step: &str
         RightOfWay::Minor
     };
     g.connections.push(Connection {
+        via_shape: Vec::new(),
         yields_to: Vec::new(),
         yields_inside: false,
         junction,
@@ -556,6 +557,7 @@ pub(crate) mod test_maps {
                     priority: if class == "motorway" { 13 } else { 12 },
                     lanes: (0..lanes)
                         .map(|index| Lane {
+                            shape: Vec::new(),
                             index,
                             speed_mps: 30.0,
                             width_m: 3.5,
@@ -590,6 +592,7 @@ pub(crate) mod test_maps {
                 RightOfWay::Minor
             };
             g.connections.push(Connection {
+                via_shape: Vec::new(),
                 yields_to: Vec::new(),
                 yields_inside: false,
                 junction: j,

@@ -340,6 +340,7 @@ mod tests {
                 priority: 1,
                 lanes: (0..n as u8)
                     .map(|index| Lane {
+                        shape: Vec::new(),
                         index,
                         speed_mps: 30.0,
                         width_m: 3.5,
@@ -354,6 +355,7 @@ mod tests {
             if let Some(&m) = lanes.get(i + 1) {
                 for lane in 0..n.min(m) as u8 {
                     g.connections.push(Connection {
+                        via_shape: Vec::new(),
                         yields_to: Vec::new(),
                         yields_inside: false,
                         junction: JunctionId(i as u32 + 1),
