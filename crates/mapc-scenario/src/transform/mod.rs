@@ -382,6 +382,7 @@ pub fn ensure_connection(g: &mut LaneGraph, from: RoadId, to: RoadId, step: &str
         RightOfWay::Minor
     };
     g.connections.push(Connection {
+        wait_inside: None,
         via_shape: Vec::new(),
         yields_to: Vec::new(),
         yields_inside: false,
@@ -592,6 +593,7 @@ pub(crate) mod test_maps {
                 RightOfWay::Minor
             };
             g.connections.push(Connection {
+                wait_inside: None,
                 via_shape: Vec::new(),
                 yields_to: Vec::new(),
                 yields_inside: false,
