@@ -130,7 +130,6 @@ pub(crate) mod tests {
         ];
         for (from, row) in [(0, RightOfWay::Minor), (1, RightOfWay::Major)] {
             g.connections.push(Connection {
-                wait_inside: None,
                 via_shape: Vec::new(),
                 yields_to: Vec::new(),
                 yields_inside: false,

@@ -294,19 +294,6 @@ pub struct Connection {
     /// another); empty elsewhere.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub via_shape: Vec<[f64; 2]>,
-    /// Where its driver waits inside the junction, and for whom (a SUMO net's internal junction on the connection's
-    /// internal lanes); `None` where it waits only at the line.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub wait_inside: Option<WaitInside>,
-}
-
-/// A wait point inside a junction (SUMO's internal junction): a left turn waits there for the oncoming stream.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct WaitInside {
-    /// Its distance from the stop line along the connection (m).
-    pub at_m: f64,
-    /// The connections whose vehicles it lets pass first (the internal junction's foe internal lanes).
-    pub yields_to: Vec<ConnectionLanes>,
 }
 
 /// A connection named by its lanes: from road and lane, to road and lane.

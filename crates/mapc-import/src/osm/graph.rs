@@ -335,7 +335,6 @@ fn osm_connections(graph: &LaneGraph, road_piece: &[(i64, u32)]) -> Vec<Connecti
                 let out_lanes = tr.lanes.len() as u8;
                 for lane in 0..fr.lanes.len() as u8 {
                     out.push(Connection {
-                        wait_inside: None,
                         yields_to: Vec::new(),
                         yields_inside: false,
                         junction: j.id,

@@ -281,8 +281,6 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     let mut connections = Vec::new();
     // per graph connection, its SUMO junction and index in that junction's request table
     let mut link_of_connection: Vec<(&str, usize)> = Vec::new();
-    // per graph connection, the internal lanes it drives, in order
-    let mut chains: Vec<Vec<(String, f64)>> = Vec::new();
     for (ci, c) in net.connections.iter().enumerate() {
         let el = || Some(format!("<connection from=\"{}\" to=\"{}\">", c.from, c.to));
         let from_edge = edge_index.get(c.from.as_str()).ok_or_else(|| {
@@ -345,7 +343,6 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         // Follow the internal lanes from `via` to the next normal edge.
         let (mut via_length, mut via_speed) = (0.0, None::<f64>);
         let mut via_shape: Vec<[f64; 2]> = Vec::new();
-        let mut chain: Vec<(String, f64)> = Vec::new();
         let mut next = c.via.clone();
         let mut steps = 0;
         while let Some(lane) = next.take() {
@@ -357,7 +354,6 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                 )
             })?;
             via_length += len;
-            chain.push((lane.clone(), len));
             // (one internal lane starts where the one before ends)
             let joint =
                 usize::from(via_shape.last().is_some() && via_shape.last() == shape.first());
@@ -411,7 +407,6 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             provenance.sumo_ids.push(v.clone());
         }
         link_of_connection.push((from_edge.to.as_str(), link));
-        chains.push(chain);
         connections.push(Connection {
             junction,
             from_road: road_of[c.from.as_str()],
@@ -430,12 +425,10 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             yields_to: Vec::new(),
             yields_inside: false,
             via_shape,
-            wait_inside: None,
         });
     }
 
     fill_yields(&mut connections, &link_of_connection, &requests);
-    wait_at_internal_junctions(&mut connections, &chains, &requests);
 
     let mut graph = LaneGraph::new(source, projection);
     graph.junctions = junctions;
@@ -459,44 +452,6 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
     graph.warnings = warnings;
     graph.rebuild_junction_links();
     Ok(graph)
-}
-
-/// A connection whose internal lanes pass an internal junction: its driver waits there, inside the junction, for
-/// the connections that junction names (`intLanes`: the foe internal lanes, the oncoming stream a left turn
-/// crosses), which the request table of the junction leaves out (`Connection::wait_inside`). `chains`: per
-/// connection, its internal lanes with their lengths, in order.
-fn wait_at_internal_junctions(
-    connections: &mut [Connection],
-    chains: &[Vec<(String, f64)>],
-    junctions: &HashMap<&str, &SumoJunction>,
-) {
-    let mut by_internal_lane: HashMap<&str, ConnectionLanes> = HashMap::new();
-    for (c, chain) in connections.iter().zip(chains) {
-        for (lane, _) in chain {
-            by_internal_lane.entry(lane.as_str()).or_insert(c.lanes());
-        }
-    }
-    for (c, chain) in connections.iter_mut().zip(chains) {
-        let mut at_m = 0.0;
-        for (k, (lane, length)) in chain.iter().enumerate() {
-            // (an internal junction has the id of the internal lane that leaves it)
-            if let Some(j) = junctions.get(lane.as_str()).filter(|j| j.internal && k > 0) {
-                let mut yields_to: Vec<ConnectionLanes> = Vec::new();
-                for foe in j
-                    .int_lanes
-                    .iter()
-                    .filter_map(|l| by_internal_lane.get(l.as_str()))
-                {
-                    if *foe != c.lanes() && !yields_to.contains(foe) {
-                        yields_to.push(*foe);
-                    }
-                }
-                c.wait_inside = Some(mapc_graph::WaitInside { at_m, yields_to });
-                break;
-            }
-            at_m += length;
-        }
-    }
 }
 
 /// Each connection's `yields_to`: the connections its junction's request table says it yields to (the response's

@@ -57,8 +57,6 @@ pub(super) struct SumoJunction {
     pub(super) pos: [f64; 2],
     pub(super) internal: bool,
     pub(super) inc_lanes: Vec<String>,
-    /// An internal junction's foe internal lanes (`intLanes`): whose vehicles the one waiting there yields to.
-    pub(super) int_lanes: Vec<String>,
     pub(super) requests: Vec<SumoRequest>,
 }
 
@@ -310,12 +308,6 @@ pub(super) fn parse<R: BufRead>(input: R) -> Result<Net, ParseError> {
                             internal: el.get("type") == Some("internal"),
                             inc_lanes: el
                                 .get("incLanes")
-                                .unwrap_or("")
-                                .split_whitespace()
-                                .map(str::to_string)
-                                .collect(),
-                            int_lanes: el
-                                .get("intLanes")
                                 .unwrap_or("")
                                 .split_whitespace()
                                 .map(str::to_string)

@@ -79,7 +79,6 @@ pub fn flow_bottleneck(p: &FlowBottleneckParams) -> Result<LaneGraph, String> {
     let mut g = generated_graph(FLOW_BOTTLENECK, &node_names, provenance);
     g.roads = roads;
     let link = |junction: u32, from_lane: u8, to_lane: u8, via: f64, right_of_way| Connection {
-        wait_inside: None,
         via_shape: Vec::new(),
         yields_to: Vec::new(),
         yields_inside: false,

@@ -204,7 +204,6 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     };
     let connection =
         |from: &str, from_lane: u8, to: &str, to_lane: u8, via: f64, speed: f64, row| Connection {
-            wait_inside: None,
             via_shape: Vec::new(),
             yields_to: Vec::new(),
             yields_inside: false,
@@ -331,7 +330,6 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
     let dropped = p.lanes_before - p.lanes_after;
     g.connections = (0..p.lanes_after)
         .map(|lane| Connection {
-            wait_inside: None,
             via_shape: Vec::new(),
             yields_to: Vec::new(),
             yields_inside: false,

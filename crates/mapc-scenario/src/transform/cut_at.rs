@@ -112,7 +112,6 @@ pub fn cut_road(
     }
     for lane in 0..r.lanes.len() as u8 {
         g.connections.push(Connection {
-            wait_inside: None,
             via_shape: Vec::new(),
             yields_to: Vec::new(),
             yields_inside: false,

@@ -382,7 +382,6 @@ pub fn ensure_connection(g: &mut LaneGraph, from: RoadId, to: RoadId, step: &str
         RightOfWay::Minor
     };
     g.connections.push(Connection {
-        wait_inside: None,
         via_shape: Vec::new(),
         yields_to: Vec::new(),
         yields_inside: false,
@@ -593,7 +592,6 @@ pub(crate) mod test_maps {
                 RightOfWay::Minor
             };
             g.connections.push(Connection {
-                wait_inside: None,
                 via_shape: Vec::new(),
                 yields_to: Vec::new(),
                 yields_inside: false,

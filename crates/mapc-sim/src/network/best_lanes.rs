@@ -355,7 +355,6 @@ mod tests {
             if let Some(&m) = lanes.get(i + 1) {
                 for lane in 0..n.min(m) as u8 {
                     g.connections.push(Connection {
-                        wait_inside: None,
                         via_shape: Vec::new(),
                         yields_to: Vec::new(),
                         yields_inside: false,

@@ -72,10 +72,6 @@ pub struct SimLink {
     /// Its driver yields inside the junction (SUMO's `cont`): SUMO 1.8 skips the slow approach to the foe
     /// visibility point there.
     pub yields_inside: bool,
-    /// Where its driver waits inside the junction, and for whom (a SUMO net's internal junction, a left turn's):
-    /// (distance from the stop line along the via lane, the links it lets pass first with the distance along each
-    /// one's via lane to where the paths cross: its end where the shapes do not say).
-    pub wait_inside: Option<(f64, Vec<(LinkIdx, f64)>)>,
     /// The fixed-time light that controls it: (index into [`Network::lights`], index in its phases' states).
     pub signal: Option<(u32, u32)>,
 }
@@ -246,8 +242,6 @@ impl Network {
         let mut seen: HashMap<mapc_graph::ConnectionLanes, LinkIdx> = HashMap::new();
         // per link, the connections its own yields to
         let mut yields: Vec<&Vec<mapc_graph::ConnectionLanes>> = Vec::new();
-        let mut waits: Vec<Option<&mapc_graph::WaitInside>> = Vec::new();
-        let mut via_shapes: Vec<(&[[f64; 2]], f64)> = Vec::new();
         for c in &g.connections {
             if seen.contains_key(&c.lanes()) {
                 continue;
@@ -297,7 +291,6 @@ impl Network {
                 foes: Vec::new(),
                 crossing_foes: Vec::new(),
                 yields_inside: c.yields_inside,
-                wait_inside: None,
                 signal: c.signal.as_ref().and_then(|s| {
                     g.lights
                         .iter()
@@ -307,8 +300,6 @@ impl Network {
             });
             seen.insert(c.lanes(), link_idx);
             yields.push(&c.yields_to);
-            waits.push(c.wait_inside.as_ref());
-            via_shapes.push((c.via_shape.as_slice(), c.via_length_m));
         }
         for i in 0..links.len() {
             let foes: Vec<LinkIdx> = (0..links.len())
@@ -329,24 +320,6 @@ impl Network {
                 .filter(|&j| j as usize != i && !links[i].foes.contains(&j))
                 .collect();
             links[i].crossing_foes = crossing;
-        }
-        for (i, w) in waits.iter().enumerate() {
-            if let Some(w) = w {
-                let foes: Vec<(LinkIdx, f64)> = w
-                    .yields_to
-                    .iter()
-                    .filter_map(|k| seen.get(k))
-                    .copied()
-                    .filter(|&j| j as usize != i)
-                    .map(|j| {
-                        let (foe_shape, foe_len) = via_shapes[j as usize];
-                        let at = crossing_along(foe_shape, via_shapes[i].0)
-                            .map_or(foe_len, |d| d * foe_len / polyline_length(foe_shape));
-                        (j, at)
-                    })
-                    .collect();
-                links[i].wait_inside = Some((w.at_m, foes));
-            }
         }
         let (via_groups, via_beside) = side_by_side_groups(&mut lanes, &links);
         let mut net = Network {
@@ -669,40 +642,4 @@ fn turn_angle(a: &mapc_graph::Road, b: &mapc_graph::Road) -> f64 {
         d = 2.0 * std::f64::consts::PI - d;
     }
     d
-}
-
-/// A polyline's length.
-fn polyline_length(p: &[[f64; 2]]) -> f64 {
-    p.windows(2)
-        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
-        .sum()
-}
-
-/// The distance along `a` to where it first crosses `b` (two junction connections' drawn paths); `None` where they
-/// do not cross or are not drawn.
-fn crossing_along(a: &[[f64; 2]], b: &[[f64; 2]]) -> Option<f64> {
-    let mut seen = 0.0;
-    for sa in a.windows(2) {
-        let (p, r) = (sa[0], [sa[1][0] - sa[0][0], sa[1][1] - sa[0][1]]);
-        let len = r[0].hypot(r[1]);
-        let mut first: Option<f64> = None;
-        for sb in b.windows(2) {
-            let (q, s) = (sb[0], [sb[1][0] - sb[0][0], sb[1][1] - sb[0][1]]);
-            let denom = r[0] * s[1] - r[1] * s[0];
-            if denom.abs() < 1e-12 {
-                continue;
-            }
-            let qp = [q[0] - p[0], q[1] - p[1]];
-            let t = (qp[0] * s[1] - qp[1] * s[0]) / denom;
-            let u = (qp[0] * r[1] - qp[1] * r[0]) / denom;
-            if (0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u) {
-                first = Some(first.map_or(t, |f: f64| f.min(t)));
-            }
-        }
-        if let Some(t) = first {
-            return Some(seen + t * len);
-        }
-        seen += len;
-    }
-    None
 }

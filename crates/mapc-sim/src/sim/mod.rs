@@ -167,10 +167,6 @@ impl Simulation {
             for &f in &l.crossing_foes {
                 crossed[f as usize] = true;
             }
-            // (a link another waits inside the junction for is crossed too)
-            for &(f, _) in l.wait_inside.iter().flat_map(|(_, foes)| foes) {
-                crossed[f as usize] = true;
-            }
         }
         let dt = spec.step_s;
         let types: Vec<CfModel> = spec

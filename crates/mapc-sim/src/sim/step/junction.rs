@@ -189,11 +189,6 @@ impl Simulation {
         crossing: bool,
     ) -> bool {
         let lk = self.link_at(it.link as usize);
-        // a link with a wait point inside the junction is open at its line (SUMO's `isCont`): its driver yields
-        // there ([`Self::wait_inside_speed`])
-        if lk.wait_inside.is_some() {
-            return true;
-        }
         if crossing && !lk.crossing_foes.is_empty() {
             let impatience = self.impatience(id, can_brake);
             let crossed = lk.crossing_foes.iter().any(|&foe| {
@@ -218,94 +213,6 @@ impl Simulation {
             blocked = true;
         });
         !blocked
-    }
-
-    /// The speed that stops a driver at its link's wait point inside the junction (SUMO's internal junction: a
-    /// left turn waits there for the oncoming stream), `dist` metres ahead of its front, while a vehicle it waits for
-    /// crosses there or is about to: one moving on a foe's connection not yet past the conflict point, or one approaching
-    /// a foe's link whose passage overlaps ego's (as [`Self::link_opened`] judges a crossing foe), and, as at an
-    /// open minor link, while it is farther from the point than the foe visibility distance; infinity when it may
-    /// drive on. The driver's passage is estimated from its speed, accelerating at most to `des`.
-    pub(in crate::sim) fn wait_inside_speed(
-        &self,
-        id: VehicleId,
-        link: LinkIdx,
-        dist: f64,
-        des: f64,
-    ) -> f64 {
-        let lk = self.link_at(link as usize);
-        let Some((at_m, foes)) = &lk.wait_inside else {
-            return f64::INFINITY;
-        };
-        if foes.is_empty() || dist < 0.0 {
-            return f64::INFINITY;
-        }
-        // a protected turn (its light's major green) waits for nobody inside the junction
-        if lk.signal.is_some()
-            && self.signal_of(lk, self.time_s - self.spec.start_time_s)
-                == Some(crate::network::signals::SignalState::Green)
-        {
-            return f64::INFINITY;
-        }
-        // two drivers who wait inside for each other (opposite left turns whose paths cross): the link listed
-        // first goes first, so that they do not wait for good
-        let waits_for_ego = |foe: LinkIdx| {
-            self.link_at(foe as usize)
-                .wait_inside
-                .as_ref()
-                .is_some_and(|(_, theirs)| theirs.iter().any(|&(l, _)| l == link))
-        };
-        let foes: Vec<(LinkIdx, f64)> = foes
-            .iter()
-            .copied()
-            .filter(|&(foe, _)| !(foe > link && waits_for_ego(foe)))
-            .collect();
-        let v = &self.veh[id as usize];
-        let p = &self.types[v.vtype as usize];
-        // a foe inside the junction whose back has not passed the crossing (one that stands there waits for
-        // something itself: waiting for it could hold both for good)
-        let crossing_now = foes.iter().any(|&(foe, at)| {
-            let fl = self.link_at(foe as usize);
-            self.lane_veh[fl.via_lane as usize].iter().any(|&o| {
-                let ov = &self.veh[o as usize];
-                ov.speed > super::moves::HALTING_SPEED && ov.pos - ov.length < at
-            })
-        });
-        let stop = || {
-            p.stop_speed((dist - POSITION_EPS).fmax(0.0), v.speed, des)
-                .fmax(0.0)
-        };
-        // SUMO's approach to a minor link, here to the wait point's: until the foes are in sight, the driver keeps
-        // able to stop there
-        if crossing_now || dist > FOE_VISIBILITY_M {
-            return stop();
-        }
-        // ego's passage: to the wait point at its speed, accelerating towards `des`, then across the rest of the
-        // connection and its own length at the speed reached
-        let a = p.accel.max(NUMERICAL_EPS);
-        let top = des.max(NUMERICAL_EPS);
-        let speed = v.speed.min(top);
-        let to_top = (top * top - speed * speed) / (2.0 * a);
-        let (t_point, v_point) = if dist <= to_top {
-            let v_point = (speed * speed + 2.0 * a * dist).sqrt();
-            ((v_point - speed) / a, v_point)
-        } else {
-            ((top - speed) / a + (dist - to_top) / top, top)
-        };
-        let rest = self.lane_at(lk.via_lane as usize).length - at_m + v.length;
-        let arrival = self.time_s + t_point;
-        let leave = arrival + rest / v_point.max(NUMERICAL_EPS);
-        let impatience = self.impatience(id, true);
-        let crossed = foes.iter().any(|&(foe, _)| {
-            self.approaches[foe as usize].iter().any(|a| {
-                a.veh != id
-                    && a.will_pass
-                    && !(a.leave_time < arrival)
-                    && !((1.0 - impatience) * a.arrival_time + impatience * a.arrival_time_braking
-                        > leave + LINK_LOOKAHEAD_S)
-            })
-        });
-        if crossed { stop() } else { f64::INFINITY }
     }
 
     /// How far a waiting driver expects a foe to brake for it: its type's impatience, growing with its waiting time;

@@ -176,12 +176,6 @@ impl Simulation {
             let y = self.yield_inside_junction(id, link, p, des_cur);
             vv = vv.fmin(y);
             v_link_pass.lower(y);
-            // not yet at its wait point inside the junction (a left turn's), where it lets the oncoming pass
-            if let Some((at_m, _)) = self.link_at(link as usize).wait_inside {
-                let w = self.wait_inside_speed(id, link, at_m - v.pos, des_cur);
-                vv = vv.fmin(w);
-                v_link_pass.lower(w);
-            }
         }
         if qi == 0 && !matches!(cur.kind, LaneKind::Via(_)) {
             // tails of vehicles that entered a connection out of this road still reach back onto it: they lead
@@ -372,17 +366,6 @@ impl Simulation {
                     last_item = Some(i);
                 } else {
                     last_item = None;
-                }
-                // a wait point inside the junction ahead (a left turn's): stop there while the oncoming pass
-                if let Some((at_m, _)) = lk.wait_inside {
-                    let w = self.wait_inside_speed(id, link, seen + at_m, des_cur);
-                    if w < vv {
-                        vv = w;
-                        if let Some(i) = last_item {
-                            let it = &mut plan.items[i];
-                            it.leave_speed = it.leave_speed.fmin(w);
-                        }
-                    }
                 }
             }
             if had_non_internal
