@@ -588,4 +588,29 @@ fn sumo_replays_deterministic_copy_draws_nothing_and_first_finds_where_the_runs_
     assert_eq!(first.lines().count(), 3, "{first}");
     let follow = run(&["follow", "g.json", "fcd.xml", "trace.csv", "f.1"]);
     assert_eq!(follow.matches("<<").count(), 2, "{follow}");
+    // mapc's own floating-car data in place of the trace: SUMO's names and time stamps, vehicles matched by name
+    let mut mapc_fcd = String::from("<?xml version=\"1.0\"?>\n<fcd-export>\n");
+    for t in 0..4 {
+        let (p1, p2) = (5 + 10 * t, 5 + 8 * t);
+        let (m2, s2) = if t < 2 { (p2, 8) } else { (p2 - 1, 7) };
+        mapc_fcd += &format!(
+            "<timestep time=\"{t}.00\"><vehicle id=\"f.0\" lane=\"a_0\" pos=\"{p1}.00\" speed=\"10.00\"/>\
+             <vehicle id=\"f.1\" lane=\"a_1\" pos=\"{m2}.00\" speed=\"{s2}.00\"/></timestep>\n"
+        );
+    }
+    mapc_fcd += "<timestep time=\"4.00\"><vehicle id=\"f.2\" lane=\"a_1\" pos=\"0.00\" speed=\"9.00\"/></timestep>\n</fcd-export>\n";
+    std::fs::write(dir.join("mapc_fcd.xml"), mapc_fcd).unwrap();
+    let by_name = run(&["first", "g.json", "fcd.xml", "mapc_fcd.xml"]);
+    assert!(
+        by_name.contains("3 SUMO vehicles matched (0 of them by their first step and road alone"),
+        "{by_name}"
+    );
+    assert!(
+        by_name.contains("2.00  f.1") && by_name.contains("mapc a 1 20.00 7.00"),
+        "{by_name}"
+    );
+    assert!(
+        by_name.contains("4.00  f.2") && by_name.contains("mapc a 1 0.00 9.00"),
+        "{by_name}"
+    );
 }

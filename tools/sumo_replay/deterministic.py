@@ -21,6 +21,9 @@ step where they part points at a rule of SUMO's that mapc does not follow (docs/
 - `follow`: one SUMO vehicle's steps beside mapc's, `<<` where they differ.
 
 FCD and trace are read with `roads.py`'s readers (trace times one step earlier, so that both name a step alike).
+mapc's own floating-car data may stand for the trace (`mapc sim OUT/NAME.sumocfg --seeds 1 --fcd-output
+mapc_fcd.xml`): it names vehicles and lanes as SUMO does, so vehicles are matched by name and lane indices agree
+where a road has lanes closed to cars.
 Standard library only; SUMO is a reference, never needed by mapc.
 """
 import argparse
@@ -87,7 +90,7 @@ def cmd_copy(a):
 def rows(a, to_time):
     edges = roads.sumo_edges(a.graph)
     sumo = [(round(r[0], 2),) + tuple(r[1:]) for r in roads.fcd_rows(a.fcd, 0, to_time)]
-    mapc = [(round(r[0], 2),) + tuple(r[1:]) for r in roads.trace_rows(a.trace, edges, 0, to_time)]
+    mapc = [(round(r[0], 2),) + tuple(r[1:]) for r in roads.mapc_rows(a.trace, edges, 0, to_time)]
     return sumo, mapc
 
 
@@ -112,6 +115,10 @@ def matched(sumo, mapc):
                 if len(vs) == 1 and len(by_key.get(k, [])) == 1}
 
     sumo_firsts, mapc_firsts = firsts(sumo), firsts(mapc)
+    # mapc's floating-car data names each vehicle as SUMO does
+    named = {v: v for v in sumo_firsts if v in mapc_firsts}
+    if len(named) * 2 > len(sumo_firsts):
+        return named, 0
     out = one_to_one(sumo_firsts, mapc_firsts, lambda r: (r[0], r[2], r[3], round(r[4], 1)))
     taken = set(out.values())
     second = one_to_one({v: r for v, r in sumo_firsts.items() if v not in out},

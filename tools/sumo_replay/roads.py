@@ -30,7 +30,9 @@ FCD and trace may each be several files, comma-separated (runs of several seeds,
 S --seeds 1 --trace` writes seed S's). The runs' `--end` (or horizon) and `--begin` must match; with `--from-time` and `--to-time` only the steps in
 between count.
 mapc's trace stamps a frame with the end of its step, SUMO's FCD with its begin: trace times are read one step
-earlier, so that both name a step alike. A trace thinned by its budget (one frame in k) gives vehicle-seconds
+earlier, so that both name a step alike. In place of the trace, mapc's own floating-car data (`mapc sim
+--fcd-output mapc_fcd.xml`) is read as SUMO's is: SUMO's lane ids (the lanes closed to cars counted, as on
+Ingolstadt's sidewalks) and SUMO's vehicle names. A trace thinned by its budget (one frame in k) gives vehicle-seconds
 scaled by k. Standard library only; SUMO is a reference, never needed by mapc.
 """
 import argparse
@@ -62,6 +64,20 @@ def fcd_rows(path, from_time, to_time):
             yield t, el.get("id"), edge, int(index), float(el.get("pos")), float(el.get("speed"))
 
 
+def is_xml(path):
+    """Whether `path` is an XML file (mapc's `--fcd-output`) rather than a CSV trace, by its first character."""
+    with open(path, "rb") as f:
+        return f.read(1) == b"<"
+
+
+def mapc_rows(path, edges, from_time, to_time):
+    """mapc's rows: from its floating-car data (`mapc sim --fcd-output`: SUMO's lane ids and vehicle names, SUMO's
+    time stamps) or from its trace."""
+    if is_xml(path):
+        return fcd_rows(path, from_time, to_time)
+    return trace_rows(path, edges, from_time, to_time)
+
+
 def trace_rows(path, edges, from_time, to_time):
     """The same rows from a mapc trace, its roads named by their SUMO edges, its times one step earlier."""
     with open(path) as f:
@@ -91,7 +107,7 @@ def both(a):
         return rows
 
     return (("SUMO", pooled(a.fcd, lambda p: fcd_rows(p, a.from_time, a.to_time))),
-            ("mapc", pooled(a.trace, lambda p: trace_rows(p, edges, a.from_time, a.to_time))))
+            ("mapc", pooled(a.trace, lambda p: mapc_rows(p, edges, a.from_time, a.to_time))))
 
 
 def step_of(rows):
