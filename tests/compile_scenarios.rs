@@ -561,7 +561,7 @@ fn shipped_corridors_and_windows_are_unchanged_without_keep_lanes() {
                 }
             }
             for c in v["connections"].as_array_mut().unwrap() {
-                c.as_object_mut().unwrap().remove("via_shape");
+                c.as_object_mut().unwrap().remove("via_lanes");
             }
             v
         };

@@ -130,7 +130,7 @@ pub(crate) mod tests {
         ];
         for (from, row) in [(0, RightOfWay::Minor), (1, RightOfWay::Major)] {
             g.connections.push(Connection {
-                via_shape: Vec::new(),
+                via_lanes: Vec::new(),
                 yields_to: Vec::new(),
                 yields_inside: false,
                 junction: JunctionId(2),

@@ -290,10 +290,20 @@ pub struct Connection {
     /// request table): a left turn waits in the junction for the oncoming stream to clear.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub yields_inside: bool,
-    /// The path inside the junction where the input drew one (a SUMO net's internal lanes' shapes, one after
-    /// another); empty elsewhere.
+    /// The lanes inside the junction where the input has them (a SUMO net's internal lanes, one after another,
+    /// their lengths summing to `via_length_m`); empty elsewhere.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub via_shape: Vec<[f64; 2]>,
+    pub via_lanes: Vec<InternalLane>,
+}
+
+/// One of a connection's lanes inside the junction (a SUMO internal lane).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct InternalLane {
+    /// The input's id of it (`:J4_0_0`).
+    pub id: String,
+    pub length_m: f64,
+    /// Its centre line, from its start to its end.
+    pub shape: Vec<[f64; 2]>,
 }
 
 /// A connection named by its lanes: from road and lane, to road and lane.

@@ -5,10 +5,9 @@
 //! Positions are SUMO's: the front's point on its lane's shape, the lane position scaled by the shape's length
 //! over the lane's length; the angle (navigation degrees, north 0, clockwise) is that of the line from the back to
 //! the front. A lane's shape is the one its SUMO net drew (`Lane::shape`), else the one `mapc export --sumo`
-//! writes (the road's centre line moved sideways by whole lane widths, [`crate::net`]); a junction's connection
-//! follows its internal lanes' shapes one after another (`Connection::via_shape`), else the straight line from the
-//! lane it leaves to the lane it enters, as the export's internal lanes do. A connection of several internal lanes
-//! (an internal junction) is named by its first, its position counted from that one's start.
+//! writes (the road's centre line moved sideways by whole lane widths, [`crate::net`]); on a junction's
+//! connection a vehicle is on one of its internal lanes (`Connection::via_lanes`), named and placed as SUMO does,
+//! else on the straight line from the lane it leaves to the lane it enters, as the export's internal lanes are.
 
 use crate::run_outputs::{lane_name, vehicle_name};
 use crate::xml::escape as xml_escape;
@@ -113,8 +112,9 @@ pub fn navi_degree(angle: f64) -> f64 {
 #[derive(Debug, Default)]
 pub struct FcdOutput {
     lanes: HashMap<(RoadId, u8), LaneGeometry>,
-    /// A junction connection's geometry and SUMO lane id, by (from road, from lane, to road, to lane).
-    vias: HashMap<(RoadId, u8, RoadId, u8), (LaneGeometry, String)>,
+    /// A junction connection's internal lanes, by (from road, from lane, to road, to lane): each one's start
+    /// along the connection, geometry and SUMO lane id.
+    vias: HashMap<(RoadId, u8, RoadId, u8), Vec<(f64, LaneGeometry, String)>>,
     names: HashMap<VehicleId, String>,
     rows: Vec<(String, String)>,
     begin_s: f64,
@@ -145,24 +145,31 @@ impl FcdOutput {
             ) else {
                 continue;
             };
-            let shape = if c.via_shape.len() >= 2 {
-                c.via_shape.clone()
+            let drawn = !c.via_lanes.is_empty() && c.via_lanes.iter().all(|l| l.shape.len() >= 2);
+            let parts: Vec<(f64, LaneGeometry, String)> = if drawn {
+                let mut start = 0.0;
+                c.via_lanes
+                    .iter()
+                    .map(|l| {
+                        let geometry = LaneGeometry::new(l.shape.clone(), l.length_m);
+                        let part = (start, geometry, l.id.clone());
+                        start += l.length_m;
+                        part
+                    })
+                    .collect()
             } else {
-                match (from.points.last(), to.points.first()) {
-                    (Some(&a), Some(&b)) => vec![a, b],
-                    _ => continue,
-                }
+                let (Some(&a), Some(&b)) = (from.points.last(), to.points.first()) else {
+                    continue;
+                };
+                let name = c
+                    .provenance
+                    .sumo_ids
+                    .first()
+                    .cloned()
+                    .unwrap_or_else(|| format!(":{}_{i}_0", c.junction));
+                vec![(0.0, LaneGeometry::new(vec![a, b], c.via_length_m), name)]
             };
-            let name = c
-                .provenance
-                .sumo_ids
-                .first()
-                .cloned()
-                .unwrap_or_else(|| format!(":{}_{i}_0", c.junction));
-            vias.insert(
-                (c.from_road, c.from_lane, c.to_road, c.to_lane),
-                (LaneGeometry::new(shape, c.via_length_m), name),
-            );
+            vias.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), parts);
         }
         FcdOutput {
             lanes,
@@ -177,9 +184,13 @@ impl FcdOutput {
         self.lanes.get(&(road, lane))
     }
 
-    /// The geometry of the junction connection written as SUMO lane `name`.
+    /// The geometry of the internal lane written as SUMO lane `name`.
     pub fn via_geometry(&self, name: &str) -> Option<&LaneGeometry> {
-        self.vias.values().find(|(_, n)| n == name).map(|(g, _)| g)
+        self.vias
+            .values()
+            .flatten()
+            .find(|(_, _, n)| n == name)
+            .map(|(_, g, _)| g)
     }
 
     /// The file's start: SUMO's XML declaration and root element.
@@ -203,19 +214,29 @@ impl FcdOutput {
         self.rows.clear();
         for id in sim.active_ids() {
             let Some(v) = sim.vehicle(id) else { continue };
-            let (geometry, lane) = match v.via_to {
+            let (geometry, lane, pos) = match v.via_to {
                 Some((to_road, to_lane)) => {
-                    match self.vias.get(&(v.road, v.lane_index, to_road, to_lane)) {
-                        Some((geometry, name)) => (geometry, name.clone()),
-                        None => continue,
-                    }
+                    let Some(parts) = self.vias.get(&(v.road, v.lane_index, to_road, to_lane))
+                    else {
+                        continue;
+                    };
+                    // the internal lane its front is on
+                    let Some((start, geometry, name)) = parts
+                        .iter()
+                        .rev()
+                        .find(|(start, ..)| *start <= v.pos_m)
+                        .or(parts.first())
+                    else {
+                        continue;
+                    };
+                    (geometry, name.clone(), v.pos_m - start)
                 }
                 None => match self.lanes.get(&(v.road, v.lane_index)) {
-                    Some(geometry) => (geometry, lane_name(g, v.road, v.lane_index)),
+                    Some(geometry) => (geometry, lane_name(g, v.road, v.lane_index), v.pos_m),
                     None => continue,
                 },
             };
-            let Some(([x, y], angle)) = geometry.place(v.pos_m, v.length) else {
+            let Some(([x, y], angle)) = geometry.place(pos, v.length) else {
                 continue;
             };
             let name = self
@@ -229,7 +250,7 @@ impl FcdOutput {
                 xml_escape(&name),
                 xml_escape(v.vehicle_type),
                 v.speed,
-                v.pos_m,
+                pos,
                 xml_escape(&lane),
             );
             self.rows.push((name, row));

@@ -348,7 +348,7 @@ fn osm_connections(graph: &LaneGraph, road_piece: &[(i64, u32)]) -> Vec<Connecti
                         signal: None,
                         right_of_way_overridden: false,
                         provenance: Provenance::default(),
-                        via_shape: Vec::new(),
+                        via_lanes: Vec::new(),
                     });
                 }
             }

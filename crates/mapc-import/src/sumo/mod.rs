@@ -342,7 +342,7 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
         let junction = junction_of[from_edge.to.as_str()];
         // Follow the internal lanes from `via` to the next normal edge.
         let (mut via_length, mut via_speed) = (0.0, None::<f64>);
-        let mut via_shape: Vec<[f64; 2]> = Vec::new();
+        let mut via_lanes: Vec<mapc_graph::InternalLane> = Vec::new();
         let mut next = c.via.clone();
         let mut steps = 0;
         while let Some(lane) = next.take() {
@@ -354,10 +354,11 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
                 )
             })?;
             via_length += len;
-            // (one internal lane starts where the one before ends)
-            let joint =
-                usize::from(via_shape.last().is_some() && via_shape.last() == shape.first());
-            via_shape.extend_from_slice(&shape[joint.min(shape.len())..]);
+            via_lanes.push(mapc_graph::InternalLane {
+                id: lane.clone(),
+                length_m: len,
+                shape: shape.to_vec(),
+            });
             via_speed = Some(via_speed.map_or(speed, |s: f64| s.min(speed)));
             steps += 1;
             if steps > 16 {
@@ -424,7 +425,7 @@ pub(crate) fn read<R: BufRead>(input: R, source: Source) -> Result<LaneGraph, Pa
             provenance,
             yields_to: Vec::new(),
             yields_inside: false,
-            via_shape,
+            via_lanes,
         });
     }
 

@@ -79,7 +79,7 @@ pub fn flow_bottleneck(p: &FlowBottleneckParams) -> Result<LaneGraph, String> {
     let mut g = generated_graph(FLOW_BOTTLENECK, &node_names, provenance);
     g.roads = roads;
     let link = |junction: u32, from_lane: u8, to_lane: u8, via: f64, right_of_way| Connection {
-        via_shape: Vec::new(),
+        via_lanes: Vec::new(),
         yields_to: Vec::new(),
         yields_inside: false,
         junction: JunctionId(junction),

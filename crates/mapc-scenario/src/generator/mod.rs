@@ -204,7 +204,7 @@ pub fn simple_merge(p: &SimpleMergeParams) -> Result<LaneGraph, String> {
     };
     let connection =
         |from: &str, from_lane: u8, to: &str, to_lane: u8, via: f64, speed: f64, row| Connection {
-            via_shape: Vec::new(),
+            via_lanes: Vec::new(),
             yields_to: Vec::new(),
             yields_inside: false,
             junction: jid(edges.iter().find(|e| e.0 == from).unwrap().2),
@@ -330,7 +330,7 @@ pub fn lane_drop(p: &LaneDropParams) -> Result<LaneGraph, String> {
     let dropped = p.lanes_before - p.lanes_after;
     g.connections = (0..p.lanes_after)
         .map(|lane| Connection {
-            via_shape: Vec::new(),
+            via_lanes: Vec::new(),
             yields_to: Vec::new(),
             yields_inside: false,
             junction: JunctionId(1),

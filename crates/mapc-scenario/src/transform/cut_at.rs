@@ -112,7 +112,7 @@ pub fn cut_road(
     }
     for lane in 0..r.lanes.len() as u8 {
         g.connections.push(Connection {
-            via_shape: Vec::new(),
+            via_lanes: Vec::new(),
             yields_to: Vec::new(),
             yields_inside: false,
             junction: new_junction,

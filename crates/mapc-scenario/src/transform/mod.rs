@@ -382,7 +382,7 @@ pub fn ensure_connection(g: &mut LaneGraph, from: RoadId, to: RoadId, step: &str
         RightOfWay::Minor
     };
     g.connections.push(Connection {
-        via_shape: Vec::new(),
+        via_lanes: Vec::new(),
         yields_to: Vec::new(),
         yields_inside: false,
         junction,
@@ -592,7 +592,7 @@ pub(crate) mod test_maps {
                 RightOfWay::Minor
             };
             g.connections.push(Connection {
-                via_shape: Vec::new(),
+                via_lanes: Vec::new(),
                 yields_to: Vec::new(),
                 yields_inside: false,
                 junction: j,

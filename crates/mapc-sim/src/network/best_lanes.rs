@@ -355,7 +355,7 @@ mod tests {
             if let Some(&m) = lanes.get(i + 1) {
                 for lane in 0..n.min(m) as u8 {
                     g.connections.push(Connection {
-                        via_shape: Vec::new(),
+                        via_lanes: Vec::new(),
                         yields_to: Vec::new(),
                         yields_inside: false,
                         junction: JunctionId(i as u32 + 1),
