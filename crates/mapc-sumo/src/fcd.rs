@@ -108,13 +108,16 @@ pub fn navi_degree(angle: f64) -> f64 {
     d
 }
 
+/// A junction connection by its lanes: (from road, from lane, to road, to lane).
+type ConnectionKey = (RoadId, u8, RoadId, u8);
+
 /// The floating-car data of one run, written step by step.
 #[derive(Debug, Default)]
 pub struct FcdOutput {
     lanes: HashMap<(RoadId, u8), LaneGeometry>,
     /// A junction connection's internal lanes, by (from road, from lane, to road, to lane): each one's start
     /// along the connection, geometry and SUMO lane id.
-    vias: HashMap<(RoadId, u8, RoadId, u8), Vec<(f64, LaneGeometry, String)>>,
+    vias: HashMap<ConnectionKey, Vec<(f64, LaneGeometry, String)>>,
     names: HashMap<VehicleId, String>,
     rows: Vec<(String, String)>,
     begin_s: f64,
