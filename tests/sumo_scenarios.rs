@@ -219,6 +219,63 @@ fn fcd_output_has_sumos_elements_and_its_first_step() {
     }
 }
 
+/// `--sumo-outputs DIR`: the outputs the configuration names, under their names, from the same run as the flags
+/// write them; only a SUMO configuration names outputs.
+#[test]
+fn sumo_outputs_writes_what_the_configuration_names() {
+    let dir = scratch_dir("sumo-outputs-dir");
+    let outs = dir.join("outs");
+    let analysis = "scenarios/sumo/highway_ramp/highway-ramp-analysis.sumocfg";
+    let out = run_mapc(&[
+        "sim",
+        analysis,
+        "--seeds",
+        "1",
+        "--sumo-outputs",
+        outs.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    // (written, so not said to be unwritten)
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("not written"));
+    let mut names: Vec<String> = std::fs::read_dir(&outs)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["summary.xml", "trip_info.xml", "vehicle_traces.xml"]
+    );
+    let trip = dir.join("trip.xml");
+    assert_success(&run_mapc(&[
+        "sim",
+        analysis,
+        "--seeds",
+        "1",
+        "--tripinfo-output",
+        trip.to_str().unwrap(),
+    ]));
+    assert_eq!(
+        std::fs::read(outs.join("trip_info.xml")).unwrap(),
+        std::fs::read(&trip).unwrap()
+    );
+    let fcd = std::fs::read_to_string(outs.join("vehicle_traces.xml")).unwrap();
+    assert!(fcd.contains("<fcd-export"));
+    // a mapc scenario names no outputs: refused, nothing written
+    let none = dir.join("none");
+    let out = run_mapc(&[
+        "sim",
+        "scenarios/simple_merge.toml",
+        "--seeds",
+        "1",
+        "--sumo-outputs",
+        none.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("is not one"));
+    assert!(!none.exists());
+}
+
 /// A trace asked beside SUMO's outputs: all of them are written, from the first seed's one run (the trip-info used
 /// to be left out, without a word, whenever `--trace` was given).
 #[test]

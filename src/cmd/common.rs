@@ -113,6 +113,15 @@ impl AvArgs {
 /// The scenario `name` names (a scenario file, a `.sumocfg`, a built-in name), or the SUMO files of `sumo`;
 /// what reading a SUMO scenario dropped is printed as warnings.
 pub fn load_scenario_or_sumo(name: &str, sumo: &SumoInputArgs) -> anyhow::Result<ResolvedScenario> {
+    load_scenario_or_sumo_saying(name, sumo, |_| true)
+}
+
+/// [`load_scenario_or_sumo`], printing only the warnings `say` keeps.
+pub fn load_scenario_or_sumo_saying(
+    name: &str,
+    sumo: &SumoInputArgs,
+    say: impl Fn(&str) -> bool,
+) -> anyhow::Result<ResolvedScenario> {
     let options = mapc_scenario::sumo::ReadOptions {
         skip_unsupported: sumo.skip_unsupported,
     };
@@ -132,7 +141,7 @@ pub fn load_scenario_or_sumo(name: &str, sumo: &SumoInputArgs) -> anyhow::Result
                 .with_context(|| format!("loading scenario `{name}`"))?
         }
     };
-    for note in &rs.notes {
+    for note in rs.notes.iter().filter(|n| say(n)) {
         eprintln!("warning: {note}");
     }
     Ok(rs)

@@ -39,13 +39,21 @@ pub struct Args {
     /// angle, speed and lane after every step).
     #[arg(long, value_name = "FILE")]
     pub fcd_output: Option<PathBuf>,
+    /// Write every output the SUMO configuration names (its trip-info, summary and floating-car data files, its
+    /// induction loops' files) into DIR, each under its own file name, from the first seed's run, as `sumo -c`
+    /// writes them beside the configuration; a flag above names its file instead.
+    #[arg(long, value_name = "DIR")]
+    pub sumo_outputs: Option<PathBuf>,
     /// Write the induction loops' files of the first seed's run into DIR, each under the name of the file its
     /// `inductionLoop` names (what SUMO 1.8 writes there).
     #[arg(long, value_name = "DIR")]
     pub detector_output: Option<PathBuf>,
 }
 
-pub fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(mut args: Args) -> anyhow::Result<()> {
+    if let Some(dir) = args.sumo_outputs.clone() {
+        outputs_into(&mut args, &dir)?;
+    }
     super::common::check_outputs([
         args.trace.as_deref(),
         args.tripinfo_output.as_deref(),
@@ -57,9 +65,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         mapc_graph::check_folder_creatable(dir)
             .with_context(|| format!("creating {}", dir.display()))?;
     }
-    let rs = args.avs.apply(super::common::load_scenario_or_sumo(
+    // (with --sumo-outputs, the configuration's outputs are written: no word that they are not)
+    let writes_named = args.sumo_outputs.is_some();
+    let rs = args.avs.apply(super::common::load_scenario_or_sumo_saying(
         args.input.as_deref().unwrap_or(&args.scenario),
         &args.sumo,
+        |note| !(writes_named && note.contains("` not written; `mapc sim --")),
     )?)?;
     let spec = spec_from_scenario(&rs).with_context(|| format!("scenario `{}`", rs.origin))?;
     let fit = mapc_scenario::timing::HorizonFit::of_resolved(&rs);
@@ -203,6 +214,39 @@ fn progress_bar(n: u64, quiet: bool) -> ProgressBar {
             .expect("valid template"),
     );
     pb
+}
+
+/// `--sumo-outputs DIR`: the outputs the SUMO configuration names, each into DIR under its file name (the folders
+/// of the name dropped: a name read from an input never leads outside the output folder), where no flag names it.
+fn outputs_into(args: &mut Args, dir: &std::path::Path) -> anyhow::Result<()> {
+    let input = args.input.as_deref().unwrap_or(&args.scenario);
+    let cfg = std::path::Path::new(input);
+    if args.sumo.net.is_some() || !cfg.is_file() || !mapc_scenario::sumo::is_sumo_config(cfg) {
+        anyhow::bail!(
+            "--sumo-outputs {}: writes the outputs a SUMO configuration names; `{input}` is not one \
+             (name its files with --tripinfo-output, --summary-output, --fcd-output, --detector-output)",
+            dir.display()
+        );
+    }
+    let conf = mapc_scenario::sumo::config::read(cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
+    for (option, name) in &conf.named_outputs {
+        let Some(file) = std::path::Path::new(name).file_name() else {
+            continue;
+        };
+        let slot = match option.as_str() {
+            "tripinfo-output" => &mut args.tripinfo_output,
+            "summary-output" => &mut args.summary_output,
+            "fcd-output" => &mut args.fcd_output,
+            _ => continue,
+        };
+        slot.get_or_insert_with(|| dir.join(file));
+    }
+    args.detector_output
+        .get_or_insert_with(|| dir.to_path_buf());
+    mapc_graph::check_folder_creatable(dir)
+        .with_context(|| format!("creating {}", dir.display()))?;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    Ok(())
 }
 
 /// Run `seed` once and write from that one run whatever was asked of it: the trace, SUMO's trip-info, summary and

@@ -36,6 +36,9 @@ pub struct SumoConfig {
     /// The files SUMO itself writes for this configuration, as it names them (`*-output`, `output-prefix` and the
     /// logs: relative to the configuration's folder); mapc writes none of them.
     pub outputs: Vec<String>,
+    /// The outputs mapc can write, by the option that names them (`tripinfo-output`, `summary-output`,
+    /// `fcd-output`), with the name the configuration gives.
+    pub named_outputs: Vec<(String, String)>,
 }
 
 impl SumoConfig {
@@ -56,6 +59,7 @@ impl SumoConfig {
             scale: 1.0,
             warnings: Vec::new(),
             outputs: Vec::new(),
+            named_outputs: Vec::new(),
         }
     }
 }
@@ -218,10 +222,16 @@ pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
                 }
             }
             // written where the run asks for them (`mapc sim --tripinfo-output`), not into the user's folder
-            "tripinfo-output" | "summary-output" | "fcd-output" => c.warnings.push(format!(
-                "{}: option `{}` not written; `mapc sim --{} FILE` writes it",
-                o.place, o.name, o.name
-            )),
+            "tripinfo-output" | "summary-output" | "fcd-output" => {
+                c.warnings.push(format!(
+                    "{}: option `{}` not written; `mapc sim --{} FILE` writes it (`--sumo-outputs DIR`: every \
+                     output the configuration names, into DIR)",
+                    o.place, o.name, o.name
+                ));
+                if !value.is_empty() {
+                    c.named_outputs.push((o.name.clone(), value.to_string()));
+                }
+            }
             name if WITHOUT_EFFECT.contains(&name) => {}
             name => c
                 .warnings
