@@ -274,6 +274,33 @@ fn sumo_outputs_writes_what_the_configuration_names() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("is not one"));
     assert!(!none.exists());
+    // two outputs of one file name (the folders dropped) would write over each other: refused, nothing written
+    let copy = dir.join("copy");
+    std::fs::create_dir_all(&copy).unwrap();
+    for f in ["highway.net.xml", "highway-ramp.rou.xml"] {
+        std::fs::copy(format!("scenarios/sumo/highway_ramp/{f}"), copy.join(f)).unwrap();
+    }
+    let cfg = std::fs::read_to_string(analysis)
+        .unwrap()
+        .replace("\"summary.xml\"", "\"sub/trip_info.xml\"");
+    std::fs::write(copy.join("a.sumocfg"), cfg).unwrap();
+    let clash = dir.join("clash");
+    let out = run_mapc(&[
+        "sim",
+        copy.join("a.sumocfg").to_str().unwrap(),
+        "--seeds",
+        "1",
+        "--sumo-outputs",
+        clash.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr)
+            .contains("`summary-output` and `tripinfo-output` both name `trip_info.xml`"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!clash.exists());
 }
 
 /// A trace asked beside SUMO's outputs: all of them are written, from the first seed's one run (the trip-info used

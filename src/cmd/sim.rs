@@ -229,10 +229,21 @@ fn outputs_into(args: &mut Args, dir: &std::path::Path) -> anyhow::Result<()> {
         );
     }
     let conf = mapc_scenario::sumo::config::read(cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut taken: Vec<(&str, &std::ffi::OsStr)> = Vec::new();
     for (option, name) in &conf.named_outputs {
         let Some(file) = std::path::Path::new(name).file_name() else {
             continue;
         };
+        // (two outputs of one name would write over each other in DIR)
+        if let Some((other, _)) = taken.iter().find(|(_, f)| *f == file) {
+            anyhow::bail!(
+                "--sumo-outputs {}: {}: `{option}` and `{other}` both name `{}`",
+                dir.display(),
+                cfg.display(),
+                file.to_string_lossy()
+            );
+        }
+        taken.push((option, file));
         let slot = match option.as_str() {
             "tripinfo-output" => &mut args.tripinfo_output,
             "summary-output" => &mut args.summary_output,
