@@ -85,12 +85,6 @@ pub struct Simulation {
     /// Right of way is decided at the link (a major link with minor foes, a zipper link, a link another one
     /// crosses by the net's request table): approaching vehicles register their requests there.
     link_takes_requests: Table<bool>,
-    /// Per link, its junction is kept clear: a driver enters it only with room beyond
-    /// ([`step::junction_space`]); and whether any link is.
-    link_keeps_clear: Table<bool>,
-    any_keeps_clear: bool,
-    /// Per lane, what the room check read of it this step ([`step::junction_space`]).
-    lane_room: Vec<step::junction_space::LaneRoom>,
     /// Per entry lane, the vehicles waiting to be inserted, in departure order.
     pending: Vec<EntryQueue>,
     entry_lanes: Vec<LaneIdx>,
@@ -174,19 +168,6 @@ impl Simulation {
                 crossed[f as usize] = true;
             }
         }
-        // a junction with any link that yields or merges is kept clear (SUMO's `keepClear` with `hasFoes`)
-        let mut junction_has_foes: rustc_hash::FxHashMap<mapc_graph::JunctionId, bool> =
-            Default::default();
-        for l in &net.links {
-            *junction_has_foes.entry(l.junction).or_default() |=
-                !l.foes.is_empty() || !l.crossing_foes.is_empty();
-        }
-        let link_keeps_clear: Table<bool> = net
-            .links
-            .iter()
-            .map(|l| junction_has_foes[&l.junction])
-            .collect();
-        let any_keeps_clear = link_keeps_clear.iter().any(|&k| k);
         let dt = spec.step_s;
         let types: Vec<CfModel> = spec
             .vehicle_types
@@ -221,9 +202,6 @@ impl Simulation {
             approaches: Table(vec![Vec::new(); net.links.len()]),
             light_phases: (f64::NAN, Vec::new()),
             transfers: Vec::new(),
-            link_keeps_clear,
-            any_keeps_clear,
-            lane_room: Vec::new(),
             link_takes_requests: net
                 .links
                 .iter()

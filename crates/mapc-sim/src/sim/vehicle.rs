@@ -27,9 +27,6 @@ pub(super) struct Veh {
     pub(super) route: u32,
     pub(super) route_pos: u32,
     pub(super) waiting_s: f64,
-    /// In its last move it was held before a link, or crawled towards one (SUMO's `myHaveToWaitOnNextLink`): the
-    /// room behind it counts as standing for those who would enter a junction towards it.
-    pub(super) waits_at_link: bool,
     pub(super) depart_s: f64,
     /// When it was due to enter (a flow's vehicle: its departure time; NaN for others).
     pub(super) due_s: f64,
@@ -162,7 +159,6 @@ impl Simulation {
             route,
             route_pos: 0,
             waiting_s: 0.0,
-            waits_at_link: false,
             depart_s: f64::NAN,
             due_s: f64::NAN,
             arrive_s: f64::NAN,

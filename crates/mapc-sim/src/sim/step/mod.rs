@@ -8,7 +8,6 @@ use super::*;
 pub(in crate::sim) mod active_lanes;
 pub(in crate::sim) mod detection;
 pub(in crate::sim) mod junction;
-pub(in crate::sim) mod junction_space;
 pub(in crate::sim) mod lane_change;
 pub(in crate::sim) mod lane_change_view;
 #[cfg(test)]

@@ -55,14 +55,7 @@ impl Simulation {
                 // under SUMO's rules, the least speed past a minor link's point of no return (SUMO's `vSafeMin`),
                 // and the distance across
                 let mut across_min: Option<(f64, f64)> = None;
-                // held before a link (its light, a foe, no room beyond it), or crawling towards one (SUMO's
-                // `myHaveToWaitOnNextLink`)
-                let mut waits = false;
-                let mut held = false;
                 for it in &plan.items[..plan.n_items as usize] {
-                    if plan.hold_dist <= it.dist {
-                        break;
-                    }
                     let lk = self.link_at(it.link as usize);
                     let signal = self.signal_of(lk, light_time);
                     if signal == Some(SignalState::Green)
@@ -82,7 +75,6 @@ impl Simulation {
                     if matches!(signal, Some(SignalState::Red | SignalState::Yellow)) {
                         if signal == Some(SignalState::Red) || can_brake {
                             v_safe = v_safe.fmin(wait((it.dist - LIGHT_STOP_OFFSET_M).fmax(0.0)));
-                            (waits, held) = (true, true);
                             break;
                         }
                         continue;
@@ -105,7 +97,6 @@ impl Simulation {
                         !must_stop && it.will_pass && self.link_opened(id, it, can_brake, crossing);
                     if !opened && (can_brake || !it.will_pass || must_stop) {
                         v_safe = v_safe.fmin(wait(it.stop_dist));
-                        (waits, held) = (true, true);
                         break;
                     }
                     if opened
@@ -123,21 +114,12 @@ impl Simulation {
                                 v_safe = v_safe.fmin(wait(it.stop_dist));
                             }
                             debug_assert!(v_safe <= wait(it.stop_dist));
-                            (waits, held) = (true, true);
                             break;
                         }
                         let across = self.lane_at(v.lane as usize).length - v.pos;
                         across_min =
                             Some((((across + POSITION_EPS) / dt).fmin(it.v_link_pass), across));
                     }
-                }
-                if !held && plan.hold_dist.is_finite() {
-                    // no room beyond the junction ahead ([`super::junction_space`])
-                    v_safe = v_safe.fmin(plan.hold_speed);
-                    (waits, held) = (true, true);
-                }
-                if !held && (v_safe < v.speed || v_safe < HALTING_SPEED) {
-                    waits = true;
                 }
                 if let Some((min, dist)) = across_min
                     && v_safe + NUMERICAL_EPS < min
@@ -146,10 +128,7 @@ impl Simulation {
                     v_safe =
                         v_safe.fmin(p.stop_speed(dist, v.speed, self.desired_speed(v, v.lane)));
                     across_min = None;
-                    waits = true;
                 }
-                self.veh[id as usize].waits_at_link = waits;
-                let v = &self.veh[id as usize];
                 // finalise: acceleration and deceleration bounds (emergency braking allowed when unsafe)
                 let v_max = v_safe.fmin(v.speed + p.accel * dt);
                 let v_min = (v.speed - p.decel * dt)

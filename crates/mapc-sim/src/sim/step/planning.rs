@@ -1,7 +1,6 @@
 //! Each vehicle's plan for a step (SUMO's `MSVehicle::planMoveInternal`): the safe speed from every leader and
 //! limit ahead, and a request at every link where right of way is decided.
 
-use super::junction_space::{Crossing, MAX_CROSSINGS};
 use super::*;
 use crate::network::signals::SignalState;
 
@@ -18,14 +17,6 @@ pub(in crate::sim) struct Plan {
     pub(in crate::sim) stop_brake_gap: f64,
     pub(in crate::sim) n_items: u8,
     pub(in crate::sim) items: [LinkItem; MAX_LINK_ITEMS],
-    /// Under SUMO's rules, on a network with junctions to keep clear: the junctions crossed in the look-ahead
-    /// ([`super::junction_space`]).
-    pub(in crate::sim) n_crossings: u8,
-    pub(in crate::sim) crossings: [Crossing; MAX_CROSSINGS],
-    /// Where the driver must stop for want of room beyond a junction (distance to the link, infinite: nowhere),
-    /// and the speed that stops it there (SUMO's `myVLinkWait` of a withdrawn request).
-    pub(in crate::sim) hold_dist: f64,
-    pub(in crate::sim) hold_speed: f64,
 }
 
 /// The speed at the next link, `speed_after_distance(dist, speed, accel).fmin(cap)` lowered by every leader
@@ -132,10 +123,7 @@ impl Simulation {
         // the speed at the next link: an upper bound, lowered by every leader
         let mut v_link_pass = LazyPassSpeed::new(seen, vv, p.accel, des_cur);
         plan.n_items = 0;
-        plan.n_crossings = 0;
-        plan.hold_dist = f64::INFINITY;
         plan.stop_brake_gap = f64::NAN;
-        let records_crossings = self.spec.sumo_junction_lane_changes && self.any_keeps_clear;
         // the request whose leave speed later constraints lower (SUMO's `lastLink`); none before the first link
         // and after an exit link (those carry no request)
         let mut last_item: Option<usize> = None;
@@ -299,17 +287,6 @@ impl Simulation {
             let next = r.lanes[k + 1];
             let next_ref = self.lane_at(next as usize);
             if let LaneKind::Via(cur_link) = lane_ref.kind {
-                if records_crossings && k == v.route_pos as usize {
-                    // on the connection already: only its exit is ahead
-                    plan.crossings[0] = Crossing {
-                        link: cur_link,
-                        dist: seen - lane_ref.length,
-                        v_pass: vv,
-                        item: None,
-                        exit_only: true,
-                    };
-                    plan.n_crossings = 1;
-                }
                 // the exit link of a junction: vehicles on merging connections closer to the merge point lead
                 let cur_major = self.link_at(cur_link as usize).major;
                 if k > v.route_pos as usize && !self.link_at(cur_link as usize).foes.is_empty() {
@@ -390,16 +367,6 @@ impl Simulation {
                 } else {
                     last_item = None;
                 }
-                if records_crossings && (plan.n_crossings as usize) < MAX_CROSSINGS {
-                    plan.crossings[plan.n_crossings as usize] = Crossing {
-                        link,
-                        dist: seen,
-                        v_pass: vv,
-                        item: last_item.map(|i| i as u8),
-                        exit_only: false,
-                    };
-                    plan.n_crossings += 1;
-                }
             }
             if had_non_internal
                 && seen_non_internal > (5.0 * v.length).fmax(v.length + vv)
@@ -428,11 +395,6 @@ impl Simulation {
         if self.spec.sumo_junction_lane_changes {
             self.lower_leave_speeds_for_merging_foes(plan, p, speed, des_cur);
         }
-        if plan.n_crossings > 0 {
-            self.check_room_beyond(id, qi, plan);
-        }
-        let v = &self.veh[id as usize];
-        let p = &self.types[v.vtype as usize];
         let own_lane_index = self.lane_at(v.lane as usize).index;
         let light_time = self.time_s - self.spec.start_time_s;
         // leave times from the final leave speeds; register approaches on links that minor foes check
