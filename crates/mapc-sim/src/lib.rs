@@ -100,7 +100,7 @@ pub use runs::regime::{
 };
 pub use runs::scenario::{run_baseline, run_baseline_spec, spec_from_scenario};
 pub use runs::trace::{MAX_TRACE_ROWS, TraceBudget, TracedRun, trace_run, trace_sim};
-pub use sim::{MergeFoe, Neighbor, SideNeighbors, Simulation, VehicleStatus, VehicleView};
+pub use sim::{LaneRef, MergeFoe, Neighbor, SideNeighbors, Simulation, VehicleStatus, VehicleView};
 pub use spec::{
     ControlWindowSpec, DepartLane, DetectorSpec, FlowSpec, InitialVehicleSpec, SimSpec,
     VehicleTypeSpec,

@@ -4,7 +4,8 @@
 //!
 //! Positions are SUMO's: the front's point on its lane's shape, the lane position scaled by the shape's length
 //! over the lane's length; the angle (navigation degrees, north 0, clockwise) is that of the line from the back to
-//! the front. A lane's shape is the one its SUMO net drew (`Lane::shape`), else the one `mapc export --sumo`
+//! the front, the back on the lane behind where it reaches there (`Simulation::back_place`; where the route no
+//! longer knows that lane, after a lane change, the lane's start, as SUMO draws a back out of the network). A lane's shape is the one its SUMO net drew (`Lane::shape`), else the one `mapc export --sumo`
 //! writes (the road's centre line moved sideways by whole lane widths, [`crate::net`]); on a junction's
 //! connection a vehicle is on one of its internal lanes (`Connection::via_lanes`), named and placed as SUMO does,
 //! else on the straight line from the lane it leaves to the lane it enters, as the export's internal lanes are.
@@ -12,7 +13,7 @@
 use crate::run_outputs::{lane_name, vehicle_name};
 use crate::xml::escape as xml_escape;
 use mapc_graph::{LaneGraph, RoadId};
-use mapc_sim::{Simulation, VehicleId};
+use mapc_sim::{LaneRef, Simulation, VehicleId};
 use std::collections::HashMap;
 use std::io::Write;
 
@@ -24,6 +25,7 @@ pub struct LaneGeometry {
     along: Vec<f64>,
     /// The polyline's length over the lane's (SUMO's `myLengthGeometryFactor`).
     factor: f64,
+    length_m: f64,
 }
 
 impl LaneGeometry {
@@ -47,7 +49,13 @@ impl LaneGeometry {
             points,
             along,
             factor,
+            length_m,
         }
+    }
+
+    /// The lane's length (m), as lane positions count it.
+    pub fn length_m(&self) -> f64 {
+        self.length_m
     }
 
     /// The point at lane position `pos`: on the shape, its last point beyond its end (SUMO's
@@ -182,6 +190,23 @@ impl FcdOutput {
         }
     }
 
+    /// The point at position `at` along a road's lane or a junction's connection (its internal lanes one after
+    /// another).
+    fn point_on(&self, lane: LaneRef, at: f64) -> Option<[f64; 2]> {
+        match lane {
+            LaneRef::Road { road, lane } => self.lanes.get(&(road, lane))?.point_at(at),
+            LaneRef::Via { from, to } => {
+                let parts = self.vias.get(&(from.0, from.1, to.0, to.1))?;
+                let (start, geometry, _) = parts
+                    .iter()
+                    .rev()
+                    .find(|(start, ..)| *start <= at)
+                    .or(parts.first())?;
+                geometry.point_at(at - start)
+            }
+        }
+    }
+
     /// The geometry of lane `lane` of road `road`.
     pub fn lane_geometry(&self, road: RoadId, lane: u8) -> Option<&LaneGeometry> {
         self.lanes.get(&(road, lane))
@@ -239,8 +264,35 @@ impl FcdOutput {
                     None => continue,
                 },
             };
-            let Some(([x, y], angle)) = geometry.place(pos, v.length) else {
+            let Some(front) = geometry.point_at(pos) else {
                 continue;
+            };
+            // the back: on the same lane, else where the route says it lies behind (SUMO's farthest lane behind),
+            // else the lane's start (SUMO's, where the back reaches out of the network)
+            let back = if pos >= v.length {
+                geometry.point_at(pos - v.length)
+            } else if v.pos_m >= v.length {
+                // (on an earlier internal lane of the same connection)
+                v.via_to.and_then(|(to_road, to_lane)| {
+                    self.point_on(
+                        LaneRef::Via {
+                            from: (v.road, v.lane_index),
+                            to: (to_road, to_lane),
+                        },
+                        v.pos_m - v.length,
+                    )
+                })
+            } else {
+                sim.back_place(id)
+                    .and_then(|(lane, at)| self.point_on(lane, at))
+            }
+            .or_else(|| geometry.point_at(0.0))
+            .unwrap_or(front);
+            let [x, y] = front;
+            let angle = if front != back {
+                navi_degree((front[1] - back[1]).atan2(front[0] - back[0]))
+            } else {
+                navi_degree(geometry.rotation_at(pos))
             };
             let name = self
                 .names

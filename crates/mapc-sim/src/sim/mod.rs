@@ -38,7 +38,7 @@ use step::{junction, lane_change, planning, side_lanes};
 use table::Table;
 use vehicle::{Route, TypeConsts, Veh};
 
-pub use queries::{MergeFoe, Neighbor, VehicleView};
+pub use queries::{LaneRef, MergeFoe, Neighbor, VehicleView};
 pub use side_lanes::SideNeighbors;
 pub use vehicle::VehicleStatus;
 

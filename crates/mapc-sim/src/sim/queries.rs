@@ -20,6 +20,20 @@ pub struct MergeFoe {
     pub speed: f64,
 }
 
+/// A lane of the network as front ends name it: a road's lane by its index, or a junction's connection by the lanes
+/// it joins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LaneRef {
+    Road {
+        road: RoadId,
+        lane: u8,
+    },
+    Via {
+        from: (RoadId, u8),
+        to: (RoadId, u8),
+    },
+}
+
 /// Read-only view of one vehicle.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VehicleView<'a> {
@@ -212,6 +226,46 @@ impl Simulation {
             speed_factor: v.speed_factor,
             free_flow_s: v.free_flow_s,
         })
+    }
+
+    /// Where a vehicle's back lies when it reaches behind the start of its lane (SUMO's farthest lane behind):
+    /// the lane on its route and the position there; `None` when the back is on its own lane, or behind the lanes
+    /// its route knows.
+    pub fn back_place(&self, id: VehicleId) -> Option<(LaneRef, f64)> {
+        let v = self.veh.get(id as usize)?;
+        let mut back = v.pos - v.length;
+        if back >= 0.0 {
+            return None;
+        }
+        let lanes = &self.routes[v.route as usize].lanes.0;
+        for &l in lanes[..v.route_pos as usize].iter().rev() {
+            back += self.lane_at(l as usize).length;
+            if back >= 0.0 {
+                return Some((self.lane_ref(l), back));
+            }
+        }
+        None
+    }
+
+    /// The network's lane `l` as front ends name it.
+    pub fn lane_ref(&self, l: LaneIdx) -> LaneRef {
+        let place = |l: LaneIdx| {
+            let r = self.net.road_of(l).expect("a road lane");
+            (self.net.road_ids[r], self.lane_at(l as usize).index)
+        };
+        match self.lane_at(l as usize).kind {
+            LaneKind::Road(_) => {
+                let (road, lane) = place(l);
+                LaneRef::Road { road, lane }
+            }
+            LaneKind::Via(k) => {
+                let lk = self.link_at(k as usize);
+                LaneRef::Via {
+                    from: place(lk.from_lane),
+                    to: place(lk.to_lane),
+                }
+            }
+        }
     }
 
     /// Index on its road of a road lane; for a via lane, of the lane it leaves.
