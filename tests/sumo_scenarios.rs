@@ -219,6 +219,49 @@ fn fcd_output_has_sumos_elements_and_its_first_step() {
     }
 }
 
+/// A mapc scenario's floating-car data names the lanes `mapc export --sumo` writes, internal lanes too, so that it
+/// reads beside SUMO's run of the export.
+#[test]
+fn fcd_of_a_mapc_scenario_names_the_exported_lanes() {
+    let dir = scratch_dir("fcd-export-names");
+    let fcd = dir.join("fcd.xml");
+    let export = dir.join("export");
+    let scenario = "scenarios/simple_merge.toml";
+    assert_success(&run_mapc(&[
+        "sim",
+        scenario,
+        "--seeds",
+        "1",
+        "--fcd-output",
+        fcd.to_str().unwrap(),
+    ]));
+    assert_success(&run_mapc(&[
+        "export",
+        scenario,
+        "--sumo",
+        export.to_str().unwrap(),
+    ]));
+    let net = std::fs::read_dir(&export)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.to_string_lossy().ends_with(".net.xml"))
+        .unwrap();
+    let net = std::fs::read_to_string(net).unwrap();
+    let fcd = std::fs::read_to_string(fcd).unwrap();
+    let lanes: std::collections::BTreeSet<&str> = fcd
+        .split(" lane=\"")
+        .skip(1)
+        .map(|r| &r[..r.find('"').unwrap()])
+        .collect();
+    assert!(lanes.iter().any(|l| l.starts_with(':')), "{lanes:?}");
+    for lane in &lanes {
+        assert!(
+            net.contains(&format!("<lane id=\"{lane}\"")),
+            "{lane} not in the export"
+        );
+    }
+}
+
 /// `--sumo-outputs DIR`: the outputs the configuration names, under their names, from the same run as the flags
 /// write them; only a SUMO configuration names outputs.
 #[test]

@@ -427,6 +427,47 @@ fn sumo_replays_roads_counts_vehicle_seconds_per_road_and_where_a_lane_is_left()
         2,
         "{inserted}"
     );
+    // `places`: two floating-car data files at the same step, lane and place; one point 0.5 m off, one angle
+    // 3 degrees off where the back is behind the lane's start, and a row at another place, not compared
+    let row = |t: u32, lane: &str, pos: &str, x: &str, angle: &str| {
+        format!(
+            "<timestep time=\"{t}.00\"><vehicle id=\"v\" x=\"{x}\" y=\"0.00\" angle=\"{angle}\" \
+             lane=\"{lane}\" pos=\"{pos}\" speed=\"10.00\"/></timestep>\n"
+        )
+    };
+    let sumo = [
+        row(0, "a_0", "3.00", "3.00", "90.00"),
+        row(1, "a_0", "13.00", "13.00", "90.00"),
+        row(2, "a_0", "23.00", "23.00", "90.00"),
+    ];
+    let mapc = [
+        row(0, "a_0", "3.00", "3.00", "93.00"),
+        row(1, "a_0", "13.00", "13.50", "90.00"),
+        row(2, "a_0", "24.00", "24.00", "90.00"),
+    ];
+    std::fs::write(
+        dir.join("s.xml"),
+        format!("<fcd-export>\n{}</fcd-export>\n", sumo.concat()),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("m.xml"),
+        format!("<fcd-export>\n{}</fcd-export>\n", mapc.concat()),
+    )
+    .unwrap();
+    let places = roads(&["places", "s.xml", "m.xml"]);
+    assert!(
+        places.contains("distance between the points: 2 rows, median 0.500 m"),
+        "{places}"
+    );
+    assert!(
+        places.contains("back on the same lane: 1 rows, median 0.000"),
+        "{places}"
+    );
+    assert!(
+        places.contains("below 5.0 m): 1 rows, median 3.000 degrees"),
+        "{places}"
+    );
 }
 
 /// sumo_check's `--sumo-runs` (tools/sumo_check/recorded.py) gives back the recorded runs only for the same SUMO

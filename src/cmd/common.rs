@@ -174,33 +174,47 @@ pub fn check_outputs<'a>(paths: impl IntoIterator<Item = Option<&'a Path>>) -> a
     Ok(())
 }
 
-/// Writes a trace CSV (header, then the rows `body` writes) atomically (`mapc_graph::write_atomically_with`), so
-/// an interrupted or failed run leaves neither half a trace under the final name nor a temporary file.
+/// Writes a trace CSV (header, then the rows `body` writes) atomically ([`write_streamed`]), so an interrupted or
+/// failed run leaves neither half a trace under the final name nor a temporary file.
 pub fn write_trace_file(
     path: &Path,
     body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    // the writer speaks io::Error; the simulator's or the policy's own error is kept aside and returned as is
+    write_streamed(path, "the trace ", |w| {
+        writeln!(w, "{TRACE_HEADER}")?;
+        body(w)
+    })
+}
+
+/// Writes `path` atomically (`mapc_graph::write_atomically_with`) as `body` streams it while a run goes on. The
+/// writer speaks io::Error: an error of `body`'s own (the simulator's, the policy's, another file's) is kept aside
+/// and returned as is; the file system's own refusal here (a full disk) names the file, called `what` (`the
+/// trace `, or nothing).
+pub fn write_streamed(
+    path: &Path,
+    what: &str,
+    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
     let mut failure = None;
     let written = mapc_graph::write_atomically_with(path, |w| {
-        writeln!(w, "{TRACE_HEADER}")?;
         body(w).map_err(|e| {
             let io = std::io::Error::other(e.to_string());
             failure = Some(e);
             io
         })
     });
+    let named = || format!("writing {what}{}", path.display());
     if let Some(e) = failure {
-        // the file system's own refusal (a full disk) names the file; the simulator's or the policy's stays as is
-        let os_error = e
-            .downcast_ref::<std::io::Error>()
-            .is_some_and(|io| io.get_ref().is_none());
+        // (a bare refusal of the file system, not one that already names its file)
+        let os_error = e.chain().count() == 1
+            && e.downcast_ref::<std::io::Error>()
+                .is_some_and(|io| io.get_ref().is_none());
         if os_error {
-            return Err(e.context(format!("writing the trace {}", path.display())));
+            return Err(e.context(named()));
         }
         return Err(e);
     }
-    written.with_context(|| format!("writing the trace {}", path.display()))
+    written.with_context(named)
 }
 
 /// Whether a map argument names a scenario rather than a map or graph: a file whose content is a scenario

@@ -70,7 +70,7 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     let rs = args.avs.apply(super::common::load_scenario_or_sumo_saying(
         args.input.as_deref().unwrap_or(&args.scenario),
         &args.sumo,
-        |note| !(writes_named && note.contains("` not written; `mapc sim --")),
+        |note| !(writes_named && note.contains(mapc_scenario::sumo::config::OUTPUT_NOT_WRITTEN)),
     )?)?;
     let spec = spec_from_scenario(&rs).with_context(|| format!("scenario `{}`", rs.origin))?;
     let fit = mapc_scenario::timing::HorizonFit::of_resolved(&rs);
@@ -232,6 +232,10 @@ fn outputs_into(args: &mut Args, dir: &std::path::Path) -> anyhow::Result<()> {
     let mut taken: Vec<(&str, &std::ffi::OsStr)> = Vec::new();
     for (option, name) in &conf.named_outputs {
         let Some(file) = std::path::Path::new(name).file_name() else {
+            eprintln!(
+                "warning: {}: `{option}` names `{name}`, no file: not written",
+                cfg.display()
+            );
             continue;
         };
         // (two outputs of one name would write over each other in DIR)
@@ -252,11 +256,9 @@ fn outputs_into(args: &mut Args, dir: &std::path::Path) -> anyhow::Result<()> {
         };
         slot.get_or_insert_with(|| dir.join(file));
     }
+    // (the folder is made when its first file is written: a run refused before leaves nothing)
     args.detector_output
         .get_or_insert_with(|| dir.to_path_buf());
-    mapc_graph::check_folder_creatable(dir)
-        .with_context(|| format!("creating {}", dir.display()))?;
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     Ok(())
 }
 
@@ -273,24 +275,18 @@ fn write_first_run(
         return first_run_writing(sim, args, detector_files, None);
     };
     let mut fcd = mapc_sumo::fcd::FcdOutput::new(&mut sim);
-    // the writer speaks io::Error; the run's own error is kept aside and returned as is
-    let (mut failure, mut metrics) = (None, None);
-    let written = mapc_graph::write_atomically_with(path, |w| {
+    let mut metrics = None;
+    super::common::write_streamed(path, "", |w| {
         fcd.start(w)?;
-        match first_run_writing(sim, args, detector_files, Some((&mut fcd, &mut *w, path))) {
-            Ok(m) => metrics = Some(m),
-            Err(e) => {
-                let io = std::io::Error::other(e.to_string());
-                failure = Some(e);
-                return Err(io);
-            }
-        }
-        fcd.finish(w)
-    });
-    if let Some(e) = failure {
-        return Err(e);
-    }
-    written.with_context(|| format!("writing {}", path.display()))?;
+        metrics = Some(first_run_writing(
+            sim,
+            args,
+            detector_files,
+            Some((&mut fcd, &mut *w)),
+        )?);
+        fcd.finish(w)?;
+        Ok(())
+    })?;
     Ok(metrics.expect("the run ended"))
 }
 
@@ -299,11 +295,7 @@ fn first_run_writing(
     mut sim: Simulation,
     args: &Args,
     detector_files: &[Option<String>],
-    mut fcd: Option<(
-        &mut mapc_sumo::fcd::FcdOutput,
-        &mut dyn std::io::Write,
-        &std::path::Path,
-    )>,
+    mut fcd: Option<(&mut mapc_sumo::fcd::FcdOutput, &mut dyn std::io::Write)>,
 ) -> anyhow::Result<RunMetrics> {
     let mut out = (args.tripinfo_output.is_some() || args.summary_output.is_some()).then(|| {
         mapc_sumo::run_outputs::SumoOutputs::new(
@@ -316,9 +308,8 @@ fn first_run_writing(
         if let Some(out) = &mut out {
             out.observe(s);
         }
-        if let Some((fcd, w, path)) = &mut fcd {
-            fcd.observe(s, w)
-                .with_context(|| format!("writing {}", path.display()))?;
+        if let Some((fcd, w)) = &mut fcd {
+            fcd.observe(s, w)?;
         }
         Ok(())
     };

@@ -23,6 +23,8 @@ mapc's trace of the same configuration, mapc's roads named by their SUMO edges (
 - `speeds`: per edge, position (per `--bucket` m) and lane, the mean speed in both.
 - `inserted`: per lane of EDGE, the vehicles first seen there (inserted, on an entry road), their mean place and
   speed.
+- `places`: SUMO's and mapc's floating-car data (`roads.py places fcd.xml mapc_fcd.xml`): at every step, lane and
+  place both have a vehicle, how far apart they draw it and at which angle (the back on its lane, or behind).
 - `departures`: per trip-info file, the vehicles that departed on lanes named `--lane-prefix...` before
   `--until`, and the mean departure delay of all of them.
 
@@ -231,6 +233,43 @@ def cmd_departures(a):
             path, before, len(d), a.until, sum(x for _, x in d) / len(d) if d else float("nan")))
 
 
+def fcd_places(path):
+    """(time, vehicle) -> (lane, pos, x, y, angle) of an FCD file (SUMO's, or mapc's `--fcd-output`)."""
+    out, t = {}, None
+    for _, el in ET.iterparse(path, events=("start",)):
+        if el.tag == "timestep":
+            t = el.get("time")
+        elif el.tag == "vehicle":
+            out[(t, el.get("id"))] = (el.get("lane"), float(el.get("pos")), float(el.get("x")), float(el.get("y")),
+                                      float(el.get("angle")))
+    return out
+
+
+def cmd_places(a):
+    """Where both files have a vehicle at the same step, lane and place (to the FCD's rounding), how far apart
+    they draw it and at which angles: mapc's geometry against SUMO's, whatever the dynamics."""
+    sumo, mapc = fcd_places(a.fcd), fcd_places(a.mapc_fcd)
+    dist, angle, behind = [], [], []
+    for key, (lane, pos, x, y, ang) in sumo.items():
+        m = mapc.get(key)
+        if m is None or m[0] != lane or abs(m[1] - pos) > 0.011:
+            continue
+        dist.append(((m[2] - x) ** 2 + (m[3] - y) ** 2) ** 0.5)
+        d = abs(m[4] - ang) % 360.0
+        (behind if pos < a.length else angle).append(min(d, 360.0 - d))
+
+    def stats(xs, unit):
+        xs = sorted(xs)
+        if not xs:
+            return "none"
+        return "%d rows, median %.3f %s, 95th percentile %.3f, largest %.3f" % (
+            len(xs), xs[len(xs) // 2], unit, xs[int(0.95 * (len(xs) - 1))], xs[-1])
+
+    print("distance between the points: %s" % stats(dist, "m"))
+    print("angle, the back on the same lane: %s" % stats(angle, "degrees"))
+    print("angle, the back on a lane behind (position below %.1f m): %s" % (a.length, stats(behind, "degrees")))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -264,8 +303,12 @@ def main():
     p.add_argument("tripinfo", nargs="+")
     p.add_argument("--lane-prefix", default="")
     p.add_argument("--until", type=float, default=3600.0)
+    p = sub.add_parser("places")
+    p.add_argument("fcd", help="SUMO's --fcd-output")
+    p.add_argument("mapc_fcd", help="mapc's --fcd-output of the same configuration")
+    p.add_argument("--length", type=float, default=5.0, help="the vehicles' length (m)")
     a = ap.parse_args()
-    {"time": cmd_time, "leave": cmd_leave, "stop-line": cmd_stop_line, "entries": cmd_entries,
+    {"places": cmd_places, "time": cmd_time, "leave": cmd_leave, "stop-line": cmd_stop_line, "entries": cmd_entries,
      "speeds": cmd_speeds, "inserted": cmd_inserted, "departures": cmd_departures}[a.cmd](a)
 
 

@@ -8,11 +8,14 @@
 //! longer knows that lane, after a lane change, the lane's start, as SUMO draws a back out of the network). A lane's shape is the one its SUMO net drew (`Lane::shape`), else the one `mapc export --sumo`
 //! writes (the road's centre line moved sideways by whole lane widths, [`crate::net`]); on a junction's
 //! connection a vehicle is on one of its internal lanes (`Connection::via_lanes`), named and placed as SUMO does,
-//! else on the straight line from the lane it leaves to the lane it enters, as the export's internal lanes are.
+//! else on the straight line from the lane it leaves to the lane it enters, named and drawn as `mapc export --sumo`
+//! writes that connection's internal lane.
 
+use crate::junctions::{InternalEdges, links_by_junction};
+use crate::names::SumoNames;
 use crate::run_outputs::{lane_name, vehicle_name};
 use crate::xml::escape as xml_escape;
-use mapc_graph::{LaneGraph, RoadId};
+use mapc_graph::{ConnectionLanes, RoadId};
 use mapc_sim::{LaneRef, Simulation, VehicleId};
 use std::collections::HashMap;
 use std::io::Write;
@@ -94,12 +97,17 @@ impl LaneGeometry {
     pub fn place(&self, pos: f64, length: f64) -> Option<([f64; 2], f64)> {
         let front = self.point_at(pos)?;
         let back = self.point_at(pos - length).or_else(|| self.point_at(0.0))?;
-        let angle = if front != back {
+        Some((front, self.heading(pos, front, back)))
+    }
+
+    /// SUMO's angle of a vehicle with its front at `pos` (`front`) and its back at `back`: the line between them
+    /// in navigation degrees, the lane's own direction where they coincide.
+    fn heading(&self, pos: f64, front: [f64; 2], back: [f64; 2]) -> f64 {
+        navi_degree(if front != back {
             (front[1] - back[1]).atan2(front[0] - back[0])
         } else {
             self.rotation_at(pos)
-        };
-        Some((front, navi_degree(angle)))
+        })
     }
 }
 
@@ -119,13 +127,20 @@ pub fn navi_degree(angle: f64) -> f64 {
 /// A junction connection by its lanes: (from road, from lane, to road, to lane).
 type ConnectionKey = (RoadId, u8, RoadId, u8);
 
+/// A lane as the file names and draws it.
+#[derive(Debug)]
+struct Drawn {
+    geometry: LaneGeometry,
+    /// SUMO's lane id.
+    name: String,
+}
+
 /// The floating-car data of one run, written step by step.
 #[derive(Debug, Default)]
 pub struct FcdOutput {
-    lanes: HashMap<(RoadId, u8), LaneGeometry>,
-    /// A junction connection's internal lanes, by (from road, from lane, to road, to lane): each one's start
-    /// along the connection, geometry and SUMO lane id.
-    vias: HashMap<ConnectionKey, Vec<(f64, LaneGeometry, String)>>,
+    lanes: HashMap<(RoadId, u8), Drawn>,
+    /// A junction connection's internal lanes, each with its start along the connection.
+    vias: HashMap<ConnectionKey, Vec<(f64, Drawn)>>,
     names: HashMap<VehicleId, String>,
     rows: Vec<(String, String)>,
     begin_s: f64,
@@ -145,40 +160,70 @@ impl FcdOutput {
                 } else {
                     crate::net::lane_shape(road, k)
                 };
-                lanes.insert((road.id, k as u8), LaneGeometry::new(shape, lane.length_m));
+                let drawn = Drawn {
+                    geometry: LaneGeometry::new(shape, lane.length_m),
+                    name: lane_name(g, road.id, k as u8),
+                };
+                lanes.insert((road.id, k as u8), drawn);
             }
         }
+        // a connection without internal lanes of its own is named as `mapc export --sumo` names it
+        let grouping = if sim.spec().sumo_junction_lane_changes {
+            InternalEdges::SideBySide
+        } else {
+            InternalEdges::PerConnection
+        };
+        let exported: HashMap<ConnectionLanes, String> =
+            links_by_junction(g, &SumoNames::of(g), grouping)
+                .into_values()
+                .flatten()
+                .map(|l| (l.connection.lanes(), l.via()))
+                .collect();
         let mut vias = HashMap::new();
-        for (i, c) in g.connections.iter().enumerate() {
+        for c in &g.connections {
             let (Some(from), Some(to)) = (
                 lanes.get(&(c.from_road, c.from_lane)),
                 lanes.get(&(c.to_road, c.to_lane)),
             ) else {
                 continue;
             };
-            let drawn = !c.via_lanes.is_empty() && c.via_lanes.iter().all(|l| l.shape.len() >= 2);
-            let parts: Vec<(f64, LaneGeometry, String)> = if drawn {
+            let drawn_inside =
+                !c.via_lanes.is_empty() && c.via_lanes.iter().all(|l| l.shape.len() >= 2);
+            let parts: Vec<(f64, Drawn)> = if drawn_inside {
                 let mut start = 0.0;
                 c.via_lanes
                     .iter()
                     .map(|l| {
                         let geometry = LaneGeometry::new(l.shape.clone(), l.length_m);
-                        let part = (start, geometry, l.id.clone());
+                        let part = (
+                            start,
+                            Drawn {
+                                geometry,
+                                name: l.id.clone(),
+                            },
+                        );
                         start += l.length_m;
                         part
                     })
                     .collect()
             } else {
-                let (Some(&a), Some(&b)) = (from.points.last(), to.points.first()) else {
+                // the straight line from the lane it leaves to the lane it enters, as the export draws it
+                let (Some(&a), Some(&b)) =
+                    (from.geometry.points.last(), to.geometry.points.first())
+                else {
                     continue;
                 };
-                let name = c
-                    .provenance
-                    .sumo_ids
-                    .first()
-                    .cloned()
-                    .unwrap_or_else(|| format!(":{}_{i}_0", c.junction));
-                vec![(0.0, LaneGeometry::new(vec![a, b], c.via_length_m), name)]
+                let Some(name) = exported.get(&c.lanes()) else {
+                    continue;
+                };
+                let geometry = LaneGeometry::new(vec![a, b], c.via_length_m);
+                vec![(
+                    0.0,
+                    Drawn {
+                        geometry,
+                        name: name.clone(),
+                    },
+                )]
             };
             vias.insert((c.from_road, c.from_lane, c.to_road, c.to_lane), parts);
         }
@@ -190,26 +235,26 @@ impl FcdOutput {
         }
     }
 
-    /// The point at position `at` along a road's lane or a junction's connection (its internal lanes one after
-    /// another).
-    fn point_on(&self, lane: LaneRef, at: f64) -> Option<[f64; 2]> {
-        match lane {
-            LaneRef::Road { road, lane } => self.lanes.get(&(road, lane))?.point_at(at),
+    /// The lane that position `at` of `place` lies on (on a connection, the internal lane it has reached) and the
+    /// position on it.
+    fn locate(&self, place: LaneRef, at: f64) -> Option<(&Drawn, f64)> {
+        match place {
+            LaneRef::Road { road, lane } => Some((self.lanes.get(&(road, lane))?, at)),
             LaneRef::Via { from, to } => {
                 let parts = self.vias.get(&(from.0, from.1, to.0, to.1))?;
-                let (start, geometry, _) = parts
+                let (start, drawn) = parts
                     .iter()
                     .rev()
-                    .find(|(start, ..)| *start <= at)
+                    .find(|(start, _)| *start <= at)
                     .or(parts.first())?;
-                geometry.point_at(at - start)
+                Some((drawn, at - start))
             }
         }
     }
 
     /// The geometry of lane `lane` of road `road`.
     pub fn lane_geometry(&self, road: RoadId, lane: u8) -> Option<&LaneGeometry> {
-        self.lanes.get(&(road, lane))
+        self.lanes.get(&(road, lane)).map(|d| &d.geometry)
     }
 
     /// The geometry of the internal lane written as SUMO lane `name`.
@@ -217,8 +262,8 @@ impl FcdOutput {
         self.vias
             .values()
             .flatten()
-            .find(|(_, _, n)| n == name)
-            .map(|(_, g, _)| g)
+            .find(|(_, d)| d.name == name)
+            .map(|(_, d)| &d.geometry)
     }
 
     /// The file's start: SUMO's XML declaration and root element.
@@ -234,7 +279,6 @@ impl FcdOutput {
     /// The step `sim` just made: the vehicles on the network after it, stamped with the step's begin on SUMO's
     /// clock (as SUMO stamps the state after a step).
     pub fn observe(&mut self, sim: &Simulation, out: &mut impl Write) -> std::io::Result<()> {
-        let g: &LaneGraph = &sim.spec().graph;
         let stamp = sim.time_s() - self.begin_s - sim.step_s() + sim.spec().clock_begin_s;
         for &id in sim.arrived_last_step() {
             self.names.remove(&id);
@@ -242,58 +286,27 @@ impl FcdOutput {
         self.rows.clear();
         for id in sim.active_ids() {
             let Some(v) = sim.vehicle(id) else { continue };
-            let (geometry, lane, pos) = match v.via_to {
-                Some((to_road, to_lane)) => {
-                    let Some(parts) = self.vias.get(&(v.road, v.lane_index, to_road, to_lane))
-                    else {
-                        continue;
-                    };
-                    // the internal lane its front is on
-                    let Some((start, geometry, name)) = parts
-                        .iter()
-                        .rev()
-                        .find(|(start, ..)| *start <= v.pos_m)
-                        .or(parts.first())
-                    else {
-                        continue;
-                    };
-                    (geometry, name.clone(), v.pos_m - start)
-                }
-                None => match self.lanes.get(&(v.road, v.lane_index)) {
-                    Some(geometry) => (geometry, lane_name(g, v.road, v.lane_index), v.pos_m),
-                    None => continue,
-                },
-            };
-            let Some(front) = geometry.point_at(pos) else {
+            let Some((drawn, pos)) = self.locate(v.place, v.pos_m) else {
                 continue;
             };
-            // the back: on the same lane, else where the route says it lies behind (SUMO's farthest lane behind),
-            // else the lane's start (SUMO's, where the back reaches out of the network)
-            let back = if pos >= v.length {
-                geometry.point_at(pos - v.length)
-            } else if v.pos_m >= v.length {
-                // (on an earlier internal lane of the same connection)
-                v.via_to.and_then(|(to_road, to_lane)| {
-                    self.point_on(
-                        LaneRef::Via {
-                            from: (v.road, v.lane_index),
-                            to: (to_road, to_lane),
-                        },
-                        v.pos_m - v.length,
-                    )
-                })
+            let Some(front) = drawn.geometry.point_at(pos) else {
+                continue;
+            };
+            // the back: on its lane, else where the route says it lies behind (SUMO's farthest lane behind), else
+            // the lane's start (SUMO's, where the back reaches out of the network)
+            let back_at = if v.pos_m >= v.length {
+                Some((v.place, v.pos_m - v.length))
             } else {
                 sim.back_place(id)
-                    .and_then(|(lane, at)| self.point_on(lane, at))
-            }
-            .or_else(|| geometry.point_at(0.0))
-            .unwrap_or(front);
-            let [x, y] = front;
-            let angle = if front != back {
-                navi_degree((front[1] - back[1]).atan2(front[0] - back[0]))
-            } else {
-                navi_degree(geometry.rotation_at(pos))
             };
+            let back = back_at
+                .and_then(|(place, at)| self.locate(place, at))
+                .and_then(|(d, at)| d.geometry.point_at(at))
+                .or_else(|| drawn.geometry.point_at(0.0))
+                .unwrap_or(front);
+            let [x, y] = front;
+            let angle = drawn.geometry.heading(pos, front, back);
+            let lane = xml_escape(&drawn.name);
             let name = self
                 .names
                 .entry(id)
@@ -306,7 +319,7 @@ impl FcdOutput {
                 xml_escape(v.vehicle_type),
                 v.speed,
                 pos,
-                xml_escape(&lane),
+                lane,
             );
             self.rows.push((name, row));
         }

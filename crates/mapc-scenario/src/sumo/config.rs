@@ -103,6 +103,10 @@ const WITHOUT_EFFECT: &[&str] = &[
     "lanechange.duration",
 ];
 
+/// The words of the warning for an output the configuration names and mapc writes only when asked
+/// (`tripinfo-output`, ...): a front end that writes them anyway leaves out the warnings that contain them.
+pub const OUTPUT_NOT_WRITTEN: &str = "not written; `mapc sim --";
+
 /// Read a `.sumocfg`.
 pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
     let root = mapc_import::read_sumo_xml(
@@ -224,7 +228,7 @@ pub fn read(path: &Path) -> Result<SumoConfig, SumoError> {
             // written where the run asks for them (`mapc sim --tripinfo-output`), not into the user's folder
             "tripinfo-output" | "summary-output" | "fcd-output" => {
                 c.warnings.push(format!(
-                    "{}: option `{}` not written; `mapc sim --{} FILE` writes it (`--sumo-outputs DIR`: every \
+                    "{}: option `{}` {OUTPUT_NOT_WRITTEN}{} FILE` writes it (`--sumo-outputs DIR`: every \
                      output the configuration names, into DIR)",
                     o.place, o.name, o.name
                 ));

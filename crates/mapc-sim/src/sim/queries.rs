@@ -47,8 +47,8 @@ pub struct VehicleView<'a> {
     pub in_junction: bool,
     /// The lane's index on `road`, 0 rightmost (inside a junction, the lane it came from).
     pub lane_index: u8,
-    /// Inside a junction: the road and lane index its connection leads to.
-    pub via_to: Option<(RoadId, u8)>,
+    /// Its lane as front ends name it (inside a junction, the connection's lanes).
+    pub place: LaneRef,
     pub pos_m: f64,
     pub speed: f64,
     pub length: f64,
@@ -208,15 +208,7 @@ impl Simulation {
             road,
             in_junction,
             lane_index: self.lane_index_on_road(v.lane),
-            via_to: match self.lane_at(v.lane as usize).kind {
-                LaneKind::Via(k) => {
-                    let to = self.link_at(k as usize).to_lane;
-                    self.net
-                        .road_of(to)
-                        .map(|r| (self.net.road_ids[r], self.lane_at(to as usize).index))
-                }
-                LaneKind::Road(_) => None,
-            },
+            place: self.lane_ref(v.lane),
             pos_m: v.pos,
             speed: v.speed,
             length: v.length,

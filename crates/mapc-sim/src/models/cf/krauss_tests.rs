@@ -262,6 +262,32 @@ fn surely_stops_within_never_overstates_and_mostly_fires() {
     assert!(fired * 10 >= truly * 9, "fired {fired} of {truly}");
 }
 
+/// The open minor link's shortcut (`CarFollowModel::stop_speed_at_least`, read by the moves before they compute
+/// the stop speed at the line): where it says the stop speed is at least `v`, the stop speed is; and it decides
+/// most of the cases where the stop speed is.
+#[test]
+fn stop_speed_at_least_never_overstates_and_mostly_fires() {
+    let (mut fired, mut truly) = (0u64, 0u64);
+    for k in model_grid(&[1.0]) {
+        for si in 0..=60 {
+            let speed = si as f64 * 0.53;
+            for gi in 0..=200 {
+                let gap = gi as f64 * 0.83;
+                let stop = k.stop_speed(gap, speed, 30.0);
+                for vi in 0..=20 {
+                    let v = vi as f64 * 1.1;
+                    truly += (stop >= v) as u64;
+                    if k.stop_speed_at_least(gap, speed, v) {
+                        fired += 1;
+                        assert!(stop >= v, "{k:?} speed {speed} gap {gap} v {v}: {stop}");
+                    }
+                }
+            }
+        }
+    }
+    assert!(fired * 10 >= truly * 7, "fired {fired} of {truly}");
+}
+
 /// The secure gap's bound never calls a gap secure that the exact check blocks, over speeds, decelerations,
 /// headways, steps and safety factors; and it decides every gap beyond its slack.
 #[test]
